@@ -1,0 +1,17 @@
+#version 450
+// Tone-map subpass: reads the HDR colour of this pixel as an input
+// attachment and writes display colour; the sRGB attachment encodes it.
+#include "tonemap.glsl"
+
+layout(input_attachment_index = 0, set = 0, binding = 0) uniform subpassInput hdr;
+layout(location = 0) out vec4 out_color;
+
+const int TONEMAP_REINHARD = 0;
+const int TONEMAP_ACES = 1;
+layout(constant_id = 0) const int OPERATOR = TONEMAP_REINHARD;
+layout(constant_id = 1) const float EXPOSURE = 1.0;
+
+void main() {
+    vec3 c = sanitize_hdr(subpassLoad(hdr).rgb) * EXPOSURE;
+    out_color = vec4(OPERATOR == TONEMAP_ACES ? aces_fit(c) : reinhard(c), 1.0);
+}

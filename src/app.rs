@@ -1,0 +1,82 @@
+//! One render run, as the CLI and the tests use it: create the device
+//! (with validation if asked), build the scene's frame, submit it N times,
+//! read the images back, tear everything down, and report what the
+//! validation layer said. Files are only written by the caller, after the
+//! run was found clean.
+
+use crate::render::{FrameTiming, Pixels, RenderError, Renderer};
+use crate::scene::Scene;
+use crate::vk::validation::ValidationMessage;
+use crate::vk::{Context, ContextOptions, DeviceInfo};
+
+/// What to render and how.
+#[derive(Clone, Debug, Default)]
+pub struct RenderSettings {
+    pub validate: bool,
+    pub device: Option<String>,
+    /// Frames to submit (at least 1); the images are from the last one.
+    pub frames: u32,
+    /// Read back the linear HDR image too.
+    pub keep_hdr: bool,
+}
+
+/// Everything a run produced.
+pub struct RenderRun {
+    pub device: DeviceInfo,
+    /// Pass names, in the order of each `FrameTiming::pass_ms`.
+    pub passes: Vec<&'static str>,
+    pub frames: Vec<FrameTiming>,
+    pub output: Pixels<u8>,
+    pub hdr: Option<Pixels<f32>>,
+    /// Validation messages that were not on the allow-list (empty without
+    /// validation).
+    pub validation: Vec<ValidationMessage>,
+}
+
+impl RenderRun {
+    /// Metadata stored in every PNG: which device and driver made it.
+    pub fn png_metadata(&self) -> Vec<(&'static str, String)> {
+        vec![
+            ("Software", format!("aerial {}", env!("CARGO_PKG_VERSION"))),
+            ("aerial:device", self.device.name.clone()),
+            (
+                "aerial:driver",
+                format!(
+                    "{} {} (driverVersion {:#x})",
+                    self.device.driver_name, self.device.driver_info, self.device.driver_version
+                ),
+            ),
+            ("aerial:vulkan", self.device.api_version.clone()),
+        ]
+    }
+}
+
+pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderRun, RenderError> {
+    let ctx = Context::new(&ContextOptions {
+        validate: settings.validate,
+        device: settings.device.clone(),
+    })?;
+    let log = ctx.validation_log();
+    let device = ctx.device_info().clone();
+    let (passes, frames, output, hdr) = {
+        let mut renderer = Renderer::new(&ctx, scene, settings.keep_hdr)?;
+        let passes = renderer.plan().passes.iter().map(|p| p.name()).collect();
+        let mut frames = Vec::new();
+        for _ in 0..settings.frames.max(1) {
+            frames.push(renderer.render_frame()?);
+        }
+        (passes, frames, renderer.output(), renderer.hdr())
+    };
+    // Destroy the device and instance before reading the log, so messages
+    // about leaked objects at teardown are counted too.
+    drop(ctx);
+    let validation = log.map(|l| l.messages()).unwrap_or_default();
+    Ok(RenderRun {
+        device,
+        passes,
+        frames,
+        output,
+        hdr,
+        validation,
+    })
+}

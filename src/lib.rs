@@ -1,0 +1,4 @@
+pub mod vk;
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
+}

@@ -1,0 +1,23 @@
+//! The frame: which passes a scene needs (`plan`), the GPU resources and
+//! the recorded command buffer (`renderer`), and writing the images out
+//! (`output`).
+
+mod gpu_types;
+pub mod output;
+pub mod plan;
+mod renderer;
+
+pub use plan::{FramePlan, Pass};
+pub use renderer::{FrameTiming, Pixels, Renderer};
+
+use std::path::PathBuf;
+
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error(transparent)]
+    Vulkan(#[from] crate::vk::VkError),
+    #[error("texture {path}: {reason}")]
+    Texture { path: PathBuf, reason: String },
+    #[error("cannot write {path}: {reason}")]
+    Output { path: PathBuf, reason: String },
+}

@@ -1,0 +1,86 @@
+//! Writing rendered images: the tone-mapped PNG and the linear HDR EXR.
+//!
+//! Each file is written to a temporary name in the destination folder and
+//! renamed into place, so a failed run never leaves a half-written image.
+
+use super::{Pixels, RenderError};
+use std::path::{Path, PathBuf};
+
+/// Writes `write(tmp)` to a temporary sibling of `path`, then renames it.
+fn atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), RenderError> {
+    let err = |reason: String| RenderError::Output {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let name = path
+        .file_name()
+        .ok_or_else(|| err("not a file name".into()))?
+        .to_string_lossy()
+        .into_owned();
+    let tmp: PathBuf = path.with_file_name(format!(".{name}.partial"));
+    if let Err(e) = write(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(err(e));
+    }
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        err(e.to_string())
+    })
+}
+
+/// Saves 8-bit sRGB RGBA pixels as PNG, with `metadata` as text chunks
+/// (the device and driver that rendered it, so a comparison can tell
+/// whether bit-identity is expected).
+pub fn write_png(path: &Path, pixels: &Pixels<u8>, metadata: &[(&str, String)]) -> Result<(), RenderError> {
+    atomically(path, |tmp| {
+        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+        let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), pixels.width, pixels.height);
+        encoder.set_color(png::ColorType::Rgba);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        for (key, value) in metadata {
+            encoder
+                .add_text_chunk(key.to_string(), value.clone())
+                .map_err(|e| e.to_string())?;
+        }
+        let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+        writer.write_image_data(&pixels.data).map_err(|e| e.to_string())?;
+        writer.finish().map_err(|e| e.to_string())
+    })
+}
+
+/// Saves linear float RGBA pixels as an OpenEXR file (32-bit float channels).
+pub fn write_exr(path: &Path, pixels: &Pixels<f32>) -> Result<(), RenderError> {
+    atomically(path, |tmp| {
+        let w = pixels.width as usize;
+        exr::prelude::write_rgba_file(tmp, w, pixels.height as usize, |x, y| {
+            let i = (y * w + x) * 4;
+            let p = &pixels.data[i..i + 4];
+            (p[0], p[1], p[2], p[3])
+        })
+        .map_err(|e| e.to_string())
+    })
+}
+
+/// Reads an EXR written by [`write_exr`] (or any RGBA EXR) back as linear
+/// float RGBA.
+pub fn read_exr(path: &Path) -> Result<Pixels<f32>, RenderError> {
+    use exr::prelude::*;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |resolution, _| Pixels {
+            width: resolution.width() as u32,
+            height: resolution.height() as u32,
+            data: vec![0f32; resolution.width() * resolution.height() * 4],
+        },
+        |pixels: &mut Pixels<f32>, position, (r, g, b, a): (f32, f32, f32, f32)| {
+            let i = (position.y() * pixels.width as usize + position.x()) * 4;
+            pixels.data[i..i + 4].copy_from_slice(&[r, g, b, a]);
+        },
+    )
+    .map_err(|e| RenderError::Output {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    Ok(image.layer_data.channel_data.pixels)
+}

@@ -1,0 +1,168 @@
+//! What a scene needs from the GPU, decided on the CPU before any Vulkan
+//! object exists: which passes run, which pipeline variants and textures
+//! are created, and the order of the draws.
+//!
+//! Everything the scene does not use is left out here, so the GPU side
+//! only builds what the plan lists.
+
+use crate::mesh::Mesh;
+use crate::scene::{HdrFormat, Scene, ShadingModel};
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+/// A pipeline variant: shading model (a specialization constant), base
+/// colour texture (a shader variant with its own descriptor set) and alpha
+/// blending (the transparent pass).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct PipelineKey {
+    pub shading: ShadingKey,
+    pub textured: bool,
+    pub blended: bool,
+}
+
+/// `ShadingModel` as an ordered key (the GLSL specialization value).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum ShadingKey {
+    Phong = 0,
+    Gouraud = 1,
+    Toon = 2,
+}
+
+impl From<ShadingModel> for ShadingKey {
+    fn from(m: ShadingModel) -> Self {
+        match m {
+            ShadingModel::Phong => ShadingKey::Phong,
+            ShadingModel::Gouraud => ShadingKey::Gouraud,
+            ShadingModel::Toon => ShadingKey::Toon,
+        }
+    }
+}
+
+/// One object draw.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Draw {
+    pub object: usize,
+    pub pipeline: PipelineKey,
+    /// Index into `FramePlan::textures`.
+    pub texture: Option<usize>,
+    /// Indices into `Scene::lights` that reach this object.
+    pub lights: Vec<usize>,
+}
+
+/// A timed pass of the frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pass {
+    Opaque,
+    Transparent,
+    ToneMap,
+    Readback,
+}
+
+impl Pass {
+    pub fn name(self) -> &'static str {
+        match self {
+            Pass::Opaque => "opaque",
+            Pass::Transparent => "transparent",
+            Pass::ToneMap => "tonemap",
+            Pass::Readback => "readback",
+        }
+    }
+}
+
+/// The frame a scene needs.
+#[derive(Clone, Debug)]
+pub struct FramePlan {
+    pub width: u32,
+    pub height: u32,
+    pub hdr_format: HdrFormat,
+    /// Opaque draws, grouped by pipeline to save binds.
+    pub opaque: Vec<Draw>,
+    /// Transparent draws, back to front from the camera.
+    pub transparent: Vec<Draw>,
+    /// Distinct base-colour textures, each loaded once.
+    pub textures: Vec<PathBuf>,
+    /// Store the HDR image for readback (`--hdr`).
+    pub keep_hdr: bool,
+    /// Passes in the order they run; one timestamp interval each.
+    pub passes: Vec<Pass>,
+}
+
+impl FramePlan {
+    /// `meshes[i]` is object i tessellated in object space.
+    pub fn new(scene: &Scene, meshes: &[Mesh], keep_hdr: bool) -> FramePlan {
+        let mut textures: Vec<PathBuf> = Vec::new();
+        let mut texture_index = BTreeMap::new();
+        let mut opaque = Vec::new();
+        let mut transparent = Vec::new();
+        for (i, object) in scene.objects.iter().enumerate() {
+            let material = &scene.materials[object.material];
+            let texture = material.texture.as_ref().map(|path| {
+                *texture_index.entry(path.clone()).or_insert_with(|| {
+                    textures.push(path.clone());
+                    textures.len() - 1
+                })
+            });
+            let blended = material.opacity < 1.0;
+            let draw = Draw {
+                object: i,
+                pipeline: PipelineKey {
+                    shading: material.shading.into(),
+                    textured: texture.is_some(),
+                    blended,
+                },
+                texture,
+                lights: scene.lights_reaching(i),
+            };
+            if blended {
+                transparent.push(draw);
+            } else {
+                opaque.push(draw);
+            }
+        }
+        opaque.sort_by_key(|d| (d.pipeline, d.texture, d.object));
+        // Back to front by the distance of each object's world-space
+        // bounding-sphere centre; ties keep scene order.
+        let eye = scene.camera.eye;
+        let distance = |d: &Draw| {
+            let object = &scene.objects[d.object];
+            let (centre, _) = meshes[d.object].bounding_sphere();
+            object.transform.matrix().transform_point3(centre).distance(eye)
+        };
+        let mut keyed: Vec<(f32, Draw)> = transparent.into_iter().map(|d| (distance(&d), d)).collect();
+        keyed.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let transparent: Vec<Draw> = keyed.into_iter().map(|(_, d)| d).collect();
+
+        let mut passes = vec![Pass::Opaque];
+        if !transparent.is_empty() {
+            passes.push(Pass::Transparent);
+        }
+        passes.extend([Pass::ToneMap, Pass::Readback]);
+        FramePlan {
+            width: scene.output.width,
+            height: scene.output.height,
+            hdr_format: scene.output.hdr_format,
+            opaque,
+            transparent,
+            textures,
+            keep_hdr,
+            passes,
+        }
+    }
+
+    /// Every distinct pipeline variant the draws use.
+    pub fn pipelines(&self) -> Vec<PipelineKey> {
+        let mut keys: Vec<PipelineKey> = self
+            .opaque
+            .iter()
+            .chain(&self.transparent)
+            .map(|d| d.pipeline)
+            .collect();
+        keys.sort();
+        keys.dedup();
+        keys
+    }
+
+    pub fn draws(&self) -> impl Iterator<Item = &Draw> {
+        self.opaque.iter().chain(&self.transparent)
+    }
+}

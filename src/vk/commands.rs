@@ -1,0 +1,449 @@
+//! Command pool + command buffer recording, submission and fences.
+//!
+//! The renderer records a frame once and submits it as often as it is asked
+//! to; `CommandBuffer` owns its own pool, so its lifetime is simple.
+
+use super::{Buffer, Context, Framebuffer, GraphicsPipeline, Image, PipelineLayout, RenderPass, TimestampQueries, VkError};
+use super::descriptors::DescriptorSet;
+use ash::vk;
+use std::sync::Arc;
+
+/// A fence, for waiting on a submission.
+pub struct Fence {
+    ctx: Arc<Context>,
+    handle: vk::Fence,
+}
+
+impl Fence {
+    pub fn new(ctx: &Arc<Context>) -> Result<Fence, VkError> {
+        // SAFETY: valid device.
+        let handle = unsafe { ctx.device.create_fence(&vk::FenceCreateInfo::default(), None) }?;
+        Ok(Fence {
+            ctx: ctx.clone(),
+            handle,
+        })
+    }
+
+    /// Waits for the fence and resets it for the next submission.
+    pub fn wait_and_reset(&self) -> Result<(), VkError> {
+        // SAFETY: the fence belongs to this device and was submitted.
+        unsafe {
+            self.ctx
+                .device
+                .wait_for_fences(&[self.handle], true, u64::MAX)?;
+            self.ctx.device.reset_fences(&[self.handle])?;
+        }
+        Ok(())
+    }
+}
+
+impl Drop for Fence {
+    fn drop(&mut self) {
+        // SAFETY: callers wait on the fence before dropping it; a wait here
+        // would hide that bug, so we only destroy.
+        unsafe { self.ctx.device.destroy_fence(self.handle, None) };
+    }
+}
+
+/// A primary command buffer with its own pool.
+pub struct CommandBuffer {
+    ctx: Arc<Context>,
+    pool: vk::CommandPool,
+    pub(crate) handle: vk::CommandBuffer,
+}
+
+/// One image layout transition or memory dependency on an image.
+#[derive(Clone, Copy, Debug)]
+pub struct ImageBarrier {
+    pub old_layout: vk::ImageLayout,
+    pub new_layout: vk::ImageLayout,
+    pub src_stage: vk::PipelineStageFlags,
+    pub src_access: vk::AccessFlags,
+    pub dst_stage: vk::PipelineStageFlags,
+    pub dst_access: vk::AccessFlags,
+    pub base_mip: u32,
+    pub mip_count: u32,
+}
+
+impl CommandBuffer {
+    pub fn new(ctx: &Arc<Context>) -> Result<CommandBuffer, VkError> {
+        let info = vk::CommandPoolCreateInfo::default().queue_family_index(ctx.queue_family);
+        // SAFETY: valid device and queue family.
+        let pool = unsafe { ctx.device.create_command_pool(&info, None) }?;
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: the pool was just created.
+        let handle = match unsafe { ctx.device.allocate_command_buffers(&alloc) } {
+            Ok(b) => b[0],
+            Err(e) => {
+                // SAFETY: nothing allocated from the pool.
+                unsafe { ctx.device.destroy_command_pool(pool, None) };
+                return Err(e.into());
+            }
+        };
+        Ok(CommandBuffer {
+            ctx: ctx.clone(),
+            pool,
+            handle,
+        })
+    }
+
+    pub fn begin(&self) -> Result<(), VkError> {
+        // SAFETY: the buffer is not pending (callers wait on their fence).
+        unsafe {
+            self.ctx
+                .device
+                .begin_command_buffer(self.handle, &vk::CommandBufferBeginInfo::default())
+        }?;
+        Ok(())
+    }
+
+    pub fn end(&self) -> Result<(), VkError> {
+        // SAFETY: recording was begun.
+        unsafe { self.ctx.device.end_command_buffer(self.handle) }?;
+        Ok(())
+    }
+
+    /// Submits the recorded buffer and signals `fence`.
+    pub fn submit(&self, fence: &Fence) -> Result<(), VkError> {
+        let buffers = [self.handle];
+        let submit = vk::SubmitInfo::default().command_buffers(&buffers);
+        // SAFETY: the buffer is fully recorded; the fence is unsignalled.
+        unsafe {
+            self.ctx
+                .device
+                .queue_submit(self.ctx.queue, &[submit], fence.handle)
+        }?;
+        Ok(())
+    }
+
+    /// Records with `f`, submits, and waits: for uploads done at load time.
+    pub fn run_once(ctx: &Arc<Context>, f: impl FnOnce(&CommandBuffer)) -> Result<(), VkError> {
+        let cmd = CommandBuffer::new(ctx)?;
+        let fence = Fence::new(ctx)?;
+        cmd.begin()?;
+        f(&cmd);
+        cmd.end()?;
+        cmd.submit(&fence)?;
+        fence.wait_and_reset()
+    }
+
+    pub fn image_barrier(&self, image: &Image, b: ImageBarrier) {
+        let mut range = image.full_range();
+        range.base_mip_level = b.base_mip;
+        range.level_count = b.mip_count;
+        let barrier = vk::ImageMemoryBarrier::default()
+            .old_layout(b.old_layout)
+            .new_layout(b.new_layout)
+            .src_access_mask(b.src_access)
+            .dst_access_mask(b.dst_access)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(image.handle)
+            .subresource_range(range);
+        // SAFETY: recording; the image is alive until the submission ends.
+        unsafe {
+            self.ctx.device.cmd_pipeline_barrier(
+                self.handle,
+                b.src_stage,
+                b.dst_stage,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &[barrier],
+            )
+        };
+    }
+
+    /// Copies mip level 0 of a colour image (in TRANSFER_SRC_OPTIMAL) into
+    /// a buffer, tightly packed.
+    pub fn copy_image_to_buffer(&self, image: &Image, buffer: &Buffer) {
+        let region = vk::BufferImageCopy::default()
+            .image_subresource(vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            })
+            .image_extent(vk::Extent3D {
+                width: image.desc.width,
+                height: image.desc.height,
+                depth: 1,
+            });
+        // SAFETY: recording; buffer is large enough (callers size it from
+        // the image) and the image is in TRANSFER_SRC_OPTIMAL.
+        unsafe {
+            self.ctx.device.cmd_copy_image_to_buffer(
+                self.handle,
+                image.handle,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                buffer.handle,
+                &[region],
+            )
+        };
+    }
+
+    /// Copies a tightly packed buffer into mip level 0 of an image in
+    /// TRANSFER_DST_OPTIMAL.
+    pub fn copy_buffer_to_image(&self, buffer: &Buffer, image: &Image) {
+        let region = vk::BufferImageCopy::default()
+            .image_subresource(vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            })
+            .image_extent(vk::Extent3D {
+                width: image.desc.width,
+                height: image.desc.height,
+                depth: 1,
+            });
+        // SAFETY: recording; the buffer holds width*height texels.
+        unsafe {
+            self.ctx.device.cmd_copy_buffer_to_image(
+                self.handle,
+                buffer.handle,
+                image.handle,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+            )
+        };
+    }
+
+    /// Fills every mip level below 0 by successive linear blits; level 0
+    /// must be in TRANSFER_DST_OPTIMAL, and on return every level is in
+    /// SHADER_READ_ONLY_OPTIMAL.
+    pub fn generate_mipmaps(&self, image: &Image) {
+        let (mut w, mut h) = (image.desc.width as i32, image.desc.height as i32);
+        let levels = image.desc.mip_levels;
+        for level in 1..levels {
+            // Previous level: written (copy or blit) → blit source.
+            self.image_barrier(
+                image,
+                ImageBarrier {
+                    old_layout: vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    new_layout: vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    src_stage: vk::PipelineStageFlags::TRANSFER,
+                    src_access: vk::AccessFlags::TRANSFER_WRITE,
+                    dst_stage: vk::PipelineStageFlags::TRANSFER,
+                    dst_access: vk::AccessFlags::TRANSFER_READ,
+                    base_mip: level - 1,
+                    mip_count: 1,
+                },
+            );
+            let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+            let layers = |mip| vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: mip,
+                base_array_layer: 0,
+                layer_count: 1,
+            };
+            let blit = vk::ImageBlit::default()
+                .src_subresource(layers(level - 1))
+                .src_offsets([vk::Offset3D::default(), vk::Offset3D { x: w, y: h, z: 1 }])
+                .dst_subresource(layers(level))
+                .dst_offsets([vk::Offset3D::default(), vk::Offset3D { x: nw, y: nh, z: 1 }]);
+            // SAFETY: recording; level-1 is TRANSFER_SRC, level is TRANSFER_DST
+            // (the whole image was put there before the upload).
+            unsafe {
+                self.ctx.device.cmd_blit_image(
+                    self.handle,
+                    image.handle,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    image.handle,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[blit],
+                    vk::Filter::LINEAR,
+                )
+            };
+            self.image_barrier(
+                image,
+                ImageBarrier {
+                    old_layout: vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    new_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    src_stage: vk::PipelineStageFlags::TRANSFER,
+                    src_access: vk::AccessFlags::TRANSFER_READ,
+                    dst_stage: vk::PipelineStageFlags::FRAGMENT_SHADER,
+                    dst_access: vk::AccessFlags::SHADER_READ,
+                    base_mip: level - 1,
+                    mip_count: 1,
+                },
+            );
+            (w, h) = (nw, nh);
+        }
+        self.image_barrier(
+            image,
+            ImageBarrier {
+                old_layout: vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                new_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                src_stage: vk::PipelineStageFlags::TRANSFER,
+                src_access: vk::AccessFlags::TRANSFER_WRITE,
+                dst_stage: vk::PipelineStageFlags::FRAGMENT_SHADER,
+                dst_access: vk::AccessFlags::SHADER_READ,
+                base_mip: levels - 1,
+                mip_count: 1,
+            },
+        );
+    }
+
+    pub fn begin_render_pass(&self, pass: &RenderPass, framebuffer: &Framebuffer, clears: &[vk::ClearValue]) {
+        let info = vk::RenderPassBeginInfo::default()
+            .render_pass(pass.handle)
+            .framebuffer(framebuffer.handle)
+            .render_area(vk::Rect2D {
+                offset: vk::Offset2D::default(),
+                extent: framebuffer.extent,
+            })
+            .clear_values(clears);
+        // SAFETY: recording outside a render pass; framebuffer matches pass.
+        unsafe {
+            self.ctx
+                .device
+                .cmd_begin_render_pass(self.handle, &info, vk::SubpassContents::INLINE)
+        };
+        let viewport = vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: framebuffer.extent.width as f32,
+            height: framebuffer.extent.height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        let scissor = vk::Rect2D {
+            offset: vk::Offset2D::default(),
+            extent: framebuffer.extent,
+        };
+        // SAFETY: every pipeline declares viewport and scissor dynamic.
+        unsafe {
+            self.ctx.device.cmd_set_viewport(self.handle, 0, &[viewport]);
+            self.ctx.device.cmd_set_scissor(self.handle, 0, &[scissor]);
+        }
+    }
+
+    pub fn next_subpass(&self) {
+        // SAFETY: inside a render pass with a following subpass.
+        unsafe {
+            self.ctx
+                .device
+                .cmd_next_subpass(self.handle, vk::SubpassContents::INLINE)
+        };
+    }
+
+    pub fn end_render_pass(&self) {
+        // SAFETY: inside the last subpass of a render pass.
+        unsafe { self.ctx.device.cmd_end_render_pass(self.handle) };
+    }
+
+    pub fn bind_pipeline(&self, pipeline: &GraphicsPipeline) {
+        // SAFETY: recording; the pipeline lives until the submission ends.
+        unsafe {
+            self.ctx.device.cmd_bind_pipeline(
+                self.handle,
+                vk::PipelineBindPoint::GRAPHICS,
+                pipeline.handle,
+            )
+        };
+    }
+
+    pub fn bind_descriptor_set(&self, layout: &PipelineLayout, index: u32, set: &DescriptorSet, dynamic_offsets: &[u32]) {
+        // SAFETY: recording; the set matches the layout at `index`.
+        unsafe {
+            self.ctx.device.cmd_bind_descriptor_sets(
+                self.handle,
+                vk::PipelineBindPoint::GRAPHICS,
+                layout.handle,
+                index,
+                &[set.handle],
+                dynamic_offsets,
+            )
+        };
+    }
+
+    pub fn bind_geometry(&self, buffer: &Buffer, vertex_offset: u64, index_offset: u64) {
+        // SAFETY: recording; the buffer holds both vertex and index data at
+        // these offsets.
+        unsafe {
+            self.ctx
+                .device
+                .cmd_bind_vertex_buffers(self.handle, 0, &[buffer.handle], &[vertex_offset]);
+            self.ctx.device.cmd_bind_index_buffer(
+                self.handle,
+                buffer.handle,
+                index_offset,
+                vk::IndexType::UINT32,
+            );
+        }
+    }
+
+    pub fn draw_indexed(&self, index_count: u32) {
+        // SAFETY: recording inside a render pass with pipeline and geometry bound.
+        unsafe {
+            self.ctx
+                .device
+                .cmd_draw_indexed(self.handle, index_count, 1, 0, 0, 0)
+        };
+    }
+
+    pub fn draw(&self, vertex_count: u32) {
+        // SAFETY: recording inside a render pass with a pipeline bound.
+        unsafe { self.ctx.device.cmd_draw(self.handle, vertex_count, 1, 0, 0) };
+    }
+
+    /// A global memory dependency (for buffers read back by the host and
+    /// reused across submissions).
+    pub fn memory_barrier(
+        &self,
+        src_stage: vk::PipelineStageFlags,
+        src_access: vk::AccessFlags,
+        dst_stage: vk::PipelineStageFlags,
+        dst_access: vk::AccessFlags,
+    ) {
+        let barrier = vk::MemoryBarrier::default()
+            .src_access_mask(src_access)
+            .dst_access_mask(dst_access);
+        // SAFETY: recording outside a render pass.
+        unsafe {
+            self.ctx.device.cmd_pipeline_barrier(
+                self.handle,
+                src_stage,
+                dst_stage,
+                vk::DependencyFlags::empty(),
+                &[barrier],
+                &[],
+                &[],
+            )
+        };
+    }
+
+    pub fn reset_queries(&self, queries: &TimestampQueries) {
+        // SAFETY: recording outside a render pass.
+        unsafe {
+            self.ctx
+                .device
+                .cmd_reset_query_pool(self.handle, queries.pool, 0, queries.capacity)
+        };
+    }
+
+    /// Writes timestamp `index` once all earlier work has finished.
+    pub fn write_timestamp(&self, queries: &TimestampQueries, index: u32) {
+        // SAFETY: recording; index < capacity and was reset in this buffer.
+        unsafe {
+            self.ctx.device.cmd_write_timestamp(
+                self.handle,
+                vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                queries.pool,
+                index,
+            )
+        };
+    }
+}
+
+impl Drop for CommandBuffer {
+    fn drop(&mut self) {
+        // SAFETY: owners wait for submissions before dropping; destroying the
+        // pool frees its command buffer.
+        unsafe { self.ctx.device.destroy_command_pool(self.pool, None) };
+    }
+}

@@ -1,0 +1,161 @@
+//! Descriptor set layouts, pools and sets.
+
+use super::{Buffer, Context, Image, Sampler, VkError};
+use ash::vk;
+use std::sync::Arc;
+
+/// One binding of a set layout.
+#[derive(Clone, Copy, Debug)]
+pub struct DescriptorBinding {
+    pub binding: u32,
+    pub kind: vk::DescriptorType,
+    pub stages: vk::ShaderStageFlags,
+}
+
+pub struct DescriptorSetLayout {
+    ctx: Arc<Context>,
+    pub(crate) handle: vk::DescriptorSetLayout,
+    pub(crate) bindings: Vec<DescriptorBinding>,
+}
+
+impl DescriptorSetLayout {
+    pub fn new(ctx: &Arc<Context>, bindings: &[DescriptorBinding]) -> Result<DescriptorSetLayout, VkError> {
+        let raw: Vec<_> = bindings
+            .iter()
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b.binding)
+                    .descriptor_type(b.kind)
+                    .descriptor_count(1)
+                    .stage_flags(b.stages)
+            })
+            .collect();
+        let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&raw);
+        // SAFETY: valid device and bindings.
+        let handle = unsafe { ctx.device.create_descriptor_set_layout(&info, None) }?;
+        Ok(DescriptorSetLayout {
+            ctx: ctx.clone(),
+            handle,
+            bindings: bindings.to_vec(),
+        })
+    }
+}
+
+impl Drop for DescriptorSetLayout {
+    fn drop(&mut self) {
+        // SAFETY: pipelines and sets created from it are not in use.
+        unsafe {
+            self.ctx
+                .device
+                .destroy_descriptor_set_layout(self.handle, None)
+        };
+    }
+}
+
+/// A pool sized exactly for the given layouts (one set each).
+pub struct DescriptorPool {
+    ctx: Arc<Context>,
+    handle: vk::DescriptorPool,
+}
+
+impl DescriptorPool {
+    pub fn for_layouts(ctx: &Arc<Context>, layouts: &[&DescriptorSetLayout]) -> Result<DescriptorPool, VkError> {
+        let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
+        for b in layouts.iter().flat_map(|l| &l.bindings) {
+            match sizes.iter_mut().find(|s| s.ty == b.kind) {
+                Some(s) => s.descriptor_count += 1,
+                None => sizes.push(vk::DescriptorPoolSize {
+                    ty: b.kind,
+                    descriptor_count: 1,
+                }),
+            }
+        }
+        let info = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(layouts.len().max(1) as u32)
+            .pool_sizes(&sizes);
+        // SAFETY: valid device.
+        let handle = unsafe { ctx.device.create_descriptor_pool(&info, None) }?;
+        Ok(DescriptorPool {
+            ctx: ctx.clone(),
+            handle,
+        })
+    }
+
+    /// Allocates one set of `layout` from the pool.
+    pub fn allocate(&self, layout: &DescriptorSetLayout) -> Result<DescriptorSet, VkError> {
+        let layouts = [layout.handle];
+        let info = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(self.handle)
+            .set_layouts(&layouts);
+        // SAFETY: the pool was sized for this layout.
+        let handle = unsafe { self.ctx.device.allocate_descriptor_sets(&info) }?[0];
+        Ok(DescriptorSet {
+            ctx: self.ctx.clone(),
+            handle,
+        })
+    }
+}
+
+impl Drop for DescriptorPool {
+    fn drop(&mut self) {
+        // SAFETY: destroying the pool frees its sets; none is in use.
+        unsafe { self.ctx.device.destroy_descriptor_pool(self.handle, None) };
+    }
+}
+
+/// A descriptor set; freed with its pool.
+pub struct DescriptorSet {
+    ctx: Arc<Context>,
+    pub(crate) handle: vk::DescriptorSet,
+}
+
+impl DescriptorSet {
+    /// Points `binding` at `range` bytes of `buffer` (a uniform or storage
+    /// buffer, dynamic or not, as the layout says).
+    pub fn write_buffer(&self, binding: u32, kind: vk::DescriptorType, buffer: &Buffer, range: u64) {
+        let infos = [vk::DescriptorBufferInfo {
+            buffer: buffer.handle,
+            offset: 0,
+            range,
+        }];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(self.handle)
+            .dst_binding(binding)
+            .descriptor_type(kind)
+            .buffer_info(&infos);
+        // SAFETY: the set is not in use by a pending command buffer.
+        unsafe { self.ctx.device.update_descriptor_sets(&[write], &[]) };
+    }
+
+    /// Points `binding` at a sampled image in SHADER_READ_ONLY_OPTIMAL.
+    pub fn write_sampled_image(&self, binding: u32, image: &Image, sampler: &Sampler) {
+        let infos = [vk::DescriptorImageInfo {
+            sampler: sampler.handle,
+            image_view: image.view,
+            image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+        }];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(self.handle)
+            .dst_binding(binding)
+            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+            .image_info(&infos);
+        // SAFETY: the set is not in use by a pending command buffer.
+        unsafe { self.ctx.device.update_descriptor_sets(&[write], &[]) };
+    }
+
+    /// Points `binding` at an input attachment read in a later subpass.
+    pub fn write_input_attachment(&self, binding: u32, image: &Image) {
+        let infos = [vk::DescriptorImageInfo {
+            sampler: vk::Sampler::null(),
+            image_view: image.view,
+            image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+        }];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(self.handle)
+            .dst_binding(binding)
+            .descriptor_type(vk::DescriptorType::INPUT_ATTACHMENT)
+            .image_info(&infos);
+        // SAFETY: the set is not in use by a pending command buffer.
+        unsafe { self.ctx.device.update_descriptor_sets(&[write], &[]) };
+    }
+}

@@ -1,0 +1,185 @@
+//! Images (attachments and textures), their views, and samplers.
+
+use super::{Context, VkError};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+/// What to create: a 2D image with one view over all its mip levels.
+#[derive(Clone, Copy, Debug)]
+pub struct ImageDesc {
+    pub width: u32,
+    pub height: u32,
+    pub format: vk::Format,
+    pub usage: vk::ImageUsageFlags,
+    pub mip_levels: u32,
+    pub aspect: vk::ImageAspectFlags,
+}
+
+/// A device-local 2D image with its view.
+pub struct Image {
+    ctx: Arc<Context>,
+    pub(crate) handle: vk::Image,
+    pub(crate) view: vk::ImageView,
+    allocation: Option<Allocation>,
+    pub desc: ImageDesc,
+}
+
+impl Image {
+    pub fn new(ctx: &Arc<Context>, name: &str, desc: ImageDesc) -> Result<Image, VkError> {
+        check_format(ctx, desc.format, desc.usage)?;
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(desc.format)
+            .extent(vk::Extent3D {
+                width: desc.width,
+                height: desc.height,
+                depth: 1,
+            })
+            .mip_levels(desc.mip_levels)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(desc.usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: valid device; format support checked above.
+        let handle = unsafe { ctx.device.create_image(&info, None) }?;
+        // From here, `image` owns the handle and cleans up on early return.
+        let mut image = Image {
+            ctx: ctx.clone(),
+            handle,
+            view: vk::ImageView::null(),
+            allocation: None,
+            desc,
+        };
+        // SAFETY: handle was created on this device.
+        let requirements = unsafe { ctx.device.get_image_memory_requirements(handle) };
+        let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
+            name,
+            requirements,
+            location: MemoryLocation::GpuOnly,
+            linear: false,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        })?;
+        // SAFETY: memory satisfies the image's requirements; bound once.
+        let bound = unsafe {
+            ctx.device
+                .bind_image_memory(handle, allocation.memory(), allocation.offset())
+        };
+        image.allocation = Some(allocation);
+        bound?;
+        let view_info = vk::ImageViewCreateInfo::default()
+            .image(handle)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(desc.format)
+            .subresource_range(image.full_range());
+        // SAFETY: the image is bound to memory and the range is within it.
+        image.view = unsafe { ctx.device.create_image_view(&view_info, None) }?;
+        Ok(image)
+    }
+
+    /// Every mip level and the one layer.
+    pub(crate) fn full_range(&self) -> vk::ImageSubresourceRange {
+        vk::ImageSubresourceRange {
+            aspect_mask: self.desc.aspect,
+            base_mip_level: 0,
+            level_count: self.desc.mip_levels,
+            base_array_layer: 0,
+            layer_count: 1,
+        }
+    }
+}
+
+/// Fails with a clear error when the device cannot use `format` as asked.
+fn check_format(ctx: &Context, format: vk::Format, usage: vk::ImageUsageFlags) -> Result<(), VkError> {
+    // SAFETY: valid physical device of this instance.
+    let props = unsafe {
+        ctx.instance
+            .get_physical_device_format_properties(ctx.physical_device, format)
+    };
+    let have = props.optimal_tiling_features;
+    let needs = [
+        (vk::ImageUsageFlags::COLOR_ATTACHMENT, vk::FormatFeatureFlags::COLOR_ATTACHMENT, "colour attachment"),
+        (vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT, vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT, "depth attachment"),
+        (vk::ImageUsageFlags::SAMPLED, vk::FormatFeatureFlags::SAMPLED_IMAGE, "sampling"),
+        (vk::ImageUsageFlags::TRANSFER_SRC, vk::FormatFeatureFlags::TRANSFER_SRC, "transfer source"),
+        (vk::ImageUsageFlags::TRANSFER_DST, vk::FormatFeatureFlags::TRANSFER_DST, "transfer destination"),
+    ];
+    for (u, f, what) in needs {
+        if usage.contains(u) && !have.contains(f) {
+            return Err(VkError::UnsupportedFormat {
+                format,
+                what: what.to_string(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Whether linear filtering in blits and samplers works for `format`.
+pub fn supports_linear_filter(ctx: &Context, format: vk::Format) -> bool {
+    // SAFETY: valid physical device of this instance.
+    let props = unsafe {
+        ctx.instance
+            .get_physical_device_format_properties(ctx.physical_device, format)
+    };
+    props
+        .optimal_tiling_features
+        .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR | vk::FormatFeatureFlags::BLIT_SRC | vk::FormatFeatureFlags::BLIT_DST)
+}
+
+impl Drop for Image {
+    fn drop(&mut self) {
+        // SAFETY: owners drop images only after the GPU finished with them.
+        unsafe {
+            if self.view != vk::ImageView::null() {
+                self.ctx.device.destroy_image_view(self.view, None);
+            }
+            self.ctx.device.destroy_image(self.handle, None);
+        }
+        if let Some(a) = self.allocation.take() {
+            let _ = self.ctx.allocator().free(a);
+        }
+    }
+}
+
+/// A sampler.
+pub struct Sampler {
+    ctx: Arc<Context>,
+    pub(crate) handle: vk::Sampler,
+}
+
+impl Sampler {
+    /// Trilinear (or nearest) filtering with repeat addressing over `mip_levels`.
+    pub fn new(ctx: &Arc<Context>, linear: bool, mip_levels: u32) -> Result<Sampler, VkError> {
+        let (filter, mip) = if linear {
+            (vk::Filter::LINEAR, vk::SamplerMipmapMode::LINEAR)
+        } else {
+            (vk::Filter::NEAREST, vk::SamplerMipmapMode::NEAREST)
+        };
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(filter)
+            .min_filter(filter)
+            .mipmap_mode(mip)
+            .address_mode_u(vk::SamplerAddressMode::REPEAT)
+            .address_mode_v(vk::SamplerAddressMode::REPEAT)
+            .address_mode_w(vk::SamplerAddressMode::REPEAT)
+            .min_lod(0.0)
+            .max_lod(mip_levels as f32);
+        // SAFETY: valid device; anisotropy stays disabled (feature not enabled).
+        let handle = unsafe { ctx.device.create_sampler(&info, None) }?;
+        Ok(Sampler {
+            ctx: ctx.clone(),
+            handle,
+        })
+    }
+}
+
+impl Drop for Sampler {
+    fn drop(&mut self) {
+        // SAFETY: no command buffer using the sampler is pending.
+        unsafe { self.ctx.device.destroy_sampler(self.handle, None) };
+    }
+}

@@ -1,0 +1,72 @@
+//! The only module that touches `ash` directly.
+//!
+//! Small RAII wrappers over Vulkan objects. Each holds an `Arc<Context>` so
+//! the device outlives it, and destroys its handle in `Drop`. Every `unsafe`
+//! block states the invariant it relies on.
+
+mod buffer;
+mod commands;
+mod context;
+mod descriptors;
+mod image;
+mod pipeline;
+mod query;
+mod render_pass;
+pub mod validation;
+
+pub use ash::vk::{
+    AccessFlags, PipelineStageFlags, ImageUsageFlags, ImageAspectFlags,
+    BlendFactor, CullModeFlags, DescriptorType, Format, ImageLayout, ShaderStageFlags,
+};
+pub use buffer::{Buffer, BufferUsage};
+pub use commands::{CommandBuffer, Fence};
+pub use context::{Context, ContextOptions, DeviceInfo};
+pub use descriptors::{DescriptorBinding, DescriptorPool, DescriptorSet, DescriptorSetLayout};
+pub use image::{Image, ImageDesc, Sampler};
+pub use commands::ImageBarrier;
+pub use pipeline::{
+    GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, ShaderModule, VertexAttribute,
+};
+pub use render_pass::{DEPTH_ATTACHMENT, HDR_ATTACHMENT, OUTPUT_ATTACHMENT};
+pub use query::TimestampQueries;
+pub use render_pass::{Framebuffer, RenderPass, RenderPassDesc};
+
+/// Errors from the Vulkan layer.
+#[derive(Debug, thiserror::Error)]
+pub enum VkError {
+    #[error("could not load the Vulkan loader (is libvulkan1 installed? run scripts/setup.sh): {0}")]
+    Loader(String),
+    #[error("VK_LAYER_KHRONOS_validation is not installed (package vulkan-validationlayers; run scripts/setup.sh)")]
+    MissingValidationLayer,
+    #[error("no Vulkan 1.2 device matches '{wanted}'; available: {available:?}")]
+    NoDevice {
+        wanted: String,
+        available: Vec<String>,
+    },
+    #[error("the device has no graphics queue")]
+    NoGraphicsQueue,
+    #[error("format {format:?} does not support {what} on this device")]
+    UnsupportedFormat { format: ash::vk::Format, what: String },
+    #[error("Vulkan call failed: {0}")]
+    Api(#[from] ash::vk::Result),
+    #[error("memory allocation failed: {0}")]
+    Allocation(#[from] gpu_allocator::AllocationError),
+    #[error("invalid SPIR-V: {0}")]
+    Spirv(String),
+}
+
+pub use image::supports_linear_filter;
+
+/// A colour clear value.
+pub fn clear_color(rgba: [f32; 4]) -> ash::vk::ClearValue {
+    ash::vk::ClearValue {
+        color: ash::vk::ClearColorValue { float32: rgba },
+    }
+}
+
+/// A depth clear value (stencil 0).
+pub fn clear_depth(depth: f32) -> ash::vk::ClearValue {
+    ash::vk::ClearValue {
+        depth_stencil: ash::vk::ClearDepthStencilValue { depth, stencil: 0 },
+    }
+}

@@ -1,0 +1,219 @@
+//! Shader modules, pipeline layouts and graphics pipelines.
+
+use super::{Context, DescriptorSetLayout, RenderPass, VkError};
+use ash::vk;
+use std::sync::Arc;
+
+pub struct ShaderModule {
+    ctx: Arc<Context>,
+    handle: vk::ShaderModule,
+}
+
+impl ShaderModule {
+    /// `spirv` is the bytes of a SPIR-V binary (embedded at build time).
+    pub fn new(ctx: &Arc<Context>, spirv: &[u8]) -> Result<ShaderModule, VkError> {
+        let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
+            .map_err(|e| VkError::Spirv(e.to_string()))?;
+        let info = vk::ShaderModuleCreateInfo::default().code(&words);
+        // SAFETY: valid device; words is aligned SPIR-V.
+        let handle = unsafe { ctx.device.create_shader_module(&info, None) }?;
+        Ok(ShaderModule {
+            ctx: ctx.clone(),
+            handle,
+        })
+    }
+}
+
+impl Drop for ShaderModule {
+    fn drop(&mut self) {
+        // SAFETY: modules are only needed during pipeline creation.
+        unsafe { self.ctx.device.destroy_shader_module(self.handle, None) };
+    }
+}
+
+pub struct PipelineLayout {
+    ctx: Arc<Context>,
+    pub(crate) handle: vk::PipelineLayout,
+}
+
+impl PipelineLayout {
+    pub fn new(ctx: &Arc<Context>, sets: &[&DescriptorSetLayout]) -> Result<PipelineLayout, VkError> {
+        let handles: Vec<_> = sets.iter().map(|s| s.handle).collect();
+        let info = vk::PipelineLayoutCreateInfo::default().set_layouts(&handles);
+        // SAFETY: valid device and set layouts.
+        let handle = unsafe { ctx.device.create_pipeline_layout(&info, None) }?;
+        Ok(PipelineLayout {
+            ctx: ctx.clone(),
+            handle,
+        })
+    }
+}
+
+impl Drop for PipelineLayout {
+    fn drop(&mut self) {
+        // SAFETY: pipelines using it are idle.
+        unsafe { self.ctx.device.destroy_pipeline_layout(self.handle, None) };
+    }
+}
+
+/// One vertex attribute: shader location, format, byte offset.
+#[derive(Clone, Copy, Debug)]
+pub struct VertexAttribute {
+    pub location: u32,
+    pub format: vk::Format,
+    pub offset: u32,
+}
+
+/// Everything that varies between the renderer's pipelines.
+pub struct GraphicsPipelineDesc<'a> {
+    pub vertex_shader: &'a ShaderModule,
+    pub fragment_shader: &'a ShaderModule,
+    /// Specialization constants (id, value), given to both stages.
+    pub specialization: &'a [(u32, u32)],
+    /// Per-vertex stride and attributes; stride 0 means no vertex input
+    /// (full-screen triangle generated from the vertex index).
+    pub vertex_stride: u32,
+    pub vertex_attributes: &'a [VertexAttribute],
+    pub cull_mode: vk::CullModeFlags,
+    pub depth_test: bool,
+    pub depth_write: bool,
+    /// Straight alpha blending (src-alpha, one-minus-src-alpha).
+    pub alpha_blend: bool,
+    pub subpass: u32,
+}
+
+pub struct GraphicsPipeline {
+    ctx: Arc<Context>,
+    pub(crate) handle: vk::Pipeline,
+}
+
+impl GraphicsPipeline {
+    pub fn new(
+        ctx: &Arc<Context>,
+        layout: &PipelineLayout,
+        pass: &RenderPass,
+        desc: &GraphicsPipelineDesc<'_>,
+    ) -> Result<GraphicsPipeline, VkError> {
+        let entries: Vec<vk::SpecializationMapEntry> = desc
+            .specialization
+            .iter()
+            .enumerate()
+            .map(|(i, (id, _))| vk::SpecializationMapEntry {
+                constant_id: *id,
+                offset: (i * 4) as u32,
+                size: 4,
+            })
+            .collect();
+        let data: Vec<u8> = desc
+            .specialization
+            .iter()
+            .flat_map(|(_, v)| v.to_ne_bytes())
+            .collect();
+        let spec = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(&data);
+        let stages = [
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(desc.vertex_shader.handle)
+                .name(c"main")
+                .specialization_info(&spec),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::FRAGMENT)
+                .module(desc.fragment_shader.handle)
+                .name(c"main")
+                .specialization_info(&spec),
+        ];
+        let bindings = [vk::VertexInputBindingDescription {
+            binding: 0,
+            stride: desc.vertex_stride,
+            input_rate: vk::VertexInputRate::VERTEX,
+        }];
+        let attributes: Vec<_> = desc
+            .vertex_attributes
+            .iter()
+            .map(|a| vk::VertexInputAttributeDescription {
+                location: a.location,
+                binding: 0,
+                format: a.format,
+                offset: a.offset,
+            })
+            .collect();
+        let vertex_input = if desc.vertex_stride == 0 {
+            vk::PipelineVertexInputStateCreateInfo::default()
+        } else {
+            vk::PipelineVertexInputStateCreateInfo::default()
+                .vertex_binding_descriptions(&bindings)
+                .vertex_attribute_descriptions(&attributes)
+        };
+        let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
+            .viewport_count(1)
+            .scissor_count(1);
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(desc.cull_mode)
+            // Counter-clockwise in framebuffer space (y down after the
+            // projection's flip) is front.
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        // Reversed-Z: nearer surfaces have larger depth.
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(desc.depth_test)
+            .depth_write_enable(desc.depth_write)
+            .depth_compare_op(vk::CompareOp::GREATER);
+        let blend_attachment = if desc.alpha_blend {
+            vk::PipelineColorBlendAttachmentState::default()
+                .blend_enable(true)
+                .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
+                .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+                .color_blend_op(vk::BlendOp::ADD)
+                .src_alpha_blend_factor(vk::BlendFactor::ONE)
+                .dst_alpha_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+                .alpha_blend_op(vk::BlendOp::ADD)
+                .color_write_mask(vk::ColorComponentFlags::RGBA)
+        } else {
+            vk::PipelineColorBlendAttachmentState::default()
+                .color_write_mask(vk::ColorComponentFlags::RGBA)
+        };
+        let blend_attachments = [blend_attachment];
+        let blend =
+            vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&input_assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(layout.handle)
+            .render_pass(pass.handle)
+            .subpass(desc.subpass);
+        // SAFETY: all state structs are locals alive for the call; the
+        // shaders, layout and pass are valid objects of this device.
+        let handle = unsafe {
+            ctx.device
+                .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+        }
+        .map_err(|(_, e)| VkError::Api(e))?[0];
+        Ok(GraphicsPipeline {
+            ctx: ctx.clone(),
+            handle,
+        })
+    }
+}
+
+impl Drop for GraphicsPipeline {
+    fn drop(&mut self) {
+        // SAFETY: no pending command buffer uses it.
+        unsafe { self.ctx.device.destroy_pipeline(self.handle, None) };
+    }
+}

@@ -1,0 +1,118 @@
+//! Validation-layer messages, counted.
+//!
+//! Every run that enables `VK_LAYER_KHRONOS_validation` installs a debug-utils
+//! messenger that records each warning and error. A run that produced any
+//! message that is not on the reviewed allow-list is a failed run: the CLI
+//! exits non-zero and the tests assert the log is empty.
+
+use ash::vk;
+use std::ffi::CStr;
+use std::sync::Mutex;
+
+/// Messages that are known, reviewed and harmless, keyed by VUID (the
+/// layer's `pMessageIdName`), each with the reason it is allowed.
+///
+/// Keep this list short; every entry needs a reason a reviewer can check.
+pub const ALLOWED_MESSAGES: &[(&str, &str)] = &[];
+
+/// One message the validation layer emitted.
+#[derive(Clone, Debug)]
+pub struct ValidationMessage {
+    pub severity: &'static str,
+    pub id_name: String,
+    pub text: String,
+}
+
+impl std::fmt::Display for ValidationMessage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "[{}] {}: {}", self.severity, self.id_name, self.text)
+    }
+}
+
+/// The shared record of validation messages for one instance.
+///
+/// It is boxed and its address handed to the layer as user data, so it must
+/// outlive the instance; [`super::Context`] owns it and drops it last.
+#[derive(Default, Debug)]
+pub struct ValidationLog {
+    messages: Mutex<Vec<ValidationMessage>>,
+    allowed: Mutex<usize>,
+}
+
+impl ValidationLog {
+    /// Every counted (not allowed) message so far.
+    pub fn messages(&self) -> Vec<ValidationMessage> {
+        self.messages.lock().map(|m| m.clone()).unwrap_or_default()
+    }
+
+    /// How many messages matched the allow-list and were not counted.
+    pub fn allowed_count(&self) -> usize {
+        self.allowed.lock().map(|a| *a).unwrap_or(0)
+    }
+
+    fn record(&self, message: ValidationMessage) {
+        if ALLOWED_MESSAGES
+            .iter()
+            .any(|(id, _)| *id == message.id_name)
+        {
+            if let Ok(mut a) = self.allowed.lock() {
+                *a += 1;
+            }
+            return;
+        }
+        log::error!("validation: {message}");
+        if let Ok(mut m) = self.messages.lock() {
+            m.push(message);
+        }
+    }
+}
+
+/// The severities the messenger reports: warnings and errors are counted;
+/// info and verbose messages are not requested at all.
+pub(crate) fn counted_severities() -> vk::DebugUtilsMessageSeverityFlagsEXT {
+    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+}
+
+pub(crate) fn counted_types() -> vk::DebugUtilsMessageTypeFlagsEXT {
+    vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+        | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE
+}
+
+/// The messenger callback.
+///
+/// # Safety
+/// Called by the validation layer with `user_data` pointing at the
+/// `ValidationLog` owned by the `Context`, which outlives the instance.
+pub(crate) unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    _types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user_data: *mut std::ffi::c_void,
+) -> vk::Bool32 {
+    if data.is_null() || user_data.is_null() {
+        return vk::FALSE;
+    }
+    // SAFETY: the layer passes a valid callback-data struct for the duration
+    // of the call, and user_data is the ValidationLog we registered.
+    let (data, log) = unsafe { (&*data, &*(user_data as *const ValidationLog)) };
+    let text = |p: *const std::ffi::c_char| {
+        if p.is_null() {
+            String::new()
+        } else {
+            // SAFETY: non-null strings from the layer are NUL-terminated.
+            unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
+        }
+    };
+    let severity = if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
+        "error"
+    } else {
+        "warning"
+    };
+    log.record(ValidationMessage {
+        severity,
+        id_name: text(data.p_message_id_name),
+        text: text(data.p_message),
+    });
+    vk::FALSE
+}
