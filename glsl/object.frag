@@ -6,7 +6,9 @@
 
 layout(location = 0) in vec3 in_world_position;
 layout(location = 1) in vec3 in_normal;
+#ifdef BASE_COLOR_TEXTURE
 layout(location = 2) in vec2 in_uv;
+#endif
 layout(location = 3) in vec3 in_gouraud;
 
 layout(location = 0) out vec4 out_color;
@@ -18,7 +20,8 @@ layout(set = 2, binding = 0) uniform sampler2D base_color;
 void main() {
     vec4 base = vec4(1.0);
 #ifdef BASE_COLOR_TEXTURE
-    base = texture(base_color, in_uv);
+    // Surface v grows upwards; image rows grow downwards.
+    base = texture(base_color, vec2(in_uv.x, 1.0 - in_uv.y));
 #endif
     float alpha = object.kd.a * base.a;
     if (SHADING_MODEL == SHADING_GOURAUD) {

@@ -1,17 +1,21 @@
 #version 450
 // Transforms object vertices to clip space; for Gouraud shading it also
 // lights each vertex.
+// variant: textured BASE_COLOR_TEXTURE
 #include "scene_data.glsl"
 #include "lighting.glsl"
 
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
-layout(location = 2) in vec4 in_tangent;
+#ifdef BASE_COLOR_TEXTURE
 layout(location = 3) in vec2 in_uv;
+#endif
 
 layout(location = 0) out vec3 out_world_position;
 layout(location = 1) out vec3 out_normal;
+#ifdef BASE_COLOR_TEXTURE
 layout(location = 2) out vec2 out_uv;
+#endif
 layout(location = 3) out vec3 out_gouraud;
 
 void main() {
@@ -19,7 +23,9 @@ void main() {
     vec3 n = normalize(mat3(object.normal_matrix) * in_normal);
     out_world_position = world.xyz;
     out_normal = n;
+#ifdef BASE_COLOR_TEXTURE
     out_uv = in_uv;
+#endif
     out_gouraud = vec3(0.0);
     if (SHADING_MODEL == SHADING_GOURAUD) {
         vec3 v = normalize(frame.camera_position.xyz - world.xyz);

@@ -14,6 +14,7 @@ packages=(
   glslang-dev           # static glslang libraries shaderc links against
   spirv-tools           # static SPIRV-Tools libraries shaderc links against
   pkg-config
+  g++                   # nv-flip builds NVIDIA FLIP from C++ source
 )
 
 missing=()

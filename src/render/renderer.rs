@@ -236,30 +236,36 @@ impl Renderer {
         };
         let tonemap_pipeline_layout = PipelineLayout::new(ctx, &[&tonemap_layout])?;
 
-        let object_vert = ShaderModule::new(ctx, shaders::OBJECT_VERT)?;
-        let object_frag = ShaderModule::new(ctx, shaders::OBJECT_FRAG)?;
-        let object_frag_textured = if textures.is_empty() {
+        // The shader pair without texture, and with it only when needed.
+        let plain_shaders = (
+            ShaderModule::new(ctx, shaders::OBJECT_VERT)?,
+            ShaderModule::new(ctx, shaders::OBJECT_FRAG)?,
+        );
+        let textured_shaders = if textures.is_empty() {
             None
         } else {
-            Some(ShaderModule::new(ctx, shaders::OBJECT_FRAG_TEXTURED)?)
+            Some((
+                ShaderModule::new(ctx, shaders::OBJECT_VERT_TEXTURED)?,
+                ShaderModule::new(ctx, shaders::OBJECT_FRAG_TEXTURED)?,
+            ))
         };
-        let attributes = vertex_attributes();
         let mut pipelines: BTreeMap<PipelineKey, GraphicsPipeline> = BTreeMap::new();
         for key in plan.pipelines() {
-            let (layout, frag) = if key.textured {
+            let (layout, (vert, frag)) = if key.textured {
                 (
                     textured_layout.as_ref().expect("textured layout exists when a draw is textured"),
-                    object_frag_textured.as_ref().expect("textured shader exists when a draw is textured"),
+                    textured_shaders.as_ref().expect("textured shaders exist when a draw is textured"),
                 )
             } else {
-                (&plain_layout, &object_frag)
+                (&plain_layout, &plain_shaders)
             };
+            let attributes = vertex_attributes(key.textured);
             let pipeline = GraphicsPipeline::new(
                 ctx,
                 layout,
                 &render_pass,
                 &GraphicsPipelineDesc {
-                    vertex_shader: &object_vert,
+                    vertex_shader: vert,
                     fragment_shader: frag,
                     specialization: &[(0, key.shading as u32)],
                     vertex_stride: std::mem::size_of::<Vertex>() as u32,
@@ -483,9 +489,12 @@ impl Drop for Renderer {
     }
 }
 
-fn vertex_attributes() -> [VertexAttribute; 4] {
+/// The vertex attributes a pipeline consumes: position and normal always,
+/// UVs only for textured materials. (Tangents stay in the vertex format for
+/// normal mapping but are not fed to shaders that do not read them.)
+fn vertex_attributes(textured: bool) -> Vec<VertexAttribute> {
     let offset = |f: usize| f as u32;
-    [
+    let mut attributes = vec![
         VertexAttribute {
             location: 0,
             format: Format::R32G32B32_SFLOAT,
@@ -496,17 +505,15 @@ fn vertex_attributes() -> [VertexAttribute; 4] {
             format: Format::R32G32B32_SFLOAT,
             offset: offset(std::mem::offset_of!(Vertex, normal)),
         },
-        VertexAttribute {
-            location: 2,
-            format: Format::R32G32B32A32_SFLOAT,
-            offset: offset(std::mem::offset_of!(Vertex, tangent)),
-        },
-        VertexAttribute {
+    ];
+    if textured {
+        attributes.push(VertexAttribute {
             location: 3,
             format: Format::R32G32_SFLOAT,
             offset: offset(std::mem::offset_of!(Vertex, uv)),
-        },
-    ]
+        });
+    }
+    attributes
 }
 
 fn upload_geometry(ctx: &Arc<Context>, meshes: &[Mesh]) -> Result<(Buffer, Vec<GeometryRange>), RenderError> {

@@ -1,0 +1,18 @@
+//! Reporting helpers for CI: summarising benchmark samples and comparing
+//! rendered screenshots against references.
+//!
+//! - [`stats`] turns raw frame-time samples into a [`Summary`] (min, median,
+//!   p95, max, mean, sample standard deviation) that serialises to JSON for
+//!   dashboards and regression checks.
+//! - [`compare`] compares two images (PNG as sRGB 8-bit, OpenEXR as linear
+//!   float) with FLIP, PSNR or RMSE, gates the result against [`Thresholds`],
+//!   and writes a diff picture for humans to look at.
+//!
+//! Both are deliberately free of Vulkan so they can run on CI machines without
+//! a GPU, e.g. to re-check stored screenshots.
+
+pub mod compare;
+pub mod stats;
+
+pub use compare::{compare_files, write_diff_png, CompareError, Comparison, Metric, Thresholds};
+pub use stats::{percentile, Summary};

@@ -1,0 +1,273 @@
+//! Scene description: camera, lights, materials and objects, loaded from a
+//! TOML file and validated so that the renderer can trust every value.
+//!
+//! The file format is documented on [`Scene::from_toml`]; example scenes are
+//! in `assets/scenes/`.
+
+mod camera;
+mod error;
+mod file;
+mod lights;
+mod material;
+mod object;
+
+use std::path::Path;
+
+use glam::Vec3;
+use serde::Deserialize;
+
+pub use camera::Camera;
+pub use error::SceneError;
+pub use file::{
+    DEFAULT_ATTENUATION, DEFAULT_LIGHT_CUTOFF, DEFAULT_TESSELLATION, MAX_OUTPUT_SIZE, MIN_SEGMENTS,
+};
+pub use lights::Light;
+pub use material::{Material, ShadingModel};
+pub use object::{Object, Shape, Transform};
+
+use crate::mesh::{tessellate, Mesh};
+
+/// A complete, validated scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// Render target size and format.
+    pub output: Output,
+    /// The camera.
+    pub camera: Camera,
+    /// Ambient light `La`, linear RGB.
+    pub ambient: Vec3,
+    /// HDR to display mapping.
+    pub tone_map: ToneMap,
+    /// Light sources.
+    pub lights: Vec<Light>,
+    /// Materials, with unique names.
+    pub materials: Vec<Material>,
+    /// Objects to draw; each refers to a material by index.
+    pub objects: Vec<Object>,
+    /// A point light is skipped for an object when its strongest colour
+    /// component, attenuated to the object's bounding sphere, is below this.
+    pub light_cutoff: f32,
+}
+
+/// Render target description.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Output {
+    /// Width in pixels, `1..=16384`.
+    pub width: u32,
+    /// Height in pixels, `1..=16384`.
+    pub height: u32,
+    /// Format of the HDR colour target.
+    pub hdr_format: HdrFormat,
+}
+
+impl Output {
+    /// `width / height`, the aspect ratio for [`Camera::projection`].
+    pub fn aspect(&self) -> f32 {
+        self.width as f32 / self.height.max(1) as f32
+    }
+}
+
+/// Format of the HDR colour target.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum HdrFormat {
+    /// `R16G16B16A16_SFLOAT` (`"rgba16f"`).
+    Rgba16F,
+    /// `R32G32B32A32_SFLOAT` (`"rgba32f"`).
+    Rgba32F,
+}
+
+/// Tone mapping from HDR to display values.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ToneMap {
+    /// The curve.
+    pub operator: ToneMapOperator,
+    /// Linear scale applied before the curve, finite and > 0.
+    pub exposure: f32,
+}
+
+/// Tone-mapping curve.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ToneMapOperator {
+    /// `c / (1 + c)`.
+    Reinhard,
+    /// The ACES filmic approximation.
+    Aces,
+}
+
+impl Scene {
+    /// Reads and validates the scene file at `path`. Textures are resolved
+    /// relative to the file's folder.
+    ///
+    /// # Errors
+    ///
+    /// [`SceneError::Io`] if the file cannot be read, otherwise as
+    /// [`Scene::from_toml`].
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            file: file.clone(),
+            source,
+        })?;
+        let base_dir = path.parent().unwrap_or_else(|| Path::new(""));
+        Scene::from_toml(&text, &file, base_dir)
+    }
+
+    /// Parses and validates a scene from TOML text. `file` is only used in
+    /// messages; `base_dir` is the folder textures are resolved against.
+    ///
+    /// Format (every table rejects unknown keys; defaults in brackets):
+    ///
+    /// ```toml
+    /// ambient = [0.03, 0.03, 0.03]        # [0, 0, 0]; >= 0
+    /// light_cutoff = 0.001                 # [0.001]; >= 0, 0 disables culling
+    /// [output]                             # optional table
+    /// width = 640                          # [640]; 1..=16384
+    /// height = 360                         # [360]; 1..=16384
+    /// hdr_format = "rgba16f"               # ["rgba16f"] | "rgba32f"
+    /// [camera]                             # required
+    /// eye = [0.0, 2.0, 6.0]                # required
+    /// look_at = [0.0, 0.0, 0.0]            # required, != eye
+    /// up = [0.0, 1.0, 0.0]                 # [0, 1, 0]; not parallel to look_at - eye
+    /// fov_y = 45.0                         # [45]; degrees, in (0, 180)
+    /// near = 0.1                           # [0.1]; > 0
+    /// far = 100.0                          # > near; omit for an infinite far plane
+    /// [tone_map]                           # optional table
+    /// operator = "reinhard"                # ["reinhard"] | "aces"
+    /// exposure = 1.0                       # [1]; > 0
+    /// [[lights]]
+    /// type = "point"
+    /// position = [2.0, 3.0, 2.0]           # required
+    /// color = [1.0, 0.9, 0.8]              # [1, 1, 1]; >= 0
+    /// intensity = 20.0                     # [1]; >= 0, multiplies color
+    /// attenuation = [1.0, 0.0, 1.0]        # [1, 0, 1]; constant, linear, quadratic; >= 0, not all 0
+    /// [[lights]]
+    /// type = "directional"
+    /// direction = [-1.0, -1.0, -0.5]       # required, the way the light travels
+    /// color = [0.3, 0.3, 0.3]              # [1, 1, 1]
+    /// intensity = 1.0                      # [1]
+    /// [[materials]]
+    /// name = "red"                         # required, unique, not empty
+    /// kd = [0.8, 0.1, 0.1]                 # required; >= 0
+    /// ka = [0.8, 0.1, 0.1]                 # [= kd]; >= 0
+    /// ks = [0.5, 0.5, 0.5]                 # [0, 0, 0]; >= 0
+    /// shininess = 32.0                     # [32]; > 0
+    /// texture = "../textures/checker.png"  # optional, relative to the scene file; must exist
+    /// opacity = 1.0                        # [1]; in [0, 1]
+    /// shading = "phong"                    # ["phong"] | "gouraud" | "toon"
+    /// [[objects]]
+    /// name = "ball"                        # required, not empty
+    /// material = "red"                     # required, a material name
+    /// shape = { type = "sphere", radius = 1.0 }   # see below
+    /// tessellation = [64, 32]              # [64, 32]; u and v segments, each 3..=4096
+    /// translate = [0.0, 1.0, 0.0]          # [0, 0, 0]
+    /// rotate = { axis = [0.0, 1.0, 0.0], degrees = 30.0 }  # optional; axis not zero
+    /// scale = [1.0, 1.0, 1.0]              # [1, 1, 1]; every component > 0
+    /// ```
+    ///
+    /// Shapes (all lengths > 0): `sphere` (`radius`), `torus`
+    /// (`major_radius`, `minor_radius`), `plane` (`width`, `depth`; XZ
+    /// plane, normal +Y), `cylinder` (`radius`, `height`; open, axis Y),
+    /// `flag` (`width`, `height`, `amplitude`, `frequency` in radians over
+    /// the width, optional `phase`, default 0). Every number must be finite.
+    ///
+    /// # Errors
+    ///
+    /// [`SceneError::Parse`] for TOML syntax errors, unknown keys, missing
+    /// required keys and wrong types (with the `toml` crate's line/column
+    /// message); [`SceneError::Invalid`] for values that break the rules
+    /// above, naming the field path (e.g. `objects[2].rotate.axis`).
+    pub fn from_toml(text: &str, file: &str, base_dir: &Path) -> Result<Scene, SceneError> {
+        file::parse(text, file, base_dir)
+    }
+
+    /// Overrides the output size (from the command line), with the same
+    /// limits as the scene file's `output.width` / `output.height`.
+    pub fn set_output_size(&mut self, width: Option<u32>, height: Option<u32>) -> Result<(), SceneError> {
+        for (field, value, target) in [
+            ("output.width", width, &mut self.output.width),
+            ("output.height", height, &mut self.output.height),
+        ] {
+            if let Some(v) = value {
+                if v == 0 || v > MAX_OUTPUT_SIZE {
+                    return Err(SceneError::Invalid {
+                        file: "command line".into(),
+                        field: field.into(),
+                        reason: format!("{v} is outside 1..={MAX_OUTPUT_SIZE}"),
+                    });
+                }
+                *target = v;
+            }
+        }
+        Ok(())
+    }
+
+    /// The built-in default scene (`assets/scenes/default.toml`).
+    pub fn default_scene() -> Scene {
+        let base_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+        Scene::from_toml(
+            include_str!("../../assets/scenes/default.toml"),
+            "assets/scenes/default.toml",
+            &base_dir,
+        )
+        // The file is compiled in and a test loads it, so failure here is a
+        // build defect, not bad user input.
+        .expect("built-in default scene is valid")
+    }
+
+    /// Tessellates object `index` in object space. An index out of range
+    /// gives an empty mesh.
+    pub fn object_mesh(&self, index: usize) -> Mesh {
+        match self.objects.get(index) {
+            Some(object) => tessellate(
+                object.shape.surface().as_ref(),
+                object.tessellation.0,
+                object.tessellation.1,
+            ),
+            None => Mesh::default(),
+        }
+    }
+
+    /// World-space bounding sphere `(centre, radius)` of object `index`: its
+    /// mesh's bounding sphere moved by the object transform, the radius
+    /// scaled by the largest scale component. `None` if out of range.
+    pub fn object_bounds(&self, index: usize) -> Option<(Vec3, f32)> {
+        let object = self.objects.get(index)?;
+        let (centre, radius) = self.object_mesh(index).bounding_sphere();
+        let transform = &object.transform;
+        Some((
+            transform.matrix().transform_point3(centre),
+            radius * transform.max_scale(),
+        ))
+    }
+
+    /// Indices into [`Scene::lights`] of the lights that can noticeably light
+    /// object `object`: every directional light, and every point light whose
+    /// strongest colour component times `1 / (c + l d + q d^2)` is at least
+    /// [`Scene::light_cutoff`], with `d` the distance from the light to the
+    /// object's world-space bounding sphere (0 inside it). An object index
+    /// out of range gives an empty list.
+    pub fn lights_reaching(&self, object: usize) -> Vec<usize> {
+        let Some((centre, radius)) = self.object_bounds(object) else {
+            return Vec::new();
+        };
+        self.lights
+            .iter()
+            .enumerate()
+            .filter(|(_, light)| match light {
+                Light::Directional { .. } => true,
+                Light::Point { position, .. } => {
+                    let distance = (position.distance(centre) - radius).max(0.0);
+                    // Written as "not below" so that an infinite strength
+                    // (c = 0 at d = 0) counts as reaching.
+                    light.strength_at(distance) >= self.light_cutoff
+                }
+            })
+            .map(|(i, _)| i)
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,172 @@
+//! Scene [`Object`]s: an analytic [`Shape`], how finely to tessellate it, a
+//! material and a [`Transform`].
+
+use glam::{Mat3, Mat4, Quat, Vec3};
+
+use crate::mesh::{
+    CylinderSurface, FlagSurface, ParametricSurface, PlaneSurface, SphereSurface, TorusSurface,
+};
+
+/// One object to draw.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Object {
+    /// Name, for messages and debugging.
+    pub name: String,
+    /// The surface.
+    pub shape: Shape,
+    /// `(u_segments, v_segments)`, each in `3..=4096`.
+    pub tessellation: (u32, u32),
+    /// Index into `Scene::materials`.
+    pub material: usize,
+    /// Object-to-world transform.
+    pub transform: Transform,
+}
+
+/// Object-to-world transform: scale, then rotate, then translate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transform {
+    /// Translation.
+    pub translate: Vec3,
+    /// Rotation axis; unit length after loading.
+    pub rotate_axis: Vec3,
+    /// Rotation angle in degrees, counter-clockwise looking down the axis
+    /// towards the origin (right-hand rule).
+    pub rotate_degrees: f32,
+    /// Per-axis scale; every component > 0 after loading.
+    pub scale: Vec3,
+}
+
+impl Default for Transform {
+    fn default() -> Self {
+        Transform {
+            translate: Vec3::ZERO,
+            rotate_axis: Vec3::Y,
+            rotate_degrees: 0.0,
+            scale: Vec3::ONE,
+        }
+    }
+}
+
+impl Transform {
+    /// The rotation as a quaternion. A zero axis (only possible when the
+    /// struct is built by hand) means no rotation rather than NaN.
+    pub fn rotation(&self) -> Quat {
+        match self.rotate_axis.try_normalize() {
+            Some(axis) => Quat::from_axis_angle(axis, self.rotate_degrees.to_radians()),
+            None => Quat::IDENTITY,
+        }
+    }
+
+    /// `T * R * S`.
+    pub fn matrix(&self) -> Mat4 {
+        Mat4::from_scale_rotation_translation(self.scale, self.rotation(), self.translate)
+    }
+
+    /// Inverse transpose of the upper 3x3 of [`Transform::matrix`], for
+    /// transforming normals.
+    pub fn normal_matrix(&self) -> Mat3 {
+        // (R S)^-T = R^-T S^-T = R S^-1 because R is orthonormal and S
+        // diagonal; this avoids a general 3x3 inverse and its round-off.
+        Mat3::from_quat(self.rotation()) * Mat3::from_diagonal(self.scale.recip())
+    }
+
+    /// Largest absolute scale component: how much the transform can stretch
+    /// a distance, used to scale bounding-sphere radii.
+    pub fn max_scale(&self) -> f32 {
+        self.scale.abs().max_element()
+    }
+}
+
+/// An analytic surface with its dimensions (all lengths > 0 after loading).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shape {
+    /// Sphere centred at the origin.
+    Sphere {
+        /// Radius.
+        radius: f32,
+    },
+    /// Torus around the `Y` axis, centred at the origin.
+    Torus {
+        /// Distance from the centre to the middle of the tube.
+        major_radius: f32,
+        /// Tube radius (may exceed `major_radius`: a spindle torus).
+        minor_radius: f32,
+    },
+    /// Rectangle in the `XZ` plane, centred at the origin, normal `+Y`.
+    Plane {
+        /// Extent along `X`.
+        width: f32,
+        /// Extent along `Z`.
+        depth: f32,
+    },
+    /// Open cylinder around the `Y` axis, centred at the origin.
+    Cylinder {
+        /// Radius.
+        radius: f32,
+        /// Height along `Y`.
+        height: f32,
+    },
+    /// Waving flag `r(u, v) = [u W, v H, D sin(K u + alpha)]`, hanging from
+    /// a pole along the `Y` axis and extending along `+X`.
+    Flag {
+        /// `W`, extent along `X`.
+        width: f32,
+        /// `H`, extent along `Y`.
+        height: f32,
+        /// `D`, wave amplitude along `Z`.
+        amplitude: f32,
+        /// `K`, radians of wave over the whole width.
+        frequency: f32,
+        /// `alpha`, radians.
+        phase: f32,
+    },
+}
+
+impl Shape {
+    /// The parametric surface to tessellate.
+    pub fn surface(&self) -> Box<dyn ParametricSurface> {
+        let f = f64::from;
+        match *self {
+            Shape::Sphere { radius } => Box::new(SphereSurface { radius: f(radius) }),
+            Shape::Torus {
+                major_radius,
+                minor_radius,
+            } => Box::new(TorusSurface {
+                major_radius: f(major_radius),
+                minor_radius: f(minor_radius),
+            }),
+            Shape::Plane { width, depth } => Box::new(PlaneSurface {
+                width: f(width),
+                depth: f(depth),
+            }),
+            Shape::Cylinder { radius, height } => Box::new(CylinderSurface {
+                radius: f(radius),
+                height: f(height),
+            }),
+            Shape::Flag {
+                width,
+                height,
+                amplitude,
+                frequency,
+                phase,
+            } => Box::new(FlagSurface {
+                width: f(width),
+                height: f(height),
+                amplitude: f(amplitude),
+                frequency: f(frequency),
+                phase: f(phase),
+            }),
+        }
+    }
+
+    /// The `type` name used in scene files.
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            Shape::Sphere { .. } => "sphere",
+            Shape::Torus { .. } => "torus",
+            Shape::Plane { .. } => "plane",
+            Shape::Cylinder { .. } => "cylinder",
+            Shape::Flag { .. } => "flag",
+        }
+    }
+}

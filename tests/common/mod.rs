@@ -1,0 +1,66 @@
+//! Helpers shared by the integration tests: every render here runs under
+//! the Khronos validation layer and fails on any message.
+
+#![allow(dead_code)]
+
+use aerial::app::{self, RenderRun, RenderSettings};
+use aerial::render::Pixels;
+use aerial::scene::Scene;
+use std::path::Path;
+
+/// Parses a scene written inline in a test.
+pub fn scene(toml: &str) -> Scene {
+    Scene::from_toml(toml, "inline test scene", Path::new(env!("CARGO_MANIFEST_DIR")))
+        .unwrap_or_else(|e| panic!("test scene does not parse: {e}"))
+}
+
+/// Renders with validation on and asserts the layer said nothing.
+pub fn render(scene: &Scene, keep_hdr: bool) -> RenderRun {
+    let run = app::render(
+        scene,
+        &RenderSettings {
+            validate: true,
+            device: None,
+            frames: 1,
+            keep_hdr,
+        },
+    )
+    .unwrap_or_else(|e| panic!("render failed: {e}"));
+    assert_no_validation_messages(&run);
+    run
+}
+
+pub fn assert_no_validation_messages(run: &RenderRun) {
+    assert!(
+        run.validation.is_empty(),
+        "validation messages:\n{}",
+        run.validation
+            .iter()
+            .map(|m| m.to_string())
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
+}
+
+/// RGBA at pixel (x, y).
+pub fn pixel<T: Copy>(p: &Pixels<T>, x: u32, y: u32) -> [T; 4] {
+    let i = ((y * p.width + x) * 4) as usize;
+    [p.data[i], p.data[i + 1], p.data[i + 2], p.data[i + 3]]
+}
+
+/// Fails on a blank or nearly blank image: at least `min_fraction` of the
+/// pixels must differ from the top-left (background) pixel, and the image
+/// must hold more than a handful of distinct colours.
+pub fn assert_not_blank(p: &Pixels<u8>, min_fraction: f64) {
+    let bg = pixel(p, 0, 0);
+    let total = (p.width * p.height) as usize;
+    let differing = p.data.chunks_exact(4).filter(|c| c[..3] != bg[..3]).count();
+    let mut colours: Vec<[u8; 3]> = p.data.chunks_exact(4).map(|c| [c[0], c[1], c[2]]).collect();
+    colours.sort_unstable();
+    colours.dedup();
+    assert!(
+        differing as f64 >= min_fraction * total as f64,
+        "only {differing} of {total} pixels differ from the background"
+    );
+    assert!(colours.len() > 16, "only {} distinct colours", colours.len());
+}
