@@ -7,8 +7,8 @@
 
 pub mod app;
 pub mod mesh;
-pub mod report;
 pub mod render;
+pub mod report;
 pub mod scene;
 pub mod vk;
 

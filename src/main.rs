@@ -8,7 +8,11 @@ use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 
 #[derive(Parser)]
-#[command(name = "aerial", version, about = "An explicit, headless Vulkan renderer")]
+#[command(
+    name = "aerial",
+    version,
+    about = "An explicit, headless Vulkan renderer"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -112,12 +116,23 @@ fn print_timings(run: &app::RenderRun) {
     let median = |mut v: Vec<f64>| {
         v.sort_by(f64::total_cmp);
         let n = v.len();
-        let med = if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) };
+        let med = if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            0.5 * (v[n / 2 - 1] + v[n / 2])
+        };
         (med, v[0], v[n - 1])
     };
-    println!("{:<12} {:>10} {:>10} {:>10}", "pass", "median ms", "min ms", "max ms");
+    println!(
+        "{:<12} {:>10} {:>10} {:>10}",
+        "pass", "median ms", "min ms", "max ms"
+    );
     for (i, name) in run.passes.iter().enumerate() {
-        let samples: Vec<f64> = run.frames.iter().filter_map(|f| f.pass_ms.get(i).copied()).collect();
+        let samples: Vec<f64> = run
+            .frames
+            .iter()
+            .filter_map(|f| f.pass_ms.get(i).copied())
+            .collect();
         if samples.is_empty() {
             continue;
         }

@@ -29,13 +29,25 @@ fn default_scene_renders_to_png_and_exr_under_validation() {
     let dir = temp_dir("default");
     let (png, exr) = (dir.join("out.png"), dir.join("out.exr"));
     let out = aerial()
-        .args(["render", "--validate", "--width", "160", "--height", "90", "--out"])
+        .args([
+            "render",
+            "--validate",
+            "--width",
+            "160",
+            "--height",
+            "90",
+            "--out",
+        ])
         .arg(&png)
         .arg("--hdr")
         .arg(&exr)
         .output()
         .unwrap();
-    assert!(out.status.success(), "stderr: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let img = image::open(&png).unwrap().to_rgba8();
     assert_eq!(img.dimensions(), (160, 90));
     assert!(std::fs::metadata(&exr).unwrap().len() > 1000);
@@ -49,11 +61,20 @@ fn every_bad_scene_fails_with_a_message_naming_the_file() {
     for scene in scenes {
         let dir = temp_dir("bad");
         let png = dir.join("out.png");
-        let out = aerial().arg("render").arg(&scene).arg("--out").arg(&png).output().unwrap();
+        let out = aerial()
+            .arg("render")
+            .arg(&scene)
+            .arg("--out")
+            .arg(&png)
+            .output()
+            .unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{} was accepted", scene.display());
         let name = scene.file_name().unwrap().to_string_lossy();
-        assert!(stderr.contains(name.as_ref()), "{name}: message does not name the file: {stderr}");
+        assert!(
+            stderr.contains(name.as_ref()),
+            "{name}: message does not name the file: {stderr}"
+        );
         assert!(!stderr.contains("panicked"), "{name}: panicked: {stderr}");
         assert!(!png.exists(), "{name}: an output file was left behind");
         std::fs::remove_dir_all(&dir).ok();
@@ -62,7 +83,10 @@ fn every_bad_scene_fails_with_a_message_naming_the_file() {
 
 #[test]
 fn a_missing_scene_file_is_a_clear_error() {
-    let out = aerial().args(["render", "no/such/scene.toml"]).output().unwrap();
+    let out = aerial()
+        .args(["render", "no/such/scene.toml"])
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/scene.toml"));
 }

@@ -20,7 +20,10 @@ fn example_scenes() -> Vec<PathBuf> {
 #[test]
 fn every_example_scene_renders_cleanly() {
     let scenes = example_scenes();
-    assert!(scenes.len() >= 5, "expected the example scenes, found {scenes:?}");
+    assert!(
+        scenes.len() >= 5,
+        "expected the example scenes, found {scenes:?}"
+    );
     for path in scenes {
         let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
         // Small, so the suite stays fast; the shading is resolution-independent.
@@ -44,8 +47,12 @@ fn two_renders_are_bit_identical() {
     scene.set_output_size(Some(320), Some(180)).unwrap();
     let a = common::render(&scene, true);
     let b = common::render(&scene, true);
-    assert_eq!(a.output.data, b.output.data, "tone-mapped output differs between runs");
+    assert_eq!(
+        a.output.data, b.output.data,
+        "tone-mapped output differs between runs"
+    );
     let (ha, hb) = (a.hdr.unwrap(), b.hdr.unwrap());
-    let bits = |p: &aerial::render::Pixels<f32>| p.data.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    let bits =
+        |p: &aerial::render::Pixels<f32>| p.data.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&ha), bits(&hb), "HDR output differs between runs");
 }

@@ -111,7 +111,12 @@ fn blinn_phong_matches_double_precision_oracle() {
     );
     let light = DVec3::new(2.0, 2.0, 4.0);
     let le = DVec3::new(1.0, 0.9, 0.8) * 12.0;
-    let (ka, kd, ks, shine) = (DVec3::splat(0.1), DVec3::new(0.6, 0.5, 0.4), DVec3::splat(0.5), 20.0);
+    let (ka, kd, ks, shine) = (
+        DVec3::splat(0.1),
+        DVec3::new(0.6, 0.5, 0.4),
+        DVec3::splat(0.5),
+        20.0,
+    );
     let la = DVec3::splat(0.2);
 
     let mut checked = 0;
@@ -158,6 +163,9 @@ fn blinn_phong_matches_double_precision_oracle() {
         }
     }
     assert!(checked > 150, "only {checked} pixels checked");
-    assert!(saw_highlight, "the sampled pixels never reached the highlight");
+    assert!(
+        saw_highlight,
+        "the sampled pixels never reached the highlight"
+    );
     eprintln!("{checked} pixels within tolerance; worst error {worst:.2} of the tolerance");
 }

@@ -58,7 +58,9 @@ fn differences(a: &Pixels<f32>, b: &Pixels<f32>) -> (f64, f64) {
         if pa[3] == 0.0 || pb[3] == 0.0 {
             continue;
         }
-        let d = (0..3).map(|c| (pa[c] - pb[c]).abs() as f64).fold(0.0, f64::max);
+        let d = (0..3)
+            .map(|c| (pa[c] - pb[c]).abs() as f64)
+            .fold(0.0, f64::max);
         max = max.max(d);
         sum += d;
         n += 1;
@@ -71,18 +73,34 @@ fn gouraud_misses_the_highlight_on_a_coarse_mesh() {
     let phong = common::render(&common::scene(&sphere_scene("phong", (12, 6), 0.8)), true);
     let gouraud = common::render(&common::scene(&sphere_scene("gouraud", (12, 6), 0.8)), true);
     let (p, g) = (phong.hdr.unwrap(), gouraud.hdr.unwrap());
-    let peak = |img: &Pixels<f32>| img.data.chunks_exact(4).map(|c| luminance([c[0], c[1], c[2], c[3]])).fold(0.0, f64::max);
+    let peak = |img: &Pixels<f32>| {
+        img.data
+            .chunks_exact(4)
+            .map(|c| luminance([c[0], c[1], c[2], c[3]]))
+            .fold(0.0, f64::max)
+    };
     let (max_diff, _) = differences(&p, &g);
     // Per-pixel Phong reaches the highlight's peak between vertices; per-
     // vertex lighting interpolates it away on 12×6 quads.
-    assert!(peak(&p) > peak(&g) + 0.2, "phong peak {} vs gouraud peak {}", peak(&p), peak(&g));
+    assert!(
+        peak(&p) > peak(&g) + 0.2,
+        "phong peak {} vs gouraud peak {}",
+        peak(&p),
+        peak(&g)
+    );
     assert!(max_diff > 0.2, "images differ by at most {max_diff}");
 }
 
 #[test]
 fn gouraud_and_phong_agree_on_a_dense_diffuse_mesh() {
-    let phong = common::render(&common::scene(&sphere_scene("phong", (256, 128), 0.0)), true);
-    let gouraud = common::render(&common::scene(&sphere_scene("gouraud", (256, 128), 0.0)), true);
+    let phong = common::render(
+        &common::scene(&sphere_scene("phong", (256, 128), 0.0)),
+        true,
+    );
+    let gouraud = common::render(
+        &common::scene(&sphere_scene("gouraud", (256, 128), 0.0)),
+        true,
+    );
     let (max_diff, mean_diff) = differences(&phong.hdr.unwrap(), &gouraud.hdr.unwrap());
     assert!(mean_diff < 2e-3, "mean difference {mean_diff}");
     assert!(max_diff < 0.03, "max difference {max_diff}");
@@ -93,17 +111,26 @@ fn toon_has_black_silhouettes_and_lit_interior() {
     // Unattenuated light, so each tone is one value across the sphere.
     let toon = sphere_scene("toon", (128, 64), 0.3)
         .replace("width = 128\nheight = 128", "width = 256\nheight = 256")
-        .replace("intensity = 30.0\nattenuation = [1.0, 0.0, 1.0]", "intensity = 1.0\nattenuation = [1.0, 0.0, 0.0]");
+        .replace(
+            "intensity = 30.0\nattenuation = [1.0, 0.0, 1.0]",
+            "intensity = 1.0\nattenuation = [1.0, 0.0, 0.0]",
+        );
     let run = common::render(&common::scene(&toon), true);
     let hdr = run.hdr.unwrap();
     let (w, h) = (hdr.width, hdr.height);
     // Walk from the centre to the right along the middle row: the last
     // covered pixels before the background are the silhouette.
     let y = h / 2;
-    let covered: Vec<u32> = (w / 2..w).filter(|&x| common::pixel(&hdr, x, y)[3] > 0.0).collect();
+    let covered: Vec<u32> = (w / 2..w)
+        .filter(|&x| common::pixel(&hdr, x, y)[3] > 0.0)
+        .collect();
     let edge = *covered.last().expect("sphere covers the centre row");
     let rim = common::pixel(&hdr, edge, y);
-    assert_eq!(&rim[..3], &[0.0, 0.0, 0.0], "silhouette pixel {edge} is {rim:?}");
+    assert_eq!(
+        &rim[..3],
+        &[0.0, 0.0, 0.0],
+        "silhouette pixel {edge} is {rim:?}"
+    );
     let centre = common::pixel(&hdr, w / 2, y);
     assert!(luminance(centre) > 0.1, "centre is {centre:?}");
     // Two tones: the lit interior holds few distinct values.
@@ -114,7 +141,11 @@ fn toon_has_black_silhouettes_and_lit_interior() {
         .collect();
     tones.sort_unstable();
     tones.dedup();
-    assert!(tones.len() <= 4, "toon row has {} tones: {tones:?}", tones.len());
+    assert!(
+        tones.len() <= 4,
+        "toon row has {} tones: {tones:?}",
+        tones.len()
+    );
 }
 
 /// Two planes facing the camera at `distance`, `gap` apart: red in front,
@@ -135,7 +166,11 @@ rotate = {{ axis = [1.0, 0.0, 0.0], degrees = 90.0 }}
         )
     };
     let (front, back) = (plane("red", -distance), plane("green", -distance - gap));
-    let objects = if near_first { front + &back } else { back + &front };
+    let objects = if near_first {
+        front + &back
+    } else {
+        back + &front
+    };
     format!(
         r#"
 ambient = [1.0, 1.0, 1.0]
@@ -173,7 +208,10 @@ fn all_red(p: &Pixels<f32>) -> bool {
 #[test]
 fn nearer_surface_wins_in_either_draw_order() {
     for near_first in [true, false] {
-        let run = common::render(&common::scene(&two_planes(10.0, 1.0, near_first, "far = 100.0")), true);
+        let run = common::render(
+            &common::scene(&two_planes(10.0, 1.0, near_first, "far = 100.0")),
+            true,
+        );
         assert!(all_red(&run.hdr.unwrap()), "near_first = {near_first}");
     }
 }
@@ -183,7 +221,10 @@ fn reversed_z_separates_surfaces_one_metre_apart_at_a_million_metres() {
     // near = 0.1 with an infinite far plane: a near/far ratio no standard
     // depth buffer survives.
     for near_first in [true, false] {
-        let run = common::render(&common::scene(&two_planes(1.0e6, 1.0, near_first, "")), true);
+        let run = common::render(
+            &common::scene(&two_planes(1.0e6, 1.0, near_first, "")),
+            true,
+        );
         assert!(all_red(&run.hdr.unwrap()), "near_first = {near_first}");
     }
 }
@@ -191,10 +232,14 @@ fn reversed_z_separates_surfaces_one_metre_apart_at_a_million_metres() {
 #[test]
 fn back_faces_are_culled() {
     // From inside a closed sphere every triangle faces away: nothing is drawn.
-    let inside = sphere_scene("phong", (32, 16), 0.5).replace("eye = [0.0, 0.0, 4.0]", "eye = [0.0, 0.0, 0.2]");
+    let inside = sphere_scene("phong", (32, 16), 0.5)
+        .replace("eye = [0.0, 0.0, 4.0]", "eye = [0.0, 0.0, 0.2]");
     let run = common::render(&common::scene(&inside), true);
     let hdr = run.hdr.unwrap();
-    assert!(hdr.data.chunks_exact(4).all(|c| c == [0.0; 4]), "something was drawn from inside the sphere");
+    assert!(
+        hdr.data.chunks_exact(4).all(|c| c == [0.0; 4]),
+        "something was drawn from inside the sphere"
+    );
     // And from outside, the front faces are the ones drawn (lit from the front).
     let outside = common::render(&common::scene(&sphere_scene("phong", (32, 16), 0.5)), true);
     let hdr = outside.hdr.unwrap();

@@ -19,7 +19,9 @@ fn a_deliberate_misuse_is_counted() {
     drop(ctx);
     let messages = log.messages();
     assert!(
-        messages.iter().any(|m| m.id_name.contains("anisotropy") || m.text.contains("anisotropy")),
+        messages
+            .iter()
+            .any(|m| m.id_name.contains("anisotropy") || m.text.contains("anisotropy")),
         "the misuse was not reported: {messages:?}"
     );
 }

@@ -7,7 +7,10 @@ use super::{Pixels, RenderError};
 use std::path::{Path, PathBuf};
 
 /// Writes `write(tmp)` to a temporary sibling of `path`, then renames it.
-fn atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), RenderError> {
+fn atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), String>,
+) -> Result<(), RenderError> {
     let err = |reason: String| RenderError::Output {
         path: path.to_path_buf(),
         reason,
@@ -31,10 +34,15 @@ fn atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> R
 /// Saves 8-bit sRGB RGBA pixels as PNG, with `metadata` as text chunks
 /// (the device and driver that rendered it, so a comparison can tell
 /// whether bit-identity is expected).
-pub fn write_png(path: &Path, pixels: &Pixels<u8>, metadata: &[(&str, String)]) -> Result<(), RenderError> {
+pub fn write_png(
+    path: &Path,
+    pixels: &Pixels<u8>,
+    metadata: &[(&str, String)],
+) -> Result<(), RenderError> {
     atomically(path, |tmp| {
         let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
-        let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), pixels.width, pixels.height);
+        let mut encoder =
+            png::Encoder::new(std::io::BufWriter::new(file), pixels.width, pixels.height);
         encoder.set_color(png::ColorType::Rgba);
         encoder.set_depth(png::BitDepth::Eight);
         encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
@@ -44,7 +52,9 @@ pub fn write_png(path: &Path, pixels: &Pixels<u8>, metadata: &[(&str, String)]) 
                 .map_err(|e| e.to_string())?;
         }
         let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
-        writer.write_image_data(&pixels.data).map_err(|e| e.to_string())?;
+        writer
+            .write_image_data(&pixels.data)
+            .map_err(|e| e.to_string())?;
         writer.finish().map_err(|e| e.to_string())
     })
 }

@@ -126,9 +126,14 @@ impl FramePlan {
         let distance = |d: &Draw| {
             let object = &scene.objects[d.object];
             let (centre, _) = meshes[d.object].bounding_sphere();
-            object.transform.matrix().transform_point3(centre).distance(eye)
+            object
+                .transform
+                .matrix()
+                .transform_point3(centre)
+                .distance(eye)
         };
-        let mut keyed: Vec<(f32, Draw)> = transparent.into_iter().map(|d| (distance(&d), d)).collect();
+        let mut keyed: Vec<(f32, Draw)> =
+            transparent.into_iter().map(|d| (distance(&d), d)).collect();
         keyed.sort_by(|a, b| b.0.total_cmp(&a.0));
         let transparent: Vec<Draw> = keyed.into_iter().map(|(_, d)| d).collect();
 

@@ -10,11 +10,11 @@ use crate::mesh::{Mesh, Vertex};
 use crate::scene::{HdrFormat, Light, Scene, ToneMapOperator};
 use crate::shaders;
 use crate::vk::{
-    self, AccessFlags, Buffer, BufferUsage, CommandBuffer, Context, CullModeFlags, DescriptorBinding,
-    DescriptorPool, DescriptorSet, DescriptorSetLayout, DescriptorType, Fence, Format, GraphicsPipeline,
-    GraphicsPipelineDesc, Image, ImageAspectFlags, ImageBarrier, ImageDesc, ImageLayout, ImageUsageFlags,
-    PipelineLayout, PipelineStageFlags, RenderPass, RenderPassDesc, Sampler, ShaderModule, ShaderStageFlags,
-    TimestampQueries, VertexAttribute,
+    self, AccessFlags, Buffer, BufferUsage, CommandBuffer, Context, CullModeFlags,
+    DescriptorBinding, DescriptorPool, DescriptorSet, DescriptorSetLayout, DescriptorType, Fence,
+    Format, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageAspectFlags, ImageBarrier,
+    ImageDesc, ImageLayout, ImageUsageFlags, PipelineLayout, PipelineStageFlags, RenderPass,
+    RenderPassDesc, Sampler, ShaderModule, ShaderStageFlags, TimestampQueries, VertexAttribute,
 };
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -74,7 +74,9 @@ pub struct Renderer {
 
 impl Renderer {
     pub fn new(ctx: &Arc<Context>, scene: &Scene, keep_hdr: bool) -> Result<Renderer, RenderError> {
-        let meshes: Vec<Mesh> = (0..scene.objects.len()).map(|i| scene.object_mesh(i)).collect();
+        let meshes: Vec<Mesh> = (0..scene.objects.len())
+            .map(|i| scene.object_mesh(i))
+            .collect();
         let plan = FramePlan::new(scene, &meshes, keep_hdr);
         let (width, height) = (plan.width, plan.height);
 
@@ -135,7 +137,12 @@ impl Renderer {
             camera_position: scene.camera.eye.extend(1.0).to_array(),
             ambient: scene.ambient.extend(0.0).to_array(),
         };
-        let frame_buffer = Buffer::with_data(ctx, "frame", bytemuck::bytes_of(&frame), BufferUsage::Uniform)?;
+        let frame_buffer = Buffer::with_data(
+            ctx,
+            "frame",
+            bytemuck::bytes_of(&frame),
+            BufferUsage::Uniform,
+        )?;
 
         // Per-object blocks, each at an aligned offset, all read through one
         // dynamic storage descriptor whose range fits the largest block.
@@ -149,7 +156,10 @@ impl Renderer {
         for b in &blocks {
             block_offsets.push(object_bytes.len() as u32);
             object_bytes.extend_from_slice(b);
-            object_bytes.resize((object_bytes.len() as u64).next_multiple_of(alignment) as usize, 0);
+            object_bytes.resize(
+                (object_bytes.len() as u64).next_multiple_of(alignment) as usize,
+                0,
+            );
         }
         // The last block's descriptor range must still fit in the buffer.
         let last = block_offsets.last().copied().unwrap_or(0) as u64;
@@ -214,9 +224,19 @@ impl Renderer {
         }
         let pool = DescriptorPool::for_layouts(ctx, &pool_layouts)?;
         let frame_set = pool.allocate(&frame_layout)?;
-        frame_set.write_buffer(0, DescriptorType::UNIFORM_BUFFER, &frame_buffer, std::mem::size_of::<FrameUniforms>() as u64);
+        frame_set.write_buffer(
+            0,
+            DescriptorType::UNIFORM_BUFFER,
+            &frame_buffer,
+            std::mem::size_of::<FrameUniforms>() as u64,
+        );
         let object_set = pool.allocate(&object_layout)?;
-        object_set.write_buffer(0, DescriptorType::STORAGE_BUFFER_DYNAMIC, &object_buffer, block_range);
+        object_set.write_buffer(
+            0,
+            DescriptorType::STORAGE_BUFFER_DYNAMIC,
+            &object_buffer,
+            block_range,
+        );
         let tonemap_set = pool.allocate(&tonemap_layout)?;
         tonemap_set.write_input_attachment(0, &hdr);
         let mut texture_sets = Vec::new();
@@ -231,7 +251,10 @@ impl Renderer {
         // Pipeline layouts and pipelines.
         let plain_layout = PipelineLayout::new(ctx, &[&frame_layout, &object_layout])?;
         let textured_layout = match &texture_layout {
-            Some(t) => Some(PipelineLayout::new(ctx, &[&frame_layout, &object_layout, t])?),
+            Some(t) => Some(PipelineLayout::new(
+                ctx,
+                &[&frame_layout, &object_layout, t],
+            )?),
             None => None,
         };
         let tonemap_pipeline_layout = PipelineLayout::new(ctx, &[&tonemap_layout])?;
@@ -253,8 +276,12 @@ impl Renderer {
         for key in plan.pipelines() {
             let (layout, (vert, frag)) = if key.textured {
                 (
-                    textured_layout.as_ref().expect("textured layout exists when a draw is textured"),
-                    textured_shaders.as_ref().expect("textured shaders exist when a draw is textured"),
+                    textured_layout
+                        .as_ref()
+                        .expect("textured layout exists when a draw is textured"),
+                    textured_shaders
+                        .as_ref()
+                        .expect("textured shaders exist when a draw is textured"),
                 )
             } else {
                 (&plain_layout, &plain_shaders)
@@ -307,13 +334,19 @@ impl Renderer {
 
         // Readback buffers.
         let pixels = width as u64 * height as u64;
-        let output_readback = Buffer::new(ctx, "output readback", pixels * 4, BufferUsage::Readback)?;
+        let output_readback =
+            Buffer::new(ctx, "output readback", pixels * 4, BufferUsage::Readback)?;
         let hdr_readback = if keep_hdr {
             let texel = match plan.hdr_format {
                 HdrFormat::Rgba16F => 8,
                 HdrFormat::Rgba32F => 16,
             };
-            Some(Buffer::new(ctx, "hdr readback", pixels * texel, BufferUsage::Readback)?)
+            Some(Buffer::new(
+                ctx,
+                "hdr readback",
+                pixels * texel,
+                BufferUsage::Readback,
+            )?)
         } else {
             None
         };
@@ -516,7 +549,10 @@ fn vertex_attributes(textured: bool) -> Vec<VertexAttribute> {
     attributes
 }
 
-fn upload_geometry(ctx: &Arc<Context>, meshes: &[Mesh]) -> Result<(Buffer, Vec<GeometryRange>), RenderError> {
+fn upload_geometry(
+    ctx: &Arc<Context>,
+    meshes: &[Mesh],
+) -> Result<(Buffer, Vec<GeometryRange>), RenderError> {
     let mut bytes: Vec<u8> = Vec::new();
     let mut vertex_offsets = Vec::new();
     for m in meshes {
@@ -545,7 +581,12 @@ fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
     let model = object.transform.matrix();
     let normal = glam::Mat4::from_mat3(object.transform.normal_matrix());
     let lights: Vec<GpuLight> = draw
-        .map(|d| d.lights.iter().map(|&l| gpu_light(&scene.lights[l])).collect())
+        .map(|d| {
+            d.lights
+                .iter()
+                .map(|&l| gpu_light(&scene.lights[l]))
+                .collect()
+        })
         .unwrap_or_default();
     let header = ObjectHeader {
         model: model.to_cols_array_2d(),
@@ -598,7 +639,9 @@ fn load_texture(ctx: &Arc<Context>, path: &std::path::Path) -> Result<Image, Ren
             width: w,
             height: h,
             format: TEXTURE_FORMAT,
-            usage: ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_DST | ImageUsageFlags::TRANSFER_SRC,
+            usage: ImageUsageFlags::SAMPLED
+                | ImageUsageFlags::TRANSFER_DST
+                | ImageUsageFlags::TRANSFER_SRC,
             mip_levels,
             aspect: ImageAspectFlags::COLOR,
         },

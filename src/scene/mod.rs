@@ -184,7 +184,11 @@ impl Scene {
 
     /// Overrides the output size (from the command line), with the same
     /// limits as the scene file's `output.width` / `output.height`.
-    pub fn set_output_size(&mut self, width: Option<u32>, height: Option<u32>) -> Result<(), SceneError> {
+    pub fn set_output_size(
+        &mut self,
+        width: Option<u32>,
+        height: Option<u32>,
+    ) -> Result<(), SceneError> {
         for (field, value, target) in [
             ("output.width", width, &mut self.output.width),
             ("output.height", height, &mut self.output.height),

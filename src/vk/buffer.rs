@@ -54,7 +54,12 @@ pub struct Buffer {
 }
 
 impl Buffer {
-    pub fn new(ctx: &Arc<Context>, name: &str, size: u64, usage: BufferUsage) -> Result<Buffer, VkError> {
+    pub fn new(
+        ctx: &Arc<Context>,
+        name: &str,
+        size: u64,
+        usage: BufferUsage,
+    ) -> Result<Buffer, VkError> {
         let size = size.max(4);
         let info = vk::BufferCreateInfo::default()
             .size(size)
@@ -95,7 +100,12 @@ impl Buffer {
     }
 
     /// A buffer created and filled with `data`.
-    pub fn with_data(ctx: &Arc<Context>, name: &str, data: &[u8], usage: BufferUsage) -> Result<Buffer, VkError> {
+    pub fn with_data(
+        ctx: &Arc<Context>,
+        name: &str,
+        data: &[u8],
+        usage: BufferUsage,
+    ) -> Result<Buffer, VkError> {
         let mut buffer = Buffer::new(ctx, name, data.len() as u64, usage)?;
         buffer.write(0, data);
         Ok(buffer)

@@ -3,8 +3,11 @@
 //! The renderer records a frame once and submits it as often as it is asked
 //! to; `CommandBuffer` owns its own pool, so its lifetime is simple.
 
-use super::{Buffer, Context, Framebuffer, GraphicsPipeline, Image, PipelineLayout, RenderPass, TimestampQueries, VkError};
 use super::descriptors::DescriptorSet;
+use super::{
+    Buffer, Context, Framebuffer, GraphicsPipeline, Image, PipelineLayout, RenderPass,
+    TimestampQueries, VkError,
+};
 use ash::vk;
 use std::sync::Arc;
 
@@ -17,7 +20,10 @@ pub struct Fence {
 impl Fence {
     pub fn new(ctx: &Arc<Context>) -> Result<Fence, VkError> {
         // SAFETY: valid device.
-        let handle = unsafe { ctx.device.create_fence(&vk::FenceCreateInfo::default(), None) }?;
+        let handle = unsafe {
+            ctx.device
+                .create_fence(&vk::FenceCreateInfo::default(), None)
+        }?;
         Ok(Fence {
             ctx: ctx.clone(),
             handle,
@@ -288,7 +294,12 @@ impl CommandBuffer {
         );
     }
 
-    pub fn begin_render_pass(&self, pass: &RenderPass, framebuffer: &Framebuffer, clears: &[vk::ClearValue]) {
+    pub fn begin_render_pass(
+        &self,
+        pass: &RenderPass,
+        framebuffer: &Framebuffer,
+        clears: &[vk::ClearValue],
+    ) {
         let info = vk::RenderPassBeginInfo::default()
             .render_pass(pass.handle)
             .framebuffer(framebuffer.handle)
@@ -317,7 +328,9 @@ impl CommandBuffer {
         };
         // SAFETY: every pipeline declares viewport and scissor dynamic.
         unsafe {
-            self.ctx.device.cmd_set_viewport(self.handle, 0, &[viewport]);
+            self.ctx
+                .device
+                .cmd_set_viewport(self.handle, 0, &[viewport]);
             self.ctx.device.cmd_set_scissor(self.handle, 0, &[scissor]);
         }
     }
@@ -347,7 +360,13 @@ impl CommandBuffer {
         };
     }
 
-    pub fn bind_descriptor_set(&self, layout: &PipelineLayout, index: u32, set: &DescriptorSet, dynamic_offsets: &[u32]) {
+    pub fn bind_descriptor_set(
+        &self,
+        layout: &PipelineLayout,
+        index: u32,
+        set: &DescriptorSet,
+        dynamic_offsets: &[u32],
+    ) {
         // SAFETY: recording; the set matches the layout at `index`.
         unsafe {
             self.ctx.device.cmd_bind_descriptor_sets(
@@ -365,9 +384,12 @@ impl CommandBuffer {
         // SAFETY: recording; the buffer holds both vertex and index data at
         // these offsets.
         unsafe {
-            self.ctx
-                .device
-                .cmd_bind_vertex_buffers(self.handle, 0, &[buffer.handle], &[vertex_offset]);
+            self.ctx.device.cmd_bind_vertex_buffers(
+                self.handle,
+                0,
+                &[buffer.handle],
+                &[vertex_offset],
+            );
             self.ctx.device.cmd_bind_index_buffer(
                 self.handle,
                 buffer.handle,

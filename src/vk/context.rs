@@ -97,9 +97,9 @@ impl Context {
         let enabled_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
         let mut validation_features =
             vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_features);
-        let user_data = validation_log
-            .as_ref()
-            .map_or(std::ptr::null_mut(), |l| Arc::as_ptr(l) as *mut std::ffi::c_void);
+        let user_data = validation_log.as_ref().map_or(std::ptr::null_mut(), |l| {
+            Arc::as_ptr(l) as *mut std::ffi::c_void
+        });
         let messenger_info = || {
             vk::DebugUtilsMessengerCreateInfoEXT::default()
                 .message_severity(validation::counted_severities())
@@ -358,8 +358,7 @@ fn graphics_queue_family(
     physical_device: vk::PhysicalDevice,
 ) -> Result<u32, VkError> {
     // SAFETY: valid physical device.
-    let families =
-        unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
+    let families = unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
     families
         .iter()
         .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS))

@@ -19,7 +19,10 @@ pub struct DescriptorSetLayout {
 }
 
 impl DescriptorSetLayout {
-    pub fn new(ctx: &Arc<Context>, bindings: &[DescriptorBinding]) -> Result<DescriptorSetLayout, VkError> {
+    pub fn new(
+        ctx: &Arc<Context>,
+        bindings: &[DescriptorBinding],
+    ) -> Result<DescriptorSetLayout, VkError> {
         let raw: Vec<_> = bindings
             .iter()
             .map(|b| {
@@ -59,7 +62,10 @@ pub struct DescriptorPool {
 }
 
 impl DescriptorPool {
-    pub fn for_layouts(ctx: &Arc<Context>, layouts: &[&DescriptorSetLayout]) -> Result<DescriptorPool, VkError> {
+    pub fn for_layouts(
+        ctx: &Arc<Context>,
+        layouts: &[&DescriptorSetLayout],
+    ) -> Result<DescriptorPool, VkError> {
         let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
         for b in layouts.iter().flat_map(|l| &l.bindings) {
             match sizes.iter_mut().find(|s| s.ty == b.kind) {
@@ -112,7 +118,13 @@ pub struct DescriptorSet {
 impl DescriptorSet {
     /// Points `binding` at `range` bytes of `buffer` (a uniform or storage
     /// buffer, dynamic or not, as the layout says).
-    pub fn write_buffer(&self, binding: u32, kind: vk::DescriptorType, buffer: &Buffer, range: u64) {
+    pub fn write_buffer(
+        &self,
+        binding: u32,
+        kind: vk::DescriptorType,
+        buffer: &Buffer,
+        range: u64,
+    ) {
         let infos = [vk::DescriptorBufferInfo {
             buffer: buffer.handle,
             offset: 0,

@@ -93,7 +93,11 @@ impl Image {
 }
 
 /// Fails with a clear error when the device cannot use `format` as asked.
-fn check_format(ctx: &Context, format: vk::Format, usage: vk::ImageUsageFlags) -> Result<(), VkError> {
+fn check_format(
+    ctx: &Context,
+    format: vk::Format,
+    usage: vk::ImageUsageFlags,
+) -> Result<(), VkError> {
     // SAFETY: valid physical device of this instance.
     let props = unsafe {
         ctx.instance
@@ -101,11 +105,31 @@ fn check_format(ctx: &Context, format: vk::Format, usage: vk::ImageUsageFlags) -
     };
     let have = props.optimal_tiling_features;
     let needs = [
-        (vk::ImageUsageFlags::COLOR_ATTACHMENT, vk::FormatFeatureFlags::COLOR_ATTACHMENT, "colour attachment"),
-        (vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT, vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT, "depth attachment"),
-        (vk::ImageUsageFlags::SAMPLED, vk::FormatFeatureFlags::SAMPLED_IMAGE, "sampling"),
-        (vk::ImageUsageFlags::TRANSFER_SRC, vk::FormatFeatureFlags::TRANSFER_SRC, "transfer source"),
-        (vk::ImageUsageFlags::TRANSFER_DST, vk::FormatFeatureFlags::TRANSFER_DST, "transfer destination"),
+        (
+            vk::ImageUsageFlags::COLOR_ATTACHMENT,
+            vk::FormatFeatureFlags::COLOR_ATTACHMENT,
+            "colour attachment",
+        ),
+        (
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT,
+            "depth attachment",
+        ),
+        (
+            vk::ImageUsageFlags::SAMPLED,
+            vk::FormatFeatureFlags::SAMPLED_IMAGE,
+            "sampling",
+        ),
+        (
+            vk::ImageUsageFlags::TRANSFER_SRC,
+            vk::FormatFeatureFlags::TRANSFER_SRC,
+            "transfer source",
+        ),
+        (
+            vk::ImageUsageFlags::TRANSFER_DST,
+            vk::FormatFeatureFlags::TRANSFER_DST,
+            "transfer destination",
+        ),
     ];
     for (u, f, what) in needs {
         if usage.contains(u) && !have.contains(f) {
@@ -125,9 +149,11 @@ pub fn supports_linear_filter(ctx: &Context, format: vk::Format) -> bool {
         ctx.instance
             .get_physical_device_format_properties(ctx.physical_device, format)
     };
-    props
-        .optimal_tiling_features
-        .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR | vk::FormatFeatureFlags::BLIT_SRC | vk::FormatFeatureFlags::BLIT_DST)
+    props.optimal_tiling_features.contains(
+        vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR
+            | vk::FormatFeatureFlags::BLIT_SRC
+            | vk::FormatFeatureFlags::BLIT_DST,
+    )
 }
 
 impl Drop for Image {

@@ -15,26 +15,28 @@ mod render_pass;
 pub mod validation;
 
 pub use ash::vk::{
-    AccessFlags, PipelineStageFlags, ImageUsageFlags, ImageAspectFlags,
-    BlendFactor, CullModeFlags, DescriptorType, Format, ImageLayout, ShaderStageFlags,
+    AccessFlags, BlendFactor, CullModeFlags, DescriptorType, Format, ImageAspectFlags, ImageLayout,
+    ImageUsageFlags, PipelineStageFlags, ShaderStageFlags,
 };
 pub use buffer::{Buffer, BufferUsage};
+pub use commands::ImageBarrier;
 pub use commands::{CommandBuffer, Fence};
 pub use context::{Context, ContextOptions, DeviceInfo};
 pub use descriptors::{DescriptorBinding, DescriptorPool, DescriptorSet, DescriptorSetLayout};
 pub use image::{Image, ImageDesc, Sampler};
-pub use commands::ImageBarrier;
 pub use pipeline::{
     GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, ShaderModule, VertexAttribute,
 };
-pub use render_pass::{DEPTH_ATTACHMENT, HDR_ATTACHMENT, OUTPUT_ATTACHMENT};
 pub use query::TimestampQueries;
 pub use render_pass::{Framebuffer, RenderPass, RenderPassDesc};
+pub use render_pass::{DEPTH_ATTACHMENT, HDR_ATTACHMENT, OUTPUT_ATTACHMENT};
 
 /// Errors from the Vulkan layer.
 #[derive(Debug, thiserror::Error)]
 pub enum VkError {
-    #[error("could not load the Vulkan loader (is libvulkan1 installed? run scripts/setup.sh): {0}")]
+    #[error(
+        "could not load the Vulkan loader (is libvulkan1 installed? run scripts/setup.sh): {0}"
+    )]
     Loader(String),
     #[error("VK_LAYER_KHRONOS_validation is not installed (package vulkan-validationlayers; run scripts/setup.sh)")]
     MissingValidationLayer,
@@ -46,7 +48,10 @@ pub enum VkError {
     #[error("the device has no graphics queue")]
     NoGraphicsQueue,
     #[error("format {format:?} does not support {what} on this device")]
-    UnsupportedFormat { format: ash::vk::Format, what: String },
+    UnsupportedFormat {
+        format: ash::vk::Format,
+        what: String,
+    },
     #[error("Vulkan call failed: {0}")]
     Api(#[from] ash::vk::Result),
     #[error("memory allocation failed: {0}")]

@@ -37,7 +37,10 @@ pub struct PipelineLayout {
 }
 
 impl PipelineLayout {
-    pub fn new(ctx: &Arc<Context>, sets: &[&DescriptorSetLayout]) -> Result<PipelineLayout, VkError> {
+    pub fn new(
+        ctx: &Arc<Context>,
+        sets: &[&DescriptorSetLayout],
+    ) -> Result<PipelineLayout, VkError> {
         let handles: Vec<_> = sets.iter().map(|s| s.handle).collect();
         let info = vk::PipelineLayoutCreateInfo::default().set_layouts(&handles);
         // SAFETY: valid device and set layouts.

@@ -47,7 +47,11 @@ impl TimestampQueries {
             )
         }?;
         let bits = self.ctx.device_info().timestamp_valid_bits;
-        let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
+        let mask = if bits >= 64 {
+            u64::MAX
+        } else {
+            (1u64 << bits) - 1
+        };
         let period = self.ctx.device_info().timestamp_period_ns as f64;
         Ok(ticks
             .windows(2)

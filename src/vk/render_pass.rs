@@ -45,12 +45,23 @@ impl RenderPass {
                 .final_layout(final_layout)
         };
         let (hdr_store, hdr_final) = if desc.keep_hdr {
-            (vk::AttachmentStoreOp::STORE, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
+            (
+                vk::AttachmentStoreOp::STORE,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            )
         } else {
-            (vk::AttachmentStoreOp::DONT_CARE, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+            (
+                vk::AttachmentStoreOp::DONT_CARE,
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            )
         };
         let attachments = [
-            attachment(desc.hdr_format, vk::AttachmentLoadOp::CLEAR, hdr_store, hdr_final),
+            attachment(
+                desc.hdr_format,
+                vk::AttachmentLoadOp::CLEAR,
+                hdr_store,
+                hdr_final,
+            ),
             attachment(
                 desc.depth_format,
                 vk::AttachmentLoadOp::CLEAR,
@@ -94,8 +105,8 @@ impl RenderPass {
         let attachment_stages = vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
             | vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS
             | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS;
-        let attachment_writes =
-            vk::AccessFlags::COLOR_ATTACHMENT_WRITE | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE;
+        let attachment_writes = vk::AccessFlags::COLOR_ATTACHMENT_WRITE
+            | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE;
         let dependencies = [
             // The previous submission of this frame (same attachments) must
             // finish writing, reading in the tone-map pass and copying out
@@ -103,7 +114,11 @@ impl RenderPass {
             vk::SubpassDependency::default()
                 .src_subpass(vk::SUBPASS_EXTERNAL)
                 .dst_subpass(0)
-                .src_stage_mask(attachment_stages | vk::PipelineStageFlags::FRAGMENT_SHADER | vk::PipelineStageFlags::TRANSFER)
+                .src_stage_mask(
+                    attachment_stages
+                        | vk::PipelineStageFlags::FRAGMENT_SHADER
+                        | vk::PipelineStageFlags::TRANSFER,
+                )
                 .src_access_mask(attachment_writes)
                 .dst_stage_mask(attachment_stages)
                 .dst_access_mask(
@@ -159,7 +174,11 @@ pub struct Framebuffer {
 
 impl Framebuffer {
     /// `attachments` in the order HDR, depth, output.
-    pub fn new(ctx: &Arc<Context>, pass: &RenderPass, attachments: [&Image; 3]) -> Result<Framebuffer, VkError> {
+    pub fn new(
+        ctx: &Arc<Context>,
+        pass: &RenderPass,
+        attachments: [&Image; 3],
+    ) -> Result<Framebuffer, VkError> {
         let views = attachments.map(|i| i.view);
         let extent = vk::Extent2D {
             width: attachments[0].desc.width,

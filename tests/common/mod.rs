@@ -10,8 +10,12 @@ use std::path::Path;
 
 /// Parses a scene written inline in a test.
 pub fn scene(toml: &str) -> Scene {
-    Scene::from_toml(toml, "inline test scene", Path::new(env!("CARGO_MANIFEST_DIR")))
-        .unwrap_or_else(|e| panic!("test scene does not parse: {e}"))
+    Scene::from_toml(
+        toml,
+        "inline test scene",
+        Path::new(env!("CARGO_MANIFEST_DIR")),
+    )
+    .unwrap_or_else(|e| panic!("test scene does not parse: {e}"))
 }
 
 /// Renders with validation on and asserts the layer said nothing.
@@ -62,5 +66,9 @@ pub fn assert_not_blank(p: &Pixels<u8>, min_fraction: f64) {
         differing as f64 >= min_fraction * total as f64,
         "only {differing} of {total} pixels differ from the background"
     );
-    assert!(colours.len() > 16, "only {} distinct colours", colours.len());
+    assert!(
+        colours.len() > 16,
+        "only {} distinct colours",
+        colours.len()
+    );
 }
