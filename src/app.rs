@@ -14,7 +14,10 @@ use crate::vk::{Context, ContextOptions, DeviceInfo};
 pub struct RenderSettings {
     pub validate: bool,
     pub device: Option<String>,
-    /// Frames to submit (at least 1); the images are from the last one.
+    /// Frames submitted and discarded before the measured ones (warm-up:
+    /// first-use costs such as shader compilation in the driver).
+    pub warmup: u32,
+    /// Frames to submit and time (at least 1); the images are from the last one.
     pub frames: u32,
     /// Read back the linear HDR image too.
     pub keep_hdr: bool,
@@ -61,6 +64,9 @@ pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderRun, Ren
     let (passes, frames, output, hdr) = {
         let mut renderer = Renderer::new(&ctx, scene, settings.keep_hdr)?;
         let passes = renderer.plan().passes.iter().map(|p| p.name()).collect();
+        for _ in 0..settings.warmup {
+            renderer.render_frame()?;
+        }
         let mut frames = Vec::new();
         for _ in 0..settings.frames.max(1) {
             frames.push(renderer.render_frame()?);

@@ -7,7 +7,7 @@ use super::gpu_types::{FrameUniforms, GpuLight, ObjectHeader};
 use super::plan::{Draw, FramePlan, Pass, PipelineKey};
 use super::RenderError;
 use crate::mesh::{Mesh, Vertex};
-use crate::scene::{HdrFormat, Light, Scene, ToneMapOperator};
+use crate::scene::{HdrFormat, Light, Scene, TextureFilter, ToneMapOperator};
 use crate::shaders;
 use crate::vk::{
     self, AccessFlags, Buffer, BufferUsage, CommandBuffer, Context, CullModeFlags,
@@ -170,7 +170,11 @@ impl Renderer {
         let sampler = if plan.textures.is_empty() {
             None
         } else {
-            Some(Sampler::new(ctx, true, 16)?)
+            Some(Sampler::new(
+                ctx,
+                scene.output.texture_filter == TextureFilter::Trilinear,
+                16,
+            )?)
         };
         let textures = plan
             .textures

@@ -20,7 +20,7 @@ use serde::Deserialize;
 
 use super::{
     Camera, HdrFormat, Light, Material, Object, Output, Scene, SceneError, ShadingModel, Shape,
-    ToneMap, ToneMapOperator, Transform,
+    TextureFilter, ToneMap, ToneMapOperator, Transform,
 };
 use crate::mesh::MAX_SEGMENTS;
 
@@ -63,6 +63,7 @@ struct OutputFile {
     width: u32,
     height: u32,
     hdr_format: HdrFormat,
+    texture_filter: TextureFilter,
 }
 
 impl Default for OutputFile {
@@ -71,6 +72,7 @@ impl Default for OutputFile {
             width: 640,
             height: 360,
             hdr_format: HdrFormat::Rgba16F,
+            texture_filter: TextureFilter::Trilinear,
         }
     }
 }
@@ -372,6 +374,7 @@ impl Check<'_> {
             width: raw.width,
             height: raw.height,
             hdr_format: raw.hdr_format,
+            texture_filter: raw.texture_filter,
         })
     }
 

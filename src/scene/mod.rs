@@ -7,6 +7,7 @@
 mod camera;
 mod error;
 mod file;
+mod knobs;
 mod lights;
 mod material;
 mod object;
@@ -21,6 +22,7 @@ pub use error::SceneError;
 pub use file::{
     DEFAULT_ATTENUATION, DEFAULT_LIGHT_CUTOFF, DEFAULT_TESSELLATION, MAX_OUTPUT_SIZE, MIN_SEGMENTS,
 };
+pub use knobs::{settings as knob_settings, Best, Knob, KnobError, KNOBS};
 pub use lights::Light;
 pub use material::{Material, ShadingModel};
 pub use object::{Object, Shape, Transform};
@@ -58,6 +60,18 @@ pub struct Output {
     pub height: u32,
     /// Format of the HDR colour target.
     pub hdr_format: HdrFormat,
+    /// How base-colour textures are filtered.
+    pub texture_filter: TextureFilter,
+}
+
+/// Texture filtering (`[output] texture_filter`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TextureFilter {
+    /// Nearest texel, nearest mip level (`"nearest"`).
+    Nearest,
+    /// Bilinear within and linear between mip levels (`"trilinear"`, the default).
+    Trilinear,
 }
 
 impl Output {
@@ -126,6 +140,7 @@ impl Scene {
     /// width = 640                          # [640]; 1..=16384
     /// height = 360                         # [360]; 1..=16384
     /// hdr_format = "rgba16f"               # ["rgba16f"] | "rgba32f"
+    /// texture_filter = "trilinear"         # ["trilinear"] | "nearest"
     /// [camera]                             # required
     /// eye = [0.0, 2.0, 6.0]                # required
     /// look_at = [0.0, 0.0, 0.0]            # required, != eye

@@ -285,7 +285,8 @@ fn minimal_scene_gets_the_documented_defaults() {
         Output {
             width: 640,
             height: 360,
-            hdr_format: HdrFormat::Rgba16F
+            hdr_format: HdrFormat::Rgba16F,
+            texture_filter: crate::scene::TextureFilter::Trilinear,
         }
     );
     assert_eq!(scene.camera.up, Vec3::Y);

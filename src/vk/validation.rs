@@ -60,7 +60,7 @@ impl ValidationLog {
             }
             return;
         }
-        log::error!("validation: {message}");
+        log::debug!("validation: {message}");
         if let Ok(mut m) = self.messages.lock() {
             m.push(message);
         }

@@ -25,6 +25,7 @@ pub fn render(scene: &Scene, keep_hdr: bool) -> RenderRun {
         &RenderSettings {
             validate: true,
             device: None,
+            warmup: 0,
             frames: 1,
             keep_hdr,
         },

@@ -1,0 +1,3 @@
+//! The subcommands of the `aerial` binary, one module each.
+
+pub mod render;

@@ -1,0 +1,252 @@
+//! Knobs: every quality/cost setting of the renderer, by name, applied to a
+//! loaded scene.
+//!
+//! Benchmarks record every knob's setting, and sweeps render the cartesian
+//! product of knob values, so adding an approximation to the renderer means
+//! adding one entry to [`KNOBS`] and nothing else.
+
+use super::{HdrFormat, Scene, ShadingModel, TextureFilter};
+
+/// One named setting.
+pub struct Knob {
+    pub name: &'static str,
+    /// What the values mean, for `--help` and reports.
+    pub values: &'static str,
+    /// Sets the knob on a scene.
+    pub apply: fn(&mut Scene, &str) -> Result<(), String>,
+    /// The value a sweep's reference image uses for this knob: the
+    /// highest-quality setting.
+    pub best: Best,
+    /// The scene's current setting, in the same syntax `apply` takes (or a
+    /// summary when objects differ).
+    pub read: fn(&Scene) -> String,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum KnobError {
+    #[error("unknown knob '{0}'; knobs: {1}")]
+    Unknown(String, String),
+    #[error("knob {knob}={value}: {reason}")]
+    BadValue {
+        knob: String,
+        value: String,
+        reason: String,
+    },
+}
+
+/// Which value of a knob the error reference of a sweep is rendered with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Best {
+    /// This value is the highest quality.
+    Fixed(&'static str),
+    /// The last value listed in the sweep (list values cheapest first).
+    LastListed,
+    /// The knob changes what is rendered, not how well (e.g. image size):
+    /// the reference keeps the setting of the row it is compared with.
+    Unchanged,
+}
+
+/// Every knob.
+pub const KNOBS: &[Knob] = &[
+    Knob {
+        name: "size",
+        best: Best::Unchanged,
+        values: "WIDTHxHEIGHT, e.g. 1280x720",
+        apply: |s, v| {
+            let (w, h) = v.split_once('x').ok_or("expected WIDTHxHEIGHT")?;
+            let parse = |t: &str| t.trim().parse::<u32>().map_err(|e| format!("'{t}': {e}"));
+            s.set_output_size(Some(parse(w)?), Some(parse(h)?))
+                .map_err(|e| e.to_string())
+        },
+        read: |s| format!("{}x{}", s.output.width, s.output.height),
+    },
+    Knob {
+        name: "shading",
+        best: Best::Fixed("phong"),
+        values: "phong | gouraud | toon (every material)",
+        apply: |s, v| {
+            let model = match v {
+                "phong" => ShadingModel::Phong,
+                "gouraud" => ShadingModel::Gouraud,
+                "toon" => ShadingModel::Toon,
+                _ => return Err("expected phong, gouraud or toon".into()),
+            };
+            s.materials.iter_mut().for_each(|m| m.shading = model);
+            Ok(())
+        },
+        read: |s| {
+            let mut names: Vec<&str> = s
+                .materials
+                .iter()
+                .map(|m| match m.shading {
+                    ShadingModel::Phong => "phong",
+                    ShadingModel::Gouraud => "gouraud",
+                    ShadingModel::Toon => "toon",
+                })
+                .collect();
+            names.sort_unstable();
+            names.dedup();
+            names.join("+")
+        },
+    },
+    Knob {
+        name: "lights",
+        best: Best::LastListed,
+        values: "N: keep the first N lights of the scene",
+        apply: |s, v| {
+            let n: usize = v.parse().map_err(|e| format!("{e}"))?;
+            if n > s.lights.len() {
+                return Err(format!("the scene has only {} lights", s.lights.len()));
+            }
+            s.lights.truncate(n);
+            Ok(())
+        },
+        read: |s| s.lights.len().to_string(),
+    },
+    Knob {
+        name: "tessellation",
+        best: Best::LastListed,
+        values: "F: multiply every object's tessellation by F (e.g. 0.25, 1, 2)",
+        apply: |s, v| {
+            let f: f64 = v.parse().map_err(|e| format!("{e}"))?;
+            if !(f.is_finite() && f > 0.0) {
+                return Err("must be a positive factor".into());
+            }
+            for o in &mut s.objects {
+                let scale = |n: u32| {
+                    ((n as f64 * f).round() as u32)
+                        .clamp(super::MIN_SEGMENTS, crate::mesh::MAX_SEGMENTS)
+                };
+                o.tessellation = (scale(o.tessellation.0), scale(o.tessellation.1));
+            }
+            Ok(())
+        },
+        read: |s| {
+            let tris: u64 = s
+                .objects
+                .iter()
+                .map(|o| 2 * o.tessellation.0 as u64 * o.tessellation.1 as u64)
+                .sum();
+            format!("{tris} grid triangles")
+        },
+    },
+    Knob {
+        name: "hdr_format",
+        best: Best::Fixed("rgba32f"),
+        values: "rgba16f | rgba32f",
+        apply: |s, v| {
+            s.output.hdr_format = match v {
+                "rgba16f" => HdrFormat::Rgba16F,
+                "rgba32f" => HdrFormat::Rgba32F,
+                _ => return Err("expected rgba16f or rgba32f".into()),
+            };
+            Ok(())
+        },
+        read: |s| {
+            match s.output.hdr_format {
+                HdrFormat::Rgba16F => "rgba16f",
+                HdrFormat::Rgba32F => "rgba32f",
+            }
+            .into()
+        },
+    },
+    Knob {
+        name: "texture_filter",
+        best: Best::Fixed("trilinear"),
+        values: "nearest | trilinear",
+        apply: |s, v| {
+            s.output.texture_filter = match v {
+                "nearest" => TextureFilter::Nearest,
+                "trilinear" => TextureFilter::Trilinear,
+                _ => return Err("expected nearest or trilinear".into()),
+            };
+            Ok(())
+        },
+        read: |s| {
+            match s.output.texture_filter {
+                TextureFilter::Nearest => "nearest",
+                TextureFilter::Trilinear => "trilinear",
+            }
+            .into()
+        },
+    },
+];
+
+impl Knob {
+    /// The knob called `name`.
+    pub fn find(name: &str) -> Result<&'static Knob, KnobError> {
+        KNOBS.iter().find(|k| k.name == name).ok_or_else(|| {
+            KnobError::Unknown(
+                name.to_string(),
+                KNOBS.iter().map(|k| k.name).collect::<Vec<_>>().join(", "),
+            )
+        })
+    }
+
+    /// Sets this knob on `scene`, with an error naming knob and value.
+    pub fn set(&self, scene: &mut Scene, value: &str) -> Result<(), KnobError> {
+        (self.apply)(scene, value).map_err(|reason| KnobError::BadValue {
+            knob: self.name.to_string(),
+            value: value.to_string(),
+            reason,
+        })
+    }
+}
+
+/// Every knob's current setting, in [`KNOBS`] order.
+pub fn settings(scene: &Scene) -> Vec<(&'static str, String)> {
+    KNOBS.iter().map(|k| (k.name, (k.read)(scene))).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_knob_round_trips_a_value() {
+        let mut scene = Scene::default_scene();
+        for (name, value) in [
+            ("size", "320x200"),
+            ("shading", "toon"),
+            ("lights", "1"),
+            ("hdr_format", "rgba32f"),
+            ("texture_filter", "nearest"),
+        ] {
+            let knob = Knob::find(name).unwrap();
+            knob.set(&mut scene, value).unwrap();
+            assert_eq!((knob.read)(&scene), value, "knob {name}");
+        }
+    }
+
+    #[test]
+    fn bad_values_name_the_knob() {
+        let mut scene = Scene::default_scene();
+        for (name, value) in [
+            ("size", "0x10"),
+            ("shading", "flat"),
+            ("lights", "999"),
+            ("tessellation", "-1"),
+        ] {
+            let e = Knob::find(name)
+                .unwrap()
+                .set(&mut scene, value)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(name) && e.contains(value), "{e}");
+        }
+        assert!(Knob::find("nope").is_err());
+    }
+
+    #[test]
+    fn tessellation_scales_every_object() {
+        let mut scene = Scene::default_scene();
+        let before: Vec<_> = scene.objects.iter().map(|o| o.tessellation).collect();
+        Knob::find("tessellation")
+            .unwrap()
+            .set(&mut scene, "2")
+            .unwrap();
+        for (o, b) in scene.objects.iter().zip(before) {
+            assert_eq!(o.tessellation, (b.0 * 2, b.1 * 2));
+        }
+    }
+}
