@@ -5,7 +5,7 @@
 //! run was found clean.
 
 use crate::render::{FrameTiming, Pixels, RenderError, Renderer};
-use crate::scene::Scene;
+use crate::scene::{Scene, ToneMap};
 use crate::vk::validation::ValidationMessage;
 use crate::vk::{Context, ContextOptions, DeviceInfo};
 
@@ -54,7 +54,23 @@ impl RenderRun {
     }
 }
 
+/// What a run draws.
+#[derive(Clone, Copy)]
+pub enum FrameSource<'a> {
+    /// A scene, drawn and tone-mapped.
+    Scene(&'a Scene),
+    /// An existing linear HDR image, only tone-mapped.
+    HdrImage(&'a Pixels<f32>, ToneMap),
+}
+
+/// Renders `scene`; see [`run`].
 pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderRun, RenderError> {
+    run(FrameSource::Scene(scene), settings)
+}
+
+/// Renders `source` `warmup + frames` times with the device and validation
+/// the settings ask for.
+pub fn run(source: FrameSource<'_>, settings: &RenderSettings) -> Result<RenderRun, RenderError> {
     let ctx = Context::new(&ContextOptions {
         validate: settings.validate,
         device: settings.device.clone(),
@@ -62,7 +78,12 @@ pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderRun, Ren
     let log = ctx.validation_log();
     let device = ctx.device_info().clone();
     let (passes, frames, output, hdr) = {
-        let mut renderer = Renderer::new(&ctx, scene, settings.keep_hdr)?;
+        let mut renderer = match source {
+            FrameSource::Scene(scene) => Renderer::new(&ctx, scene, settings.keep_hdr)?,
+            FrameSource::HdrImage(image, tone_map) => {
+                Renderer::for_hdr_image(&ctx, tone_map, image)?
+            }
+        };
         let passes = renderer.plan().passes.iter().map(|p| p.name()).collect();
         for _ in 0..settings.warmup {
             renderer.render_frame()?;

@@ -19,6 +19,8 @@ struct Cli {
 enum Command {
     /// Render a scene (the embedded default scene without SCENE).
     Render(cli::render::RenderArgs),
+    /// Tone-map an existing HDR image (OpenEXR) with the GPU tone-map subpass.
+    Tonemap(cli::tonemap::ToneMapArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -35,5 +37,6 @@ fn main() -> std::process::ExitCode {
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Render(args) => cli::render::run(args),
+        Command::Tonemap(args) => cli::tonemap::run(args),
     }
 }

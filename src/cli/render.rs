@@ -58,15 +58,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         "device: {} ({} {}), Vulkan {}",
         run.device.name, run.device.driver_name, run.device.driver_info, run.device.api_version
     );
-    if !run.validation.is_empty() {
-        for m in &run.validation {
-            eprintln!("{m}");
-        }
-        bail!(
-            "{} validation message(s); no output written",
-            run.validation.len()
-        );
-    }
+    fail_on_validation_messages(&run)?;
     output::write_png(&args.out, &run.output, &run.png_metadata())?;
     eprintln!("wrote {}", args.out.display());
     if let (Some(path), Some(hdr)) = (&args.hdr, &run.hdr) {
@@ -107,4 +99,19 @@ fn print_timings(run: &app::RenderRun) {
         run.frames.iter().map(|f| f.pass_ms.iter().sum()).collect(),
     );
     row("cpu frame", run.frames.iter().map(|f| f.cpu_ms).collect());
+}
+
+/// Prints every validation message and fails the run if there was any, so
+/// that no output file is written from a run the layer objected to.
+pub fn fail_on_validation_messages(run: &app::RenderRun) -> anyhow::Result<()> {
+    if run.validation.is_empty() {
+        return Ok(());
+    }
+    for m in &run.validation {
+        eprintln!("{m}");
+    }
+    bail!(
+        "{} validation message(s); no output written",
+        run.validation.len()
+    )
 }

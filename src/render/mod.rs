@@ -18,6 +18,8 @@ pub enum RenderError {
     Vulkan(#[from] crate::vk::VkError),
     #[error("texture {path}: {reason}")]
     Texture { path: PathBuf, reason: String },
+    #[error("invalid HDR input image: {0}")]
+    InvalidImage(String),
     #[error("cannot write {path}: {reason}")]
     Output { path: PathBuf, reason: String },
 }

@@ -52,6 +52,9 @@ pub struct Draw {
 /// A timed pass of the frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Pass {
+    /// Copy a given HDR image into the HDR attachment (tone-mapping an
+    /// existing image instead of drawing a scene).
+    HdrUpload,
     Opaque,
     Transparent,
     ToneMap,
@@ -61,6 +64,7 @@ pub enum Pass {
 impl Pass {
     pub fn name(self) -> &'static str {
         match self {
+            Pass::HdrUpload => "hdr upload",
             Pass::Opaque => "opaque",
             Pass::Transparent => "transparent",
             Pass::ToneMap => "tonemap",
@@ -152,6 +156,26 @@ impl FramePlan {
             keep_hdr,
             passes,
         }
+    }
+
+    /// The frame that only tone-maps a given `width`×`height` HDR image:
+    /// no draws, the image copied into a 32-bit float HDR attachment.
+    pub fn for_hdr_image(width: u32, height: u32, keep_hdr: bool) -> FramePlan {
+        FramePlan {
+            width,
+            height,
+            hdr_format: HdrFormat::Rgba32F,
+            opaque: Vec::new(),
+            transparent: Vec::new(),
+            textures: Vec::new(),
+            keep_hdr,
+            passes: vec![Pass::HdrUpload, Pass::ToneMap, Pass::Readback],
+        }
+    }
+
+    /// Whether the HDR attachment starts from an uploaded image.
+    pub fn loads_hdr(&self) -> bool {
+        self.passes.contains(&Pass::HdrUpload)
     }
 
     /// Every distinct pipeline variant the draws use.

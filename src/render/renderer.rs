@@ -7,7 +7,7 @@ use super::gpu_types::{FrameUniforms, GpuLight, ObjectHeader};
 use super::plan::{Draw, FramePlan, Pass, PipelineKey};
 use super::RenderError;
 use crate::mesh::{Mesh, Vertex};
-use crate::scene::{HdrFormat, Light, Scene, TextureFilter, ToneMapOperator};
+use crate::scene::{HdrFormat, Light, Scene, TextureFilter, ToneMap, ToneMapOperator};
 use crate::shaders;
 use crate::vk::{
     self, AccessFlags, Buffer, BufferUsage, CommandBuffer, Context, CullModeFlags,
@@ -73,11 +73,45 @@ pub struct Renderer {
 }
 
 impl Renderer {
+    /// The renderer for `scene`; `keep_hdr` reads back the linear HDR
+    /// image as well as the tone-mapped output.
     pub fn new(ctx: &Arc<Context>, scene: &Scene, keep_hdr: bool) -> Result<Renderer, RenderError> {
         let meshes: Vec<Mesh> = (0..scene.objects.len())
             .map(|i| scene.object_mesh(i))
             .collect();
         let plan = FramePlan::new(scene, &meshes, keep_hdr);
+        Renderer::build(ctx, scene, &meshes, plan, None)
+    }
+
+    /// A renderer that tone-maps `image` (linear RGBA, any values,
+    /// including Inf, NaN and negatives) with the scene's tone-map subpass.
+    pub fn for_hdr_image(
+        ctx: &Arc<Context>,
+        tone_map: ToneMap,
+        image: &Pixels<f32>,
+    ) -> Result<Renderer, RenderError> {
+        let expected = image.width as usize * image.height as usize * 4;
+        if image.width == 0 || image.height == 0 || image.data.len() != expected {
+            return Err(RenderError::InvalidImage(format!(
+                "{}x{} RGBA needs {expected} values, got {}",
+                image.width,
+                image.height,
+                image.data.len()
+            )));
+        }
+        let plan = FramePlan::for_hdr_image(image.width, image.height, true);
+        let scene = Scene::empty(tone_map, image.width, image.height);
+        Renderer::build(ctx, &scene, &[], plan, Some(image))
+    }
+
+    fn build(
+        ctx: &Arc<Context>,
+        scene: &Scene,
+        meshes: &[Mesh],
+        plan: FramePlan,
+        hdr_input: Option<&Pixels<f32>>,
+    ) -> Result<Renderer, RenderError> {
+        let keep_hdr = plan.keep_hdr;
         let (width, height) = (plan.width, plan.height);
 
         // Attachments.
@@ -103,6 +137,9 @@ impl Renderer {
         if keep_hdr {
             hdr_usage |= ImageUsageFlags::TRANSFER_SRC;
         }
+        if plan.loads_hdr() {
+            hdr_usage |= ImageUsageFlags::TRANSFER_DST;
+        }
         let hdr = attachment("hdr", hdr_format, hdr_usage, ImageAspectFlags::COLOR)?;
         let depth = attachment(
             "depth",
@@ -123,12 +160,22 @@ impl Renderer {
                 depth_format: DEPTH_FORMAT,
                 output_format: OUTPUT_FORMAT,
                 keep_hdr,
+                load_hdr: plan.loads_hdr(),
             },
         )?;
         let framebuffer = vk::Framebuffer::new(ctx, &render_pass, [&hdr, &depth, &output])?;
 
         // Geometry: every mesh in one buffer, vertices then indices.
-        let (geometry, ranges) = upload_geometry(ctx, &meshes)?;
+        let (geometry, ranges) = upload_geometry(ctx, meshes)?;
+        let hdr_upload = match hdr_input {
+            Some(image) => Some(Buffer::with_data(
+                ctx,
+                "hdr upload",
+                bytemuck::cast_slice(&image.data),
+                BufferUsage::Upload,
+            )?),
+            None => None,
+        };
 
         // Per-frame uniforms.
         let aspect = width as f32 / height as f32;
@@ -385,8 +432,6 @@ impl Renderer {
             vk::clear_depth(0.0),
             vk::clear_color([0.0; 4]),
         ];
-        cmd.begin_render_pass(&render_pass, &framebuffer, &clears);
-        cmd.bind_descriptor_set(&plain_layout, 0, &frame_set, &[]);
         let record_draws = |draws: &[Draw]| {
             let mut bound: Option<PipelineKey> = None;
             for d in draws {
@@ -409,29 +454,55 @@ impl Renderer {
                 cmd.draw_indexed(range.index_count);
             }
         };
-        record_draws(&plan.opaque);
-        timestamp(cmd);
-        if plan.passes.contains(&Pass::Transparent) {
-            record_draws(&plan.transparent);
+        // Subpass 0 (opaque, transparent) and subpass 1 (tone map) live in
+        // one render pass, begun before the first of them.
+        let mut in_render_pass = false;
+        let mut begin_render_pass = |cmd: &CommandBuffer| {
+            if !in_render_pass {
+                cmd.begin_render_pass(&render_pass, &framebuffer, &clears);
+                cmd.bind_descriptor_set(&plain_layout, 0, &frame_set, &[]);
+                in_render_pass = true;
+            }
+        };
+        for pass in &plan.passes {
+            match pass {
+                Pass::HdrUpload => {
+                    let upload = hdr_upload
+                        .as_ref()
+                        .expect("the plan uploads only with an input image");
+                    record_hdr_upload(cmd, upload, &hdr);
+                }
+                Pass::Opaque => {
+                    begin_render_pass(cmd);
+                    record_draws(&plan.opaque);
+                }
+                Pass::Transparent => {
+                    begin_render_pass(cmd);
+                    record_draws(&plan.transparent);
+                }
+                Pass::ToneMap => {
+                    begin_render_pass(cmd);
+                    cmd.next_subpass();
+                    cmd.bind_pipeline(&tonemap_pipeline);
+                    cmd.bind_descriptor_set(&tonemap_pipeline_layout, 0, &tonemap_set, &[]);
+                    cmd.draw(3);
+                    cmd.end_render_pass();
+                }
+                Pass::Readback => {
+                    cmd.copy_image_to_buffer(&output, &output_readback);
+                    if let Some(buffer) = &hdr_readback {
+                        cmd.copy_image_to_buffer(&hdr, buffer);
+                    }
+                    cmd.memory_barrier(
+                        PipelineStageFlags::TRANSFER,
+                        AccessFlags::TRANSFER_WRITE,
+                        PipelineStageFlags::HOST,
+                        AccessFlags::HOST_READ,
+                    );
+                }
+            }
             timestamp(cmd);
         }
-        cmd.next_subpass();
-        cmd.bind_pipeline(&tonemap_pipeline);
-        cmd.bind_descriptor_set(&tonemap_pipeline_layout, 0, &tonemap_set, &[]);
-        cmd.draw(3);
-        cmd.end_render_pass();
-        timestamp(cmd);
-        cmd.copy_image_to_buffer(&output, &output_readback);
-        if let Some(buffer) = &hdr_readback {
-            cmd.copy_image_to_buffer(&hdr, buffer);
-        }
-        cmd.memory_barrier(
-            PipelineStageFlags::TRANSFER,
-            AccessFlags::TRANSFER_WRITE,
-            PipelineStageFlags::HOST,
-            AccessFlags::HOST_READ,
-        );
-        timestamp(cmd);
         cmd.end()?;
 
         let mut set_layouts = vec![frame_layout, object_layout, tonemap_layout];
@@ -459,7 +530,10 @@ impl Renderer {
             _attachments: vec![hdr, depth, output],
             _textures: textures,
             _sampler: sampler,
-            _buffers: vec![geometry, frame_buffer, object_buffer],
+            _buffers: [geometry, frame_buffer, object_buffer]
+                .into_iter()
+                .chain(hdr_upload)
+                .collect(),
             plan,
             ctx: ctx.clone(),
         })
@@ -551,6 +625,39 @@ fn vertex_attributes(textured: bool) -> Vec<VertexAttribute> {
         });
     }
     attributes
+}
+
+/// Copies the uploaded HDR image into the HDR attachment and leaves it in
+/// COLOR_ATTACHMENT_OPTIMAL, where the render pass loads it.
+fn record_hdr_upload(cmd: &CommandBuffer, upload: &Buffer, hdr: &Image) {
+    cmd.image_barrier(
+        hdr,
+        ImageBarrier {
+            old_layout: ImageLayout::UNDEFINED,
+            new_layout: ImageLayout::TRANSFER_DST_OPTIMAL,
+            // The previous submission's tone-map read and readback copy.
+            src_stage: PipelineStageFlags::FRAGMENT_SHADER | PipelineStageFlags::TRANSFER,
+            src_access: AccessFlags::empty(),
+            dst_stage: PipelineStageFlags::TRANSFER,
+            dst_access: AccessFlags::TRANSFER_WRITE,
+            base_mip: 0,
+            mip_count: 1,
+        },
+    );
+    cmd.copy_buffer_to_image(upload, hdr);
+    cmd.image_barrier(
+        hdr,
+        ImageBarrier {
+            old_layout: ImageLayout::TRANSFER_DST_OPTIMAL,
+            new_layout: ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            src_stage: PipelineStageFlags::TRANSFER,
+            src_access: AccessFlags::TRANSFER_WRITE,
+            dst_stage: PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+            dst_access: AccessFlags::COLOR_ATTACHMENT_READ | AccessFlags::COLOR_ATTACHMENT_WRITE,
+            base_mip: 0,
+            mip_count: 1,
+        },
+    );
 }
 
 fn upload_geometry(

@@ -197,6 +197,33 @@ impl Scene {
         file::parse(text, file, base_dir)
     }
 
+    /// A scene with nothing in it: only an output size and a tone map (for
+    /// tone-mapping an existing HDR image).
+    pub fn empty(tone_map: ToneMap, width: u32, height: u32) -> Scene {
+        Scene {
+            output: Output {
+                width,
+                height,
+                hdr_format: HdrFormat::Rgba32F,
+                texture_filter: TextureFilter::Trilinear,
+            },
+            camera: Camera {
+                eye: Vec3::Z,
+                look_at: Vec3::ZERO,
+                up: Vec3::Y,
+                fov_y_degrees: 45.0,
+                near: 0.1,
+                far: None,
+            },
+            ambient: Vec3::ZERO,
+            tone_map,
+            lights: Vec::new(),
+            materials: Vec::new(),
+            objects: Vec::new(),
+            light_cutoff: DEFAULT_LIGHT_CUTOFF,
+        }
+    }
+
     /// Overrides the output size (from the command line), with the same
     /// limits as the scene file's `output.width` / `output.height`.
     pub fn set_output_size(

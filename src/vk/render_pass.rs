@@ -19,6 +19,10 @@ pub struct RenderPassDesc {
     /// Store the HDR attachment and leave it in TRANSFER_SRC_OPTIMAL for
     /// readback.
     pub keep_hdr: bool,
+    /// Load the HDR attachment (copied in before the pass, in
+    /// COLOR_ATTACHMENT_OPTIMAL) instead of clearing it: tone-mapping an
+    /// existing HDR image.
+    pub load_hdr: bool,
 }
 
 pub const HDR_ATTACHMENT: u32 = 0;
@@ -44,6 +48,14 @@ impl RenderPass {
                 .initial_layout(vk::ImageLayout::UNDEFINED)
                 .final_layout(final_layout)
         };
+        let (hdr_load, hdr_initial) = if desc.load_hdr {
+            (
+                vk::AttachmentLoadOp::LOAD,
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            )
+        } else {
+            (vk::AttachmentLoadOp::CLEAR, vk::ImageLayout::UNDEFINED)
+        };
         let (hdr_store, hdr_final) = if desc.keep_hdr {
             (
                 vk::AttachmentStoreOp::STORE,
@@ -56,12 +68,7 @@ impl RenderPass {
             )
         };
         let attachments = [
-            attachment(
-                desc.hdr_format,
-                vk::AttachmentLoadOp::CLEAR,
-                hdr_store,
-                hdr_final,
-            ),
+            attachment(desc.hdr_format, hdr_load, hdr_store, hdr_final).initial_layout(hdr_initial),
             attachment(
                 desc.depth_format,
                 vk::AttachmentLoadOp::CLEAR,
