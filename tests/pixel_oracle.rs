@@ -11,7 +11,7 @@
 
 mod common;
 
-use glam::DVec3;
+use glam::{DMat4, DQuat, DVec3};
 
 const SCENE: &str = r#"
 ambient = [0.2, 0.2, 0.2]
@@ -79,27 +79,67 @@ impl Camera {
     }
 }
 
-fn hit_sphere(origin: DVec3, dir: DVec3, centre: DVec3, r: f64) -> Option<f64> {
-    let oc = origin - centre;
-    let b = oc.dot(dir);
-    let c = oc.length_squared() - r * r;
-    let disc = b * b - c;
-    (disc > 0.0).then(|| -b - disc.sqrt())
+/// The first hit of a ray with the unit sphere transformed by `model`:
+/// the world-space point and the world-space unit normal. The ray is taken
+/// to object space, where the surface is |p| = 1, and the normal is the
+/// gradient of that implicit function carried back by M^-T.
+fn hit_transformed_sphere(origin: DVec3, dir: DVec3, model: DMat4) -> Option<(DVec3, DVec3)> {
+    let inv = model.inverse();
+    let o = inv.transform_point3(origin);
+    let d = inv.transform_vector3(dir);
+    let a = d.length_squared();
+    let b = o.dot(d);
+    let c = o.length_squared() - 1.0;
+    let disc = b * b - a * c;
+    if disc <= 0.0 {
+        return None;
+    }
+    let t = (-b - disc.sqrt()) / a;
+    let p_object = o + d * t;
+    let normal = inv.transpose().transform_vector3(p_object).normalize();
+    Some((origin + dir * t, normal))
 }
 
 #[test]
 fn blinn_phong_matches_double_precision_oracle() {
-    let scene = common::scene(SCENE);
+    check_against_oracle(SCENE, DMat4::IDENTITY);
+}
+
+#[test]
+fn non_uniformly_scaled_normals_use_the_inverse_transpose() {
+    // An ellipsoid: the sphere scaled (1.5, 0.8, 1) and turned 30° about z.
+    // Transforming normals with M instead of M^-T tilts them visibly.
+    let scene = SCENE.replace(
+        "tessellation = [256, 128]",
+        "tessellation = [256, 128]\nscale = [1.5, 0.8, 1.0]\nrotate = { axis = [0.0, 0.0, 1.0], degrees = 30.0 }",
+    );
+    let model = DMat4::from_scale_rotation_translation(
+        DVec3::new(1.5, 0.8, 1.0),
+        DQuat::from_rotation_z(30f64.to_radians()),
+        DVec3::ZERO,
+    );
+    check_against_oracle(&scene, model);
+}
+
+fn check_against_oracle(scene_toml: &str, model: DMat4) {
+    let scene = common::scene(scene_toml);
     let run = common::render(&scene, true);
     let hdr = run.hdr.as_ref().expect("HDR requested");
 
     // Round-trip through the EXR writer, as a user of --hdr would see it.
-    let dir = std::env::temp_dir().join(format!("aerial-oracle-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("oracle.exr");
+    // Tests run in parallel: one file name per model.
+    let path = std::env::temp_dir().join(format!(
+        "aerial-oracle-{}-{:x}.exr",
+        std::process::id(),
+        model
+            .to_cols_array()
+            .iter()
+            .map(|v| v.to_bits())
+            .fold(0u64, |a, b| a.rotate_left(7) ^ b)
+    ));
     aerial::render::output::write_exr(&path, hdr).unwrap();
     let exr = aerial::render::output::read_exr(&path).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
+    std::fs::remove_file(&path).ok();
 
     let (w, h) = (exr.width, exr.height);
     let cam = Camera::new(
@@ -125,11 +165,9 @@ fn blinn_phong_matches_double_precision_oracle() {
     for y in (0..h).step_by(3) {
         for x in (0..w).step_by(3) {
             let d = cam.ray(x, y, w, h);
-            let Some(t) = hit_sphere(cam.eye, d, DVec3::ZERO, 1.0) else {
+            let Some((p, n)) = hit_transformed_sphere(cam.eye, d, model) else {
                 continue;
             };
-            let p = cam.eye + d * t;
-            let n = p.normalize();
             let v = (cam.eye - p).normalize();
             // Stay away from the silhouette, where the polygonal outline
             // and the analytic one cover different pixels.

@@ -245,3 +245,87 @@ fn back_faces_are_culled() {
     let hdr = outside.hdr.unwrap();
     assert!(luminance(common::pixel(&hdr, 64, 64)) > 0.3);
 }
+
+/// A white opaque wall with two transparent panes in front, listed in
+/// `order`; lit by ambient light only, so each surface's colour is its ka.
+fn panes(front_first: bool) -> String {
+    let pane = |name: &str, z: f64| {
+        format!(
+            r#"
+[[objects]]
+name = "{name}"
+material = "{name}"
+shape = {{ type = "plane", width = 2.0, depth = 2.0 }}
+tessellation = [4, 4]
+translate = [0.0, 0.0, {z}]
+rotate = {{ axis = [1.0, 0.0, 0.0], degrees = 90.0 }}
+"#
+        )
+    };
+    let (front, back) = (pane("red", -4.0), pane("blue", -5.0));
+    let panes = if front_first {
+        front + &back
+    } else {
+        back + &front
+    };
+    format!(
+        r#"
+ambient = [1.0, 1.0, 1.0]
+[output]
+width = 32
+height = 32
+hdr_format = "rgba32f"
+[camera]
+eye = [0.0, 0.0, 0.0]
+look_at = [0.0, 0.0, -1.0]
+fov_y = 10.0
+near = 0.1
+far = 100.0
+[[materials]]
+name = "white"
+ka = [1.0, 1.0, 1.0]
+kd = [0.0, 0.0, 0.0]
+[[materials]]
+name = "red"
+ka = [1.0, 0.0, 0.0]
+kd = [0.0, 0.0, 0.0]
+opacity = 0.4
+[[materials]]
+name = "blue"
+ka = [0.0, 0.0, 1.0]
+kd = [0.0, 0.0, 0.0]
+opacity = 0.5
+{panes}
+[[objects]]
+name = "wall"
+material = "white"
+shape = {{ type = "plane", width = 50.0, depth = 50.0 }}
+tessellation = [4, 4]
+translate = [0.0, 0.0, -10.0]
+rotate = {{ axis = [1.0, 0.0, 0.0], degrees = 90.0 }}
+"#
+    )
+}
+
+#[test]
+fn transparent_objects_blend_back_to_front_in_any_scene_order() {
+    // Straight alpha blending, back to front:
+    // wall, then blue (a = 0.5), then red (a = 0.4) on top.
+    let after_blue = [0.5 * 1.0, 0.5 * 1.0, 0.5 * 1.0 + 0.5 * 1.0];
+    let expected = [
+        0.4 * 1.0 + 0.6 * after_blue[0],
+        0.6 * after_blue[1],
+        0.6 * after_blue[2],
+    ];
+    for front_first in [true, false] {
+        let run = common::render(&common::scene(&panes(front_first)), true);
+        let hdr = run.hdr.unwrap();
+        let got = common::pixel(&hdr, 16, 16);
+        for c in 0..3 {
+            assert!(
+                (got[c] - expected[c]).abs() < 1e-3,
+                "front_first = {front_first}: got {got:?}, expected {expected:?}"
+            );
+        }
+    }
+}

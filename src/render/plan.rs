@@ -195,3 +195,68 @@ impl FramePlan {
         self.opaque.iter().chain(&self.transparent)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn load(file: &str) -> (Scene, FramePlan) {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("assets/scenes")
+            .join(file);
+        let scene = Scene::load(&path).unwrap();
+        let meshes: Vec<Mesh> = (0..scene.objects.len())
+            .map(|i| scene.object_mesh(i))
+            .collect();
+        let plan = FramePlan::new(&scene, &meshes, false);
+        (scene, plan)
+    }
+
+    #[test]
+    fn a_scene_without_transparency_or_textures_gets_neither() {
+        let (_, plan) = load("default.toml");
+        assert_eq!(
+            plan.passes,
+            vec![Pass::Opaque, Pass::ToneMap, Pass::Readback]
+        );
+        assert!(plan.textures.is_empty());
+        assert!(plan.pipelines().iter().all(|k| !k.textured && !k.blended));
+    }
+
+    #[test]
+    fn transparent_draws_are_sorted_back_to_front() {
+        let (scene, plan) = load("transparency.toml");
+        assert!(plan.passes.contains(&Pass::Transparent));
+        assert!(plan.transparent.len() >= 2);
+        let distance = |d: &Draw| {
+            let (c, _) = scene.object_bounds(d.object).unwrap();
+            c.distance(scene.camera.eye)
+        };
+        for pair in plan.transparent.windows(2) {
+            assert!(distance(&pair[0]) >= distance(&pair[1]));
+        }
+        assert!(plan.opaque.iter().all(|d| !d.pipeline.blended));
+    }
+
+    #[test]
+    fn textures_are_loaded_once_and_only_when_used() {
+        let (_, plan) = load("flag.toml");
+        assert_eq!(plan.textures.len(), 1);
+        let textured = plan.draws().filter(|d| d.texture.is_some()).count();
+        assert!(textured >= 1);
+        assert!(plan.pipelines().iter().any(|k| k.textured));
+    }
+
+    #[test]
+    fn each_draw_carries_only_the_lights_that_reach_it() {
+        let (scene, plan) = load("many_lights.toml");
+        for d in plan.draws() {
+            assert_eq!(d.lights, scene.lights_reaching(d.object));
+        }
+        assert!(
+            plan.draws().any(|d| d.lights.len() < scene.lights.len()),
+            "no light was culled"
+        );
+    }
+}
