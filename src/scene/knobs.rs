@@ -131,6 +131,20 @@ pub const KNOBS: &[Knob] = &[
         },
     },
     Knob {
+        name: "light_cutoff",
+        best: Best::Fixed("0"),
+        values: "C: leave a point light out of an object's block below this attenuated strength (0 = never)",
+        apply: |s, v| {
+            let c: f32 = v.parse().map_err(|e| format!("{e}"))?;
+            if !(c.is_finite() && c >= 0.0) {
+                return Err("must be finite and >= 0".into());
+            }
+            s.light_cutoff = c;
+            Ok(())
+        },
+        read: |s| s.light_cutoff.to_string(),
+    },
+    Knob {
         name: "hdr_format",
         best: Best::Fixed("rgba32f"),
         values: "rgba16f | rgba32f",
@@ -209,6 +223,7 @@ mod tests {
             ("size", "320x200"),
             ("shading", "toon"),
             ("lights", "1"),
+            ("light_cutoff", "0.01"),
             ("hdr_format", "rgba32f"),
             ("texture_filter", "nearest"),
         ] {
