@@ -20,4 +20,6 @@ pub enum RenderError {
     Texture { path: PathBuf, reason: String },
     #[error("cannot write {path}: {reason}")]
     Output { path: PathBuf, reason: String },
+    #[error("cannot read {path}: {reason}")]
+    Input { path: PathBuf, reason: String },
 }
