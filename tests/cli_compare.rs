@@ -247,7 +247,8 @@ fn the_rendering_device_and_driver_are_reported() {
     assert_eq!(out.status.code(), Some(0), "{}", text(&out));
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
-        stdout.contains("llvmpipe, Mesa 24.0") && stdout.contains("llvmpipe, Mesa 25.1"),
+        stdout.contains("llvmpipe; driver Mesa 24.0")
+            && stdout.contains("llvmpipe; driver Mesa 25.1"),
         "{}",
         text(&out)
     );

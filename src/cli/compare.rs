@@ -147,7 +147,7 @@ fn print_provenance(reference: &Path, test: &Path) {
         let text = output::read_png_text(path).ok()?;
         let get = |key: &str| text.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str());
         match (get("aerial:device"), get("aerial:driver")) {
-            (Some(device), Some(driver)) => Some(format!("{device}, {driver}")),
+            (Some(device), Some(driver)) => Some(format!("{device}; driver {driver}")),
             _ => None,
         }
     };
