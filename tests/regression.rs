@@ -201,6 +201,17 @@ fn check_scene(path: &Path) -> (Row, Option<String>) {
 
     let cmp = match compare_files(&reference, &new, Metric::Flip) {
         Ok(cmp) => cmp,
+        Err(e) if updating() => {
+            // A reference of another size or a corrupt one is exactly what
+            // regenerating is for.
+            std::fs::rename(&new, &reference).unwrap_or_else(|e| panic!("{e}"));
+            remove_if_present(&diff);
+            eprintln!(
+                "{stem}: overwrote {} (could not compare with it: {e})",
+                reference.display()
+            );
+            return (row(stem, None, "updated"), None);
+        }
         Err(e) => {
             let message = format!(
                 "{stem}: cannot compare with the reference: {e}\n  This render is {}. \
