@@ -8,7 +8,8 @@ use clap::{Parser, Subcommand};
 #[command(
     name = "aerial",
     version,
-    about = "An explicit, headless Vulkan renderer"
+    about = "An explicit, headless Vulkan renderer",
+    after_help = "Exit status: 0 on success, 1 when `compare` finds a threshold exceeded, 2 on any error."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -21,22 +22,31 @@ enum Command {
     Render(cli::render::RenderArgs),
     /// Tone-map an existing HDR image (OpenEXR) with the GPU tone-map subpass.
     Tonemap(cli::tonemap::ToneMapArgs),
+    /// Compare an image with a reference (FLIP, PSNR or RMSE) and fail past
+    /// a threshold: for screenshot regression checks in CI.
+    Compare(cli::compare::CompareArgs),
 }
+
+/// Exit status for errors (bad input, failed render). 2 rather than 1 so
+/// that `compare` can use 1 for "compared, and the images differ too much",
+/// as `cmp` and `diff` do.
+const EXIT_ERROR: u8 = 2;
 
 fn main() -> std::process::ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     match run(Cli::parse()) {
-        Ok(()) => std::process::ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e:#}");
-            std::process::ExitCode::FAILURE
+            std::process::ExitCode::from(EXIT_ERROR)
         }
     }
 }
 
-fn run(cli: Cli) -> anyhow::Result<()> {
+fn run(cli: Cli) -> anyhow::Result<std::process::ExitCode> {
     match cli.command {
-        Command::Render(args) => cli::render::run(args),
-        Command::Tonemap(args) => cli::tonemap::run(args),
+        Command::Render(args) => cli::render::run(args).map(|()| std::process::ExitCode::SUCCESS),
+        Command::Tonemap(args) => cli::tonemap::run(args).map(|()| std::process::ExitCode::SUCCESS),
+        Command::Compare(args) => cli::compare::run(args),
     }
 }

@@ -1,4 +1,5 @@
 //! The subcommands of the `aerial` binary, one module each.
 
+pub mod compare;
 pub mod render;
 pub mod tonemap;

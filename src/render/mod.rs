@@ -22,4 +22,6 @@ pub enum RenderError {
     InvalidImage(String),
     #[error("cannot write {path}: {reason}")]
     Output { path: PathBuf, reason: String },
+    #[error("cannot read {path}: {reason}")]
+    Input { path: PathBuf, reason: String },
 }

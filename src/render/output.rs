@@ -59,6 +59,53 @@ pub fn write_png(
     })
 }
 
+/// Reads the text chunks (tEXt, zTXt and iTXt, in that order) of a PNG as
+/// `(keyword, text)` pairs, e.g. the metadata [`write_png`] stores. Chunks
+/// after the image data count too, so the whole file is read; compressed
+/// text is inflated with the `png` crate's default size limit, so a
+/// malicious chunk cannot exhaust memory.
+pub fn read_png_text(path: &Path) -> Result<Vec<(String, String)>, RenderError> {
+    let err = |reason: String| RenderError::Input {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
+    let decoder = png::Decoder::new(std::io::BufReader::new(file));
+    let mut reader = decoder
+        .read_info()
+        .map_err(|e| err(format!("not a readable PNG: {e}")))?;
+    reader
+        .finish()
+        .map_err(|e| err(format!("not a readable PNG: {e}")))?;
+    let info = reader.info();
+    let mut text: Vec<(String, String)> = info
+        .uncompressed_latin1_text
+        .iter()
+        .map(|c| (c.keyword.clone(), c.text.clone()))
+        .collect();
+    for chunk in &info.compressed_latin1_text {
+        let mut chunk = chunk.clone();
+        chunk
+            .decompress_text()
+            .map_err(|e| err(format!("zTXt chunk {:?}: {e}", chunk.keyword)))?;
+        let value = chunk
+            .get_text()
+            .map_err(|e| err(format!("zTXt chunk {:?}: {e}", chunk.keyword)))?;
+        text.push((chunk.keyword, value));
+    }
+    for chunk in &info.utf8_text {
+        let mut chunk = chunk.clone();
+        chunk
+            .decompress_text()
+            .map_err(|e| err(format!("iTXt chunk {:?}: {e}", chunk.keyword)))?;
+        let value = chunk
+            .get_text()
+            .map_err(|e| err(format!("iTXt chunk {:?}: {e}", chunk.keyword)))?;
+        text.push((chunk.keyword, value));
+    }
+    Ok(text)
+}
+
 /// Saves linear float RGBA pixels as an OpenEXR file (32-bit float channels).
 pub fn write_exr(path: &Path, pixels: &Pixels<f32>) -> Result<(), RenderError> {
     atomically(path, |tmp| {
@@ -88,9 +135,50 @@ pub fn read_exr(path: &Path) -> Result<Pixels<f32>, RenderError> {
             pixels.data[i..i + 4].copy_from_slice(&[r, g, b, a]);
         },
     )
-    .map_err(|e| RenderError::Output {
+    .map_err(|e| RenderError::Input {
         path: path.to_path_buf(),
         reason: e.to_string(),
     })?;
     Ok(image.layer_data.channel_data.pixels)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn png_text_round_trips_and_bad_files_name_the_path() {
+        let dir = std::env::temp_dir().join(format!("aerial-output-text-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("meta.png");
+        let pixels = Pixels {
+            width: 2,
+            height: 1,
+            data: vec![255u8; 8],
+        };
+        let meta = [
+            ("aerial:device", "llvmpipe".to_string()),
+            ("aerial:driver", "Mesa 24".to_string()),
+        ];
+        write_png(&path, &pixels, &meta).unwrap();
+        let text = read_png_text(&path).unwrap();
+        let expected: Vec<(String, String)> = meta
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.clone()))
+            .collect();
+        assert_eq!(text, expected);
+
+        let junk = dir.join("junk.png");
+        std::fs::write(&junk, b"not a png").unwrap();
+        let msg = read_png_text(&junk).unwrap_err().to_string();
+        assert!(
+            msg.contains("junk.png") && msg.contains("cannot read"),
+            "{msg}"
+        );
+        let msg = read_png_text(&dir.join("missing.png"))
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("missing.png"), "{msg}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }

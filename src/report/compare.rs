@@ -153,6 +153,35 @@ pub struct Thresholds {
     pub p99: Option<f64>,
 }
 
+/// Default FLIP limits of `aerial compare` and the screenshot regression
+/// suite: mean <= 0.03 and p99 <= 0.1, meaning "looks the same to a viewer,
+/// allowing for a different GPU or driver".
+///
+/// Chosen from measurements on the example scenes (lavapipe, at 160x90 and
+/// 640x360; the numbers barely depend on the size):
+///
+/// | change to the image                      | FLIP mean   | FLIP p99    |
+/// |------------------------------------------|-------------|-------------|
+/// | +-1 LSB noise on half the channels       | 0.011-0.012 | 0.025-0.028 |
+/// | up to +-3 LSB noise on every channel     | 0.024-0.026 | 0.053-0.060 |
+/// | exposure +1 %                            | 0.011-0.019 | 0.034-0.046 |
+/// | camera moved by 1/20 pixel (edges shift) | 0.002-0.013 | 0.020-0.092 |
+/// | exposure +5 %                            | 0.033-0.058 | 0.071-0.107 |
+/// | one light removed                        | 0.067-0.17  | 0.30-0.96   |
+/// | a sphere, torus or flag removed          | 0.021-0.17  | 0.81-0.99   |
+///
+/// The first four are what another driver's rounding, rasterisation rules
+/// or texture filtering plausibly produce, and pass; the last three are
+/// real regressions, and fail. A mean limit of 0.01 would already reject
+/// +-1 LSB rounding noise. Small changes can hide under both limits: a thin
+/// ring covering 0.45 % of a 640x360 frame, removed, gives mean 0.004 and
+/// p99 0.016 (at 160x90 FLIP's blur spreads it to p99 0.20, which fails),
+/// though its `max` is 0.97, so look at `max` and the diff image too.
+pub const FLIP_DEFAULT_THRESHOLDS: Thresholds = Thresholds {
+    mean: Some(0.03),
+    p99: Some(0.1),
+};
+
 impl Comparison {
     /// Whether this result is within `t`.
     ///

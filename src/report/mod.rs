@@ -14,5 +14,8 @@
 pub mod compare;
 pub mod stats;
 
-pub use compare::{compare_files, write_diff_png, CompareError, Comparison, Metric, Thresholds};
+pub use compare::{
+    compare_files, write_diff_png, CompareError, Comparison, Metric, Thresholds,
+    FLIP_DEFAULT_THRESHOLDS,
+};
 pub use stats::{percentile, Summary};
