@@ -14,5 +14,8 @@
 pub mod compare;
 pub mod stats;
 
-pub use compare::{compare_files, write_diff_png, CompareError, Comparison, Metric, Thresholds};
+pub use compare::{
+    compare_files, compare_images, write_diff_png, CompareError, Comparison, ImageRef, Metric,
+    Thresholds,
+};
 pub use stats::{percentile, Summary};
