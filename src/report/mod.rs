@@ -7,11 +7,13 @@
 //! - [`compare`] compares two images (PNG as sRGB 8-bit, OpenEXR as linear
 //!   float) with FLIP, PSNR or RMSE, gates the result against [`Thresholds`],
 //!   and writes a diff picture for humans to look at.
+//! - [`plot`] draws error against GPU time as an SVG.
 //!
-//! Both are deliberately free of Vulkan so they can run on CI machines without
+//! All are deliberately free of Vulkan so they can run on CI machines without
 //! a GPU, e.g. to re-check stored screenshots.
 
 pub mod compare;
+pub mod plot;
 pub mod stats;
 
 pub use compare::{
