@@ -7,14 +7,17 @@
 //! - [`compare`] compares two images (PNG as sRGB 8-bit, OpenEXR as linear
 //!   float) with FLIP, PSNR or RMSE, gates the result against [`Thresholds`],
 //!   and writes a diff picture for humans to look at.
-//! - [`plot`] draws error against GPU time as an SVG.
+//! - [`sweep`] renders the combinations of knob settings and measures error
+//!   against GPU time; [`plot`] draws the result.
 //!
 //! All are deliberately free of Vulkan so they can run on CI machines without
-//! a GPU, e.g. to re-check stored screenshots.
+//! a GPU, e.g. to re-check stored screenshots; the sweep gets its renders
+//! from a closure the caller supplies.
 
 pub mod compare;
 pub mod plot;
 pub mod stats;
+pub mod sweep;
 
 pub use compare::{
     compare_files, compare_images, write_diff_png, CompareError, Comparison, ImageRef, Metric,
