@@ -19,6 +19,9 @@ struct Cli {
 enum Command {
     /// Render a scene (the embedded default scene without SCENE).
     Render(cli::render::RenderArgs),
+    /// Render every combination of knob settings and plot error against
+    /// GPU time (sweep.csv, sweep.json, sweep.svg).
+    Sweep(cli::sweep::SweepArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -35,5 +38,6 @@ fn main() -> std::process::ExitCode {
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Render(args) => cli::render::run(args),
+        Command::Sweep(args) => cli::sweep::run(args),
     }
 }
