@@ -15,6 +15,7 @@
 //!   of each other.
 
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 /// One point of the plot.
 #[derive(Clone, Debug, PartialEq)]
@@ -57,7 +58,10 @@ const FONT: &str = "sans-serif";
 const LABEL_SIZE: u32 = 13;
 /// Average glyph width of a sans-serif font, as a share of its size; SVG
 /// has no text metrics, so label boxes are estimated with this.
-const GLYPH_WIDTH: f64 = 0.58;
+const GLYPH_WIDTH: f64 = 0.55;
+
+/// The longest legend line (the legend's width is estimated from it).
+const FRONT_LABEL: &str = "Pareto front (nothing else is both faster and more accurate)";
 
 const FRONT: RGBColor = RGBColor(200, 40, 30);
 const OTHER: RGBColor = RGBColor(120, 130, 150);
@@ -178,7 +182,7 @@ fn draw(
             front.iter().map(|p| (p.x, y_of(p))),
             FRONT.stroke_width(2),
         ))?
-        .label("Pareto front (nothing else is both faster and more accurate)")
+        .label(FRONT_LABEL)
         .legend(|(x, y)| PathElement::new([(x, y), (x + 24, y)], FRONT.stroke_width(2)));
     chart
         .draw_series(
@@ -242,9 +246,11 @@ fn draw(
             }
         })
         .collect();
-    // The legend box, roughly: upper right corner of the plot.
+    // The legend box, roughly: upper right corner of the plot, as wide as
+    // its longest line plus the marker.
+    let legend_w = (FRONT_LABEL.len() as f64 * 14.0 * GLYPH_WIDTH) as i32 + 60;
     taken.push(Rect {
-        x0: area.x1 - 520,
+        x0: area.x1 - legend_w,
         y0: area.y0,
         x1: area.x1,
         y1: area.y0 + 80,
@@ -254,20 +260,35 @@ fn draw(
         .into_font()
         .style(FontStyle::Bold)
         .color(&BLACK);
-    for (p, &(x, y)) in points.iter().zip(&pixel) {
+    // The front's labels first: they matter most, so they get the best spots.
+    let mut order: Vec<usize> = (0..points.len()).collect();
+    order.sort_by_key(|&i| !points[i].pareto);
+    for i in order {
+        let p = &points[i];
         let text = if p.reference {
             format!("{} (reference)", p.label)
         } else {
             p.label.clone()
         };
-        let spot = place(&text, (x, y), &area, &taken);
-        taken.push(spot);
+        let spot = place(&text, pixel[i], &area, &taken);
+        taken.push(spot.rect);
+        // A label pushed away from its point gets a thin leader line, so
+        // it is clear which of two close points it belongs to.
+        let (px, py) = pixel[i];
+        let near = (
+            px.clamp(spot.rect.x0, spot.rect.x1),
+            py.clamp(spot.rect.y0, spot.rect.y1),
+        );
+        if (near.0 - px).pow(2) + (near.1 - py).pow(2) > 14 * 14 {
+            root.draw(&PathElement::new([(px, py), near], FLOOR.stroke_width(1)))?;
+        }
         let style = if p.reference {
             &reference_style
         } else {
             &style
         };
-        root.draw(&Text::new(text, (spot.x0, spot.y0), style.clone()))?;
+        let style = style.pos(Pos::new(spot.align.into(), VPos::Top));
+        root.draw(&Text::new(text, spot.anchor, style))?;
     }
     root.present()?;
     Ok(())
@@ -293,49 +314,97 @@ impl Rect {
     }
 }
 
-/// The box for `text` next to the point at `(x, y)`: the first candidate
-/// spot that is inside `area` and overlaps nothing in `taken`, else the
-/// inside spot with the least overlap, else the first spot.
-fn place(text: &str, (x, y): (i32, i32), area: &Rect, taken: &[Rect]) -> Rect {
+/// Where a label goes: the text's anchor and alignment, and the box it is
+/// estimated to cover.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Label {
+    anchor: (i32, i32),
+    align: Align,
+    rect: Rect,
+}
+
+/// Horizontal text alignment at the anchor (plotters' `HPos` has no
+/// `PartialEq`/`Debug`, which the tests want).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Align {
+    Left,
+    Right,
+    Center,
+}
+
+impl From<Align> for HPos {
+    fn from(a: Align) -> HPos {
+        match a {
+            Align::Left => HPos::Left,
+            Align::Right => HPos::Right,
+            Align::Center => HPos::Center,
+        }
+    }
+}
+
+/// The spot for `text` next to the point at `(x, y)`: the first candidate
+/// that is inside `area` and overlaps nothing in `taken`, else the inside
+/// candidate with the least overlap, else the first one. The text is
+/// anchored at the side facing the point (right-aligned when left of it,
+/// centred above or below it), so it sits next to its point even where
+/// the width estimate is off.
+fn place(text: &str, (x, y): (i32, i32), area: &Rect, taken: &[Rect]) -> Label {
     let w = (text.chars().count() as f64 * f64::from(LABEL_SIZE) * GLYPH_WIDTH).ceil() as i32;
     let h = LABEL_SIZE as i32 + 2;
     let gap = 9;
     // Right, left, above, below, then the diagonals and further out.
-    let offsets = [
-        (gap, -h / 2),
-        (-gap - w, -h / 2),
-        (-w / 2, -gap - h),
-        (-w / 2, gap),
-        (gap, -gap - h),
-        (gap, gap),
-        (-gap - w, -gap - h),
-        (-gap - w, gap),
-        (gap, -2 * h - gap),
-        (gap, h + gap),
-        (-gap - w, -2 * h - gap),
-        (-gap - w, h + gap),
+    let (l, r, c) = (Align::Left, Align::Right, Align::Center);
+    let candidates = [
+        (gap, -h / 2, l),
+        (-gap, -h / 2, r),
+        (0, -gap - h, c),
+        (0, gap, c),
+        (gap, -gap - h, l),
+        (gap, gap, l),
+        (-gap, -gap - h, r),
+        (-gap, gap, r),
+        (gap, -2 * h - gap, l),
+        (gap, h + gap, l),
+        (-gap, -2 * h - gap, r),
+        (-gap, h + gap, r),
     ];
-    let spots: Vec<Rect> = offsets
+    let labels: Vec<Label> = candidates
         .iter()
-        .map(|&(dx, dy)| Rect {
-            x0: x + dx,
-            y0: y + dy,
-            x1: x + dx + w,
-            y1: y + dy + h,
+        .map(|&(dx, dy, align)| {
+            let (ax, ay) = (x + dx, y + dy);
+            let x0 = match align {
+                Align::Left => ax,
+                Align::Right => ax - w,
+                Align::Center => ax - w / 2,
+            };
+            Label {
+                anchor: (ax, ay),
+                align,
+                rect: Rect {
+                    x0,
+                    y0: ay,
+                    x1: x0 + w,
+                    y1: ay + h,
+                },
+            }
         })
         .collect();
     let cost = |r: &Rect| taken.iter().map(|t| r.overlap(t)).sum::<i64>();
-    spots
+    labels
         .iter()
-        .filter(|r| r.inside(area))
-        .min_by_key(|r| cost(r))
-        .or(spots.first())
+        .filter(|l| l.rect.inside(area))
+        .min_by_key(|l| cost(&l.rect))
+        .or(labels.first())
         .copied()
-        .unwrap_or(Rect {
-            x0: x,
-            y0: y,
-            x1: x,
-            y1: y,
+        .unwrap_or(Label {
+            anchor: (x, y),
+            align: Align::Left,
+            rect: Rect {
+                x0: x,
+                y0: y,
+                x1: x,
+                y1: y,
+            },
         })
 }
 
@@ -401,11 +470,13 @@ mod tests {
         };
         let first = place("label", (500, 300), &area, &[]);
         // Right of the point by default.
-        assert!(first.x0 > 500);
-        let second = place("label", (500, 300), &area, &[first]);
-        assert_eq!(second.overlap(&first), 0);
+        assert!(first.rect.x0 > 500 && first.align == Align::Left);
+        let second = place("label", (500, 300), &area, &[first.rect]);
+        assert_eq!(second.rect.overlap(&first.rect), 0);
+        // Left of the point, right-aligned against it.
+        assert_eq!((second.align, second.anchor.0), (Align::Right, 491));
         // At the right edge, the label goes left.
         let edge = place("label", (995, 300), &area, &[]);
-        assert!(edge.inside(&area) && edge.x1 < 995);
+        assert!(edge.rect.inside(&area) && edge.rect.x1 < 995);
     }
 }
