@@ -25,6 +25,9 @@ enum Command {
     /// Compare an image with a reference (FLIP, PSNR or RMSE) and fail past
     /// a threshold: for screenshot regression checks in CI.
     Compare(cli::compare::CompareArgs),
+    /// Render every combination of knob settings and plot error against
+    /// GPU time (sweep.csv, sweep.json, sweep.svg).
+    Sweep(cli::sweep::SweepArgs),
 }
 
 /// Exit status for errors (bad input, failed render). 2 rather than 1 so
@@ -48,5 +51,6 @@ fn run(cli: Cli) -> anyhow::Result<std::process::ExitCode> {
         Command::Render(args) => cli::render::run(args).map(|()| std::process::ExitCode::SUCCESS),
         Command::Tonemap(args) => cli::tonemap::run(args).map(|()| std::process::ExitCode::SUCCESS),
         Command::Compare(args) => cli::compare::run(args),
+        Command::Sweep(args) => cli::sweep::run(args).map(|()| std::process::ExitCode::SUCCESS),
     }
 }

@@ -2,4 +2,5 @@
 
 pub mod compare;
 pub mod render;
+pub mod sweep;
 pub mod tonemap;

@@ -2,7 +2,8 @@
 //!
 //! [`compare_files`] loads a *reference* image (first argument) and a *test*
 //! image (second argument) and measures how different they are with one
-//! [`Metric`]:
+//! [`Metric`]. [`compare_images`] does the same for images already in memory
+//! (e.g. straight from the renderer), with the same checks and results:
 //!
 //! - [`Metric::Flip`]: NVIDIA's FLIP perceptual difference (LDR variant, via
 //!   the `nv-flip` binding), per pixel in `[0, 1]`. Viewing conditions are
@@ -334,6 +335,18 @@ pub enum CompareError {
         /// Encoder error.
         source: image::ImageError,
     },
+    /// An in-memory image whose buffer does not match its size.
+    #[error("{}: {len} values do not make a {width}x{height} RGBA image ({} expected)", path.display(), *width as usize * *height as usize * 4)]
+    BadBuffer {
+        /// The name given for the image.
+        path: PathBuf,
+        /// Values in the buffer.
+        len: usize,
+        /// Claimed width.
+        width: u32,
+        /// Claimed height.
+        height: u32,
+    },
     /// An unknown metric name was parsed.
     #[error("unknown metric {name:?}: expected flip, psnr or rmse")]
     UnknownMetric {
@@ -380,10 +393,60 @@ impl Loaded {
 pub fn compare_files(a: &Path, b: &Path, metric: Metric) -> Result<Comparison, CompareError> {
     let reference = load(a)?;
     let test = load(b)?;
+    compare_loaded(a, &reference, b, &test, metric)
+}
 
+/// An image in memory for [`compare_images`]: interleaved RGBA, row-major
+/// from the top-left, `width * height * 4` values. Alpha is ignored, as it
+/// is for files.
+#[derive(Debug, Clone, Copy)]
+pub enum ImageRef<'a> {
+    /// 8-bit sRGB-encoded values, compared like a PNG.
+    Srgb8 {
+        width: u32,
+        height: u32,
+        rgba: &'a [u8],
+    },
+    /// Linear values, compared like an OpenEXR file.
+    Linear {
+        width: u32,
+        height: u32,
+        rgba: &'a [f32],
+    },
+}
+
+/// Compares the in-memory `reference` with `test` using `metric`, exactly
+/// as [`compare_files`] would compare them saved as PNG (`Srgb8`) or OpenEXR
+/// (`Linear`). The names stand in for file paths in error messages.
+pub fn compare_images(
+    reference_name: &str,
+    reference: ImageRef<'_>,
+    test_name: &str,
+    test: ImageRef<'_>,
+    metric: Metric,
+) -> Result<Comparison, CompareError> {
+    let (a, b) = (Path::new(reference_name), Path::new(test_name));
+    compare_loaded(
+        a,
+        &from_memory(a, reference)?,
+        b,
+        &from_memory(b, test)?,
+        metric,
+    )
+}
+
+/// The checks and metrics shared by [`compare_files`] and
+/// [`compare_images`]; `a` and `b` name the images in errors.
+fn compare_loaded(
+    a: &Path,
+    reference: &Loaded,
+    b: &Path,
+    test: &Loaded,
+    metric: Metric,
+) -> Result<Comparison, CompareError> {
     if matches!(metric, Metric::Flip) {
         // Name whichever input is HDR so the user knows which file to change.
-        for (path, img) in [(a, &reference), (b, &test)] {
+        for (path, img) in [(a, reference), (b, test)] {
             if matches!(img.pixels, Pixels::Linear(_)) {
                 return Err(CompareError::FlipOnHdr {
                     path: path.to_owned(),
@@ -602,20 +665,83 @@ fn load_exr(path: &Path, bytes: &[u8]) -> Result<Loaded, CompareError> {
     let (width, height) = check_size(path, size.0, size.1)?;
     let data = image.layer_data.channel_data.pixels.data;
 
+    check_finite(path, &data, size.0)?;
+    Ok(Loaded {
+        width,
+        height,
+        pixels: Pixels::Linear(data),
+    })
+}
+
+/// Rejects NaN and infinite values in interleaved RGB `data` of an image
+/// `width` pixels wide, naming the first one.
+fn check_finite(path: &Path, data: &[f32], width: usize) -> Result<(), CompareError> {
     let mut bad = data.iter().enumerate().filter(|(_, v)| !v.is_finite());
     if let Some((first, _)) = bad.next() {
         let pixel = first / 3;
         return Err(CompareError::NonFinite {
             path: path.to_owned(),
             count: 1 + bad.count(),
-            x: pixel % size.0,
-            y: pixel / size.0,
+            x: pixel % width.max(1),
+            y: pixel / width.max(1),
         });
     }
+    Ok(())
+}
+
+/// Copies an in-memory RGBA image into the form [`load`] produces, with the
+/// same size and value checks as a file gets.
+fn from_memory(path: &Path, image: ImageRef<'_>) -> Result<Loaded, CompareError> {
+    let (width, height, len) = match image {
+        ImageRef::Srgb8 {
+            width,
+            height,
+            rgba,
+        } => (width, height, rgba.len()),
+        ImageRef::Linear {
+            width,
+            height,
+            rgba,
+        } => (width, height, rgba.len()),
+    };
+    let (width, height) = check_size(path, width as usize, height as usize)?;
+    // check_size bounds the pixel count, so this cannot overflow.
+    let expected = width as usize * height as usize * 4;
+    if len != expected {
+        return Err(CompareError::BadBuffer {
+            path: path.to_owned(),
+            len,
+            width,
+            height,
+        });
+    }
+    let pixels = match image {
+        ImageRef::Srgb8 { rgba, .. } => {
+            // The length was checked above; the error is only a fallback.
+            let img =
+                image::RgbaImage::from_raw(width, height, rgba.to_vec()).ok_or_else(|| {
+                    CompareError::BadBuffer {
+                        path: path.to_owned(),
+                        len,
+                        width,
+                        height,
+                    }
+                })?;
+            Pixels::Srgb(DynamicImage::ImageRgba8(img))
+        }
+        ImageRef::Linear { rgba, .. } => {
+            let rgb: Vec<f32> = rgba
+                .chunks_exact(4)
+                .flat_map(|p| [p[0], p[1], p[2]])
+                .collect();
+            check_finite(path, &rgb, width as usize)?;
+            Pixels::Linear(rgb)
+        }
+    };
     Ok(Loaded {
         width,
         height,
-        pixels: Pixels::Linear(data),
+        pixels,
     })
 }
 
@@ -731,7 +857,8 @@ pub fn write_diff_png(cmp: &Comparison, path: &Path) -> Result<(), CompareError>
 
 /// Writes through `write` into a fresh temporary file next to `path`, then
 /// renames it over `path`; on any failure the temporary file is removed.
-fn write_atomically(
+/// The sweep report writes its files through this too.
+pub(super) fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> Result<(), CompareError>,
 ) -> Result<(), CompareError> {
@@ -984,6 +1111,62 @@ mod tests {
             mean: Some(0.05),
             p99: Some(0.1)
         }));
+    }
+
+    #[test]
+    fn in_memory_images_score_like_files() {
+        let dir = TempDir::new("memory");
+        let mut other = gradient();
+        other.put_pixel(10, 10, Rgb([255, 0, 0]));
+        let a = png(&dir, "a.png", &gradient());
+        let b = png(&dir, "b.png", &other);
+        let rgba = |img: &RgbImage| DynamicImage::ImageRgb8(img.clone()).to_rgba8().into_raw();
+        let (ra, rb) = (rgba(&gradient()), rgba(&other));
+        let srgb = |rgba| ImageRef::Srgb8 {
+            width: 64,
+            height: 64,
+            rgba,
+        };
+        for metric in [Metric::Flip, Metric::Rmse, Metric::Psnr] {
+            let files = compare_files(&a, &b, metric).unwrap();
+            let memory = compare_images("a", srgb(&ra), "b", srgb(&rb), metric).unwrap();
+            assert_eq!(files, memory, "{metric}");
+        }
+
+        // Linear: same numbers as rmse_and_psnr_by_hand_exr, alpha ignored.
+        let lin = |rgb: [f32; 3], alpha: f32| [rgb[0], rgb[1], rgb[2], alpha].repeat(15);
+        let (la, lb) = (lin([2.0, 1.0, 0.5], 1.0), lin([2.0, 1.0, 0.8], 0.0));
+        let linear = |rgba| ImageRef::Linear {
+            width: 5,
+            height: 3,
+            rgba,
+        };
+        let c = compare_images("a", linear(&la), "b", linear(&lb), Metric::Rmse).unwrap();
+        assert!((c.mean - 0.03f64.sqrt()).abs() < 1e-6, "{}", c.mean);
+    }
+
+    #[test]
+    fn bad_in_memory_images_are_errors_naming_them() {
+        let ok = [0.0f32; 16];
+        let short = [0.0f32; 15];
+        let image = |rgba| ImageRef::Linear {
+            width: 2,
+            height: 2,
+            rgba,
+        };
+        let err = compare_images("ref", image(&ok), "short one", image(&short), Metric::Rmse)
+            .unwrap_err();
+        assert!(matches!(err, CompareError::BadBuffer { .. }), "{err}");
+        assert!(err.to_string().contains("short one"), "{err}");
+
+        let mut nan = ok;
+        nan[6] = f32::NAN; // pixel (1, 0), blue
+        let err = compare_images("ref", image(&ok), "nan", image(&nan), Metric::Rmse).unwrap_err();
+        assert!(err.to_string().contains("nan: 1 non-finite"), "{err}");
+        assert!(err.to_string().contains("(1, 0)"), "{err}");
+
+        let err = compare_images("ref", image(&ok), "test", image(&ok), Metric::Flip).unwrap_err();
+        assert!(matches!(err, CompareError::FlipOnHdr { .. }), "{err}");
     }
 
     #[test]

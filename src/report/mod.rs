@@ -7,15 +7,20 @@
 //! - [`compare`] compares two images (PNG as sRGB 8-bit, OpenEXR as linear
 //!   float) with FLIP, PSNR or RMSE, gates the result against [`Thresholds`],
 //!   and writes a diff picture for humans to look at.
+//! - [`sweep`] renders the combinations of knob settings and measures error
+//!   against GPU time; [`plot`] draws the result.
 //!
-//! Both are deliberately free of Vulkan so they can run on CI machines without
-//! a GPU, e.g. to re-check stored screenshots.
+//! All are deliberately free of Vulkan so they can run on CI machines without
+//! a GPU, e.g. to re-check stored screenshots; the sweep gets its renders
+//! from a closure the caller supplies.
 
 pub mod compare;
+pub mod plot;
 pub mod stats;
+pub mod sweep;
 
 pub use compare::{
-    compare_files, write_diff_png, CompareError, Comparison, Metric, Thresholds,
-    FLIP_DEFAULT_THRESHOLDS,
+    compare_files, compare_images, write_diff_png, CompareError, Comparison, ImageRef, Metric,
+    Thresholds, FLIP_DEFAULT_THRESHOLDS,
 };
 pub use stats::{percentile, Summary};

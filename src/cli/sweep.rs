@@ -1,0 +1,116 @@
+//! `aerial sweep`: render every combination of some knob settings, and
+//! write error against GPU time as CSV, JSON and an SVG plot.
+
+use aerial::app::{self, RenderSettings};
+use aerial::report::sweep::{
+    self, Axis, Job, Rendered, Sweep, SweepOptions, DEFAULT_MAX_COMBINATIONS,
+};
+use aerial::scene::Scene;
+use anyhow::{anyhow, Context as _};
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+#[command(after_help = "\
+Each combination is compared with a reference: the scene with every swept knob at its best \
+value. That is a fixed value for some knobs (e.g. hdr_format=rgba32f), the last value listed \
+for others (e.g. tessellation: so list values cheapest first), and the combination's own \
+value for size. Knobs that are not swept keep the scene's settings.")]
+pub struct SweepArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// A knob and the values to try, NAME=V1,V2,... (repeat for more knobs;
+    /// cheapest value first). An unknown NAME lists the knobs.
+    #[arg(long = "knob", value_name = "NAME=V1,V2,...", required = true)]
+    knobs: Vec<String>,
+    /// Timed frames per combination.
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
+    frames: u32,
+    /// Frames rendered and discarded before the timed ones.
+    #[arg(long, default_value_t = 2)]
+    warmup: u32,
+    /// Folder for sweep.csv, sweep.json and sweep.svg.
+    #[arg(long, default_value = "sweep")]
+    out_dir: PathBuf,
+    /// Refuse sweeps with more combinations than this.
+    #[arg(long, default_value_t = DEFAULT_MAX_COMBINATIONS)]
+    max_combinations: usize,
+    /// Enable the Khronos validation layer; any message fails the sweep.
+    #[arg(long)]
+    validate: bool,
+    /// Physical device by index or name substring.
+    #[arg(long)]
+    device: Option<String>,
+}
+
+pub fn run(args: SweepArgs) -> anyhow::Result<()> {
+    let scene = Scene::load(&args.scene)?;
+    let axes = args
+        .knobs
+        .iter()
+        .map(|k| Axis::parse(k))
+        .collect::<Result<Vec<_>, _>>()?;
+    let sweep = Sweep::new(
+        args.scene.display().to_string(),
+        scene,
+        axes,
+        SweepOptions {
+            frames: args.frames,
+            warmup: args.warmup,
+            max_combinations: args.max_combinations,
+        },
+    )?;
+    let total = sweep.combinations().len();
+    eprintln!("{total} combinations");
+
+    let render = |scene: &Scene, job: Job| -> anyhow::Result<Rendered> {
+        let (warmup, frames, keep_hdr) = match job {
+            Job::Timing { warmup, frames } => (warmup, frames, false),
+            Job::Images => (0, 1, true),
+        };
+        let run = app::render(
+            scene,
+            &RenderSettings {
+                validate: args.validate,
+                device: args.device.clone(),
+                warmup,
+                frames,
+                keep_hdr,
+            },
+        )?;
+        if !run.validation.is_empty() {
+            for m in &run.validation {
+                eprintln!("{m}");
+            }
+            return Err(anyhow!("{} validation message(s)", run.validation.len()));
+        }
+        Ok(Rendered {
+            device: run.device.name.clone(),
+            passes: run.passes.iter().map(|p| p.to_string()).collect(),
+            frames: run.frames,
+            output: run.output,
+            hdr: run.hdr,
+        })
+    };
+    let result = sweep
+        .run(render, |i, row| {
+            let settings: Vec<String> = row
+                .settings
+                .iter()
+                .map(|(k, v)| format!("{k}={v}"))
+                .collect();
+            eprintln!(
+                "[{}/{total}] {}: {:.3} ms, rmse {:.3e}",
+                i + 1,
+                settings.join(" "),
+                row.gpu_ms.median,
+                row.rmse
+            );
+        })
+        .context("sweep failed; no output written")?;
+
+    print!("{}", sweep::to_table(&result));
+    for path in sweep::write_outputs(&result, &args.out_dir)? {
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}

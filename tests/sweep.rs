@@ -1,0 +1,171 @@
+//! `aerial sweep` end to end: a tiny sweep under validation, checked through
+//! the files it writes, and the errors for bad knobs.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn aerial() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_aerial"))
+}
+
+fn scene() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/shading_models.toml")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("aerial-sweep-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+fn sweep(out_dir: &Path, knobs: &[&str], extra: &[&str]) -> Output {
+    let mut cmd = aerial();
+    cmd.arg("sweep").arg(scene()).arg("--out-dir").arg(out_dir);
+    for k in knobs {
+        cmd.args(["--knob", k]);
+    }
+    cmd.args(extra).output().unwrap()
+}
+
+/// The CSV as one map (column name -> cell) per row. The sweep's values
+/// hold no commas or quotes, so a plain split is enough here.
+fn read_csv(path: &Path) -> Vec<HashMap<String, String>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    lines
+        .map(|l| {
+            let cells: Vec<&str> = l.split(',').collect();
+            assert_eq!(cells.len(), header.len(), "{l}");
+            header
+                .iter()
+                .zip(cells)
+                .map(|(h, c)| (h.to_string(), c.to_string()))
+                .collect()
+        })
+        .collect()
+}
+
+fn num(row: &HashMap<String, String>, column: &str) -> f64 {
+    row[column]
+        .parse()
+        .unwrap_or_else(|e| panic!("{column} = {:?}: {e}", row[column]))
+}
+
+#[test]
+fn tiny_sweep_under_validation() {
+    let dir = temp_dir("tiny");
+    let out = sweep(
+        &dir,
+        &[
+            "size=96x54",
+            "tessellation=0.25,1",
+            "hdr_format=rgba16f,rgba32f",
+        ],
+        &["--frames", "2", "--warmup", "0", "--validate"],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "stderr: {stderr}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("(reference)"), "table: {stdout}");
+
+    let rows = read_csv(&dir.join("sweep.csv"));
+    assert_eq!(rows.len(), 4);
+    let find = |tess: &str, format: &str| {
+        rows.iter()
+            .find(|r| r["tessellation"] == tess && r["hdr_format"] == format)
+            .unwrap_or_else(|| panic!("no row {tess} {format}"))
+    };
+
+    // The reference is tessellation 1 (last listed) and rgba32f (fixed).
+    let reference = find("1", "rgba32f");
+    assert_eq!(reference["is_reference"], "true");
+    assert_eq!(
+        reference["reference"],
+        "size=96x54 tessellation=1 hdr_format=rgba32f"
+    );
+    assert_eq!(num(reference, "rmse"), 0.0);
+    assert_eq!(num(reference, "flip_mean"), 0.0);
+    assert_eq!(
+        rows.iter().filter(|r| r["is_reference"] == "true").count(),
+        1
+    );
+
+    // Coarse spheres are further from the reference than anything at full
+    // tessellation, and half floats add a little error of their own.
+    for format in ["rgba16f", "rgba32f"] {
+        let coarse = find("0.25", format);
+        assert!(num(coarse, "rmse") > num(find("1", "rgba16f"), "rmse"));
+        assert!(num(coarse, "flip_mean") > 0.0);
+    }
+    assert!(num(find("1", "rgba16f"), "rmse") > 0.0);
+
+    // Times are positive and every non-Pareto row is dominated by a
+    // Pareto row.
+    for r in &rows {
+        assert!(num(r, "gpu_median_ms") > 0.0);
+        assert!(num(r, "gpu_p95_ms") >= num(r, "gpu_median_ms"));
+        assert!(num(r, "opaque_median_ms") > 0.0);
+    }
+    let front: Vec<&HashMap<String, String>> =
+        rows.iter().filter(|r| r["pareto"] == "true").collect();
+    assert!(!front.is_empty());
+    for r in rows.iter().filter(|r| r["pareto"] == "false") {
+        let (t, e) = (num(r, "gpu_median_ms"), num(r, "rmse"));
+        assert!(
+            front.iter().any(|p| {
+                let (pt, pe) = (num(p, "gpu_median_ms"), num(p, "rmse"));
+                pt <= t && pe <= e && (pt < t || pe < e)
+            }),
+            "row {r:?} is off the front but nothing dominates it"
+        );
+    }
+
+    // JSON and SVG are there and complete.
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("sweep.json")).unwrap()).unwrap();
+    assert_eq!(json["rows"].as_array().unwrap().len(), 4);
+    assert_eq!(json["knobs"][1], "tessellation");
+    let svg = std::fs::read_to_string(dir.join("sweep.svg")).unwrap();
+    assert!(svg.trim_end().ends_with("</svg>"));
+    assert!(svg.contains("1, rgba32f (reference)"), "{svg}");
+
+    // Nothing but the three files (no temporary leftovers).
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["sweep.csv", "sweep.json", "sweep.svg"]);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_knobs_fail_naming_the_knob_and_write_nothing() {
+    for (knobs, expected) in [
+        (&["sharpness=1,2"][..], "sharpness"),
+        (&["tessellation=0.5,zero"][..], "tessellation=zero"),
+        (&["hdr_format=rgba8"][..], "hdr_format=rgba8"),
+        (&["tessellation"][..], "tessellation"),
+        (
+            &["tessellation=1,2", "tessellation=3"][..],
+            "tessellation is given twice",
+        ),
+        (
+            &["tessellation=1,2,3,4,5,6,7,8,9", "size=8x8,9x9,10x10"][..],
+            "27 combinations",
+        ),
+    ] {
+        let dir = temp_dir("bad");
+        let out = sweep(&dir, knobs, &["--max-combinations", "20"]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{knobs:?} was accepted");
+        assert!(
+            stderr.contains(expected),
+            "{knobs:?}: expected '{expected}' in: {stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{knobs:?}: {stderr}");
+        assert!(!dir.exists(), "{knobs:?}: output written");
+    }
+}
