@@ -9,15 +9,15 @@
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// The scene file could not be read.
-    // The I/O message is repeated in Display because a missing or
-    // unreadable file is the whole story and callers often print only the
-    // top-level error.
-    #[error("{file}: cannot read scene file: {source}")]
+    // The I/O error is part of the message rather than a chained source:
+    // the whole story fits on one line, and a chained source would be
+    // printed twice by error reporters that walk the chain.
+    #[error("{file}: cannot read scene file: {reason}")]
     Io {
         /// The scene file as given.
         file: String,
         /// The underlying error.
-        source: std::io::Error,
+        reason: std::io::Error,
     },
     /// The file is not valid TOML or does not match the scene schema
     /// (unknown or missing field, wrong type). The message comes from the

@@ -120,9 +120,9 @@ impl Scene {
     /// [`Scene::from_toml`].
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        let text = std::fs::read_to_string(path).map_err(|reason| SceneError::Io {
             file: file.clone(),
-            source,
+            reason,
         })?;
         let base_dir = path.parent().unwrap_or_else(|| Path::new(""));
         Scene::from_toml(&text, &file, base_dir)
