@@ -19,6 +19,8 @@ struct Cli {
 enum Command {
     /// Render a scene (the embedded default scene without SCENE).
     Render(cli::render::RenderArgs),
+    /// Time scenes and the empty pass; write JSON; gate against a baseline.
+    Bench(cli::bench::BenchArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -35,5 +37,6 @@ fn main() -> std::process::ExitCode {
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Render(args) => cli::render::run(args),
+        Command::Bench(args) => cli::bench::run(args),
     }
 }

@@ -1,3 +1,4 @@
 //! The subcommands of the `aerial` binary, one module each.
 
+pub mod bench;
 pub mod render;
