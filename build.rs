@@ -10,6 +10,9 @@
 //!
 //! which yields the constant `OBJECT_FRAG_TEXTURED` next to `OBJECT_FRAG`.
 //! A GLSL error fails the build with shaderc's `file:line: message`.
+//!
+//! It also sets `AERIAL_COMMIT` (see [`commit`]) so benchmark reports can
+//! name the build they measured.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -19,6 +22,7 @@ fn main() {
     let glsl = root.join("glsl");
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("set by cargo"));
     println!("cargo:rerun-if-changed={}", glsl.display());
+    println!("cargo:rustc-env=AERIAL_COMMIT={}", commit(&root));
 
     let mut files = Vec::new();
     collect(&glsl, &mut files);
@@ -136,4 +140,47 @@ fn constant_name(file: &str, variant: &str) -> String {
         n.push_str(&variant.to_uppercase());
     }
     n
+}
+
+/// `git rev-parse --short HEAD`, with `-dirty` when `git status --porcelain`
+/// lists anything, or `unknown` outside a git checkout (e.g. a source
+/// tarball) or without git.
+///
+/// Cargo reruns this script when HEAD or the checked-out branch's ref moves
+/// (that is, on checkout and commit). Editing files does not rerun it, so the
+/// `-dirty` flag reflects the tree as it was at the last rerun; watching
+/// every file would rebuild the shaders on each edit.
+fn commit(root: &Path) -> String {
+    let git = |args: &[&str]| -> Option<String> {
+        let out = std::process::Command::new("git")
+            .args(args)
+            .current_dir(root)
+            .output()
+            .ok()?;
+        out.status
+            .success()
+            .then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
+    };
+    // `--git-path` resolves worktrees (where `.git` is a file) and may
+    // answer relative to `root`. A path that does not exist would make cargo
+    // rerun the script on every build, so only existing files are watched.
+    let mut watched = vec!["HEAD".to_string()];
+    if let Some(branch) = git(&["symbolic-ref", "-q", "HEAD"]) {
+        watched.push(branch);
+    }
+    for name in watched {
+        if let Some(path) = git(&["rev-parse", "--git-path", &name]) {
+            let path = root.join(path);
+            if path.is_file() {
+                println!("cargo:rerun-if-changed={}", path.display());
+            }
+        }
+    }
+    let Some(hash) = git(&["rev-parse", "--short", "HEAD"]).filter(|h| !h.is_empty()) else {
+        return "unknown".to_string();
+    };
+    match git(&["status", "--porcelain"]) {
+        Some(status) if !status.is_empty() => format!("{hash}-dirty"),
+        _ => hash,
+    }
 }

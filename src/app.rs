@@ -2,9 +2,10 @@
 //! (with validation if asked), build the scene's frame, submit it N times,
 //! read the images back, tear everything down, and report what the
 //! validation layer said. Files are only written by the caller, after the
-//! run was found clean.
+//! run was found clean. [`render_empty_pass`] does the same for the empty
+//! pass that benchmarks measure the driver's floor with.
 
-use crate::render::{FrameTiming, Pixels, RenderError, Renderer};
+use crate::render::{empty_pass, EmptyPass, FrameTiming, Pixels, RenderError, Renderer};
 use crate::scene::{Scene, ToneMap};
 use crate::vk::validation::ValidationMessage;
 use crate::vk::{Context, ContextOptions, DeviceInfo};
@@ -65,16 +66,32 @@ pub enum FrameSource<'a> {
 
 /// Renders `scene`; see [`run`].
 pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderRun, RenderError> {
-    run(FrameSource::Scene(scene), settings)
+    run_with_progress(FrameSource::Scene(scene), settings, &mut || {})
+}
+
+/// [`render`], calling `on_frame` after every submitted frame (warm-up
+/// frames included), e.g. to drive a progress bar.
+pub fn render_with_progress(
+    scene: &Scene,
+    settings: &RenderSettings,
+    on_frame: &mut dyn FnMut(),
+) -> Result<RenderRun, RenderError> {
+    run_with_progress(FrameSource::Scene(scene), settings, on_frame)
 }
 
 /// Renders `source` `warmup + frames` times with the device and validation
 /// the settings ask for.
 pub fn run(source: FrameSource<'_>, settings: &RenderSettings) -> Result<RenderRun, RenderError> {
-    let ctx = Context::new(&ContextOptions {
-        validate: settings.validate,
-        device: settings.device.clone(),
-    })?;
+    run_with_progress(source, settings, &mut || {})
+}
+
+/// [`run`], calling `on_frame` after every submitted frame.
+pub fn run_with_progress(
+    source: FrameSource<'_>,
+    settings: &RenderSettings,
+    on_frame: &mut dyn FnMut(),
+) -> Result<RenderRun, RenderError> {
+    let ctx = context(settings)?;
     let log = ctx.validation_log();
     let device = ctx.device_info().clone();
     let (passes, frames, output, hdr) = {
@@ -85,13 +102,7 @@ pub fn run(source: FrameSource<'_>, settings: &RenderSettings) -> Result<RenderR
             }
         };
         let passes = renderer.plan().passes.iter().map(|p| p.name()).collect();
-        for _ in 0..settings.warmup {
-            renderer.render_frame()?;
-        }
-        let mut frames = Vec::new();
-        for _ in 0..settings.frames.max(1) {
-            frames.push(renderer.render_frame()?);
-        }
+        let frames = submit_frames(settings, on_frame, || renderer.render_frame())?;
         (passes, frames, renderer.output(), renderer.hdr())
     };
     // Destroy the device and instance before reading the log, so messages
@@ -106,4 +117,61 @@ pub fn run(source: FrameSource<'_>, settings: &RenderSettings) -> Result<RenderR
         hdr,
         validation,
     })
+}
+
+/// Runs the empty pass (see [`crate::render::empty_pass`]) at `width` x
+/// `height` like [`render_with_progress`] runs a scene: own device, warm-up
+/// and measured frames, validation log read after teardown. `keep_hdr` is
+/// ignored (there is no HDR image); `output` is the constant-coloured
+/// attachment.
+pub fn render_empty_pass(
+    width: u32,
+    height: u32,
+    settings: &RenderSettings,
+    on_frame: &mut dyn FnMut(),
+) -> Result<RenderRun, RenderError> {
+    let ctx = context(settings)?;
+    let log = ctx.validation_log();
+    let device = ctx.device_info().clone();
+    let (frames, output) = {
+        let mut pass = EmptyPass::new(&ctx, width, height)?;
+        let frames = submit_frames(settings, on_frame, || pass.render_frame())?;
+        (frames, pass.output())
+    };
+    drop(ctx);
+    let validation = log.map(|l| l.messages()).unwrap_or_default();
+    Ok(RenderRun {
+        device,
+        passes: vec![empty_pass::PASS_NAME],
+        frames,
+        output,
+        hdr: None,
+        validation,
+    })
+}
+
+fn context(settings: &RenderSettings) -> Result<std::sync::Arc<Context>, RenderError> {
+    Ok(Context::new(&ContextOptions {
+        validate: settings.validate,
+        device: settings.device.clone(),
+    })?)
+}
+
+/// Submits `settings.warmup` discarded frames, then `settings.frames` (at
+/// least one) whose timings are returned.
+fn submit_frames(
+    settings: &RenderSettings,
+    on_frame: &mut dyn FnMut(),
+    mut frame: impl FnMut() -> Result<FrameTiming, RenderError>,
+) -> Result<Vec<FrameTiming>, RenderError> {
+    for _ in 0..settings.warmup {
+        frame()?;
+        on_frame();
+    }
+    let mut frames = Vec::new();
+    for _ in 0..settings.frames.max(1) {
+        frames.push(frame()?);
+        on_frame();
+    }
+    Ok(frames)
 }

@@ -6,6 +6,7 @@
 //! submitted per frame, and read back as images and per-pass timings.
 
 pub mod app;
+pub mod bench;
 pub mod mesh;
 pub mod render;
 pub mod report;

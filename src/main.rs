@@ -28,6 +28,8 @@ enum Command {
     /// Render every combination of knob settings and plot error against
     /// GPU time (sweep.csv, sweep.json, sweep.svg).
     Sweep(cli::sweep::SweepArgs),
+    /// Time scenes and the empty pass; write JSON; gate against a baseline.
+    Bench(cli::bench::BenchArgs),
 }
 
 /// Exit status for errors (bad input, failed render). 2 rather than 1 so
@@ -52,5 +54,6 @@ fn run(cli: Cli) -> anyhow::Result<std::process::ExitCode> {
         Command::Tonemap(args) => cli::tonemap::run(args).map(|()| std::process::ExitCode::SUCCESS),
         Command::Compare(args) => cli::compare::run(args),
         Command::Sweep(args) => cli::sweep::run(args).map(|()| std::process::ExitCode::SUCCESS),
+        Command::Bench(args) => cli::bench::run(args).map(|()| std::process::ExitCode::SUCCESS),
     }
 }

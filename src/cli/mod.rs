@@ -1,5 +1,6 @@
 //! The subcommands of the `aerial` binary, one module each.
 
+pub mod bench;
 pub mod compare;
 pub mod render;
 pub mod sweep;

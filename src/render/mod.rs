@@ -1,12 +1,14 @@
 //! The frame: which passes a scene needs (`plan`), the GPU resources and
 //! the recorded command buffer (`renderer`), and writing the images out
-//! (`output`).
+//! (`output`). `empty_pass` is the driver's floor that benchmarks divide by.
 
+pub mod empty_pass;
 mod gpu_types;
 pub mod output;
 pub mod plan;
 mod renderer;
 
+pub use empty_pass::EmptyPass;
 pub use plan::{FramePlan, Pass};
 pub use renderer::{FrameTiming, Pixels, Renderer};
 
@@ -24,4 +26,6 @@ pub enum RenderError {
     Output { path: PathBuf, reason: String },
     #[error("cannot read {path}: {reason}")]
     Input { path: PathBuf, reason: String },
+    #[error("size {width}x{height}: each side must be in 1..={max}", max = crate::scene::MAX_OUTPUT_SIZE)]
+    Size { width: u32, height: u32 },
 }

@@ -1,6 +1,7 @@
-//! The renderer's render pass and its framebuffer.
+//! The renderer's render pass and its framebuffer, plus a single-colour
+//! pass for measuring the driver's floor.
 //!
-//! One render pass, two subpasses: subpass 0 draws the scene into a float
+//! The scene pass has two subpasses: subpass 0 draws the scene into a float
 //! HDR colour attachment with reversed-Z float depth; subpass 1 reads the HDR
 //! colour as an input attachment and writes the tone-mapped 8-bit sRGB
 //! output. The HDR image is only stored to memory when someone asked for it
@@ -32,7 +33,9 @@ pub const OUTPUT_ATTACHMENT: u32 = 2;
 pub struct RenderPass {
     ctx: Arc<Context>,
     pub(crate) handle: vk::RenderPass,
-    pub desc: RenderPassDesc,
+    /// What the scene pass was built from; `None` for a
+    /// [`RenderPass::single_color`] pass.
+    pub desc: Option<RenderPassDesc>,
 }
 
 impl RenderPass {
@@ -160,7 +163,63 @@ impl RenderPass {
         Ok(RenderPass {
             ctx: ctx.clone(),
             handle,
-            desc,
+            desc: Some(desc),
+        })
+    }
+
+    /// One subpass writing one colour attachment of `format`, every pixel
+    /// (so nothing is loaded), stored and left in TRANSFER_SRC_OPTIMAL for
+    /// readback. This is the least a frame can do, used to measure the
+    /// driver's floor.
+    pub fn single_color(ctx: &Arc<Context>, format: vk::Format) -> Result<RenderPass, VkError> {
+        let attachments = [vk::AttachmentDescription::default()
+            .format(format)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .load_op(vk::AttachmentLoadOp::DONT_CARE)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+            .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .initial_layout(vk::ImageLayout::UNDEFINED)
+            .final_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)];
+        let colour = [vk::AttachmentReference {
+            attachment: 0,
+            layout: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+        }];
+        let subpasses = [vk::SubpassDescription::default()
+            .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+            .color_attachments(&colour)];
+        let dependencies = [
+            // The previous submission's writes and its copy out must be done
+            // before this one writes the attachment again.
+            vk::SubpassDependency::default()
+                .src_subpass(vk::SUBPASS_EXTERNAL)
+                .dst_subpass(0)
+                .src_stage_mask(
+                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
+                        | vk::PipelineStageFlags::TRANSFER,
+                )
+                .src_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT)
+                .dst_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE),
+            // The attachment is copied out afterwards.
+            vk::SubpassDependency::default()
+                .src_subpass(0)
+                .dst_subpass(vk::SUBPASS_EXTERNAL)
+                .src_stage_mask(vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT)
+                .src_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags::TRANSFER)
+                .dst_access_mask(vk::AccessFlags::TRANSFER_READ),
+        ];
+        let info = vk::RenderPassCreateInfo::default()
+            .attachments(&attachments)
+            .subpasses(&subpasses)
+            .dependencies(&dependencies);
+        // SAFETY: valid device; all referenced arrays are locals.
+        let handle = unsafe { ctx.device.create_render_pass(&info, None) }?;
+        Ok(RenderPass {
+            ctx: ctx.clone(),
+            handle,
+            desc: None,
         })
     }
 }
@@ -186,14 +245,35 @@ impl Framebuffer {
         pass: &RenderPass,
         attachments: [&Image; 3],
     ) -> Result<Framebuffer, VkError> {
-        let views = attachments.map(|i| i.view);
         let extent = vk::Extent2D {
             width: attachments[0].desc.width,
             height: attachments[0].desc.height,
         };
+        Framebuffer::create(ctx, pass, &attachments.map(|i| i.view), extent)
+    }
+
+    /// The framebuffer of a [`RenderPass::single_color`] pass.
+    pub fn single(
+        ctx: &Arc<Context>,
+        pass: &RenderPass,
+        attachment: &Image,
+    ) -> Result<Framebuffer, VkError> {
+        let extent = vk::Extent2D {
+            width: attachment.desc.width,
+            height: attachment.desc.height,
+        };
+        Framebuffer::create(ctx, pass, &[attachment.view], extent)
+    }
+
+    fn create(
+        ctx: &Arc<Context>,
+        pass: &RenderPass,
+        views: &[vk::ImageView],
+        extent: vk::Extent2D,
+    ) -> Result<Framebuffer, VkError> {
         let info = vk::FramebufferCreateInfo::default()
             .render_pass(pass.handle)
-            .attachments(&views)
+            .attachments(views)
             .width(extent.width)
             .height(extent.height)
             .layers(1);

@@ -1,0 +1,305 @@
+//! Benchmarks: render scenes for a number of frames and summarise the
+//! per-pass GPU time (timestamps) and whole-frame CPU time, next to the
+//! empty pass (the driver's floor) at the same resolution.
+//!
+//! The library side does the measuring ([`run`]), the report types with
+//! their JSON form ([`report`]) and the baseline comparison ([`compare`]),
+//! so tests and other tools can use them without the command line; the
+//! `aerial bench` subcommand only parses arguments and prints.
+
+pub mod compare;
+pub mod report;
+
+pub use compare::{compare, Comparison, RatioRow, RowKey};
+pub use report::{
+    BenchReport, DeviceRecord, EmptyPassReport, PassReport, Resolution, SceneReport, CPU_FRAME,
+    FORMAT, GPU_TOTAL,
+};
+
+use crate::app::{self, RenderRun, RenderSettings};
+use crate::render::RenderError;
+use crate::report::stats::Summary;
+use crate::scene::{knob_settings, Scene, SceneError};
+use sha2::{Digest, Sha256};
+use std::path::{Path, PathBuf};
+
+/// The commit this binary was built from (see `build.rs`).
+pub const COMMIT: &str = env!("AERIAL_COMMIT");
+
+/// Why a benchmark could not run or a report could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum BenchError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    // The inner errors are shown in Display (not chained as a source), so
+    // every message names the run or file once, however it is printed.
+    #[error("{run}: {error}")]
+    Render { run: String, error: RenderError },
+    #[error("{run}: {} validation message(s):\n{}", .messages.len(), .messages.join("\n"))]
+    Validation { run: String, messages: Vec<String> },
+    #[error("{run}: {what} has no finite samples")]
+    BadSamples { run: String, what: String },
+    #[error("{}: {error}", .path.display())]
+    Io {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+    #[error("{}: {reason}", .path.display())]
+    Json { path: PathBuf, reason: String },
+    #[error("{}: given twice; each scene file may appear once", .0.display())]
+    DuplicateScene(PathBuf),
+    #[error("--frames: must be at least 1")]
+    NoFrames,
+}
+
+/// How every run of a benchmark is done.
+#[derive(Clone, Debug)]
+pub struct BenchSettings {
+    /// Frames submitted and discarded before measuring.
+    pub warmup: u32,
+    /// Frames measured (at least 1).
+    pub frames: u32,
+    pub validate: bool,
+    pub device: Option<String>,
+}
+
+/// A scene to benchmark: its file, the file's hash, and the scene as
+/// loaded, which the caller may still change (size, knobs) before [`run`].
+#[derive(Clone, Debug)]
+pub struct BenchScene {
+    pub path: PathBuf,
+    /// SHA-256 of the file's bytes, lowercase hex.
+    pub sha256: String,
+    pub scene: Scene,
+}
+
+impl BenchScene {
+    /// Reads the file once, so the hash is of exactly the bytes parsed.
+    pub fn load(path: &Path) -> Result<BenchScene, BenchError> {
+        let file = path.display().to_string();
+        let io = |reason| SceneError::Io {
+            file: file.clone(),
+            reason,
+        };
+        let bytes = std::fs::read(path).map_err(io)?;
+        let text = std::str::from_utf8(&bytes)
+            .map_err(|e| io(std::io::Error::new(std::io::ErrorKind::InvalidData, e)))?;
+        let base_dir = path.parent().unwrap_or_else(|| Path::new(""));
+        let scene = Scene::from_toml(text, &file, base_dir)?;
+        Ok(BenchScene {
+            path: path.to_path_buf(),
+            sha256: sha256_hex(&bytes),
+            scene,
+        })
+    }
+
+    fn resolution(&self) -> Resolution {
+        Resolution {
+            width: self.scene.output.width,
+            height: self.scene.output.height,
+        }
+    }
+}
+
+/// Lowercase hex SHA-256 of `bytes`.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// Receives progress while [`run`] works; every method defaults to nothing.
+pub trait Progress {
+    /// Called once, first, with the number of frames (warm-up included)
+    /// the whole benchmark will submit.
+    fn start(&mut self, _total_frames: u64) {}
+    /// A run (a scene, or the empty pass at one resolution) begins.
+    fn run(&mut self, _label: &str) {}
+    /// One frame was submitted and finished.
+    fn frame(&mut self) {}
+}
+
+/// No progress reporting.
+impl Progress for () {}
+
+/// Benchmarks the empty pass at every resolution the scenes use, then each
+/// scene, each on its own device (like `aerial render`), and returns the
+/// report. Fails on the first error, and under validation on the first run
+/// with any validation message.
+pub fn run(
+    scenes: &[BenchScene],
+    settings: &BenchSettings,
+    progress: &mut dyn Progress,
+) -> Result<BenchReport, BenchError> {
+    if settings.frames == 0 {
+        return Err(BenchError::NoFrames);
+    }
+    for (i, s) in scenes.iter().enumerate() {
+        if scenes[..i].iter().any(|t| t.path == s.path) {
+            return Err(BenchError::DuplicateScene(s.path.clone()));
+        }
+    }
+    let mut resolutions: Vec<Resolution> = Vec::new();
+    for s in scenes {
+        if !resolutions.contains(&s.resolution()) {
+            resolutions.push(s.resolution());
+        }
+    }
+    let runs = (resolutions.len() + scenes.len()) as u64;
+    progress.start(runs * (settings.warmup as u64 + settings.frames as u64));
+    let render_settings = RenderSettings {
+        validate: settings.validate,
+        device: settings.device.clone(),
+        warmup: settings.warmup,
+        frames: settings.frames,
+        keep_hdr: false,
+    };
+
+    let mut device = None;
+    let mut empty_passes = Vec::new();
+    for resolution in resolutions {
+        let label = compare::empty_pass_scene(resolution);
+        progress.run(&label);
+        let run = app::render_empty_pass(
+            resolution.width,
+            resolution.height,
+            &render_settings,
+            &mut || progress.frame(),
+        )
+        .map_err(|error| BenchError::Render {
+            run: label.clone(),
+            error,
+        })?;
+        check_validation(&label, &run)?;
+        let (mut passes, _, cpu_frame) = summarise(&label, &run)?;
+        device.get_or_insert_with(|| DeviceRecord::from(&run.device));
+        empty_passes.push(EmptyPassReport {
+            resolution,
+            gpu: passes.pop(),
+            cpu_frame,
+        });
+    }
+
+    let mut reports = Vec::new();
+    for s in scenes {
+        let label = s.path.display().to_string();
+        progress.run(&label);
+        let run = app::render_with_progress(&s.scene, &render_settings, &mut || progress.frame())
+            .map_err(|error| BenchError::Render {
+            run: label.clone(),
+            error,
+        })?;
+        check_validation(&label, &run)?;
+        let (mut passes, mut gpu_total, cpu_frame) = summarise(&label, &run)?;
+        let floor = empty_passes
+            .iter()
+            .find(|e| e.resolution == s.resolution())
+            .and_then(|e| e.gpu.as_ref())
+            .map(|g| g.ms.median)
+            .filter(|m| *m > 0.0);
+        if let Some(floor) = floor {
+            for p in passes.iter_mut().chain(gpu_total.as_mut()) {
+                p.empty_pass_multiple = Some(p.ms.median / floor);
+            }
+        }
+        reports.push(SceneReport {
+            file: label,
+            sha256: s.sha256.clone(),
+            resolution: s.resolution(),
+            triangles: (0..s.scene.objects.len())
+                .map(|i| s.scene.object_mesh(i).triangle_count() as u64)
+                .sum(),
+            knobs: knob_settings(&s.scene)
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v))
+                .collect(),
+            passes,
+            gpu_total,
+            cpu_frame,
+        });
+        device.get_or_insert_with(|| DeviceRecord::from(&run.device));
+    }
+
+    Ok(BenchReport {
+        format: FORMAT.to_string(),
+        commit: COMMIT.to_string(),
+        aerial_version: env!("CARGO_PKG_VERSION").to_string(),
+        build: if cfg!(debug_assertions) {
+            "debug"
+        } else {
+            "release"
+        }
+        .to_string(),
+        // Every run above succeeded, and there is at least one when a scene
+        // was given; with none, nothing ran and no device was opened.
+        device: device.unwrap_or_else(|| DeviceRecord {
+            name: "none".into(),
+            driver_name: String::new(),
+            driver_info: String::new(),
+            driver_version: 0,
+            api_version: String::new(),
+        }),
+        warmup: settings.warmup,
+        frames: settings.frames,
+        validate: settings.validate,
+        empty_passes,
+        scenes: reports,
+    })
+}
+
+fn check_validation(label: &str, run: &RenderRun) -> Result<(), BenchError> {
+    if run.validation.is_empty() {
+        Ok(())
+    } else {
+        Err(BenchError::Validation {
+            run: label.to_string(),
+            messages: run.validation.iter().map(|m| m.to_string()).collect(),
+        })
+    }
+}
+
+/// Per-pass GPU rows, the GPU total row (both only with timestamps) and
+/// the CPU frame row of one run.
+fn summarise(
+    label: &str,
+    run: &RenderRun,
+) -> Result<(Vec<PassReport>, Option<PassReport>, PassReport), BenchError> {
+    let row = |name: &str, samples: Vec<f64>| {
+        Summary::of(&samples)
+            .map(|ms| PassReport {
+                name: name.to_string(),
+                ms,
+                empty_pass_multiple: None,
+            })
+            .ok_or_else(|| BenchError::BadSamples {
+                run: label.to_string(),
+                what: name.to_string(),
+            })
+    };
+    // Without timestamps every frame's pass_ms is empty; a partial frame
+    // would be a driver bug, and is treated as "no timestamps" too.
+    let timed = run
+        .frames
+        .iter()
+        .all(|f| f.pass_ms.len() == run.passes.len());
+    let mut passes = Vec::new();
+    let mut gpu_total = None;
+    if timed && !run.passes.is_empty() {
+        for (i, name) in run.passes.iter().enumerate() {
+            passes.push(row(
+                name,
+                run.frames.iter().map(|f| f.pass_ms[i]).collect(),
+            )?);
+        }
+        gpu_total = Some(row(
+            GPU_TOTAL,
+            run.frames.iter().map(|f| f.pass_ms.iter().sum()).collect(),
+        )?);
+    }
+    let cpu_frame = row(CPU_FRAME, run.frames.iter().map(|f| f.cpu_ms).collect())?;
+    Ok((passes, gpu_total, cpu_frame))
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,222 @@
+//! The benchmark report: what was measured, on what, from which build, and
+//! the timing summaries; serialised as JSON for baselines and dashboards.
+//!
+//! Every time is in milliseconds (fields named `ms`). A [`Summary`] holds
+//! min, median, p95, max, mean and sample standard deviation over the
+//! measured frames (see [`crate::report::stats`]).
+
+use super::BenchError;
+use crate::report::stats::Summary;
+use crate::vk::DeviceInfo;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::Path;
+
+/// The `format` of reports this build writes and reads; bumped when a
+/// field changes meaning, so an old baseline fails loudly instead of being
+/// compared wrongly.
+pub const FORMAT: &str = "aerial-bench/1";
+
+/// Name of the row with the sum of a frame's pass times.
+pub const GPU_TOTAL: &str = "gpu total";
+/// Name of the row with a frame's CPU time (submit to fence signalled).
+pub const CPU_FRAME: &str = "cpu frame";
+
+/// One `aerial bench` run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BenchReport {
+    /// [`FORMAT`].
+    pub format: String,
+    /// The commit the binary was built from (`git rev-parse --short HEAD`,
+    /// `-dirty` if the tree had changes, `unknown` outside git).
+    pub commit: String,
+    /// The crate version of the binary.
+    pub aerial_version: String,
+    /// `release` or `debug`.
+    pub build: String,
+    pub device: DeviceRecord,
+    /// Frames submitted and discarded before measuring, per run.
+    pub warmup: u32,
+    /// Frames measured per run.
+    pub frames: u32,
+    /// Whether the validation layer was on (which slows everything down).
+    pub validate: bool,
+    /// The empty pass at each resolution the scenes use.
+    pub empty_passes: Vec<EmptyPassReport>,
+    pub scenes: Vec<SceneReport>,
+}
+
+/// The device and driver, as the Vulkan driver reports them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DeviceRecord {
+    pub name: String,
+    pub driver_name: String,
+    pub driver_info: String,
+    /// `VkPhysicalDeviceProperties::driverVersion`, vendor-encoded.
+    pub driver_version: u32,
+    /// The Vulkan API version the device supports, `major.minor.patch`.
+    pub api_version: String,
+}
+
+impl From<&DeviceInfo> for DeviceRecord {
+    fn from(d: &DeviceInfo) -> Self {
+        DeviceRecord {
+            name: d.name.clone(),
+            driver_name: d.driver_name.clone(),
+            driver_info: d.driver_info.clone(),
+            driver_version: d.driver_version,
+            api_version: d.api_version.clone(),
+        }
+    }
+}
+
+impl fmt::Display for DeviceRecord {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} ({} {}, driverVersion {:#x}), Vulkan {}",
+            self.name, self.driver_name, self.driver_info, self.driver_version, self.api_version
+        )
+    }
+}
+
+/// Output size in pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+pub struct Resolution {
+    pub width: u32,
+    pub height: u32,
+}
+
+impl fmt::Display for Resolution {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}x{}", self.width, self.height)
+    }
+}
+
+/// One timed row: a pass, or a whole-frame total.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PassReport {
+    /// The pass name (`opaque`, `tonemap`, ...), [`GPU_TOTAL`] or
+    /// [`CPU_FRAME`].
+    pub name: String,
+    /// Per-frame times in milliseconds.
+    pub ms: Summary,
+    /// Median time divided by the empty pass's median GPU time at the same
+    /// resolution; `None` for CPU rows or without timestamps.
+    pub empty_pass_multiple: Option<f64>,
+}
+
+/// The empty pass (the driver's floor) at one resolution.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EmptyPassReport {
+    pub resolution: Resolution,
+    /// The pass's GPU time; `None` when the device has no timestamps.
+    pub gpu: Option<PassReport>,
+    pub cpu_frame: PassReport,
+}
+
+/// One scene file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SceneReport {
+    /// The scene file as given on the command line; the key that
+    /// comparisons match scenes by.
+    pub file: String,
+    /// SHA-256 of the file's bytes, lowercase hex.
+    pub sha256: String,
+    pub resolution: Resolution,
+    /// Triangles drawn per frame (after tessellation).
+    pub triangles: u64,
+    /// Every knob's setting, after command-line overrides.
+    pub knobs: BTreeMap<String, String>,
+    /// GPU time of each pass, in frame order; empty without timestamps.
+    pub passes: Vec<PassReport>,
+    /// The sum of the passes per frame; `None` without timestamps.
+    pub gpu_total: Option<PassReport>,
+    pub cpu_frame: PassReport,
+}
+
+impl SceneReport {
+    /// The passes, then the GPU total, then the CPU frame time.
+    pub fn rows(&self) -> impl Iterator<Item = &PassReport> {
+        self.passes
+            .iter()
+            .chain(&self.gpu_total)
+            .chain(std::iter::once(&self.cpu_frame))
+    }
+}
+
+impl EmptyPassReport {
+    /// The GPU pass (if timed), then the CPU frame time.
+    pub fn rows(&self) -> impl Iterator<Item = &PassReport> {
+        self.gpu.iter().chain(std::iter::once(&self.cpu_frame))
+    }
+}
+
+impl BenchReport {
+    /// Reads a report written by [`BenchReport::save`], rejecting other
+    /// formats with an error naming the file and the `format` field.
+    pub fn load(path: &Path) -> Result<BenchReport, BenchError> {
+        let text = std::fs::read_to_string(path).map_err(|error| BenchError::Io {
+            path: path.to_path_buf(),
+            error,
+        })?;
+        BenchReport::from_json(&text, path)
+    }
+
+    /// Parses a report; `path` is only used in error messages.
+    pub fn from_json(text: &str, path: &Path) -> Result<BenchReport, BenchError> {
+        // Check the format first, so a report of another version says so
+        // rather than failing on whichever field changed.
+        let value: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| BenchError::Json {
+                path: path.to_path_buf(),
+                reason: e.to_string(),
+            })?;
+        match value.get("format").and_then(|f| f.as_str()) {
+            Some(FORMAT) => {}
+            Some(other) => {
+                return Err(BenchError::Json {
+                    path: path.to_path_buf(),
+                    reason: format!("format: '{other}' is not {FORMAT}"),
+                })
+            }
+            None => {
+                return Err(BenchError::Json {
+                    path: path.to_path_buf(),
+                    reason: format!(
+                        "format: missing; not a benchmark report (expected \"{FORMAT}\")"
+                    ),
+                })
+            }
+        }
+        // Parsed again from the text so errors keep their line and column,
+        // and through serde_path_to_error so they name the field.
+        serde_path_to_error::deserialize(&mut serde_json::Deserializer::from_str(text)).map_err(
+            |e| BenchError::Json {
+                path: path.to_path_buf(),
+                reason: format!("{}: {}", e.path(), e.inner()),
+            },
+        )
+    }
+
+    /// Writes the report as pretty-printed JSON.
+    pub fn save(&self, path: &Path) -> Result<(), BenchError> {
+        let mut text = serde_json::to_string_pretty(self).map_err(|e| BenchError::Json {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+        text.push('\n');
+        std::fs::write(path, text).map_err(|error| BenchError::Io {
+            path: path.to_path_buf(),
+            error,
+        })
+    }
+
+    /// The empty pass measured at `resolution`, if any.
+    pub fn empty_pass(&self, resolution: Resolution) -> Option<&EmptyPassReport> {
+        self.empty_passes
+            .iter()
+            .find(|e| e.resolution == resolution)
+    }
+}

@@ -1,0 +1,190 @@
+//! The empty pass: the floor of what one pass costs on this driver.
+//!
+//! One render pass with a single RGBA8 colour attachment and one full-screen
+//! triangle whose fragment shader writes a constant (`glsl/constant.frag`).
+//! It is timed with GPU timestamps exactly as the scene renderer times its
+//! passes (one interval from before the render pass begins to after it
+//! ends), so a scene pass's time divided by this one says how many "empty
+//! full-screen passes" of work it is. On a CPU driver such as lavapipe that
+//! floor is far from zero: every pixel is still shaded and stored.
+//!
+//! The attachment is copied to a host buffer after the timed interval so
+//! tests can check that the pass really wrote every pixel.
+
+use super::{FrameTiming, Pixels, RenderError};
+use crate::shaders;
+use crate::vk::{
+    AccessFlags, Buffer, BufferUsage, CommandBuffer, Context, CullModeFlags, Fence, Format,
+    Framebuffer, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageAspectFlags, ImageDesc,
+    ImageUsageFlags, PipelineLayout, PipelineStageFlags, RenderPass, ShaderModule,
+    TimestampQueries,
+};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// The attachment format: plain 8-bit RGBA, the cheapest colour target.
+const FORMAT: Format = Format::R8G8B8A8_UNORM;
+
+/// The name of the one timed pass.
+pub const PASS_NAME: &str = "empty";
+
+/// What `glsl/constant.frag` writes, as stored in the UNORM attachment
+/// (each channel may round either way by one).
+pub const CONSTANT_RGBA8: [u8; 4] = [64, 128, 191, 255];
+
+/// The empty pass's GPU objects and its recorded command buffer. Fields
+/// drop in declaration order: command buffer first, context last.
+pub struct EmptyPass {
+    command_buffer: CommandBuffer,
+    fence: Fence,
+    queries: Option<TimestampQueries>,
+    readback: Buffer,
+    _pipeline: GraphicsPipeline,
+    _layout: PipelineLayout,
+    _framebuffer: Framebuffer,
+    _render_pass: RenderPass,
+    _target: Image,
+    width: u32,
+    height: u32,
+    ctx: Arc<Context>,
+}
+
+impl EmptyPass {
+    /// Builds the pass at `width` x `height` and records its frame once.
+    pub fn new(ctx: &Arc<Context>, width: u32, height: u32) -> Result<EmptyPass, RenderError> {
+        // Scenes are checked when loaded; this pass takes its size directly,
+        // and a zero-sized image would be invalid Vulkan usage.
+        let valid = 1..=crate::scene::MAX_OUTPUT_SIZE;
+        if !valid.contains(&width) || !valid.contains(&height) {
+            return Err(RenderError::Size { width, height });
+        }
+        let target = Image::new(
+            ctx,
+            "empty pass target",
+            ImageDesc {
+                width,
+                height,
+                format: FORMAT,
+                usage: ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::TRANSFER_SRC,
+                mip_levels: 1,
+                aspect: ImageAspectFlags::COLOR,
+            },
+        )?;
+        let render_pass = RenderPass::single_color(ctx, FORMAT)?;
+        let framebuffer = Framebuffer::single(ctx, &render_pass, &target)?;
+        let layout = PipelineLayout::new(ctx, &[])?;
+        let vertex = ShaderModule::new(ctx, shaders::FULLSCREEN_VERT)?;
+        let fragment = ShaderModule::new(ctx, shaders::CONSTANT_FRAG)?;
+        let pipeline = GraphicsPipeline::new(
+            ctx,
+            &layout,
+            &render_pass,
+            &GraphicsPipelineDesc {
+                vertex_shader: &vertex,
+                fragment_shader: &fragment,
+                specialization: &[],
+                vertex_stride: 0,
+                vertex_attributes: &[],
+                cull_mode: CullModeFlags::NONE,
+                // There is no depth attachment; depth state is ignored.
+                depth_test: false,
+                depth_write: false,
+                alpha_blend: false,
+                subpass: 0,
+            },
+        )?;
+        let readback = Buffer::new(
+            ctx,
+            "empty pass readback",
+            width as u64 * height as u64 * 4,
+            BufferUsage::Readback,
+        )?;
+        let queries = TimestampQueries::new(ctx, 2)?;
+
+        // Recorded like the scene renderer's frame: reset the queries,
+        // order this copy after the previous submission's, then one
+        // timestamp on each side of the render pass.
+        let cmd = CommandBuffer::new(ctx)?;
+        cmd.begin()?;
+        if let Some(q) = &queries {
+            cmd.reset_queries(q);
+        }
+        cmd.memory_barrier(
+            PipelineStageFlags::TRANSFER,
+            AccessFlags::TRANSFER_WRITE,
+            PipelineStageFlags::TRANSFER,
+            AccessFlags::TRANSFER_WRITE,
+        );
+        if let Some(q) = &queries {
+            cmd.write_timestamp(q, 0);
+        }
+        // The load op is DONT_CARE (the triangle covers every pixel), so the
+        // clear value is never used; the render pass still takes one per
+        // attachment.
+        cmd.begin_render_pass(
+            &render_pass,
+            &framebuffer,
+            &[crate::vk::clear_color([0.0; 4])],
+        );
+        cmd.bind_pipeline(&pipeline);
+        cmd.draw(3);
+        cmd.end_render_pass();
+        if let Some(q) = &queries {
+            cmd.write_timestamp(q, 1);
+        }
+        cmd.copy_image_to_buffer(&target, &readback);
+        cmd.memory_barrier(
+            PipelineStageFlags::TRANSFER,
+            AccessFlags::TRANSFER_WRITE,
+            PipelineStageFlags::HOST,
+            AccessFlags::HOST_READ,
+        );
+        cmd.end()?;
+
+        Ok(EmptyPass {
+            command_buffer: cmd,
+            fence: Fence::new(ctx)?,
+            queries,
+            readback,
+            _pipeline: pipeline,
+            _layout: layout,
+            _framebuffer: framebuffer,
+            _render_pass: render_pass,
+            _target: target,
+            width,
+            height,
+            ctx: ctx.clone(),
+        })
+    }
+
+    /// Submits the recorded pass and waits for it. `pass_ms` has one entry
+    /// (empty when the device has no timestamps); `cpu_ms` is submit to
+    /// fence, as for scene frames.
+    pub fn render_frame(&mut self) -> Result<FrameTiming, RenderError> {
+        let start = Instant::now();
+        self.command_buffer.submit(&self.fence)?;
+        self.fence.wait_and_reset()?;
+        let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
+        let pass_ms = match &self.queries {
+            Some(q) => q.read_intervals_ns()?.iter().map(|ns| ns * 1e-6).collect(),
+            None => Vec::new(),
+        };
+        Ok(FrameTiming { pass_ms, cpu_ms })
+    }
+
+    /// The attachment as the last frame left it.
+    pub fn output(&self) -> Pixels<u8> {
+        Pixels {
+            width: self.width,
+            height: self.height,
+            data: self.readback.read().to_vec(),
+        }
+    }
+}
+
+impl Drop for EmptyPass {
+    fn drop(&mut self) {
+        // As for the renderer: nothing may be pending when resources go.
+        let _ = self.ctx.wait_idle();
+    }
+}
