@@ -24,7 +24,7 @@ float specular_power(float cos_nh, float shininess) {
 // plus ka * La. Specular is only lit where the light is in front (cos theta > 0).
 vec3 blinn_phong(vec3 p, vec3 n, vec3 v, vec3 kd, vec3 ka) {
     vec3 color = ka * frame.ambient.rgb;
-    for (uint i = 0u; i < object.counts.x; ++i) {
+    for (uint i = 0u; i < LIGHT_COUNT; ++i) {
         vec3 l, radiance;
         light_at(object.lights[i], p, l, radiance);
         float cos_theta = dot(n, l);
@@ -40,7 +40,7 @@ vec3 blinn_phong(vec3 p, vec3 n, vec3 v, vec3 kd, vec3 ka) {
 // by the caller where |N.V| is small.
 vec3 toon(vec3 p, vec3 n, vec3 v, vec3 kd, vec3 ka) {
     vec3 color = ka * frame.ambient.rgb;
-    for (uint i = 0u; i < object.counts.x; ++i) {
+    for (uint i = 0u; i < LIGHT_COUNT; ++i) {
         vec3 l, radiance;
         light_at(object.lights[i], p, l, radiance);
         float cos_theta = dot(n, l);

@@ -20,6 +20,8 @@ pub enum RenderError {
     Vulkan(#[from] crate::vk::VkError),
     #[error("texture {path}: {reason}")]
     Texture { path: PathBuf, reason: String },
+    #[error("an object is reached by {lights} lights; this device's uniform blocks hold at most {max} (raise light_cutoff to leave out faint ones)")]
+    TooManyLights { lights: usize, max: usize },
     #[error("invalid HDR input image: {0}")]
     InvalidImage(String),
     #[error("cannot write {path}: {reason}")]

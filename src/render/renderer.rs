@@ -196,8 +196,22 @@ impl Renderer {
         let blocks: Vec<Vec<u8>> = (0..scene.objects.len())
             .map(|i| object_block(scene, i, plan.draws().find(|d| d.object == i)))
             .collect();
-        let alignment = ctx.storage_offset_alignment().max(16);
-        let block_range = blocks.iter().map(|b| b.len() as u64).max().unwrap_or(192);
+        let alignment = ctx.uniform_offset_alignment().max(16);
+        // Every block is padded to room for at least one light, the
+        // shortest array the shaders can declare.
+        let min_block = (std::mem::size_of::<ObjectHeader>() + std::mem::size_of::<GpuLight>()) as u64;
+        let block_range = blocks
+            .iter()
+            .map(|b| b.len() as u64)
+            .max()
+            .unwrap_or(0)
+            .max(min_block);
+        if block_range > ctx.max_uniform_range() {
+            return Err(RenderError::TooManyLights {
+                lights: blocks.iter().map(|b| (b.len() - std::mem::size_of::<ObjectHeader>()) / std::mem::size_of::<GpuLight>()).max().unwrap_or(0),
+                max: (ctx.max_uniform_range() as usize - std::mem::size_of::<ObjectHeader>()) / std::mem::size_of::<GpuLight>(),
+            });
+        }
         let mut block_offsets = Vec::with_capacity(blocks.len());
         let mut object_bytes = Vec::new();
         for b in &blocks {
@@ -211,7 +225,7 @@ impl Renderer {
         // The last block's descriptor range must still fit in the buffer.
         let last = block_offsets.last().copied().unwrap_or(0) as u64;
         object_bytes.resize(object_bytes.len().max((last + block_range) as usize), 0);
-        let object_buffer = Buffer::with_data(ctx, "objects", &object_bytes, BufferUsage::Storage)?;
+        let object_buffer = Buffer::with_data(ctx, "objects", &object_bytes, BufferUsage::Uniform)?;
 
         // Textures, only if some material has one.
         let sampler = if plan.textures.is_empty() {
@@ -244,7 +258,7 @@ impl Renderer {
             ctx,
             &[DescriptorBinding {
                 binding: 0,
-                kind: DescriptorType::STORAGE_BUFFER_DYNAMIC,
+                kind: DescriptorType::UNIFORM_BUFFER_DYNAMIC,
                 stages: all_stages,
             }],
         )?;
@@ -284,7 +298,7 @@ impl Renderer {
         let object_set = pool.allocate(&object_layout)?;
         object_set.write_buffer(
             0,
-            DescriptorType::STORAGE_BUFFER_DYNAMIC,
+            DescriptorType::UNIFORM_BUFFER_DYNAMIC,
             &object_buffer,
             block_range,
         );
@@ -345,7 +359,11 @@ impl Renderer {
                 &GraphicsPipelineDesc {
                     vertex_shader: vert,
                     fragment_shader: frag,
-                    specialization: &[(0, key.shading as u32)],
+                    specialization: &[
+                        (0, key.shading as u32),
+                        (1, key.lights),
+                        (2, key.lights.max(1)),
+                    ],
                     vertex_stride: std::mem::size_of::<Vertex>() as u32,
                     vertex_attributes: &attributes,
                     cull_mode: CullModeFlags::BACK,

@@ -168,9 +168,14 @@ impl Context {
         self.allocator.lock().unwrap_or_else(|p| p.into_inner())
     }
 
-    /// The alignment of dynamic storage-buffer offsets.
-    pub fn storage_offset_alignment(&self) -> u64 {
-        self.limits.min_storage_buffer_offset_alignment
+    /// The alignment of dynamic uniform-buffer offsets.
+    pub fn uniform_offset_alignment(&self) -> u64 {
+        self.limits.min_uniform_buffer_offset_alignment
+    }
+
+    /// The largest range a uniform-buffer descriptor may cover.
+    pub fn max_uniform_range(&self) -> u64 {
+        self.limits.max_uniform_buffer_range as u64
     }
 
     /// Makes one deliberate API misuse (a sampler with anisotropic
