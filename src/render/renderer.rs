@@ -199,7 +199,8 @@ impl Renderer {
         let alignment = ctx.uniform_offset_alignment().max(16);
         // Every block is padded to room for at least one light, the
         // shortest array the shaders can declare.
-        let min_block = (std::mem::size_of::<ObjectHeader>() + std::mem::size_of::<GpuLight>()) as u64;
+        let min_block =
+            (std::mem::size_of::<ObjectHeader>() + std::mem::size_of::<GpuLight>()) as u64;
         let block_range = blocks
             .iter()
             .map(|b| b.len() as u64)
@@ -208,8 +209,16 @@ impl Renderer {
             .max(min_block);
         if block_range > ctx.max_uniform_range() {
             return Err(RenderError::TooManyLights {
-                lights: blocks.iter().map(|b| (b.len() - std::mem::size_of::<ObjectHeader>()) / std::mem::size_of::<GpuLight>()).max().unwrap_or(0),
-                max: (ctx.max_uniform_range() as usize - std::mem::size_of::<ObjectHeader>()) / std::mem::size_of::<GpuLight>(),
+                lights: blocks
+                    .iter()
+                    .map(|b| {
+                        (b.len() - std::mem::size_of::<ObjectHeader>())
+                            / std::mem::size_of::<GpuLight>()
+                    })
+                    .max()
+                    .unwrap_or(0),
+                max: (ctx.max_uniform_range() as usize - std::mem::size_of::<ObjectHeader>())
+                    / std::mem::size_of::<GpuLight>(),
             });
         }
         let mut block_offsets = Vec::with_capacity(blocks.len());

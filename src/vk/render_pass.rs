@@ -33,9 +33,6 @@ pub const OUTPUT_ATTACHMENT: u32 = 2;
 pub struct RenderPass {
     ctx: Arc<Context>,
     pub(crate) handle: vk::RenderPass,
-    /// What the scene pass was built from; `None` for a
-    /// [`RenderPass::single_color`] pass.
-    pub desc: Option<RenderPassDesc>,
 }
 
 impl RenderPass {
@@ -163,7 +160,6 @@ impl RenderPass {
         Ok(RenderPass {
             ctx: ctx.clone(),
             handle,
-            desc: Some(desc),
         })
     }
 
@@ -219,7 +215,6 @@ impl RenderPass {
         Ok(RenderPass {
             ctx: ctx.clone(),
             handle,
-            desc: None,
         })
     }
 }
