@@ -185,6 +185,7 @@ fn print_report(report: &BenchReport) {
         }
     );
     println!("times in ms; x empty = median / empty pass median at the same resolution");
+    println!("note: {}", aerial::render::SUBPASS_TIMING_NOTE);
     for e in &report.empty_passes {
         println!();
         println!("empty pass {}", e.resolution);

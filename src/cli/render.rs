@@ -99,6 +99,7 @@ fn print_timings(run: &app::RenderRun) {
         run.frames.iter().map(|f| f.pass_ms.iter().sum()).collect(),
     );
     row("cpu frame", run.frames.iter().map(|f| f.cpu_ms).collect());
+    println!("note: {}", aerial::render::SUBPASS_TIMING_NOTE);
 }
 
 /// Prints every validation message and fails the run if there was any, so

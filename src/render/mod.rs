@@ -9,7 +9,7 @@ pub mod plan;
 mod renderer;
 
 pub use empty_pass::EmptyPass;
-pub use plan::{FramePlan, Pass};
+pub use plan::{FramePlan, Pass, SUBPASS_TIMING_NOTE};
 pub use renderer::{FrameTiming, Pixels, Renderer};
 
 use std::path::PathBuf;

@@ -68,6 +68,13 @@ pub enum Pass {
     Readback,
 }
 
+/// Why the split between subpasses is approximate: printed under timing
+/// tables.
+pub const SUBPASS_TIMING_NOTE: &str =
+    "opaque, transparent and tonemap are subpasses of one render pass: \
+a binning rasterizer (lavapipe, tile-based GPUs) may do a draw's work after a later timestamp, \
+so their split is approximate; the sum over the render pass is exact";
+
 impl Pass {
     pub fn name(self) -> &'static str {
         match self {
