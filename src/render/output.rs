@@ -47,9 +47,14 @@ pub fn write_png(
         encoder.set_depth(png::BitDepth::Eight);
         encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
         for (key, value) in metadata {
-            encoder
-                .add_text_chunk(key.to_string(), value.clone())
-                .map_err(|e| e.to_string())?;
+            // tEXt is Latin-1 only; a device or driver name outside it (say
+            // with a trademark sign) goes into a UTF-8 iTXt chunk instead.
+            let added = if value.chars().all(|c| (c as u32) < 0x80) {
+                encoder.add_text_chunk(key.to_string(), value.clone())
+            } else {
+                encoder.add_itxt_chunk(key.to_string(), value.clone())
+            };
+            added.map_err(|e| e.to_string())?;
         }
         let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
         writer
@@ -158,7 +163,7 @@ mod tests {
         };
         let meta = [
             ("aerial:device", "llvmpipe".to_string()),
-            ("aerial:driver", "Mesa 24".to_string()),
+            ("aerial:driver", "Mesa 24 (Vendor™ GPU)".to_string()),
         ];
         write_png(&path, &pixels, &meta).unwrap();
         let text = read_png_text(&path).unwrap();
