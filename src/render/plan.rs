@@ -93,7 +93,8 @@ pub struct FramePlan {
     pub width: u32,
     pub height: u32,
     pub hdr_format: HdrFormat,
-    /// Opaque draws, grouped by pipeline to save binds.
+    /// Opaque draws, grouped by pipeline and texture to save binds, front
+    /// to back within a group.
     pub opaque: Vec<Draw>,
     /// Transparent draws, back to front from the camera.
     pub transparent: Vec<Draw>,
@@ -139,9 +140,8 @@ impl FramePlan {
                 opaque.push(draw);
             }
         }
-        opaque.sort_by_key(|d| (d.pipeline, d.texture, d.object));
-        // Back to front by the distance of each object's world-space
-        // bounding-sphere centre; ties keep scene order.
+        // Distance from the eye to each object's world-space bounding-sphere
+        // centre.
         let eye = scene.camera.eye;
         let distance = |d: &Draw| {
             let object = &scene.objects[d.object];
@@ -152,6 +152,17 @@ impl FramePlan {
                 .transform_point3(centre)
                 .distance(eye)
         };
+        // Opaque: grouped by pipeline and texture (fewer binds), front to
+        // back within a group, so the depth test rejects hidden fragments
+        // before they are shaded.
+        let mut keyed: Vec<(f32, Draw)> = opaque.into_iter().map(|d| (distance(&d), d)).collect();
+        keyed.sort_by(|a, b| {
+            (a.1.pipeline, a.1.texture)
+                .cmp(&(b.1.pipeline, b.1.texture))
+                .then(a.0.total_cmp(&b.0))
+        });
+        let opaque: Vec<Draw> = keyed.into_iter().map(|(_, d)| d).collect();
+        // Transparent: back to front; ties keep scene order.
         let mut keyed: Vec<(f32, Draw)> =
             transparent.into_iter().map(|d| (distance(&d), d)).collect();
         keyed.sort_by(|a, b| b.0.total_cmp(&a.0));
