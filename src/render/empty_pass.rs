@@ -11,16 +11,15 @@
 //! The attachment is copied to a host buffer after the timed interval so
 //! tests can check that the pass really wrote every pixel.
 
+use super::frame::TimedFrame;
 use super::{FrameTiming, Pixels, RenderError};
 use crate::shaders;
 use crate::vk::{
-    AccessFlags, Buffer, BufferUsage, CommandBuffer, Context, CullModeFlags, Fence, Format,
-    Framebuffer, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageAspectFlags, ImageDesc,
-    ImageUsageFlags, PipelineLayout, PipelineStageFlags, RenderPass, ShaderModule,
-    TimestampQueries,
+    Buffer, BufferUsage, Context, CullModeFlags, Format, Framebuffer, GraphicsPipeline,
+    GraphicsPipelineDesc, Image, ImageAspectFlags, ImageDesc, ImageUsageFlags, PipelineLayout,
+    RenderPass, ShaderModule,
 };
 use std::sync::Arc;
-use std::time::Instant;
 
 /// The attachment format: plain 8-bit RGBA, the cheapest colour target.
 const FORMAT: Format = Format::R8G8B8A8_UNORM;
@@ -35,9 +34,7 @@ pub const CONSTANT_RGBA8: [u8; 4] = [64, 128, 191, 255];
 /// The empty pass's GPU objects and its recorded command buffer. Fields
 /// drop in declaration order: command buffer first, context last.
 pub struct EmptyPass {
-    command_buffer: CommandBuffer,
-    fence: Fence,
-    queries: Option<TimestampQueries>,
+    frame: TimedFrame,
     readback: Buffer,
     _pipeline: GraphicsPipeline,
     _layout: PipelineLayout,
@@ -99,25 +96,10 @@ impl EmptyPass {
             width as u64 * height as u64 * 4,
             BufferUsage::Readback,
         )?;
-        let queries = TimestampQueries::new(ctx, 2)?;
-
-        // Recorded like the scene renderer's frame: reset the queries,
-        // order this copy after the previous submission's, then one
-        // timestamp on each side of the render pass.
-        let cmd = CommandBuffer::new(ctx)?;
-        cmd.begin()?;
-        if let Some(q) = &queries {
-            cmd.reset_queries(q);
-        }
-        cmd.memory_barrier(
-            PipelineStageFlags::TRANSFER,
-            AccessFlags::TRANSFER_WRITE,
-            PipelineStageFlags::TRANSFER,
-            AccessFlags::TRANSFER_WRITE,
-        );
-        if let Some(q) = &queries {
-            cmd.write_timestamp(q, 0);
-        }
+        // Recorded like the scene renderer's frame: one timestamp on each
+        // side of the render pass.
+        let frame = TimedFrame::begin(ctx, 1)?;
+        let cmd = frame.cmd();
         // The load op is DONT_CARE (the triangle covers every pixel), so the
         // clear value is never used; the render pass still takes one per
         // attachment.
@@ -129,22 +111,12 @@ impl EmptyPass {
         cmd.bind_pipeline(&pipeline);
         cmd.draw(3);
         cmd.end_render_pass();
-        if let Some(q) = &queries {
-            cmd.write_timestamp(q, 1);
-        }
+        frame.stamp();
         cmd.copy_image_to_buffer(&target, &readback);
-        cmd.memory_barrier(
-            PipelineStageFlags::TRANSFER,
-            AccessFlags::TRANSFER_WRITE,
-            PipelineStageFlags::HOST,
-            AccessFlags::HOST_READ,
-        );
-        cmd.end()?;
+        let frame = frame.finish()?;
 
         Ok(EmptyPass {
-            command_buffer: cmd,
-            fence: Fence::new(ctx)?,
-            queries,
+            frame,
             readback,
             _pipeline: pipeline,
             _layout: layout,
@@ -161,15 +133,7 @@ impl EmptyPass {
     /// (empty when the device has no timestamps); `cpu_ms` is submit to
     /// fence, as for scene frames.
     pub fn render_frame(&mut self) -> Result<FrameTiming, RenderError> {
-        let start = Instant::now();
-        self.command_buffer.submit(&self.fence)?;
-        self.fence.wait_and_reset()?;
-        let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
-        let pass_ms = match &self.queries {
-            Some(q) => q.read_intervals_ns()?.iter().map(|ns| ns * 1e-6).collect(),
-            None => Vec::new(),
-        };
-        Ok(FrameTiming { pass_ms, cpu_ms })
+        self.frame.submit()
     }
 
     /// The attachment as the last frame left it.

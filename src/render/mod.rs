@@ -3,6 +3,7 @@
 //! (`output`). `empty_pass` is the driver's floor that benchmarks divide by.
 
 pub mod empty_pass;
+mod frame;
 mod gpu_types;
 pub mod output;
 pub mod plan;

@@ -3,6 +3,7 @@
 //! Data flows one way: `Scene` → `FramePlan` → the resources built here →
 //! one command buffer recorded once → submitted per frame → images read back.
 
+use super::frame::TimedFrame;
 use super::gpu_types::{FrameUniforms, GpuLight, ObjectHeader};
 use super::plan::{Draw, FramePlan, Pass, PipelineKey};
 use super::RenderError;
@@ -11,14 +12,13 @@ use crate::scene::{HdrFormat, Light, Scene, TextureFilter, ToneMap, ToneMapOpera
 use crate::shaders;
 use crate::vk::{
     self, AccessFlags, Buffer, BufferUsage, CommandBuffer, Context, CullModeFlags,
-    DescriptorBinding, DescriptorPool, DescriptorSet, DescriptorSetLayout, DescriptorType, Fence,
-    Format, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageAspectFlags, ImageBarrier,
-    ImageDesc, ImageLayout, ImageUsageFlags, PipelineLayout, PipelineStageFlags, RenderPass,
-    RenderPassDesc, Sampler, ShaderModule, ShaderStageFlags, TimestampQueries, VertexAttribute,
+    DescriptorBinding, DescriptorPool, DescriptorSet, DescriptorSetLayout, DescriptorType, Format,
+    GraphicsPipeline, GraphicsPipelineDesc, Image, ImageAspectFlags, ImageBarrier, ImageDesc,
+    ImageLayout, ImageUsageFlags, PipelineLayout, PipelineStageFlags, RenderPass, RenderPassDesc,
+    Sampler, ShaderModule, ShaderStageFlags, VertexAttribute,
 };
 use std::collections::BTreeMap;
 use std::sync::Arc;
-use std::time::Instant;
 
 const OUTPUT_FORMAT: Format = Format::R8G8B8A8_SRGB;
 const DEPTH_FORMAT: Format = Format::D32_SFLOAT;
@@ -52,9 +52,7 @@ struct GeometryRange {
 /// Everything on the GPU for one scene. Fields drop in declaration order;
 /// the command buffer goes first, the context (inside each wrapper) last.
 pub struct Renderer {
-    command_buffer: CommandBuffer,
-    fence: Fence,
-    queries: Option<TimestampQueries>,
+    frame: TimedFrame,
     output_readback: Buffer,
     hdr_readback: Option<Buffer>,
     _descriptor_sets: Vec<DescriptorSet>,
@@ -428,31 +426,9 @@ impl Renderer {
         } else {
             None
         };
-        let queries = TimestampQueries::new(ctx, plan.passes.len() as u32 + 1)?;
-
         // Record the frame once; every submission replays it.
-        let command_buffer = CommandBuffer::new(ctx)?;
-        command_buffer.begin()?;
-        let cmd = &command_buffer;
-        let mut stamp = 0u32;
-        let mut timestamp = |cmd: &CommandBuffer| {
-            if let Some(q) = &queries {
-                cmd.write_timestamp(q, stamp);
-            }
-            stamp += 1;
-        };
-        if let Some(q) = &queries {
-            cmd.reset_queries(q);
-        }
-        // The previous submission's copies into the readback buffers must
-        // finish before this one writes them again.
-        cmd.memory_barrier(
-            PipelineStageFlags::TRANSFER,
-            AccessFlags::TRANSFER_WRITE,
-            PipelineStageFlags::TRANSFER,
-            AccessFlags::TRANSFER_WRITE,
-        );
-        timestamp(cmd);
+        let frame = TimedFrame::begin(ctx, plan.passes.len() as u32)?;
+        let cmd = frame.cmd();
         let clears = [
             vk::clear_color([0.0; 4]),
             // Reversed-Z: the far plane is 0.
@@ -520,17 +496,11 @@ impl Renderer {
                     if let Some(buffer) = &hdr_readback {
                         cmd.copy_image_to_buffer(&hdr, buffer);
                     }
-                    cmd.memory_barrier(
-                        PipelineStageFlags::TRANSFER,
-                        AccessFlags::TRANSFER_WRITE,
-                        PipelineStageFlags::HOST,
-                        AccessFlags::HOST_READ,
-                    );
                 }
             }
-            timestamp(cmd);
+            frame.stamp();
         }
-        cmd.end()?;
+        let frame = frame.finish()?;
 
         let mut set_layouts = vec![frame_layout, object_layout, tonemap_layout];
         set_layouts.extend(texture_layout);
@@ -542,9 +512,7 @@ impl Renderer {
         descriptor_sets.extend(texture_sets);
 
         Ok(Renderer {
-            command_buffer,
-            fence: Fence::new(ctx)?,
-            queries,
+            frame,
             output_readback,
             hdr_readback,
             _descriptor_sets: descriptor_sets,
@@ -576,15 +544,7 @@ impl Renderer {
 
     /// Submits the recorded frame and waits for it.
     pub fn render_frame(&mut self) -> Result<FrameTiming, RenderError> {
-        let start = Instant::now();
-        self.command_buffer.submit(&self.fence)?;
-        self.fence.wait_and_reset()?;
-        let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
-        let pass_ms = match &self.queries {
-            Some(q) => q.read_intervals_ns()?.iter().map(|ns| ns * 1e-6).collect(),
-            None => Vec::new(),
-        };
-        Ok(FrameTiming { pass_ms, cpu_ms })
+        self.frame.submit()
     }
 
     /// The tone-mapped sRGB output of the last frame.

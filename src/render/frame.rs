@@ -1,0 +1,87 @@
+//! A frame recorded once and submitted many times, with a GPU timestamp
+//! between its passes: what the scene renderer and the empty-pass
+//! benchmark share.
+
+use super::{FrameTiming, RenderError};
+use crate::vk::{AccessFlags, CommandBuffer, Context, Fence, PipelineStageFlags, TimestampQueries};
+use std::cell::Cell;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// The command buffer of a frame, its fence and its timestamp queries.
+pub(crate) struct TimedFrame {
+    command_buffer: CommandBuffer,
+    fence: Fence,
+    queries: Option<TimestampQueries>,
+    /// The next timestamp index while recording.
+    next_stamp: Cell<u32>,
+}
+
+impl TimedFrame {
+    /// Begins recording a frame of `passes` timed passes: resets the
+    /// queries, orders this submission's copies into readback buffers after
+    /// the previous submission's, and writes the first timestamp.
+    pub(crate) fn begin(ctx: &Arc<Context>, passes: u32) -> Result<TimedFrame, RenderError> {
+        let frame = TimedFrame {
+            command_buffer: CommandBuffer::new(ctx)?,
+            fence: Fence::new(ctx)?,
+            queries: TimestampQueries::new(ctx, passes + 1)?,
+            next_stamp: Cell::new(0),
+        };
+        let cmd = &frame.command_buffer;
+        cmd.begin()?;
+        if let Some(q) = &frame.queries {
+            cmd.reset_queries(q);
+        }
+        cmd.memory_barrier(
+            PipelineStageFlags::TRANSFER,
+            AccessFlags::TRANSFER_WRITE,
+            PipelineStageFlags::TRANSFER,
+            AccessFlags::TRANSFER_WRITE,
+        );
+        frame.stamp();
+        Ok(frame)
+    }
+
+    /// The command buffer being recorded.
+    pub(crate) fn cmd(&self) -> &CommandBuffer {
+        &self.command_buffer
+    }
+
+    /// Ends the pass recorded since the last timestamp.
+    pub(crate) fn stamp(&self) {
+        let index = self.next_stamp.get();
+        if let Some(q) = &self.queries {
+            self.command_buffer.write_timestamp(q, index);
+        }
+        self.next_stamp.set(index + 1);
+    }
+
+    /// Makes the readback buffers' copies visible to the host and ends
+    /// recording.
+    pub(crate) fn finish(self) -> Result<TimedFrame, RenderError> {
+        self.command_buffer.memory_barrier(
+            PipelineStageFlags::TRANSFER,
+            AccessFlags::TRANSFER_WRITE,
+            PipelineStageFlags::HOST,
+            AccessFlags::HOST_READ,
+        );
+        self.command_buffer.end()?;
+        Ok(self)
+    }
+
+    /// Submits the frame, waits for it, and returns the GPU time of each
+    /// pass (empty without timestamp support) and the CPU time from submit
+    /// to fence.
+    pub(crate) fn submit(&mut self) -> Result<FrameTiming, RenderError> {
+        let start = Instant::now();
+        self.command_buffer.submit(&self.fence)?;
+        self.fence.wait_and_reset()?;
+        let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
+        let pass_ms = match &self.queries {
+            Some(q) => q.read_intervals_ns()?.iter().map(|ns| ns * 1e-6).collect(),
+            None => Vec::new(),
+        };
+        Ok(FrameTiming { pass_ms, cpu_ms })
+    }
+}
