@@ -62,6 +62,9 @@ pub enum FrameSource<'a> {
     Scene(&'a Scene),
     /// An existing linear HDR image, only tone-mapped.
     HdrImage(&'a Pixels<f32>, ToneMap),
+    /// The empty pass (see [`crate::render::empty_pass`]): the driver's
+    /// floor at this size; `output` is its constant-coloured attachment.
+    EmptyPass { width: u32, height: u32 },
 }
 
 /// Renders `scene`; see [`run`].
@@ -94,16 +97,22 @@ pub fn run_with_progress(
     let ctx = context(settings)?;
     let log = ctx.validation_log();
     let device = ctx.device_info().clone();
-    let (passes, frames, output, hdr) = {
-        let mut renderer = match source {
-            FrameSource::Scene(scene) => Renderer::new(&ctx, scene, settings.keep_hdr)?,
-            FrameSource::HdrImage(image, tone_map) => {
-                Renderer::for_hdr_image(&ctx, tone_map, image)?
-            }
-        };
-        let passes = renderer.plan().passes.iter().map(|p| p.name()).collect();
-        let frames = submit_frames(settings, on_frame, || renderer.render_frame())?;
-        (passes, frames, renderer.output(), renderer.hdr())
+    let (passes, frames, output, hdr) = match source {
+        FrameSource::Scene(scene) => drive(
+            Renderer::new(&ctx, scene, settings.keep_hdr)?,
+            settings,
+            on_frame,
+        )?,
+        FrameSource::HdrImage(image, tone_map) => drive(
+            Renderer::for_hdr_image(&ctx, tone_map, image)?,
+            settings,
+            on_frame,
+        )?,
+        FrameSource::EmptyPass { width, height } => {
+            let mut pass = EmptyPass::new(&ctx, width, height)?;
+            let frames = submit_frames(settings, on_frame, || pass.render_frame())?;
+            (vec![empty_pass::PASS_NAME], frames, pass.output(), None)
+        }
     };
     // Destroy the device and instance before reading the log, so messages
     // about leaked objects at teardown are counted too.
@@ -119,35 +128,35 @@ pub fn run_with_progress(
     })
 }
 
-/// Runs the empty pass (see [`crate::render::empty_pass`]) at `width` x
-/// `height` like [`render_with_progress`] runs a scene: own device, warm-up
-/// and measured frames, validation log read after teardown. `keep_hdr` is
-/// ignored (there is no HDR image); `output` is the constant-coloured
-/// attachment.
+/// Runs the empty pass at `width` x `height` like [`render_with_progress`]
+/// runs a scene: own device, warm-up and measured frames, validation log
+/// read after teardown.
 pub fn render_empty_pass(
     width: u32,
     height: u32,
     settings: &RenderSettings,
     on_frame: &mut dyn FnMut(),
 ) -> Result<RenderRun, RenderError> {
-    let ctx = context(settings)?;
-    let log = ctx.validation_log();
-    let device = ctx.device_info().clone();
-    let (frames, output) = {
-        let mut pass = EmptyPass::new(&ctx, width, height)?;
-        let frames = submit_frames(settings, on_frame, || pass.render_frame())?;
-        (frames, pass.output())
-    };
-    drop(ctx);
-    let validation = log.map(|l| l.messages()).unwrap_or_default();
-    Ok(RenderRun {
-        device,
-        passes: vec![empty_pass::PASS_NAME],
-        frames,
-        output,
-        hdr: None,
-        validation,
-    })
+    run_with_progress(FrameSource::EmptyPass { width, height }, settings, on_frame)
+}
+
+/// What one renderer produced over the frames: pass names, timings, and
+/// the images of the last frame.
+type Produced = (
+    Vec<&'static str>,
+    Vec<FrameTiming>,
+    Pixels<u8>,
+    Option<Pixels<f32>>,
+);
+
+fn drive(
+    mut renderer: Renderer,
+    settings: &RenderSettings,
+    on_frame: &mut dyn FnMut(),
+) -> Result<Produced, RenderError> {
+    let passes = renderer.plan().passes.iter().map(|p| p.name()).collect();
+    let frames = submit_frames(settings, on_frame, || renderer.render_frame())?;
+    Ok((passes, frames, renderer.output(), renderer.hdr()))
 }
 
 fn context(settings: &RenderSettings) -> Result<std::sync::Arc<Context>, RenderError> {
