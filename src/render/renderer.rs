@@ -15,7 +15,7 @@ use crate::vk::{
     DescriptorBinding, DescriptorPool, DescriptorSet, DescriptorSetLayout, DescriptorType, Format,
     GraphicsPipeline, GraphicsPipelineDesc, Image, ImageAspectFlags, ImageBarrier, ImageDesc,
     ImageLayout, ImageUsageFlags, PipelineLayout, PipelineStageFlags, RenderPass, RenderPassDesc,
-    Sampler, ShaderModule, ShaderStageFlags, VertexAttribute,
+    Sampler, SamplerFilter, ShaderModule, ShaderStageFlags, VertexAttribute,
 };
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -240,7 +240,11 @@ impl Renderer {
         } else {
             Some(Sampler::new(
                 ctx,
-                scene.output.texture_filter == TextureFilter::Trilinear,
+                match scene.output.texture_filter {
+                    TextureFilter::Nearest => SamplerFilter::Nearest,
+                    TextureFilter::Bilinear => SamplerFilter::Bilinear,
+                    TextureFilter::Trilinear => SamplerFilter::Trilinear,
+                },
                 16,
             )?)
         };

@@ -167,18 +167,20 @@ pub const KNOBS: &[Knob] = &[
     Knob {
         name: "texture_filter",
         best: Best::Fixed("trilinear"),
-        values: "nearest | trilinear",
+        values: "nearest | bilinear | trilinear",
         apply: |s, v| {
             s.output.texture_filter = match v {
                 "nearest" => TextureFilter::Nearest,
+                "bilinear" => TextureFilter::Bilinear,
                 "trilinear" => TextureFilter::Trilinear,
-                _ => return Err("expected nearest or trilinear".into()),
+                _ => return Err("expected nearest, bilinear or trilinear".into()),
             };
             Ok(())
         },
         read: |s| {
             match s.output.texture_filter {
                 TextureFilter::Nearest => "nearest",
+                TextureFilter::Bilinear => "bilinear",
                 TextureFilter::Trilinear => "trilinear",
             }
             .into()

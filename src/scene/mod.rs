@@ -70,6 +70,8 @@ pub struct Output {
 pub enum TextureFilter {
     /// Nearest texel, nearest mip level (`"nearest"`).
     Nearest,
+    /// Bilinear within the nearest mip level (`"bilinear"`).
+    Bilinear,
     /// Bilinear within and linear between mip levels (`"trilinear"`, the default).
     Trilinear,
 }
@@ -140,7 +142,7 @@ impl Scene {
     /// width = 640                          # [640]; 1..=16384
     /// height = 360                         # [360]; 1..=16384
     /// hdr_format = "rgba16f"               # ["rgba16f"] | "rgba32f"
-    /// texture_filter = "trilinear"         # ["trilinear"] | "nearest"
+    /// texture_filter = "trilinear"         # ["trilinear"] | "bilinear" | "nearest"
     /// [camera]                             # required
     /// eye = [0.0, 2.0, 6.0]                # required
     /// look_at = [0.0, 0.0, 0.0]            # required, != eye

@@ -171,6 +171,17 @@ impl Drop for Image {
     }
 }
 
+/// How a sampler filters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SamplerFilter {
+    /// Nearest texel of the nearest mip level.
+    Nearest,
+    /// Bilinear within the nearest mip level.
+    Bilinear,
+    /// Bilinear within and linear between mip levels.
+    Trilinear,
+}
+
 /// A sampler.
 pub struct Sampler {
     ctx: Arc<Context>,
@@ -178,12 +189,16 @@ pub struct Sampler {
 }
 
 impl Sampler {
-    /// Trilinear (or nearest) filtering with repeat addressing over `mip_levels`.
-    pub fn new(ctx: &Arc<Context>, linear: bool, mip_levels: u32) -> Result<Sampler, VkError> {
-        let (filter, mip) = if linear {
-            (vk::Filter::LINEAR, vk::SamplerMipmapMode::LINEAR)
-        } else {
-            (vk::Filter::NEAREST, vk::SamplerMipmapMode::NEAREST)
+    /// A sampler with repeat addressing over `mip_levels`.
+    pub fn new(
+        ctx: &Arc<Context>,
+        filtering: SamplerFilter,
+        mip_levels: u32,
+    ) -> Result<Sampler, VkError> {
+        let (filter, mip) = match filtering {
+            SamplerFilter::Nearest => (vk::Filter::NEAREST, vk::SamplerMipmapMode::NEAREST),
+            SamplerFilter::Bilinear => (vk::Filter::LINEAR, vk::SamplerMipmapMode::NEAREST),
+            SamplerFilter::Trilinear => (vk::Filter::LINEAR, vk::SamplerMipmapMode::LINEAR),
         };
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(filter)

@@ -23,7 +23,7 @@ pub use commands::ImageBarrier;
 pub use commands::{CommandBuffer, Fence};
 pub use context::{Context, ContextOptions, DeviceInfo};
 pub use descriptors::{DescriptorBinding, DescriptorPool, DescriptorSet, DescriptorSetLayout};
-pub use image::{Image, ImageDesc, Sampler};
+pub use image::{Image, ImageDesc, Sampler, SamplerFilter};
 pub use pipeline::{
     GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, ShaderModule, VertexAttribute,
 };
