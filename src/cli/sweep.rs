@@ -1,9 +1,10 @@
 //! `aerial sweep`: render every combination of some knob settings, and
 //! write error against GPU time as CSV, JSON and an SVG plot.
 
-use aerial::app::{self, RenderSettings};
+use aerial::app::{self, FrameSource, RenderRun, RenderSettings};
+use aerial::render::render_reference;
 use aerial::report::sweep::{
-    self, Axis, Job, Rendered, Sweep, SweepOptions, DEFAULT_MAX_COMBINATIONS,
+    self, Axis, Job, ReferenceKind, Rendered, Sweep, SweepOptions, DEFAULT_MAX_COMBINATIONS,
 };
 use aerial::scene::Scene;
 use anyhow::{anyhow, Context as _};
@@ -14,7 +15,11 @@ use std::path::PathBuf;
 Each combination is compared with a reference: the scene with every swept knob at its best \
 value. That is a fixed value for some knobs (e.g. hdr_format=rgba32f), the last value listed \
 for others (e.g. tessellation: so list values cheapest first), and the combination's own \
-value for size. Knobs that are not swept keep the scene's settings.")]
+value for size. Knobs that are not swept keep the scene's settings.
+
+With --reference cpu, each combination is compared with the exact image of its own scene instead: \
+ray-cast in double precision against the analytic surfaces and shaded with the same formula \
+(phong spheres, planes and cylinders only; other scenes are refused before rendering).")]
 pub struct SweepArgs {
     /// Scene file (TOML).
     pub scene: PathBuf,
@@ -34,12 +39,33 @@ pub struct SweepArgs {
     /// Refuse sweeps with more combinations than this.
     #[arg(long, default_value_t = DEFAULT_MAX_COMBINATIONS)]
     max_combinations: usize,
+    /// What errors are measured against: the GPU image at the best
+    /// settings, or the exact CPU image of each combination's scene.
+    #[arg(long, value_enum, default_value = "gpu-best")]
+    reference: Reference,
     /// Enable the Khronos validation layer; any message fails the sweep.
     #[arg(long)]
     validate: bool,
     /// Physical device by index or name substring.
     #[arg(long)]
     device: Option<String>,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Reference {
+    GpuBest,
+    Cpu,
+}
+
+/// Fails on validation messages, printing them.
+fn check_validation(run: &RenderRun) -> anyhow::Result<()> {
+    if run.validation.is_empty() {
+        return Ok(());
+    }
+    for m in &run.validation {
+        eprintln!("{m}");
+    }
+    Err(anyhow!("{} validation message(s)", run.validation.len()))
 }
 
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
@@ -57,32 +83,46 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             frames: args.frames,
             warmup: args.warmup,
             max_combinations: args.max_combinations,
+            reference: match args.reference {
+                Reference::GpuBest => ReferenceKind::GpuBest,
+                Reference::Cpu => ReferenceKind::Cpu,
+            },
         },
     )?;
     let total = sweep.combinations().len();
     eprintln!("{total} combinations");
 
+    let settings = |warmup, frames, keep_hdr| RenderSettings {
+        validate: args.validate,
+        device: args.device.clone(),
+        warmup,
+        frames,
+        keep_hdr,
+    };
     let render = |scene: &Scene, job: Job| -> anyhow::Result<Rendered> {
         let (warmup, frames, keep_hdr) = match job {
             Job::Timing { warmup, frames } => (warmup, frames, false),
             Job::Images => (0, 1, true),
-        };
-        let run = app::render(
-            scene,
-            &RenderSettings {
-                validate: args.validate,
-                device: args.device.clone(),
-                warmup,
-                frames,
-                keep_hdr,
-            },
-        )?;
-        if !run.validation.is_empty() {
-            for m in &run.validation {
-                eprintln!("{m}");
+            Job::Reference => {
+                let hdr = render_reference(scene)?;
+                // The sRGB output through the renderer's own tone-map
+                // pass, as the GPU images get theirs.
+                let run = app::run(
+                    FrameSource::HdrImage(&hdr, scene.tone_map),
+                    &settings(0, 1, false),
+                )?;
+                check_validation(&run)?;
+                return Ok(Rendered {
+                    device: run.device.name.clone(),
+                    passes: Vec::new(),
+                    frames: Vec::new(),
+                    output: run.output,
+                    hdr: Some(hdr),
+                });
             }
-            return Err(anyhow!("{} validation message(s)", run.validation.len()));
-        }
+        };
+        let run = app::render(scene, &settings(warmup, frames, keep_hdr))?;
+        check_validation(&run)?;
         Ok(Rendered {
             device: run.device.name.clone(),
             passes: run.passes.iter().map(|p| p.to_string()).collect(),

@@ -1,16 +1,19 @@
 //! The frame: which passes a scene needs (`plan`), the GPU resources and
 //! the recorded command buffer (`renderer`), and writing the images out
-//! (`output`). `empty_pass` is the driver's floor that benchmarks divide by.
+//! (`output`). `empty_pass` is the driver's floor that benchmarks divide by;
+//! `reference` is the exact CPU image that sweeps can measure against.
 
 pub mod empty_pass;
 mod frame;
 mod gpu_types;
 pub mod output;
 pub mod plan;
+pub mod reference;
 mod renderer;
 
 pub use empty_pass::EmptyPass;
 pub use plan::{FramePlan, Pass, SUBPASS_TIMING_NOTE};
+pub use reference::{render_reference, ReferenceError};
 pub use renderer::{FrameTiming, Pixels, Renderer};
 
 use std::path::PathBuf;

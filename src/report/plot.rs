@@ -6,7 +6,9 @@
 //!
 //! - Error 0 (the reference itself) has no place on a log axis. Such points
 //!   are drawn on a floor one decade below the smallest non-zero error, on a
-//!   line labelled as such, with their own marker.
+//!   line labelled as such, with their own marker. When every error is
+//!   above 0 (a CPU reference) there is no floor, and the axis starts just
+//!   below the smallest error instead of wasting a decade on an empty line.
 //! - Labels are placed by hand: each goes to the first of a few spots around
 //!   its point that stays inside the plot and clear of every marker and
 //!   label placed so far (or, failing that, the spot with the least
@@ -98,8 +100,13 @@ pub fn error_vs_time_svg(plot: &Plot<'_>) -> Result<String, PlotError> {
     };
     let y_of = |p: &PlotPoint| if p.y > 0.0 { p.y } else { floor };
     let y_max = points.iter().map(y_of).fold(floor, f64::max);
-    // Half a decade of room below the floor and above the largest error.
-    let y_range = floor / 3.0..y_max * 3.0;
+    // Half a decade of room below the lowest point and above the highest.
+    let y_min = if points.iter().any(|p| p.y <= 0.0) {
+        floor
+    } else {
+        min_positive
+    };
+    let y_range = y_min / 3.0..y_max * 3.0;
 
     let (x_min, x_max) = points
         .iter()
@@ -455,6 +462,9 @@ mod tests {
         let err = plot(&[point(f64::NAN, 1.0, "nan", true)]).unwrap_err();
         assert!(err.to_string().contains("'nan'"), "{err}");
         assert!(plot(&[point(1.0, -1.0, "neg", true)]).is_err());
+        // All errors above 0: no floor line, no reference in the legend.
+        let svg = plot(&[point(1.0, 0.3, "a", true), point(2.0, 0.02, "b", true)]).unwrap();
+        assert!(!svg.contains("drawn at") && !svg.contains("(reference)"));
         // One point, or all at error 0, still has axes to draw.
         plot(&[point(2.0, 0.0, "only", true)]).unwrap();
         plot(&[point(2.0, 0.1, "a", true), point(2.0, 0.1, "b", true)]).unwrap();

@@ -19,6 +19,18 @@
 //! Each distinct reference is rendered once. A combination that is its own
 //! reference is compared with its own image, so its error is exactly 0.
 //!
+//! With [`ReferenceKind::Cpu`] the reference is instead the exact image of
+//! the combination's *own* scene ([`crate::render::render_reference`]):
+//! every knob is applied first, because some (`lights`, `light_cutoff`)
+//! change what the exact image is, and the rest (tessellation, HDR format)
+//! only change how far the GPU is from it. References are cached by
+//! [`ReferenceScene`], everything the CPU renderer reads, so a sweep over
+//! tessellation and format renders each size's reference once or, where
+//! the tessellation moves a bounding sphere across a light's cutoff, once
+//! per light set. No combination is its own reference then, and every
+//! error is above 0. A scene the CPU renderer cannot draw (a torus, a
+//! texture, ...) is refused before anything is rendered.
+//!
 //! # Measurements
 //!
 //! - GPU time: per frame the sum of the pass times; the median (and p95)
@@ -48,6 +60,7 @@
 use super::compare::{compare_images, write_atomically, CompareError, ImageRef, Metric};
 use super::plot::{self, PlotError, PlotPoint};
 use super::stats::Summary;
+use crate::render::reference::{ReferenceError, ReferenceScene};
 use crate::render::{FrameTiming, Pixels};
 use crate::scene::{Best, Knob, KnobError, Scene};
 use serde::{Serialize, Serializer};
@@ -70,6 +83,12 @@ pub enum SweepError {
     Syntax { arg: String, reason: &'static str },
     #[error(transparent)]
     Knob(#[from] KnobError),
+    #[error("--reference cpu: {what}: {source}")]
+    NoCpuReference {
+        what: String,
+        #[source]
+        source: ReferenceError,
+    },
     #[error("knob {knob} is given twice; list all its values in one --knob")]
     DuplicateKnob { knob: &'static str },
     #[error("knob {knob}: value '{value}' is listed twice")]
@@ -144,6 +163,27 @@ impl Axis {
     }
 }
 
+/// What each combination's error is measured against (see the module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ReferenceKind {
+    /// The GPU image with every swept knob at its [`Best`] value.
+    #[default]
+    GpuBest,
+    /// The exact CPU image of the combination's own scene.
+    Cpu,
+}
+
+impl ReferenceKind {
+    /// How tables, plots and the CSV name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            ReferenceKind::GpuBest => "gpu_best",
+            ReferenceKind::Cpu => "cpu",
+        }
+    }
+}
+
 /// How each combination is measured.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SweepOptions {
@@ -153,6 +193,8 @@ pub struct SweepOptions {
     pub warmup: u32,
     /// Refuse sweeps with more combinations than this.
     pub max_combinations: usize,
+    /// What the errors are measured against.
+    pub reference: ReferenceKind,
 }
 
 impl Default for SweepOptions {
@@ -161,6 +203,7 @@ impl Default for SweepOptions {
             frames: 10,
             warmup: 2,
             max_combinations: DEFAULT_MAX_COMBINATIONS,
+            reference: ReferenceKind::GpuBest,
         }
     }
 }
@@ -173,6 +216,11 @@ pub enum Job {
     Timing { warmup: u32, frames: u32 },
     /// One frame with the HDR image read back, for the error metrics.
     Images,
+    /// The exact image of the scene, for [`ReferenceKind::Cpu`]: `hdr` from
+    /// [`crate::render::render_reference`] and `output` that image through
+    /// the renderer's tone-map pass, so the FLIP columns compare like with
+    /// like. `frames` and `passes` are not read.
+    Reference,
 }
 
 /// What the caller's render closure hands back.
@@ -183,12 +231,13 @@ pub struct Rendered {
     pub passes: Vec<String>,
     pub frames: Vec<FrameTiming>,
     pub output: Pixels<u8>,
-    /// Required for [`Job::Images`].
+    /// Required for [`Job::Images`] and [`Job::Reference`].
     pub hdr: Option<Pixels<f32>>,
 }
 
 /// One combination and the reference it is compared with, as values in
-/// the order of the sweep's axes.
+/// the order of the sweep's axes (with a CPU reference, the combination's
+/// own values: the reference is the exact image of its own scene).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Combination {
     pub values: Vec<String>,
@@ -210,10 +259,12 @@ pub struct Row {
     /// Knob name and value, in the order of the sweep's axes.
     #[serde(serialize_with = "ordered_map")]
     pub settings: Vec<(String, String)>,
-    /// The settings of the reference image.
+    /// The settings of the scene the reference image was made from (with a
+    /// CPU reference, the row's own).
     #[serde(serialize_with = "ordered_map")]
     pub reference: Vec<(String, String)>,
-    /// Whether this combination is its own reference (error 0).
+    /// Whether this combination is its own reference (error 0; never with
+    /// a CPU reference).
     pub is_reference: bool,
     /// Median GPU time of each pass, in ms.
     #[serde(serialize_with = "ordered_map")]
@@ -239,6 +290,8 @@ pub struct SweepResult {
     pub device: String,
     pub frames: u32,
     pub warmup: u32,
+    /// What the errors are measured against: `"gpu_best"` or `"cpu"`.
+    pub reference: ReferenceKind,
     /// Swept knob names, in axis order.
     pub knobs: Vec<String>,
     /// Every pass name seen, in frame order.
@@ -311,19 +364,38 @@ impl Sweep {
                 })
                 .collect();
         }
-        let combinations = combinations
+        let combinations: Vec<Combination> = combinations
             .into_iter()
             .map(|values| {
-                let reference = reference_values(&axes, &values);
+                let reference = match options.reference {
+                    ReferenceKind::GpuBest => reference_values(&axes, &values),
+                    ReferenceKind::Cpu => values.clone(),
+                };
                 Combination { values, reference }
             })
             .collect();
-        Ok(Sweep {
+        let sweep = Sweep {
             scene_name: scene_name.into(),
             base,
             axes,
             combinations,
             options,
+        };
+        if options.reference == ReferenceKind::Cpu {
+            // Refuse a scene the CPU cannot draw now, not after minutes of
+            // GPU timing.
+            for c in &sweep.combinations {
+                sweep.cpu_reference_scene(&c.values)?;
+            }
+        }
+        Ok(sweep)
+    }
+
+    /// What the CPU reference of combination `values` depends on.
+    fn cpu_reference_scene(&self, values: &[String]) -> Result<ReferenceScene, SweepError> {
+        ReferenceScene::new(&self.scene_for(values)?).map_err(|source| SweepError::NoCpuReference {
+            what: self.describe(values),
+            source,
         })
     }
 
@@ -369,12 +441,19 @@ impl Sweep {
     where
         E: Into<Box<dyn std::error::Error + Send + Sync>>,
     {
+        let cpu = self.options.reference == ReferenceKind::Cpu;
+        // GPU images kept because they serve as references (none with a
+        // CPU reference: then every GPU image is compared once).
         let references: HashSet<&[String]> = self
             .combinations
             .iter()
+            .filter(|_| !cpu)
             .map(|c| c.reference.as_slice())
             .collect();
         let mut cache: HashMap<Vec<String>, Rc<Images>> = HashMap::new();
+        // CPU references by what they depend on; a short list, searched
+        // linearly (`ReferenceScene` holds floats, so it is not `Hash`).
+        let mut cpu_cache: Vec<(ReferenceScene, Rc<Images>)> = Vec::new();
         let mut device = String::new();
         let mut passes: Vec<String> = Vec::new();
         let mut rows = Vec::with_capacity(self.combinations.len());
@@ -425,8 +504,31 @@ impl Sweep {
                 Ok(images)
             };
             let test = images(&c.values)?;
-            let reference = images(&c.reference)?;
-            let ref_name = format!("reference ({})", self.describe(&c.reference));
+            let (reference, ref_name) = if cpu {
+                let key = self.cpu_reference_scene(&c.values)?;
+                let hit = cpu_cache.iter().find(|(k, _)| *k == key);
+                let reference = match hit {
+                    Some((_, images)) => images.clone(),
+                    None => {
+                        let run = render(&scene, Job::Reference)
+                            .map_err(|e| render_error(&what, "CPU reference", e))?;
+                        let hdr = run.hdr.ok_or_else(|| SweepError::Render {
+                            what: format!("{what} (CPU reference)"),
+                            reason: "no HDR image was returned".into(),
+                        })?;
+                        let images = Rc::new(Images {
+                            output: run.output,
+                            hdr,
+                        });
+                        cpu_cache.push((key, images.clone()));
+                        images
+                    }
+                };
+                (reference, format!("CPU reference ({what})"))
+            } else {
+                let name = format!("reference ({})", self.describe(&c.reference));
+                (images(&c.reference)?, name)
+            };
             let compare_err = |source| SweepError::Compare {
                 what: what.clone(),
                 source,
@@ -451,7 +553,7 @@ impl Sweep {
             let row = Row {
                 settings: self.pairs(&c.values),
                 reference: self.pairs(&c.reference),
-                is_reference: c.values == c.reference,
+                is_reference: !cpu && c.values == c.reference,
                 pass_median_ms,
                 gpu_ms,
                 cpu_ms,
@@ -473,6 +575,7 @@ impl Sweep {
             device,
             frames: self.options.frames.max(1),
             warmup: self.options.warmup,
+            reference: self.options.reference,
             knobs: self.axes.iter().map(|a| a.knob.name.to_string()).collect(),
             passes,
             rows,
@@ -630,13 +733,17 @@ pub fn to_csv(result: &SweepResult) -> String {
                     .unwrap_or_default()
             })
             .collect();
-        fields.push(
-            row.reference
+        // A CPU reference is the exact image of the row's own settings,
+        // so the settings would only repeat the row.
+        fields.push(match result.reference {
+            ReferenceKind::Cpu => ReferenceKind::Cpu.name().to_string(),
+            ReferenceKind::GpuBest => row
+                .reference
                 .iter()
                 .map(|(k, v)| format!("{k}={v}"))
                 .collect::<Vec<_>>()
                 .join(" "),
-        );
+        });
         fields.push(row.is_reference.to_string());
         // A pass this combination does not have is an empty cell.
         fields.extend(result.passes.iter().map(|p| {
@@ -681,6 +788,11 @@ pub fn to_table(result: &SweepResult) -> String {
         })
         .collect();
     let mut out = String::new();
+    if result.reference == ReferenceKind::Cpu {
+        // GPU-best tables mark their reference row; a CPU reference has
+        // none, so say once what the errors are against.
+        out.push_str("errors against the exact CPU image of each row's own scene\n");
+    }
     for (k, w) in result.knobs.iter().zip(&widths) {
         let _ = write!(out, "{k:<w$}  ");
     }
@@ -780,11 +892,17 @@ pub fn to_svg(result: &SweepResult) -> Result<String, SweepError> {
     if !fixed.is_empty() {
         let _ = write!(subtitle, "; {}", fixed.join(", "));
     }
+    if result.reference == ReferenceKind::Cpu {
+        subtitle.push_str("; reference: exact CPU image");
+    }
     Ok(plot::error_vs_time_svg(&plot::Plot {
         title: &format!("{}: error against GPU time", result.scene),
         subtitle: &subtitle,
         x_label: "GPU time per frame, median (ms)",
-        y_label: "RMSE of linear HDR vs reference (log)",
+        y_label: match result.reference {
+            ReferenceKind::GpuBest => "RMSE of linear HDR vs reference (log)",
+            ReferenceKind::Cpu => "RMSE of linear HDR vs exact CPU image (log)",
+        },
         points: &plot_points(result),
     })?)
 }
@@ -884,6 +1002,7 @@ mod tests {
             device: "dev".into(),
             frames: 1,
             warmup: 0,
+            reference: ReferenceKind::GpuBest,
             knobs: vec!["tessellation".into(), "hdr_format".into()],
             passes: vec!["opaque".into(), "tonemap".into(), "transparent".into()],
             rows: vec![
@@ -933,6 +1052,7 @@ mod tests {
             device: "dev".into(),
             frames: 1,
             warmup: 0,
+            reference: ReferenceKind::GpuBest,
             knobs: vec!["tessellation".into(), "hdr_format".into()],
             passes: vec!["opaque".into()],
             rows: vec![row(
@@ -1037,15 +1157,18 @@ mod tests {
             .iter()
             .map(|o| o.tessellation.0 * o.tessellation.1)
             .sum();
+        // The exact image is the limit of infinite tessellation, 1.
         let mut value = 1.0 - 1.0 / tris as f32;
-        if scene.output.hdr_format == crate::scene::HdrFormat::Rgba16F {
+        if job == Job::Reference {
+            value = 1.0;
+        } else if scene.output.hdr_format == crate::scene::HdrFormat::Rgba16F {
             value += 1e-6;
         }
         let (w, h) = (scene.output.width, scene.output.height);
         let n = (w * h) as usize;
         let frames = match job {
             Job::Timing { frames, .. } => frames,
-            Job::Images => 1,
+            Job::Images | Job::Reference => 1,
         };
         Ok(Rendered {
             device: "fake".into(),
@@ -1061,7 +1184,7 @@ mod tests {
                 height: h,
                 data: [(value * 200.0) as u8, 0, 0, 255].repeat(n),
             },
-            hdr: (job == Job::Images).then(|| Pixels {
+            hdr: (!matches!(job, Job::Timing { .. })).then(|| Pixels {
                 width: w,
                 height: h,
                 data: [value, 0.0, 0.0, 1.0].repeat(n),
@@ -1079,6 +1202,7 @@ mod tests {
                 frames: 3,
                 warmup: 0,
                 max_combinations: 4,
+                reference: ReferenceKind::GpuBest,
             },
         )
         .unwrap();
@@ -1170,6 +1294,130 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("no pass timings"), "{err}");
+    }
+
+    /// A phong sphere on a plane, every light reaching everything
+    /// (light_cutoff 0), so the light sets do not depend on tessellation.
+    const CPU_SCENE: &str = r#"
+light_cutoff = 0.0
+[camera]
+eye = [0.0, 1.0, 4.0]
+look_at = [0.0, 0.5, 0.0]
+[[lights]]
+type = "point"
+position = [2.0, 3.0, 2.0]
+intensity = 5.0
+[[lights]]
+type = "directional"
+direction = [0.0, -1.0, -1.0]
+[[materials]]
+name = "m"
+kd = [0.5, 0.4, 0.3]
+ks = [0.2, 0.2, 0.2]
+[[objects]]
+name = "ball"
+material = "m"
+shape = { type = "sphere", radius = 0.5 }
+translate = [0.0, 0.5, 0.0]
+[[objects]]
+name = "floor"
+material = "m"
+shape = { type = "plane", width = 4.0, depth = 4.0 }
+"#;
+
+    fn cpu_sweep(args: &[&str]) -> Result<Sweep, SweepError> {
+        let scene = Scene::from_toml(CPU_SCENE, "cpu.toml", Path::new(".")).unwrap();
+        Sweep::new(
+            "cpu.toml",
+            scene,
+            axes(args),
+            SweepOptions {
+                frames: 1,
+                warmup: 0,
+                reference: ReferenceKind::Cpu,
+                ..SweepOptions::default()
+            },
+        )
+    }
+
+    #[test]
+    fn cpu_reference_is_per_scene_and_never_the_row_itself() {
+        let sweep = cpu_sweep(&[
+            "size=16x8",
+            "tessellation=0.5,1",
+            "hdr_format=rgba16f,rgba32f",
+        ])
+        .unwrap();
+        let c = sweep.combinations();
+        assert!(c.iter().all(|c| c.values == c.reference));
+        let references = RefCell::new(0);
+        let result = sweep
+            .run(
+                |scene, job| {
+                    *references.borrow_mut() += usize::from(job == Job::Reference);
+                    fake_render(scene, job)
+                },
+                |_, _| {},
+            )
+            .unwrap();
+        // Neither tessellation nor format changes the exact image: one
+        // reference for all four rows.
+        assert_eq!(references.into_inner(), 1);
+        assert_eq!(result.reference, ReferenceKind::Cpu);
+        assert!(result.rows.iter().all(|r| !r.is_reference && r.rmse > 0.0));
+        assert!(result.rows[0].rmse > result.rows[2].rmse);
+        let csv = to_csv(&result);
+        assert!(
+            csv.lines().skip(1).all(|l| l.contains(",cpu,false,")),
+            "{csv}"
+        );
+        let json = serde_json::to_string(&result).unwrap();
+        assert!(json.contains(r#""reference":"cpu""#), "{json}");
+        assert!(to_table(&result).starts_with("errors against the exact CPU image"));
+        let svg = to_svg(&result).unwrap();
+        assert!(svg.contains("exact CPU image") && !svg.contains("(reference)"));
+
+        // Fewer lights is another exact image: one reference per count.
+        let sweep = cpu_sweep(&["size=16x8", "lights=1,2", "hdr_format=rgba16f,rgba32f"]).unwrap();
+        let references = RefCell::new(0);
+        sweep
+            .run(
+                |scene, job| {
+                    *references.borrow_mut() += usize::from(job == Job::Reference);
+                    fake_render(scene, job)
+                },
+                |_, _| {},
+            )
+            .unwrap();
+        assert_eq!(references.into_inner(), 2);
+    }
+
+    #[test]
+    fn cpu_reference_refuses_unsupported_scenes_before_rendering() {
+        let err = Sweep::new(
+            "default",
+            Scene::default_scene(),
+            axes(&["tessellation=0.5,1"]),
+            SweepOptions {
+                reference: ReferenceKind::Cpu,
+                ..SweepOptions::default()
+            },
+        )
+        .err()
+        .map(|e| e.to_string())
+        .unwrap();
+        assert!(
+            err.contains("--reference cpu") && err.contains("'ring'") && err.contains("torus"),
+            "{err}"
+        );
+        let err = cpu_sweep(&["shading=phong,toon"])
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            err.contains("shading=toon") && err.contains("toon shading"),
+            "{err}"
+        );
     }
 
     #[test]

@@ -1,0 +1,484 @@
+//! A CPU reference renderer in double precision: the exact image of a scene
+//! that the GPU's tessellated, single-precision frame approximates.
+//!
+//! Each pixel centre is ray-cast against the *analytic* surfaces (sphere,
+//! finite plane, open cylinder), each in its own object space, and shaded
+//! with exactly the Blinn-Phong formula of `glsl/include/lighting.glsl`,
+//! with the same per-object light sets ([`Scene::lights_reaching`]) as the
+//! GPU. `aerial sweep --reference cpu` measures every combination against
+//! this image instead of against the best GPU setting.
+//!
+//! It lives in `render/` because it is a second renderer (scene in, linear
+//! RGBA out, like [`crate::app::RenderRun::hdr`]); `report/` only compares
+//! images and stays free of any way of making them.
+//!
+//! # What "exact" means here, and what it does not cover
+//!
+//! - The GPU rasterizes polygons whose vertices lie on the surface, so a
+//!   curved silhouette is a polygon inside the analytic outline: pixels
+//!   along the outline can be covered by one image and not the other.
+//!   That difference is not noise in the reference: it *is* part of the
+//!   tessellation error that a sweep reports, and it shrinks as the
+//!   tessellation grows.
+//! - Interior pixels differ by the flat facets (the GPU's surface point is
+//!   up to r(1 - cos(pi/n)) inside the sphere, and its normals are
+//!   interpolated) and by single-precision shading: again what a sweep
+//!   measures.
+//! - Front faces only: a hit whose geometric normal faces along the ray is
+//!   skipped, as the GPU culls back faces. Hits nearer than the camera's
+//!   near plane or beyond a finite far plane are skipped, as the GPU clips
+//!   them.
+//! - Shapes without a closed-form intersection here (torus, flag) and
+//!   material features the formula does not cover (textures, opacity below
+//!   1, Gouraud and toon shading) are refused with an error naming the
+//!   object, its material and the feature, never approximated.
+
+use glam::{DMat3, DMat4, DQuat, DVec3};
+
+use super::Pixels;
+use crate::scene::{Light, Scene, ShadingModel, Shape, Transform, MAX_OUTPUT_SIZE};
+
+/// Why a scene has no CPU reference.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum ReferenceError {
+    #[error("object '{object}': the {shape} shape has no CPU reference (supported: sphere, plane, cylinder)")]
+    UnsupportedShape { object: String, shape: &'static str },
+    #[error("object '{object}', material '{material}': {feature} has no CPU reference (supported: opaque, untextured phong materials)")]
+    UnsupportedMaterial {
+        object: String,
+        material: String,
+        feature: String,
+    },
+    #[error("object '{object}': material index {index} is out of range (the scene has {count} materials)")]
+    NoMaterial {
+        object: String,
+        index: usize,
+        count: usize,
+    },
+    #[error("output size {width}x{height}: each side must be in 1..={max}", max = MAX_OUTPUT_SIZE)]
+    Size { width: u32, height: u32 },
+}
+
+/// Renders the exact image of `scene`: linear RGBA, row 0 at the top,
+/// alpha 1 where a surface is hit and (0, 0, 0, 0) elsewhere.
+///
+/// # Errors
+///
+/// [`ReferenceError`] naming the object (and material) whose shape or
+/// material has no CPU reference.
+pub fn render_reference(scene: &Scene) -> Result<Pixels<f32>, ReferenceError> {
+    Ok(ReferenceScene::new(scene)?.render())
+}
+
+/// Everything [`render_reference`] reads from a scene, in double precision.
+///
+/// Two scenes with equal `ReferenceScene`s have identical reference images,
+/// so a sweep can use it as a cache key: knobs that change only how the GPU
+/// renders (HDR format, tessellation apart from its effect on the light
+/// sets) leave it unchanged.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReferenceScene {
+    width: u32,
+    height: u32,
+    eye: DVec3,
+    /// Unit camera basis, as `Mat4::look_at_rh` builds it.
+    right: DVec3,
+    up: DVec3,
+    forward: DVec3,
+    tan_half_fov: f64,
+    near: f64,
+    far: Option<f64>,
+    ambient: DVec3,
+    objects: Vec<ReferenceObject>,
+}
+
+/// One object, ready for ray casting.
+#[derive(Clone, Debug, PartialEq)]
+struct ReferenceObject {
+    surface: Surface,
+    /// World to object space.
+    world_to_object: DMat4,
+    /// Inverse transpose of the object-to-world 3x3: carries object-space
+    /// normals to world space.
+    normal_matrix: DMat3,
+    ka: DVec3,
+    kd: DVec3,
+    ks: DVec3,
+    shininess: f64,
+    /// The lights that reach this object on the GPU, in scene order.
+    lights: Vec<ReferenceLight>,
+}
+
+/// The analytic surfaces the reference can intersect, in object space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Surface {
+    /// `|p| = radius`.
+    Sphere { radius: f64 },
+    /// `y = 0`, `|x| <= width / 2`, `|z| <= depth / 2`, front face `+Y`.
+    Plane { width: f64, depth: f64 },
+    /// `x^2 + z^2 = radius^2`, `|y| <= height / 2`, open, front face outward.
+    Cylinder { radius: f64, height: f64 },
+}
+
+/// A light as the shader sees it (`GpuLight`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum ReferenceLight {
+    Point {
+        position: DVec3,
+        color: DVec3,
+        /// (constant, linear, quadratic).
+        attenuation: DVec3,
+    },
+    Directional {
+        /// Unit vector towards the light (the negated travel direction).
+        to_light: DVec3,
+        color: DVec3,
+    },
+}
+
+/// A front-facing ray hit in object space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter: the point is `origin + t * direction`.
+    pub t: f64,
+    /// Object-space outward normal (not normalized).
+    pub normal: DVec3,
+}
+
+/// The visible surface along a camera ray, in world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct WorldHit {
+    t: f64,
+    /// Index into `ReferenceScene::objects` (and `Scene::objects`).
+    object: usize,
+    point: DVec3,
+    /// Unit outward normal.
+    normal: DVec3,
+}
+
+impl Surface {
+    fn of(shape: &Shape) -> Option<Surface> {
+        let f = f64::from;
+        match *shape {
+            Shape::Sphere { radius } => Some(Surface::Sphere { radius: f(radius) }),
+            Shape::Plane { width, depth } => Some(Surface::Plane {
+                width: f(width),
+                depth: f(depth),
+            }),
+            Shape::Cylinder { radius, height } => Some(Surface::Cylinder {
+                radius: f(radius),
+                height: f(height),
+            }),
+            Shape::Torus { .. } | Shape::Flag { .. } => None,
+        }
+    }
+
+    /// The nearest front-facing hit of the ray `origin + t * direction`
+    /// with `t` in `[t_min, t_max]`, in object space. `direction` need not
+    /// be a unit vector (a scaled object's object-space ray is not), so
+    /// `t` stays the world-space ray parameter.
+    ///
+    /// A hit is front-facing when the outward normal points against the
+    /// ray. The test is done in object space because it equals the world
+    /// one: with `M` the object-to-world matrix, `(M^-T n) . (M d) = n . d`.
+    pub fn intersect(
+        &self,
+        origin: DVec3,
+        direction: DVec3,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<Hit> {
+        let (o, d) = (origin, direction);
+        let in_range = |t: f64| t >= t_min && t <= t_max;
+        let front = |t: f64, normal: DVec3| {
+            (in_range(t) && normal.dot(d) < 0.0).then_some(Hit { t, normal })
+        };
+        match *self {
+            Surface::Sphere { radius } => {
+                let roots = sphere_roots(o, d, radius)?;
+                // From outside the near root is the front face and the far
+                // one the back face; from inside both face away.
+                roots.into_iter().find_map(|t| front(t, o + d * t))
+            }
+            Surface::Plane { width, depth } => {
+                if d.y == 0.0 {
+                    return None;
+                }
+                let t = -o.y / d.y;
+                let p = o + d * t;
+                if p.x.abs() > width * 0.5 || p.z.abs() > depth * 0.5 {
+                    return None;
+                }
+                front(t, DVec3::Y)
+            }
+            Surface::Cylinder { radius, height } => {
+                let flat = DVec3::new(1.0, 0.0, 1.0);
+                let roots = sphere_roots(o * flat, d * flat, radius)?;
+                // The cylinder is open: a ray can pass the near wall above
+                // its rim and meet the far wall from inside, which is a back
+                // face and culled, exactly as on the GPU.
+                roots.into_iter().find_map(|t| {
+                    let p = o + d * t;
+                    if p.y.abs() > height * 0.5 {
+                        return None;
+                    }
+                    front(t, DVec3::new(p.x, 0.0, p.z))
+                })
+            }
+        }
+    }
+}
+
+/// Where the ray `o + t d` meets the sphere `|p| = radius` (a circle when
+/// both vectors have `y = 0`), smaller `t` first; `None` on a miss or when
+/// `d` is zero (a ray along a cylinder's axis).
+///
+/// Solved from the point of the ray closest to the centre rather than by
+/// the textbook `|o|^2 - r^2`: for a small sphere far away that difference
+/// of nearly equal numbers keeps few digits (1e8 - 1e-6 loses all but two),
+/// while the closest point is computed to within an ulp of the distance.
+fn sphere_roots(o: DVec3, d: DVec3, radius: f64) -> Option<[f64; 2]> {
+    let a = d.length_squared();
+    if a == 0.0 {
+        return None;
+    }
+    let t_mid = -o.dot(d) / a;
+    let closest = o + d * t_mid;
+    let half_chord_squared = (radius * radius - closest.length_squared()) / a;
+    if half_chord_squared < 0.0 {
+        return None;
+    }
+    let h = half_chord_squared.sqrt();
+    Some([t_mid - h, t_mid + h])
+}
+
+/// The object-to-world matrix of `transform` in f64.
+fn model_matrix(transform: &Transform) -> DMat4 {
+    let axis = transform.rotate_axis.as_dvec3();
+    // A zero axis means no rotation, as in `Transform::rotation`.
+    let rotation = match axis.try_normalize() {
+        Some(axis) => {
+            DQuat::from_axis_angle(axis, f64::from(transform.rotate_degrees).to_radians())
+        }
+        None => DQuat::IDENTITY,
+    };
+    DMat4::from_scale_rotation_translation(
+        transform.scale.as_dvec3(),
+        rotation,
+        transform.translate.as_dvec3(),
+    )
+}
+
+impl ReferenceScene {
+    /// Checks that every object can be ray-cast and shaded exactly, and
+    /// gathers what the reference needs.
+    ///
+    /// # Errors
+    ///
+    /// The first object (in scene order) with an unsupported shape or
+    /// material feature, or a material index out of range.
+    pub fn new(scene: &Scene) -> Result<ReferenceScene, ReferenceError> {
+        let (width, height) = (scene.output.width, scene.output.height);
+        if !(1..=MAX_OUTPUT_SIZE).contains(&width) || !(1..=MAX_OUTPUT_SIZE).contains(&height) {
+            return Err(ReferenceError::Size { width, height });
+        }
+        let mut objects = Vec::with_capacity(scene.objects.len());
+        for (index, object) in scene.objects.iter().enumerate() {
+            let material =
+                scene
+                    .materials
+                    .get(object.material)
+                    .ok_or_else(|| ReferenceError::NoMaterial {
+                        object: object.name.clone(),
+                        index: object.material,
+                        count: scene.materials.len(),
+                    })?;
+            let surface =
+                Surface::of(&object.shape).ok_or_else(|| ReferenceError::UnsupportedShape {
+                    object: object.name.clone(),
+                    shape: object.shape.kind_name(),
+                })?;
+            let feature = if material.texture.is_some() {
+                Some("a texture".to_string())
+            } else if material.is_transparent() {
+                Some(format!("transparency (opacity {})", material.opacity))
+            } else {
+                match material.shading {
+                    ShadingModel::Phong => None,
+                    ShadingModel::Gouraud => Some("gouraud shading".to_string()),
+                    ShadingModel::Toon => Some("toon shading".to_string()),
+                }
+            };
+            if let Some(feature) = feature {
+                return Err(ReferenceError::UnsupportedMaterial {
+                    object: object.name.clone(),
+                    material: material.name.clone(),
+                    feature,
+                });
+            }
+            let model = model_matrix(&object.transform);
+            let lights = scene
+                .lights_reaching(index)
+                .into_iter()
+                .filter_map(|i| scene.lights.get(i))
+                .map(|light| match *light {
+                    Light::Point {
+                        position,
+                        color,
+                        attenuation,
+                    } => ReferenceLight::Point {
+                        position: position.as_dvec3(),
+                        color: color.as_dvec3(),
+                        attenuation: attenuation.as_dvec3(),
+                    },
+                    // The scene holds a unit travel direction; the shader
+                    // is given its negation and normalizes it again, so the
+                    // f64 normalization matches.
+                    Light::Directional { direction, color } => ReferenceLight::Directional {
+                        to_light: (-direction.as_dvec3()).normalize_or_zero(),
+                        color: color.as_dvec3(),
+                    },
+                })
+                .collect();
+            objects.push(ReferenceObject {
+                surface,
+                world_to_object: model.inverse(),
+                normal_matrix: DMat3::from_mat4(model).inverse().transpose(),
+                ka: material.ka.as_dvec3(),
+                kd: material.kd.as_dvec3(),
+                ks: material.ks.as_dvec3(),
+                shininess: f64::from(material.shininess),
+                lights,
+            });
+        }
+        let camera = &scene.camera;
+        let eye = camera.eye.as_dvec3();
+        // The basis of Mat4::look_at_rh: forward f, right s = f x up,
+        // true up u = s x f. The scene guarantees eye != look_at and an up
+        // not parallel to the view direction.
+        let forward = (camera.look_at.as_dvec3() - eye).normalize_or_zero();
+        let right = forward.cross(camera.up.as_dvec3()).normalize_or_zero();
+        let up = right.cross(forward);
+        Ok(ReferenceScene {
+            width,
+            height,
+            eye,
+            right,
+            up,
+            forward,
+            tan_half_fov: (f64::from(camera.fov_y_degrees).to_radians() * 0.5).tan(),
+            near: f64::from(camera.near),
+            far: camera.far.map(f64::from),
+            ambient: scene.ambient.as_dvec3(),
+            objects,
+        })
+    }
+
+    /// The unit world-space ray direction through the centre of pixel
+    /// `(x, y)`, row 0 at the top. The GPU's projection maps view-space
+    /// `+Y` to the top row (its `y_c = -f y_v` and Vulkan's downward NDC
+    /// `y`), with `aspect = width / height`.
+    pub fn ray(&self, x: u32, y: u32) -> DVec3 {
+        let aspect = f64::from(self.width) / f64::from(self.height);
+        let ndc_x = (f64::from(x) + 0.5) / f64::from(self.width) * 2.0 - 1.0;
+        let ndc_y = (f64::from(y) + 0.5) / f64::from(self.height) * 2.0 - 1.0;
+        let sx = ndc_x * self.tan_half_fov * aspect;
+        let sy = -ndc_y * self.tan_half_fov;
+        (self.right * sx + self.up * sy + self.forward).normalize()
+    }
+
+    /// The whole image.
+    pub fn render(&self) -> Pixels<f32> {
+        let mut data = Vec::with_capacity(self.width as usize * self.height as usize * 4);
+        for y in 0..self.height {
+            for x in 0..self.width {
+                let pixel = match self.shade(self.ray(x, y)) {
+                    Some(c) => [c.x as f32, c.y as f32, c.z as f32, 1.0],
+                    None => [0.0; 4],
+                };
+                data.extend_from_slice(&pixel);
+            }
+        }
+        Pixels {
+            width: self.width,
+            height: self.height,
+            data,
+        }
+    }
+
+    /// The radiance along the unit ray `dir` from the eye, or `None` when
+    /// it hits nothing.
+    fn shade(&self, dir: DVec3) -> Option<DVec3> {
+        let hit = self.trace(dir)?;
+        let object = &self.objects[hit.object];
+        Some(object.blinn_phong(hit.point, hit.normal, -dir, self.ambient))
+    }
+
+    /// The nearest visible surface along the unit ray `dir` from the eye.
+    fn trace(&self, dir: DVec3) -> Option<WorldHit> {
+        // The GPU clips at view depths `near` and `far`; along this ray the
+        // depth is t * cos, cos the angle to the view axis (> 0 for any
+        // pixel of a field of view under 180 degrees).
+        let cos = dir.dot(self.forward);
+        let t_min = self.near / cos;
+        let t_max = self.far.map_or(f64::INFINITY, |far| far / cos);
+        let mut nearest: Option<(f64, usize, DVec3)> = None;
+        for (index, object) in self.objects.iter().enumerate() {
+            let o = object.world_to_object.transform_point3(self.eye);
+            let d = object.world_to_object.transform_vector3(dir);
+            let limit = nearest.map_or(t_max, |(t, _, _)| t);
+            if let Some(hit) = object.surface.intersect(o, d, t_min, limit) {
+                // Ties keep the earlier object, as the GPU's GREATER depth
+                // test keeps the first fragment drawn at a depth.
+                if nearest.is_none_or(|(t, _, _)| hit.t < t) {
+                    nearest = Some((hit.t, index, hit.normal));
+                }
+            }
+        }
+        let (t, object, normal) = nearest?;
+        Some(WorldHit {
+            t,
+            object,
+            point: self.eye + dir * t,
+            normal: (self.objects[object].normal_matrix * normal).normalize(),
+        })
+    }
+}
+
+impl ReferenceObject {
+    /// `blinn_phong` of `lighting.glsl`, in f64: `ka La` plus, for every
+    /// light in front of the surface (`cos > 0`), `Le att (kd cos + ks
+    /// max(N.H, 0)^shininess)`.
+    fn blinn_phong(&self, p: DVec3, n: DVec3, v: DVec3, ambient: DVec3) -> DVec3 {
+        let mut color = self.ka * ambient;
+        for light in &self.lights {
+            let (l, radiance) = match *light {
+                ReferenceLight::Point {
+                    position,
+                    color,
+                    attenuation: a,
+                } => {
+                    let to_light = position - p;
+                    let d = to_light.length();
+                    // The shader's fallbacks, for a light exactly on the
+                    // surface: an arbitrary direction and a floor under the
+                    // attenuation denominator.
+                    let l = if d > 0.0 { to_light / d } else { DVec3::Z };
+                    let att = 1.0 / (a.x + a.y * d + a.z * d * d).max(1e-6);
+                    (l, color * att)
+                }
+                ReferenceLight::Directional { to_light, color } => (to_light, color),
+            };
+            let cos_theta = n.dot(l);
+            if cos_theta > 0.0 {
+                let h = (l + v).normalize();
+                let specular = n.dot(h).max(0.0).powf(self.shininess);
+                color += radiance * (self.kd * cos_theta + self.ks * specular);
+            }
+        }
+        color
+    }
+}
+
+#[cfg(test)]
+mod tests;
