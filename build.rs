@@ -1,15 +1,19 @@
 //! Compiles every shader under `glsl/` to SPIR-V with shaderc and embeds it.
 //!
 //! Files ending in `.vert` / `.frag` are shader stages; `glsl/include/*.glsl`
-//! are shared code pulled in with `#include "name.glsl"`. A stage can ask for
-//! extra variants compiled with preprocessor defines, one line each:
+//! are shared code pulled in with `#include "name.glsl"`. A stage declares
+//! independent feature flags, one line each:
 //!
 //! ```glsl
-//! // variant: textured BASE_COLOR_TEXTURE
+//! // feature: BASE_COLOR_TEXTURE
+//! // feature: GBUFFER
 //! ```
 //!
-//! which yields the constant `OBJECT_FRAG_TEXTURED` next to `OBJECT_FRAG`.
-//! A GLSL error fails the build with shaderc's `file:line: message`.
+//! and every combination is compiled with those preprocessor defines, so the
+//! plan can ask for any of them (`OBJECT_FRAG.spirv(&["GBUFFER"])`) without
+//! one line per combination. Each stage becomes a `ShaderVariants` constant
+//! named after its file (`object.frag` → `OBJECT_FRAG`). A GLSL error fails
+//! the build with shaderc's `file:line: message`.
 //!
 //! It also sets `AERIAL_COMMIT` (see [`commit`]) so benchmark reports can
 //! name the build they measured.
@@ -43,16 +47,25 @@ fn main() {
             .expect("file")
             .to_string_lossy()
             .into_owned();
-        let mut variants: Vec<(String, Vec<String>)> = vec![(String::new(), vec![])];
-        for line in source.lines() {
-            if let Some(rest) = line.trim().strip_prefix("// variant:") {
-                let mut words = rest.split_whitespace().map(str::to_string);
-                if let Some(v) = words.next() {
-                    variants.push((v, words.collect()));
-                }
-            }
-        }
-        for (variant, defines) in variants {
+        let features: Vec<String> = source
+            .lines()
+            .filter_map(|line| line.trim().strip_prefix("// feature:"))
+            .flat_map(|rest| rest.split_whitespace().map(str::to_string))
+            .collect();
+        assert!(
+            features.len() <= 6,
+            "{name}: at most 6 feature flags (64 variants)"
+        );
+        let constant = constant_name(&name);
+        let mut spirv_files = Vec::new();
+        // Bit i of the combination enables features[i].
+        for combination in 0..1u32 << features.len() {
+            let defines: Vec<&String> = features
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| combination & (1 << i) != 0)
+                .map(|(_, f)| f)
+                .collect();
             let mut options = shaderc::CompileOptions::new().expect("options");
             options.set_target_env(
                 shaderc::TargetEnv::Vulkan,
@@ -87,21 +100,28 @@ fn main() {
                     if artifact.get_num_warnings() > 0 {
                         println!("cargo:warning={}", artifact.get_warning_messages());
                     }
-                    let constant = constant_name(&name, &variant);
-                    let file = out.join(format!("{constant}.spv"));
-                    std::fs::write(&file, artifact.as_binary_u8()).expect("write SPIR-V");
-                    writeln!(
-                        generated,
-                        "pub const {constant}: &[u8] = include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{constant}.spv\"));"
-                    )
-                    .expect("string write");
+                    let file = format!("{constant}_{combination}.spv");
+                    std::fs::write(out.join(&file), artifact.as_binary_u8()).expect("write SPIR-V");
+                    spirv_files.push(file);
                 }
                 Err(e) => {
-                    eprintln!("GLSL error in {display} (variant '{variant}'):\n{e}");
+                    eprintln!("GLSL error in {display} (features {defines:?}):\n{e}");
                     failed = true;
                 }
             }
         }
+        let quoted: Vec<String> = features.iter().map(|f| format!("{f:?}")).collect();
+        let includes: Vec<String> = spirv_files
+            .iter()
+            .map(|f| format!("include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{f}\"))"))
+            .collect();
+        writeln!(
+            generated,
+            "pub const {constant}: ShaderVariants = ShaderVariants {{ file: {name:?}, features: &[{}], spirv: &[{}] }};",
+            quoted.join(", "),
+            includes.join(", ")
+        )
+        .expect("string write");
     }
     if failed {
         std::process::exit(1);
@@ -132,14 +152,9 @@ fn stage_of(path: &Path) -> Option<shaderc::ShaderKind> {
     }
 }
 
-/// `object.frag` + `textured` → `OBJECT_FRAG_TEXTURED`.
-fn constant_name(file: &str, variant: &str) -> String {
-    let mut n = file.replace(['.', '-'], "_").to_uppercase();
-    if !variant.is_empty() {
-        n.push('_');
-        n.push_str(&variant.to_uppercase());
-    }
-    n
+/// `object.frag` → `OBJECT_FRAG`.
+fn constant_name(file: &str) -> String {
+    file.replace(['.', '-'], "_").to_uppercase()
 }
 
 /// `git rev-parse --short HEAD`, with `-dirty` when `git status --porcelain`

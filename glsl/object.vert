@@ -1,9 +1,10 @@
 #version 450
 // Transforms object vertices to clip space; for Gouraud shading it also
 // lights each vertex.
-// variant: textured BASE_COLOR_TEXTURE
+// feature: BASE_COLOR_TEXTURE
 #include "scene_data.glsl"
 #include "lighting.glsl"
+#include "object_lighting.glsl"
 
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;

@@ -8,10 +8,18 @@ layout(location = 0) out vec4 out_color;
 
 const int TONEMAP_REINHARD = 0;
 const int TONEMAP_ACES = 1;
+// No curve: the exposed value clamped to [0, 1] (LDR output with --hdr).
+const int TONEMAP_NONE = 2;
 layout(constant_id = 0) const int OPERATOR = TONEMAP_REINHARD;
 layout(constant_id = 1) const float EXPOSURE = 1.0;
 
 void main() {
     vec3 c = sanitize_hdr(subpassLoad(hdr).rgb) * EXPOSURE;
-    out_color = vec4(OPERATOR == TONEMAP_ACES ? aces_fit(c) : reinhard(c), 1.0);
+    if (OPERATOR == TONEMAP_ACES) {
+        out_color = vec4(aces_fit(c), 1.0);
+    } else if (OPERATOR == TONEMAP_NONE) {
+        out_color = vec4(clamp(c, 0.0, 1.0), 1.0);
+    } else {
+        out_color = vec4(reinhard(c), 1.0);
+    }
 }

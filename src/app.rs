@@ -154,7 +154,7 @@ fn drive(
     settings: &RenderSettings,
     on_frame: &mut dyn FnMut(),
 ) -> Result<Produced, RenderError> {
-    let passes = renderer.plan().passes.iter().map(|p| p.name()).collect();
+    let passes = renderer.plan().pass_names();
     let frames = submit_frames(settings, on_frame, || renderer.render_frame())?;
     Ok((passes, frames, renderer.output(), renderer.hdr()))
 }

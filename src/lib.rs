@@ -13,7 +13,39 @@ pub mod report;
 pub mod scene;
 pub mod vk;
 
-/// SPIR-V of every shader in `glsl/`, compiled by `build.rs`.
+/// SPIR-V of every shader in `glsl/`, compiled by `build.rs`: one
+/// [`shaders::ShaderVariants`] per stage file, holding every combination of
+/// the feature flags the file declares.
 pub mod shaders {
+    /// Every compiled combination of one shader file's feature flags.
+    pub struct ShaderVariants {
+        /// The source file, e.g. `object.frag`.
+        pub file: &'static str,
+        /// The flags the file declares (`// feature: NAME`), in order.
+        pub features: &'static [&'static str],
+        /// SPIR-V per combination; bit i of the index enables `features[i]`.
+        pub spirv: &'static [&'static [u8]],
+    }
+
+    impl ShaderVariants {
+        /// The variant with exactly the `enabled` flags this file declares.
+        /// Flags the file does not declare are ignored, so a pass can ask
+        /// the vertex and fragment stage for the same set.
+        pub fn spirv(&self, enabled: &[&str]) -> &'static [u8] {
+            let index = self
+                .features
+                .iter()
+                .enumerate()
+                .filter(|(_, f)| enabled.contains(f))
+                .fold(0, |acc, (i, _)| acc | (1 << i));
+            self.spirv[index]
+        }
+
+        /// The variant with no feature enabled.
+        pub fn base(&self) -> &'static [u8] {
+            self.spirv[0]
+        }
+    }
+
     include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 }

@@ -1,5 +1,5 @@
-// Local illumination shared by the vertex (Gouraud) and fragment (Phong,
-// toon) paths. Requires scene_data.glsl.
+// Local illumination by one light, shared by the forward object shaders
+// and the deferred lighting pass. Requires frame_data.glsl.
 
 // Direction to the light and the attenuated radiance it brings to `p`.
 // Point lights (w = 1) and directional lights (w = 0) share one formula.
@@ -20,37 +20,15 @@ float specular_power(float cos_nh, float shininess) {
     return shininess > 0.0 ? pow(max(cos_nh, 0.0), shininess) : 1.0;
 }
 
-// Blinn-Phong: sum over lights of Le * (kd cos+theta + ks cos+(N.H)^shine)
-// plus ka * La. Specular is only lit where the light is in front (cos theta > 0).
-vec3 blinn_phong(vec3 p, vec3 n, vec3 v, vec3 kd, vec3 ka) {
-    vec3 color = ka * frame.ambient.rgb;
-    for (uint i = 0u; i < LIGHT_COUNT; ++i) {
-        vec3 l, radiance;
-        light_at(object.lights[i], p, l, radiance);
-        float cos_theta = dot(n, l);
-        if (cos_theta > 0.0) {
-            vec3 h = normalize(l + v);
-            color += radiance * (kd * cos_theta + object.ks.rgb * specular_power(dot(n, h), object.ks.a));
-        }
+// Blinn-Phong for one light: Le * (kd cos+theta + ks cos+(N.H)^shine).
+// Specular is only lit where the light is in front (cos theta > 0).
+vec3 blinn_phong_light(Light light, vec3 p, vec3 n, vec3 v, vec3 kd, vec4 ks_shininess) {
+    vec3 l, radiance;
+    light_at(light, p, l, radiance);
+    float cos_theta = dot(n, l);
+    if (cos_theta > 0.0) {
+        vec3 h = normalize(l + v);
+        return radiance * (kd * cos_theta + ks_shininess.rgb * specular_power(dot(n, h), ks_shininess.a));
     }
-    return color;
+    return vec3(0.0);
 }
-
-// Toon: two diffuse tones and a hard specular spot; the silhouette is drawn
-// by the caller where |N.V| is small.
-vec3 toon(vec3 p, vec3 n, vec3 v, vec3 kd, vec3 ka) {
-    vec3 color = ka * frame.ambient.rgb;
-    for (uint i = 0u; i < LIGHT_COUNT; ++i) {
-        vec3 l, radiance;
-        light_at(object.lights[i], p, l, radiance);
-        float cos_theta = dot(n, l);
-        float tone = cos_theta > 0.5 ? 1.0 : (cos_theta > 0.0 ? 0.4 : 0.0);
-        color += radiance * kd * tone;
-        if (cos_theta > 0.0 && specular_power(dot(n, normalize(l + v)), object.ks.a) > 0.5) {
-            color += radiance * object.ks.rgb;
-        }
-    }
-    return color;
-}
-
-const float TOON_SILHOUETTE = 0.2;

@@ -15,9 +15,9 @@ use super::frame::TimedFrame;
 use super::{FrameTiming, Pixels, RenderError};
 use crate::shaders;
 use crate::vk::{
-    Buffer, BufferUsage, Context, CullModeFlags, Format, Framebuffer, GraphicsPipeline,
-    GraphicsPipelineDesc, Image, ImageAspectFlags, ImageDesc, ImageUsageFlags, PipelineLayout,
-    RenderPass, ShaderModule,
+    AttachmentSpec, AttachmentStart, Blend, Buffer, BufferUsage, Context, CullModeFlags, Format,
+    GraphRenderPass, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, ShaderModule,
+    SubpassSpec,
 };
 use std::sync::Arc;
 
@@ -38,9 +38,7 @@ pub struct EmptyPass {
     readback: Buffer,
     _pipeline: GraphicsPipeline,
     _layout: PipelineLayout,
-    _framebuffer: Framebuffer,
-    _render_pass: RenderPass,
-    _target: Image,
+    _render_pass: GraphRenderPass,
     width: u32,
     height: u32,
     ctx: Arc<Context>,
@@ -55,27 +53,32 @@ impl EmptyPass {
         if !valid.contains(&width) || !valid.contains(&height) {
             return Err(RenderError::Size { width, height });
         }
-        let target = Image::new(
+        // One attachment, written at every pixel (nothing loaded) and read
+        // back after the pass; built by the same render-graph builder as
+        // scene frames.
+        let render_pass = GraphRenderPass::new(
             ctx,
-            "empty pass target",
-            ImageDesc {
-                width,
-                height,
+            width,
+            height,
+            &[AttachmentSpec {
+                name: "empty pass target",
                 format: FORMAT,
-                usage: ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::TRANSFER_SRC,
-                mip_levels: 1,
-                aspect: ImageAspectFlags::COLOR,
-            },
+                start: AttachmentStart::Undefined,
+                read_after: true,
+            }],
+            &[SubpassSpec {
+                name: PASS_NAME,
+                colour: vec![0],
+                ..SubpassSpec::default()
+            }],
         )?;
-        let render_pass = RenderPass::single_color(ctx, FORMAT)?;
-        let framebuffer = Framebuffer::single(ctx, &render_pass, &target)?;
         let layout = PipelineLayout::new(ctx, &[])?;
-        let vertex = ShaderModule::new(ctx, shaders::FULLSCREEN_VERT)?;
-        let fragment = ShaderModule::new(ctx, shaders::CONSTANT_FRAG)?;
+        let vertex = ShaderModule::new(ctx, shaders::FULLSCREEN_VERT.base())?;
+        let fragment = ShaderModule::new(ctx, shaders::CONSTANT_FRAG.base())?;
         let pipeline = GraphicsPipeline::new(
             ctx,
             &layout,
-            &render_pass,
+            &render_pass.render_pass,
             &GraphicsPipelineDesc {
                 vertex_shader: &vertex,
                 fragment_shader: &fragment,
@@ -83,10 +86,10 @@ impl EmptyPass {
                 vertex_stride: 0,
                 vertex_attributes: &[],
                 cull_mode: CullModeFlags::NONE,
-                // There is no depth attachment; depth state is ignored.
-                depth_test: false,
+                // There is no depth attachment.
+                depth_test: None,
                 depth_write: false,
-                alpha_blend: false,
+                blend: &[Blend::Replace],
                 subpass: 0,
             },
         )?;
@@ -100,19 +103,12 @@ impl EmptyPass {
         // side of the render pass.
         let frame = TimedFrame::begin(ctx, 1)?;
         let cmd = frame.cmd();
-        // The load op is DONT_CARE (the triangle covers every pixel), so the
-        // clear value is never used; the render pass still takes one per
-        // attachment.
-        cmd.begin_render_pass(
-            &render_pass,
-            &framebuffer,
-            &[crate::vk::clear_color([0.0; 4])],
-        );
+        cmd.begin_render_pass(&render_pass);
         cmd.bind_pipeline(&pipeline);
         cmd.draw(3);
-        cmd.end_render_pass();
+        cmd.end_render_pass(&render_pass);
         frame.stamp();
-        cmd.copy_image_to_buffer(&target, &readback);
+        cmd.copy_image_to_buffer(&render_pass.images[0], &readback);
         let frame = frame.finish()?;
 
         Ok(EmptyPass {
@@ -120,9 +116,7 @@ impl EmptyPass {
             readback,
             _pipeline: pipeline,
             _layout: layout,
-            _framebuffer: framebuffer,
             _render_pass: render_pass,
-            _target: target,
             width,
             height,
             ctx: ctx.clone(),

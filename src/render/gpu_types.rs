@@ -9,9 +9,31 @@ pub struct FrameUniforms {
     pub view_projection: [[f32; 4]; 4],
     pub camera_position: [f32; 4],
     pub ambient: [f32; 4],
+    /// Clip to world, for positions reconstructed from depth.
+    pub inverse_view_projection: [[f32; 4]; 4],
+    /// Width, height, 1/width, 1/height in pixels.
+    pub viewport: [f32; 4],
 }
 
-/// One light as the shader reads it (std430).
+impl FrameUniforms {
+    pub fn new(scene: &crate::scene::Scene, width: u32, height: u32) -> FrameUniforms {
+        let aspect = width as f32 / height as f32;
+        let view_projection = scene.camera.view_projection(aspect);
+        // Inverted in double precision: with a far/near ratio of 1e6 and
+        // more, a float inverse loses most of the depth resolution.
+        let inverse = view_projection.as_dmat4().inverse().as_mat4();
+        let (w, h) = (width as f32, height as f32);
+        FrameUniforms {
+            view_projection: view_projection.to_cols_array_2d(),
+            camera_position: scene.camera.eye.extend(1.0).to_array(),
+            ambient: scene.ambient.extend(0.0).to_array(),
+            inverse_view_projection: inverse.to_cols_array_2d(),
+            viewport: [w, h, 1.0 / w, 1.0 / h],
+        }
+    }
+}
+
+/// One light as the shader reads it (std140: three vec4s).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct GpuLight {
@@ -21,7 +43,7 @@ pub struct GpuLight {
     pub attenuation: [f32; 4],
 }
 
-/// The fixed head of a per-object block (std430); the object's lights
+/// The fixed head of a per-object block (std140); the object's lights
 /// follow it directly.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -44,7 +66,7 @@ mod tests {
     // Sizes the GLSL layouts imply; a mismatch would shift every field.
     #[test]
     fn layouts_match_glsl() {
-        assert_eq!(std::mem::size_of::<FrameUniforms>(), 96);
+        assert_eq!(std::mem::size_of::<FrameUniforms>(), 176);
         assert_eq!(std::mem::size_of::<GpuLight>(), 48);
         assert_eq!(std::mem::size_of::<ObjectHeader>(), 192);
     }

@@ -1,18 +1,27 @@
-//! The frame: which passes a scene needs (`plan`), the GPU resources and
-//! the recorded command buffer (`renderer`), and writing the images out
-//! (`output`). `empty_pass` is the driver's floor that benchmarks divide by;
-//! `reference` is the exact CPU image that sweeps can measure against.
+//! The frame: the scene's meshes built once (`geometry`), the frame as data
+//! (`plan`: attachments and passes), one type per pass (`passes`), the GPU
+//! resources and the recorded command buffer (`renderer`), and writing the
+//! images out (`output`). `tiles` culls lights per screen tile for deferred
+//! lighting; `octahedral` is the G-buffer's normal encoding. `empty_pass`
+//! is the driver's floor that benchmarks divide by; `reference` is the
+//! exact CPU image that sweeps can measure against.
 
 pub mod empty_pass;
 mod frame;
+pub mod geometry;
 mod gpu_types;
+pub mod octahedral;
 pub mod output;
+pub mod passes;
 pub mod plan;
 pub mod reference;
 mod renderer;
+mod scene_resources;
+pub mod tiles;
 
 pub use empty_pass::EmptyPass;
-pub use plan::{FramePlan, Pass, SUBPASS_TIMING_NOTE};
+pub use geometry::SceneGeometry;
+pub use plan::{FramePlan, SUBPASS_TIMING_NOTE};
 pub use reference::{render_reference, ReferenceError};
 pub use renderer::{FrameTiming, Pixels, Renderer};
 
@@ -24,8 +33,12 @@ pub enum RenderError {
     Vulkan(#[from] crate::vk::VkError),
     #[error("texture {path}: {reason}")]
     Texture { path: PathBuf, reason: String },
-    #[error("an object is reached by {lights} lights; this device's uniform blocks hold at most {max} (raise light_cutoff to leave out faint ones)")]
-    TooManyLights { lights: usize, max: usize },
+    #[error("{what} is reached by {lights} lights; this device's uniform blocks hold at most {max} (raise light_cutoff to leave out faint ones)")]
+    TooManyLights {
+        what: String,
+        lights: usize,
+        max: usize,
+    },
     #[error("invalid HDR input image: {0}")]
     InvalidImage(String),
     #[error("cannot write {path}: {reason}")]

@@ -1,12 +1,19 @@
 //! What a scene needs from the GPU, decided on the CPU before any Vulkan
-//! object exists: which passes run, which pipeline variants and textures
-//! are created, and the order of the draws.
+//! object exists: the frame as data (named attachments and an ordered list
+//! of passes saying what each reads and writes), the pipeline variants, the
+//! textures, the order of the draws and, for deferred lighting, which
+//! lights reach which screen tiles.
 //!
 //! Everything the scene does not use is left out here, so the GPU side
-//! only builds what the plan lists.
+//! only builds what the plan lists: no G-buffer in forward mode, no
+//! transparent pass without transparent objects, no HDR attachment or
+//! tone-map subpass when the scene asks for LDR output.
 
-use crate::mesh::Mesh;
-use crate::scene::{HdrFormat, Scene, ShadingModel};
+use super::geometry::SceneGeometry;
+use super::passes::{self, PassCreate};
+use super::tiles::{self, TileGroup};
+use crate::scene::{HdrFormat, Lighting, Scene, ShadingModel, ToneMapOperator};
+use crate::vk::{DepthUse, Format};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
@@ -52,40 +59,105 @@ pub struct Draw {
     pub pipeline: PipelineKey,
     /// Index into `FramePlan::textures`.
     pub texture: Option<usize>,
-    /// Indices into `Scene::lights` that reach this object.
+    /// Indices into `Scene::lights` evaluated while drawing the object
+    /// (empty for surfaces lit later by the deferred lighting pass).
     pub lights: Vec<usize>,
 }
 
-/// A timed pass of the frame.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Pass {
-    /// Copy a given HDR image into the HDR attachment (tone-mapping an
-    /// existing image instead of drawing a scene).
-    HdrUpload,
-    Opaque,
-    Transparent,
-    ToneMap,
-    Readback,
+/// The attachment names passes refer to.
+pub mod attachment {
+    /// Float HDR colour, before tone mapping.
+    pub const HDR: &str = "hdr";
+    /// Reversed-Z float depth.
+    pub const DEPTH: &str = "depth";
+    /// The 8-bit sRGB image the frame produces.
+    pub const OUTPUT: &str = "output";
+    /// G-buffer: diffuse albedo (kd times texture).
+    pub const ALBEDO: &str = "gbuffer albedo";
+    /// G-buffer: octahedral-encoded world-space normal.
+    pub const NORMAL: &str = "gbuffer normal";
+    /// G-buffer: specular colour and shininess.
+    pub const MATERIAL: &str = "gbuffer material";
+}
+
+/// One attachment of the frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AttachmentDecl {
+    pub name: &'static str,
+    pub format: Format,
+    /// Cleared to this value when the frame starts (depth: the first
+    /// component); `None` when every pixel is written before it is read.
+    pub clear: Option<[f32; 4]>,
+}
+
+/// What a pass does with attachments.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PassIo {
+    /// A subpass of the frame's render pass.
+    Subpass {
+        /// Colour targets, in fragment output location order.
+        colour: Vec<&'static str>,
+        depth: Option<(&'static str, DepthUse)>,
+        /// Input attachments, in `input_attachment_index` order.
+        inputs: Vec<&'static str>,
+    },
+    /// Copies outside the render pass.
+    Transfer {
+        /// Attachments copied out after the render pass.
+        reads: Vec<&'static str>,
+        /// Attachments copied in before the render pass.
+        writes: Vec<&'static str>,
+    },
+}
+
+/// One pass of the frame: its name (in timing tables), what it reads and
+/// writes, and the function that creates its GPU objects.
+#[derive(Clone)]
+pub struct PassDecl {
+    pub name: &'static str,
+    pub io: PassIo,
+    pub create: PassCreate,
+}
+
+impl std::fmt::Debug for PassDecl {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PassDecl")
+            .field("name", &self.name)
+            .field("io", &self.io)
+            .finish()
+    }
+}
+
+impl PassDecl {
+    fn subpass(
+        name: &'static str,
+        colour: Vec<&'static str>,
+        depth: Option<(&'static str, DepthUse)>,
+        inputs: Vec<&'static str>,
+        create: PassCreate,
+    ) -> PassDecl {
+        PassDecl {
+            name,
+            io: PassIo::Subpass {
+                colour,
+                depth,
+                inputs,
+            },
+            create,
+        }
+    }
+
+    pub fn is_subpass(&self) -> bool {
+        matches!(self.io, PassIo::Subpass { .. })
+    }
 }
 
 /// Why the split between subpasses is approximate: printed under timing
 /// tables.
 pub const SUBPASS_TIMING_NOTE: &str =
-    "opaque, transparent and tonemap are subpasses of one render pass: \
+    "the surface, lighting, transparent and tonemap passes are subpasses of one render pass: \
 a binning rasterizer (lavapipe, tile-based GPUs) may do a draw's work after a later timestamp, \
 so their split is approximate; the sum over the render pass is exact";
-
-impl Pass {
-    pub fn name(self) -> &'static str {
-        match self {
-            Pass::HdrUpload => "hdr upload",
-            Pass::Opaque => "opaque",
-            Pass::Transparent => "transparent",
-            Pass::ToneMap => "tonemap",
-            Pass::Readback => "readback",
-        }
-    }
-}
 
 /// The frame a scene needs.
 #[derive(Clone, Debug)]
@@ -93,26 +165,40 @@ pub struct FramePlan {
     pub width: u32,
     pub height: u32,
     pub hdr_format: HdrFormat,
+    pub lighting: Lighting,
     /// Opaque draws, grouped by pipeline and texture to save binds, front
-    /// to back within a group.
+    /// to back within a group. In deferred mode these are drawn into the
+    /// G-buffer.
     pub opaque: Vec<Draw>,
     /// Transparent draws, back to front from the camera.
     pub transparent: Vec<Draw>,
     /// Distinct base-colour textures, each loaded once.
     pub textures: Vec<PathBuf>,
-    /// Store the HDR image for readback (`--hdr`).
-    pub keep_hdr: bool,
-    /// Passes in the order they run; one timestamp interval each.
-    pub passes: Vec<Pass>,
+    /// Deferred lighting: screen tiles grouped by the lights that reach
+    /// them (empty in forward mode).
+    pub tile_groups: Vec<TileGroup>,
+    /// The attachments, each used by at least one pass.
+    pub attachments: Vec<AttachmentDecl>,
+    /// Passes in the order they run; one timestamp interval each. The
+    /// subpasses among them form one render pass, in this order.
+    pub passes: Vec<PassDecl>,
 }
 
 impl FramePlan {
-    /// `meshes[i]` is object i tessellated in object space.
-    pub fn new(scene: &Scene, meshes: &[Mesh], keep_hdr: bool) -> FramePlan {
+    /// The frame for `scene`, whose meshes and bounds are `geometry`;
+    /// `keep_hdr` reads the linear HDR image back too.
+    pub fn new(scene: &Scene, geometry: &SceneGeometry, keep_hdr: bool) -> FramePlan {
         let mut textures: Vec<PathBuf> = Vec::new();
         let mut texture_index = BTreeMap::new();
         let mut opaque = Vec::new();
         let mut transparent = Vec::new();
+        // Deferred lighting applies to opaque Phong surfaces; Gouraud and
+        // toon keep their forward form (drawn in the same subpass).
+        let deferred = scene.output.lighting == Lighting::Deferred
+            && scene.objects.iter().any(|o| {
+                let m = &scene.materials[o.material];
+                m.opacity >= 1.0 && m.shading == ShadingModel::Phong
+            });
         for (i, object) in scene.objects.iter().enumerate() {
             let material = &scene.materials[object.material];
             let texture = material.texture.as_ref().map(|path| {
@@ -122,7 +208,13 @@ impl FramePlan {
                 })
             });
             let blended = material.opacity < 1.0;
-            let lights = scene.lights_reaching(i);
+            let lit_later = deferred && !blended && material.shading == ShadingModel::Phong;
+            let lights = if lit_later {
+                Vec::new()
+            } else {
+                let (centre, radius) = geometry.bounds[i];
+                scene.lights_reaching_sphere(centre, radius)
+            };
             let draw = Draw {
                 object: i,
                 pipeline: PipelineKey {
@@ -140,18 +232,8 @@ impl FramePlan {
                 opaque.push(draw);
             }
         }
-        // Distance from the eye to each object's world-space bounding-sphere
-        // centre.
         let eye = scene.camera.eye;
-        let distance = |d: &Draw| {
-            let object = &scene.objects[d.object];
-            let (centre, _) = meshes[d.object].bounding_sphere();
-            object
-                .transform
-                .matrix()
-                .transform_point3(centre)
-                .distance(eye)
-        };
+        let distance = |d: &Draw| geometry.bounds[d.object].0.distance(eye);
         // Opaque: grouped by pipeline and texture (fewer binds), front to
         // back within a group, so the depth test rejects hidden fragments
         // before they are shaded.
@@ -168,58 +250,216 @@ impl FramePlan {
         keyed.sort_by(|a, b| b.0.total_cmp(&a.0));
         let transparent: Vec<Draw> = keyed.into_iter().map(|(_, d)| d).collect();
 
-        let mut passes = vec![Pass::Opaque];
-        if !transparent.is_empty() {
-            passes.push(Pass::Transparent);
+        let tile_groups = if deferred {
+            tiles::group_lights(scene, scene.output.width, scene.output.height)
+        } else {
+            Vec::new()
+        };
+        let lighting = if deferred {
+            Lighting::Deferred
+        } else {
+            Lighting::Forward
+        };
+
+        use attachment::*;
+        // LDR output without --hdr: draw straight into the sRGB output.
+        let direct = scene.tone_map.operator == ToneMapOperator::None && !keep_hdr;
+        let target = if direct { OUTPUT } else { HDR };
+        let black = Some([0.0; 4]);
+        let mut attachments = vec![AttachmentDecl {
+            name: OUTPUT,
+            format: OUTPUT_FORMAT,
+            // The tone map writes every pixel; drawn directly, the
+            // background is black.
+            clear: if direct { black } else { None },
+        }];
+        if !direct {
+            attachments.push(AttachmentDecl {
+                name: HDR,
+                format: hdr_format(scene.output.hdr_format),
+                clear: black,
+            });
         }
-        passes.extend([Pass::ToneMap, Pass::Readback]);
+        attachments.push(AttachmentDecl {
+            name: DEPTH,
+            format: DEPTH_FORMAT,
+            // Reversed-Z: the far plane is 0.
+            clear: Some([0.0; 4]),
+        });
+        let mut passes = Vec::new();
+        if deferred {
+            for (name, format) in [
+                (ALBEDO, ALBEDO_FORMAT),
+                (NORMAL, NORMAL_FORMAT),
+                (MATERIAL, MATERIAL_FORMAT),
+            ] {
+                // Written wherever depth is; the lighting pass only reads
+                // pixels that have a surface.
+                attachments.push(AttachmentDecl {
+                    name,
+                    format,
+                    clear: None,
+                });
+            }
+            passes.push(PassDecl::subpass(
+                "gbuffer",
+                vec![target, ALBEDO, NORMAL, MATERIAL],
+                Some((DEPTH, DepthUse::Write)),
+                vec![],
+                passes::surface::create_gbuffer,
+            ));
+            passes.push(PassDecl::subpass(
+                "lighting",
+                vec![target],
+                Some((DEPTH, DepthUse::Test)),
+                vec![ALBEDO, NORMAL, MATERIAL, DEPTH],
+                passes::deferred_lighting::create,
+            ));
+        } else {
+            passes.push(PassDecl::subpass(
+                "opaque",
+                vec![target],
+                Some((DEPTH, DepthUse::Write)),
+                vec![],
+                passes::surface::create_opaque,
+            ));
+        }
+        if !transparent.is_empty() {
+            passes.push(PassDecl::subpass(
+                "transparent",
+                vec![target],
+                Some((DEPTH, DepthUse::Test)),
+                vec![],
+                passes::surface::create_transparent,
+            ));
+        }
+        if !direct {
+            passes.push(PassDecl::subpass(
+                "tonemap",
+                vec![OUTPUT],
+                None,
+                vec![HDR],
+                passes::tonemap::create,
+            ));
+        }
+        let mut reads = vec![OUTPUT];
+        if keep_hdr {
+            reads.push(HDR);
+        }
+        passes.push(PassDecl {
+            name: "readback",
+            io: PassIo::Transfer {
+                reads,
+                writes: vec![],
+            },
+            create: passes::transfer::create,
+        });
         FramePlan {
             width: scene.output.width,
             height: scene.output.height,
             hdr_format: scene.output.hdr_format,
+            lighting,
             opaque,
             transparent,
             textures,
-            keep_hdr,
+            tile_groups,
+            attachments,
             passes,
         }
     }
 
     /// The frame that only tone-maps a given `width`×`height` HDR image:
-    /// no draws, the image copied into a 32-bit float HDR attachment.
+    /// no draws, the image copied into a 32-bit float HDR attachment;
+    /// `keep_hdr` reads that attachment back too.
     pub fn for_hdr_image(width: u32, height: u32, keep_hdr: bool) -> FramePlan {
+        use attachment::*;
+        let mut reads = vec![OUTPUT];
+        if keep_hdr {
+            reads.push(HDR);
+        }
         FramePlan {
             width,
             height,
             hdr_format: HdrFormat::Rgba32F,
+            lighting: Lighting::Forward,
             opaque: Vec::new(),
             transparent: Vec::new(),
             textures: Vec::new(),
-            keep_hdr,
-            passes: vec![Pass::HdrUpload, Pass::ToneMap, Pass::Readback],
+            tile_groups: Vec::new(),
+            attachments: vec![
+                AttachmentDecl {
+                    name: OUTPUT,
+                    format: OUTPUT_FORMAT,
+                    clear: None,
+                },
+                AttachmentDecl {
+                    name: HDR,
+                    format: hdr_format(HdrFormat::Rgba32F),
+                    clear: None,
+                },
+            ],
+            passes: vec![
+                PassDecl {
+                    name: "hdr upload",
+                    io: PassIo::Transfer {
+                        reads: vec![],
+                        writes: vec![HDR],
+                    },
+                    create: passes::transfer::create,
+                },
+                PassDecl::subpass(
+                    "tonemap",
+                    vec![OUTPUT],
+                    None,
+                    vec![HDR],
+                    passes::tonemap::create,
+                ),
+                PassDecl {
+                    name: "readback",
+                    io: PassIo::Transfer {
+                        reads,
+                        writes: vec![],
+                    },
+                    create: passes::transfer::create,
+                },
+            ],
         }
     }
 
-    /// Whether the HDR attachment starts from an uploaded image.
-    pub fn loads_hdr(&self) -> bool {
-        self.passes.contains(&Pass::HdrUpload)
+    /// The pass names, in order.
+    pub fn pass_names(&self) -> Vec<&'static str> {
+        self.passes.iter().map(|p| p.name).collect()
     }
 
-    /// Every distinct pipeline variant the draws use.
-    pub fn pipelines(&self) -> Vec<PipelineKey> {
-        let mut keys: Vec<PipelineKey> = self
-            .opaque
-            .iter()
-            .chain(&self.transparent)
-            .map(|d| d.pipeline)
-            .collect();
-        keys.sort();
-        keys.dedup();
-        keys
+    /// Whether an attachment of this name exists.
+    pub fn has_attachment(&self, name: &str) -> bool {
+        self.attachments.iter().any(|a| a.name == name)
+    }
+
+    /// The attachment called `name`.
+    pub fn attachment(&self, name: &str) -> Option<&AttachmentDecl> {
+        self.attachments.iter().find(|a| a.name == name)
     }
 
     pub fn draws(&self) -> impl Iterator<Item = &Draw> {
         self.opaque.iter().chain(&self.transparent)
+    }
+}
+
+/// The 8-bit output: sRGB, so shaders write linear values.
+pub const OUTPUT_FORMAT: Format = Format::R8G8B8A8_SRGB;
+pub const DEPTH_FORMAT: Format = Format::D32_SFLOAT;
+/// kd can exceed 1 (it is only required to be >= 0), so not UNORM.
+pub const ALBEDO_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+/// Octahedral normal, two signed 16-bit components.
+pub const NORMAL_FORMAT: Format = Format::R16G16_SNORM;
+/// ks (rgb, >= 0, unbounded) and shininess (a).
+pub const MATERIAL_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+
+pub fn hdr_format(format: HdrFormat) -> Format {
+    match format {
+        HdrFormat::Rgba16F => Format::R16G16B16A16_SFLOAT,
+        HdrFormat::Rgba32F => Format::R32G32B32A32_SFLOAT,
     }
 }
 
@@ -233,28 +473,23 @@ mod tests {
             .join("assets/scenes")
             .join(file);
         let scene = Scene::load(&path).unwrap();
-        let meshes: Vec<Mesh> = (0..scene.objects.len())
-            .map(|i| scene.object_mesh(i))
-            .collect();
-        let plan = FramePlan::new(&scene, &meshes, false);
+        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene), false);
         (scene, plan)
     }
 
     #[test]
     fn a_scene_without_transparency_or_textures_gets_neither() {
         let (_, plan) = load("default.toml");
-        assert_eq!(
-            plan.passes,
-            vec![Pass::Opaque, Pass::ToneMap, Pass::Readback]
-        );
+        assert_eq!(plan.pass_names(), vec!["opaque", "tonemap", "readback"]);
         assert!(plan.textures.is_empty());
-        assert!(plan.pipelines().iter().all(|k| !k.textured && !k.blended));
+        assert!(plan.draws().all(|d| !d.pipeline.textured && !d.pipeline.blended));
+        assert!(!plan.has_attachment(attachment::ALBEDO));
     }
 
     #[test]
     fn transparent_draws_are_sorted_back_to_front() {
         let (scene, plan) = load("transparency.toml");
-        assert!(plan.passes.contains(&Pass::Transparent));
+        assert!(plan.pass_names().contains(&"transparent"));
         assert!(plan.transparent.len() >= 2);
         let distance = |d: &Draw| {
             let (c, _) = scene.object_bounds(d.object).unwrap();
@@ -272,7 +507,6 @@ mod tests {
         assert_eq!(plan.textures.len(), 1);
         let textured = plan.draws().filter(|d| d.texture.is_some()).count();
         assert!(textured >= 1);
-        assert!(plan.pipelines().iter().any(|k| k.textured));
     }
 
     #[test]
@@ -285,5 +519,48 @@ mod tests {
             plan.draws().any(|d| d.lights.len() < scene.lights.len()),
             "no light was culled"
         );
+    }
+
+    #[test]
+    fn ldr_output_has_no_hdr_attachment_and_no_tone_map() {
+        let (mut scene, _) = load("default.toml");
+        scene.tone_map.operator = ToneMapOperator::None;
+        let geometry = SceneGeometry::new(&scene);
+        let plan = FramePlan::new(&scene, &geometry, false);
+        assert_eq!(plan.pass_names(), vec!["opaque", "readback"]);
+        assert!(!plan.has_attachment(attachment::HDR));
+        // Reading the HDR image back needs it, and the tone map (a clamp).
+        let plan = FramePlan::new(&scene, &geometry, true);
+        assert_eq!(plan.pass_names(), vec!["opaque", "tonemap", "readback"]);
+        assert!(plan.has_attachment(attachment::HDR));
+    }
+
+    #[test]
+    fn deferred_lighting_adds_the_gbuffer_and_lighting_subpass() {
+        let (mut scene, _) = load("many_lights.toml");
+        scene.output.lighting = Lighting::Deferred;
+        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene), false);
+        assert_eq!(
+            plan.pass_names(),
+            vec!["gbuffer", "lighting", "tonemap", "readback"]
+        );
+        for name in [attachment::ALBEDO, attachment::NORMAL, attachment::MATERIAL] {
+            assert!(plan.has_attachment(name));
+        }
+        // Phong surfaces are lit by the lighting pass, not while drawn.
+        assert!(plan.opaque.iter().all(|d| d.lights.is_empty()));
+        assert!(!plan.tile_groups.is_empty());
+    }
+
+    #[test]
+    fn deferred_without_phong_surfaces_stays_forward() {
+        let (mut scene, _) = load("shading_models.toml");
+        scene.output.lighting = Lighting::Deferred;
+        for m in &mut scene.materials {
+            m.shading = ShadingModel::Toon;
+        }
+        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene), false);
+        assert_eq!(plan.lighting, Lighting::Forward);
+        assert!(!plan.has_attachment(attachment::ALBEDO));
     }
 }

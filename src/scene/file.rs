@@ -19,7 +19,7 @@ use glam::Vec3;
 use serde::Deserialize;
 
 use super::{
-    Camera, HdrFormat, Light, Material, Object, Output, Scene, SceneError, ShadingModel, Shape,
+    Camera, HdrFormat, Light, Lighting, Material, Object, Output, Scene, SceneError, ShadingModel, Shape,
     TextureFilter, ToneMap, ToneMapOperator, Transform,
 };
 use crate::mesh::MAX_SEGMENTS;
@@ -64,6 +64,7 @@ struct OutputFile {
     height: u32,
     hdr_format: HdrFormat,
     texture_filter: TextureFilter,
+    lighting: Lighting,
 }
 
 impl Default for OutputFile {
@@ -73,6 +74,7 @@ impl Default for OutputFile {
             height: 360,
             hdr_format: HdrFormat::Rgba16F,
             texture_filter: TextureFilter::Trilinear,
+            lighting: Lighting::Forward,
         }
     }
 }
@@ -375,6 +377,7 @@ impl Check<'_> {
             height: raw.height,
             hdr_format: raw.hdr_format,
             texture_filter: raw.texture_filter,
+            lighting: raw.lighting,
         })
     }
 

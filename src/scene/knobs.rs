@@ -5,7 +5,7 @@
 //! product of knob values, so adding an approximation to the renderer means
 //! adding one entry to [`KNOBS`] and nothing else.
 
-use super::{HdrFormat, Scene, ShadingModel, TextureFilter};
+use super::{HdrFormat, Lighting, Scene, ShadingModel, TextureFilter};
 
 /// One named setting.
 pub struct Knob {
@@ -182,6 +182,28 @@ pub const KNOBS: &[Knob] = &[
                 TextureFilter::Nearest => "nearest",
                 TextureFilter::Bilinear => "bilinear",
                 TextureFilter::Trilinear => "trilinear",
+            }
+            .into()
+        },
+    },
+    Knob {
+        name: "lighting",
+        // Both evaluate the same formula; forward does it in full float
+        // precision, deferred from a 16-bit G-buffer.
+        best: Best::Fixed("forward"),
+        values: "forward | deferred",
+        apply: |s, v| {
+            s.output.lighting = match v {
+                "forward" => Lighting::Forward,
+                "deferred" => Lighting::Deferred,
+                _ => return Err("expected forward or deferred".into()),
+            };
+            Ok(())
+        },
+        read: |s| {
+            match s.output.lighting {
+                Lighting::Forward => "forward",
+                Lighting::Deferred => "deferred",
             }
             .into()
         },

@@ -27,7 +27,54 @@ pub enum Light {
     },
 }
 
+/// How far a light reaches at a given cutoff: the distances where its
+/// strength ([`Light::strength_at`]) is at least the cutoff.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightRange {
+    /// Every distance (directional lights, a zero cutoff, no fall-off).
+    Everywhere,
+    /// Distances up to this one (>= 0).
+    Within(f32),
+    /// No distance: the light is below the cutoff even at its position.
+    Nowhere,
+}
+
 impl Light {
+    /// Where this light's strength is at least `cutoff`.
+    ///
+    /// With peak colour `P` and `K = P / cutoff`, a point light reaches `d`
+    /// when `c + l d + q d^2 <= K`; the positive root is computed as
+    /// `2 (K - c) / (l + sqrt(l^2 + 4 q (K - c)))`, which stays accurate
+    /// when `q` is tiny (no cancellation) and is `(K - c) / l` at `q = 0`.
+    pub fn range(&self, cutoff: f32) -> LightRange {
+        let Light::Point { attenuation, .. } = *self else {
+            return LightRange::Everywhere;
+        };
+        if cutoff <= 0.0 {
+            return LightRange::Everywhere;
+        }
+        let peak = f64::from(self.color().max_element());
+        let k = peak / f64::from(cutoff);
+        let (c, l, q) = (
+            f64::from(attenuation.x),
+            f64::from(attenuation.y),
+            f64::from(attenuation.z),
+        );
+        if c > k || peak == 0.0 {
+            return LightRange::Nowhere;
+        }
+        if l == 0.0 && q == 0.0 {
+            return LightRange::Everywhere;
+        }
+        let slack = k - c;
+        let d = 2.0 * slack / (l + (l * l + 4.0 * q * slack).sqrt());
+        if d.is_finite() && d < f64::from(f32::MAX) {
+            LightRange::Within(d as f32)
+        } else {
+            LightRange::Everywhere
+        }
+    }
+
     /// The light's colour (times intensity).
     pub fn color(&self) -> Vec3 {
         match *self {

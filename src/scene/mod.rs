@@ -23,7 +23,7 @@ pub use file::{
     DEFAULT_ATTENUATION, DEFAULT_LIGHT_CUTOFF, DEFAULT_TESSELLATION, MAX_OUTPUT_SIZE, MIN_SEGMENTS,
 };
 pub use knobs::{settings as knob_settings, Best, Knob, KnobError, KNOBS};
-pub use lights::Light;
+pub use lights::{Light, LightRange};
 pub use material::{Material, ShadingModel};
 pub use object::{Object, Shape, Transform};
 
@@ -62,6 +62,20 @@ pub struct Output {
     pub hdr_format: HdrFormat,
     /// How base-colour textures are filtered.
     pub texture_filter: TextureFilter,
+    /// Forward or deferred lighting.
+    pub lighting: Lighting,
+}
+
+/// Where lights are evaluated (`[output] lighting`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Lighting {
+    /// Each object's fragments loop over the lights that reach the object
+    /// (`"forward"`, the default).
+    Forward,
+    /// Opaque Phong surfaces write a G-buffer; a full-screen subpass loops
+    /// over the lights that reach each screen tile (`"deferred"`).
+    Deferred,
 }
 
 /// Texture filtering (`[output] texture_filter`).
@@ -110,6 +124,10 @@ pub enum ToneMapOperator {
     Reinhard,
     /// The ACES filmic approximation.
     Aces,
+    /// No curve: exposure, then clamped to [0, 1]. Without `--hdr` the
+    /// scene is then drawn straight into the 8-bit output, with no HDR
+    /// attachment and no tone-map subpass.
+    None,
 }
 
 impl Scene {
@@ -208,6 +226,7 @@ impl Scene {
                 height,
                 hdr_format: HdrFormat::Rgba32F,
                 texture_filter: TextureFilter::Trilinear,
+                lighting: Lighting::Forward,
             },
             camera: Camera {
                 eye: Vec3::Z,
@@ -280,14 +299,23 @@ impl Scene {
     /// World-space bounding sphere `(centre, radius)` of object `index`: its
     /// mesh's bounding sphere moved by the object transform, the radius
     /// scaled by the largest scale component. `None` if out of range.
+    ///
+    /// This tessellates the object; the renderer builds each mesh once
+    /// (`render::SceneGeometry`) and uses [`Scene::world_bounds`].
     pub fn object_bounds(&self, index: usize) -> Option<(Vec3, f32)> {
-        let object = self.objects.get(index)?;
-        let (centre, radius) = self.object_mesh(index).bounding_sphere();
-        let transform = &object.transform;
-        Some((
+        self.objects.get(index)?;
+        Some(self.world_bounds(index, &self.object_mesh(index)))
+    }
+
+    /// The world-space bounding sphere of object `index` given its mesh in
+    /// object space. Panics if `index` is out of range.
+    pub fn world_bounds(&self, index: usize, mesh: &Mesh) -> (Vec3, f32) {
+        let (centre, radius) = mesh.bounding_sphere();
+        let transform = &self.objects[index].transform;
+        (
             transform.matrix().transform_point3(centre),
             radius * transform.max_scale(),
-        ))
+        )
     }
 
     /// Indices into [`Scene::lights`] of the lights that can noticeably light
@@ -297,9 +325,14 @@ impl Scene {
     /// object's world-space bounding sphere (0 inside it). An object index
     /// out of range gives an empty list.
     pub fn lights_reaching(&self, object: usize) -> Vec<usize> {
-        let Some((centre, radius)) = self.object_bounds(object) else {
-            return Vec::new();
-        };
+        match self.object_bounds(object) {
+            Some((centre, radius)) => self.lights_reaching_sphere(centre, radius),
+            None => Vec::new(),
+        }
+    }
+
+    /// [`Scene::lights_reaching`] for the sphere `(centre, radius)`.
+    pub fn lights_reaching_sphere(&self, centre: Vec3, radius: f32) -> Vec<usize> {
         self.lights
             .iter()
             .enumerate()

@@ -4,8 +4,9 @@
 //! to; `CommandBuffer` owns its own pool, so its lifetime is simple.
 
 use super::descriptors::DescriptorSet;
+use super::image::ImageState;
 use super::{
-    Buffer, Context, Framebuffer, GraphicsPipeline, Image, PipelineLayout, RenderPass,
+    Buffer, Context, GraphRenderPass, GraphicsPipeline, Image, PipelineLayout,
     TimestampQueries, VkError,
 };
 use ash::vk;
@@ -58,9 +59,54 @@ pub struct CommandBuffer {
     pub(crate) handle: vk::CommandBuffer,
 }
 
-/// One image layout transition or memory dependency on an image.
+/// What the next command does with an image; `CommandBuffer::transition`
+/// derives the layout and the barrier from it and the image's state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageUse {
+    TransferSrc,
+    TransferDst,
+    /// Sampled by fragment shaders.
+    FragmentSampled,
+    /// Written as a colour attachment (e.g. loaded by a render pass).
+    ColourAttachment,
+}
+
+impl ImageUse {
+    fn layout_stage_access(
+        self,
+    ) -> (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags) {
+        match self {
+            ImageUse::TransferSrc => (
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_READ,
+            ),
+            ImageUse::TransferDst => (
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_WRITE,
+            ),
+            ImageUse::FragmentSampled => (
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                vk::PipelineStageFlags::FRAGMENT_SHADER,
+                vk::AccessFlags::SHADER_READ,
+            ),
+            ImageUse::ColourAttachment => (
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                vk::AccessFlags::COLOR_ATTACHMENT_READ | vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+            ),
+        }
+    }
+
+    fn writes(self) -> bool {
+        matches!(self, ImageUse::TransferDst | ImageUse::ColourAttachment)
+    }
+}
+
+/// One image layout transition or memory dependency on some mip levels.
 #[derive(Clone, Copy, Debug)]
-pub struct ImageBarrier {
+struct ImageBarrier {
     pub old_layout: vk::ImageLayout,
     pub new_layout: vk::ImageLayout,
     pub src_stage: vk::PipelineStageFlags,
@@ -136,7 +182,70 @@ impl CommandBuffer {
         fence.wait_and_reset()
     }
 
-    pub fn image_barrier(&self, image: &Image, b: ImageBarrier) {
+    /// Makes `image` ready for `next`: the one place barriers outside render
+    /// passes come from. The barrier waits for the image's last recorded use
+    /// and moves it to the layout `next` needs; none is recorded when the
+    /// image is already in that layout, nothing wrote it since, and `next`
+    /// only reads.
+    pub fn transition(&self, image: &Image, next: ImageUse) {
+        let state = image.state.get();
+        let (layout, stage, access) = next.layout_stage_access();
+        let needed = state.layout != layout || !state.pending_writes.is_empty() || next.writes();
+        if needed {
+            self.image_barrier(
+                image,
+                ImageBarrier {
+                    old_layout: state.layout,
+                    new_layout: layout,
+                    src_stage: state.stage,
+                    src_access: state.pending_writes,
+                    dst_stage: stage,
+                    dst_access: access,
+                    base_mip: 0,
+                    mip_count: image.desc.mip_levels,
+                },
+            );
+        }
+        self.set_state(image, next);
+    }
+
+    /// Like [`transition`](Self::transition), but the current contents are
+    /// not needed (they are about to be overwritten). In a frame that is
+    /// recorded once and submitted many times, the previous submission's
+    /// use of the image is not known at record time, so this waits for
+    /// every earlier command.
+    pub fn transition_discarding(&self, image: &Image, next: ImageUse) {
+        let (layout, stage, access) = next.layout_stage_access();
+        self.image_barrier(
+            image,
+            ImageBarrier {
+                old_layout: vk::ImageLayout::UNDEFINED,
+                new_layout: layout,
+                src_stage: vk::PipelineStageFlags::ALL_COMMANDS,
+                src_access: vk::AccessFlags::MEMORY_WRITE,
+                dst_stage: stage,
+                dst_access: access,
+                base_mip: 0,
+                mip_count: image.desc.mip_levels,
+            },
+        );
+        self.set_state(image, next);
+    }
+
+    fn set_state(&self, image: &Image, now: ImageUse) {
+        let (layout, stage, access) = now.layout_stage_access();
+        image.state.set(ImageState {
+            layout,
+            stage,
+            pending_writes: if now.writes() {
+                access & (vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
+            } else {
+                vk::AccessFlags::empty()
+            },
+        });
+    }
+
+    fn image_barrier(&self, image: &Image, b: ImageBarrier) {
         let mut range = image.full_range();
         range.base_mip_level = b.base_mip;
         range.level_count = b.mip_count;
@@ -163,9 +272,10 @@ impl CommandBuffer {
         };
     }
 
-    /// Copies mip level 0 of a colour image (in TRANSFER_SRC_OPTIMAL) into
-    /// a buffer, tightly packed.
+    /// Copies mip level 0 of a colour image into a buffer, tightly packed
+    /// (moving the image to TRANSFER_SRC_OPTIMAL first if needed).
     pub fn copy_image_to_buffer(&self, image: &Image, buffer: &Buffer) {
+        self.transition(image, ImageUse::TransferSrc);
         let region = vk::BufferImageCopy::default()
             .image_subresource(vk::ImageSubresourceLayers {
                 aspect_mask: vk::ImageAspectFlags::COLOR,
@@ -191,9 +301,10 @@ impl CommandBuffer {
         };
     }
 
-    /// Copies a tightly packed buffer into mip level 0 of an image in
-    /// TRANSFER_DST_OPTIMAL.
+    /// Copies a tightly packed buffer into mip level 0 of an image, whose
+    /// earlier contents are discarded.
     pub fn copy_buffer_to_image(&self, buffer: &Buffer, image: &Image) {
+        self.transition_discarding(image, ImageUse::TransferDst);
         let region = vk::BufferImageCopy::default()
             .image_subresource(vk::ImageSubresourceLayers {
                 aspect_mask: vk::ImageAspectFlags::COLOR,
@@ -218,9 +329,9 @@ impl CommandBuffer {
         };
     }
 
-    /// Fills every mip level below 0 by successive linear blits; level 0
-    /// must be in TRANSFER_DST_OPTIMAL, and on return every level is in
-    /// SHADER_READ_ONLY_OPTIMAL.
+    /// Fills every mip level below 0 by successive linear blits from level
+    /// 0 (just written by a copy, every level in TRANSFER_DST_OPTIMAL); on
+    /// return every level is ready for fragment-shader sampling.
     pub fn generate_mipmaps(&self, image: &Image) {
         let (mut w, mut h) = (image.desc.width as i32, image.desc.height as i32);
         let levels = image.desc.mip_levels;
@@ -292,23 +403,33 @@ impl CommandBuffer {
                 mip_count: 1,
             },
         );
+        image.state.set(ImageState {
+            layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            stage: vk::PipelineStageFlags::FRAGMENT_SHADER,
+            pending_writes: vk::AccessFlags::empty(),
+        });
     }
 
-    pub fn begin_render_pass(
-        &self,
-        pass: &RenderPass,
-        framebuffer: &Framebuffer,
-        clears: &[vk::ClearValue],
-    ) {
+    /// Begins `pass` (with a viewport and scissor over the whole
+    /// framebuffer). A loaded attachment is first moved to the layout its
+    /// first subpass uses, after whatever wrote it.
+    pub fn begin_render_pass(&self, pass: &GraphRenderPass) {
+        for (image, initial) in pass.images.iter().zip(&pass.initial_layouts) {
+            if *initial == vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL {
+                self.transition(image, ImageUse::ColourAttachment);
+            }
+        }
+        let extent = pass.framebuffer.extent;
         let info = vk::RenderPassBeginInfo::default()
-            .render_pass(pass.handle)
-            .framebuffer(framebuffer.handle)
+            .render_pass(pass.render_pass.handle)
+            .framebuffer(pass.framebuffer.handle)
             .render_area(vk::Rect2D {
                 offset: vk::Offset2D::default(),
-                extent: framebuffer.extent,
+                extent,
             })
-            .clear_values(clears);
-        // SAFETY: recording outside a render pass; framebuffer matches pass.
+            .clear_values(&pass.clears);
+        // SAFETY: recording outside a render pass; the framebuffer was made
+        // for this pass, with one clear value per attachment.
         unsafe {
             self.ctx
                 .device
@@ -317,14 +438,14 @@ impl CommandBuffer {
         let viewport = vk::Viewport {
             x: 0.0,
             y: 0.0,
-            width: framebuffer.extent.width as f32,
-            height: framebuffer.extent.height as f32,
+            width: extent.width as f32,
+            height: extent.height as f32,
             min_depth: 0.0,
             max_depth: 1.0,
         };
         let scissor = vk::Rect2D {
             offset: vk::Offset2D::default(),
-            extent: framebuffer.extent,
+            extent,
         };
         // SAFETY: every pipeline declares viewport and scissor dynamic.
         unsafe {
@@ -344,9 +465,29 @@ impl CommandBuffer {
         };
     }
 
-    pub fn end_render_pass(&self) {
-        // SAFETY: inside the last subpass of a render pass.
+    /// Ends `pass`; its attachments are then in their final layouts. A
+    /// stored attachment's writes were made visible to transfer reads by
+    /// the pass's own outgoing dependency.
+    pub fn end_render_pass(&self, pass: &GraphRenderPass) {
+        // SAFETY: inside the last subpass of this render pass.
         unsafe { self.ctx.device.cmd_end_render_pass(self.handle) };
+        for (image, layout) in pass.images.iter().zip(&pass.final_layouts) {
+            let state = if *layout == vk::ImageLayout::TRANSFER_SRC_OPTIMAL {
+                ImageState {
+                    layout: *layout,
+                    stage: vk::PipelineStageFlags::TRANSFER,
+                    pending_writes: vk::AccessFlags::empty(),
+                }
+            } else {
+                ImageState {
+                    layout: *layout,
+                    stage: vk::PipelineStageFlags::ALL_GRAPHICS,
+                    pending_writes: vk::AccessFlags::COLOR_ATTACHMENT_WRITE
+                        | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE,
+                }
+            };
+            image.state.set(state);
+        }
     }
 
     pub fn bind_pipeline(&self, pipeline: &GraphicsPipeline) {
@@ -397,6 +538,15 @@ impl CommandBuffer {
                 vk::IndexType::UINT32,
             );
         }
+    }
+
+    pub fn bind_vertex_buffer(&self, buffer: &Buffer, offset: u64) {
+        // SAFETY: recording; the buffer holds vertex data from `offset`.
+        unsafe {
+            self.ctx
+                .device
+                .cmd_bind_vertex_buffers(self.handle, 0, &[buffer.handle], &[offset])
+        };
     }
 
     pub fn draw_indexed(&self, index_count: u32) {

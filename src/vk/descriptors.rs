@@ -155,12 +155,18 @@ impl DescriptorSet {
         unsafe { self.ctx.device.update_descriptor_sets(&[write], &[]) };
     }
 
-    /// Points `binding` at an input attachment read in a later subpass.
+    /// Points `binding` at an input attachment read in a later subpass (in
+    /// the read-only layout the render graph gives input attachments).
     pub fn write_input_attachment(&self, binding: u32, image: &Image) {
+        let image_layout = if image.desc.aspect.contains(vk::ImageAspectFlags::DEPTH) {
+            vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL
+        } else {
+            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL
+        };
         let infos = [vk::DescriptorImageInfo {
             sampler: vk::Sampler::null(),
             image_view: image.view,
-            image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            image_layout,
         }];
         let write = vk::WriteDescriptorSet::default()
             .dst_set(self.handle)

@@ -4,6 +4,7 @@ use super::{Context, VkError};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
+use std::cell::Cell;
 use std::sync::Arc;
 
 /// What to create: a 2D image with one view over all its mip levels.
@@ -17,13 +18,38 @@ pub struct ImageDesc {
     pub aspect: vk::ImageAspectFlags,
 }
 
-/// A device-local 2D image with its view.
+/// Where an image stands in the command stream being recorded: its layout,
+/// and the last stages and accesses that touched it, so the next use can
+/// derive its barrier (see `CommandBuffer::transition`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct ImageState {
+    pub layout: vk::ImageLayout,
+    pub stage: vk::PipelineStageFlags,
+    /// Writes not yet made visible to later uses (empty after reads, or when
+    /// a dependency already made them visible).
+    pub pending_writes: vk::AccessFlags,
+}
+
+impl ImageState {
+    pub(crate) const UNDEFINED: ImageState = ImageState {
+        layout: vk::ImageLayout::UNDEFINED,
+        stage: vk::PipelineStageFlags::TOP_OF_PIPE,
+        pending_writes: vk::AccessFlags::empty(),
+    };
+}
+
+/// A device-local 2D image with its view, which knows its current layout
+/// while commands are recorded.
 pub struct Image {
     ctx: Arc<Context>,
     pub(crate) handle: vk::Image,
     pub(crate) view: vk::ImageView,
     allocation: Option<Allocation>,
     pub desc: ImageDesc,
+    /// The state after the commands recorded so far (every mip level
+    /// together; mip generation handles levels itself and leaves them
+    /// uniform).
+    pub(crate) state: Cell<ImageState>,
 }
 
 impl Image {
@@ -53,6 +79,7 @@ impl Image {
             view: vk::ImageView::null(),
             allocation: None,
             desc,
+            state: Cell::new(ImageState::UNDEFINED),
         };
         // SAFETY: handle was created on this device.
         let requirements = unsafe { ctx.device.get_image_memory_requirements(handle) };
@@ -78,6 +105,11 @@ impl Image {
         // SAFETY: the image is bound to memory and the range is within it.
         image.view = unsafe { ctx.device.create_image_view(&view_info, None) }?;
         Ok(image)
+    }
+
+    /// The layout the recorded commands leave the image in.
+    pub fn layout(&self) -> vk::ImageLayout {
+        self.state.get().layout
     }
 
     /// Every mip level and the one layer.

@@ -11,25 +11,26 @@ mod descriptors;
 mod image;
 mod pipeline;
 mod query;
-mod render_pass;
+mod render_graph;
 pub mod validation;
 
 pub use ash::vk::{
-    AccessFlags, BlendFactor, CullModeFlags, DescriptorType, Format, ImageAspectFlags, ImageLayout,
+    AccessFlags, CullModeFlags, DescriptorType, Format, ImageAspectFlags, ImageLayout,
     ImageUsageFlags, PipelineStageFlags, ShaderStageFlags,
 };
 pub use buffer::{Buffer, BufferUsage};
-pub use commands::ImageBarrier;
-pub use commands::{CommandBuffer, Fence};
+pub use commands::{CommandBuffer, Fence, ImageUse};
 pub use context::{Context, ContextOptions, DeviceInfo};
 pub use descriptors::{DescriptorBinding, DescriptorPool, DescriptorSet, DescriptorSetLayout};
 pub use image::{Image, ImageDesc, Sampler, SamplerFilter};
 pub use pipeline::{
-    GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, ShaderModule, VertexAttribute,
+    Blend, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, ShaderModule, VertexAttribute,
 };
 pub use query::TimestampQueries;
-pub use render_pass::{Framebuffer, RenderPass, RenderPassDesc};
-pub use render_pass::{DEPTH_ATTACHMENT, HDR_ATTACHMENT, OUTPUT_ATTACHMENT};
+pub use render_graph::{
+    AttachmentSpec, AttachmentStart, DepthUse, Framebuffer, GraphRenderPass, RenderPass,
+    SubpassSpec,
+};
 
 /// Errors from the Vulkan layer.
 #[derive(Debug, thiserror::Error)]
@@ -56,6 +57,8 @@ pub enum VkError {
     Api(#[from] ash::vk::Result),
     #[error("memory allocation failed: {0}")]
     Allocation(#[from] gpu_allocator::AllocationError),
+    #[error("frame description: {0}")]
+    Graph(String),
     #[error("invalid SPIR-V: {0}")]
     Spirv(String),
 }

@@ -78,11 +78,23 @@ pub struct GraphicsPipelineDesc<'a> {
     pub vertex_stride: u32,
     pub vertex_attributes: &'a [VertexAttribute],
     pub cull_mode: vk::CullModeFlags,
-    pub depth_test: bool,
+    /// The depth test's comparison, `None` for no test.
+    pub depth_test: Option<vk::CompareOp>,
     pub depth_write: bool,
-    /// Straight alpha blending (src-alpha, one-minus-src-alpha).
-    pub alpha_blend: bool,
+    /// One blend state per colour target of the subpass, in order.
+    pub blend: &'a [Blend],
     pub subpass: u32,
+}
+
+/// How a pipeline writes one colour target.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Blend {
+    /// The fragment's colour replaces the target's.
+    Replace,
+    /// Straight alpha blending (src-alpha, one-minus-src-alpha).
+    Alpha,
+    /// Added to the target (light accumulation).
+    Add,
 }
 
 pub struct GraphicsPipeline {
@@ -163,26 +175,37 @@ impl GraphicsPipeline {
             .line_width(1.0);
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        // Reversed-Z: nearer surfaces have larger depth.
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(desc.depth_test)
+            .depth_test_enable(desc.depth_test.is_some())
             .depth_write_enable(desc.depth_write)
-            .depth_compare_op(vk::CompareOp::GREATER);
-        let blend_attachment = if desc.alpha_blend {
-            vk::PipelineColorBlendAttachmentState::default()
-                .blend_enable(true)
-                .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
-                .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
-                .color_blend_op(vk::BlendOp::ADD)
-                .src_alpha_blend_factor(vk::BlendFactor::ONE)
-                .dst_alpha_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
-                .alpha_blend_op(vk::BlendOp::ADD)
-                .color_write_mask(vk::ColorComponentFlags::RGBA)
-        } else {
-            vk::PipelineColorBlendAttachmentState::default()
-                .color_write_mask(vk::ColorComponentFlags::RGBA)
-        };
-        let blend_attachments = [blend_attachment];
+            .depth_compare_op(desc.depth_test.unwrap_or(vk::CompareOp::ALWAYS));
+        let blend_attachments: Vec<vk::PipelineColorBlendAttachmentState> = desc
+            .blend
+            .iter()
+            .map(|b| {
+                let state = vk::PipelineColorBlendAttachmentState::default()
+                    .color_write_mask(vk::ColorComponentFlags::RGBA);
+                match b {
+                    Blend::Replace => state,
+                    Blend::Alpha => state
+                        .blend_enable(true)
+                        .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
+                        .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+                        .color_blend_op(vk::BlendOp::ADD)
+                        .src_alpha_blend_factor(vk::BlendFactor::ONE)
+                        .dst_alpha_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+                        .alpha_blend_op(vk::BlendOp::ADD),
+                    Blend::Add => state
+                        .blend_enable(true)
+                        .src_color_blend_factor(vk::BlendFactor::ONE)
+                        .dst_color_blend_factor(vk::BlendFactor::ONE)
+                        .color_blend_op(vk::BlendOp::ADD)
+                        .src_alpha_blend_factor(vk::BlendFactor::ZERO)
+                        .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                        .alpha_blend_op(vk::BlendOp::ADD),
+                }
+            })
+            .collect();
         let blend =
             vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];

@@ -1,0 +1,24 @@
+// The per-frame block and the light layout, shared by every shader that
+// lights surfaces. Layouts mirror src/render/gpu_types.rs.
+
+struct Light {
+    vec4 position;     // xyz: position (w = 1) or unit direction towards the light (w = 0)
+    vec4 color;        // rgb: emitted colour times intensity
+    vec4 attenuation;  // x: constant, y: linear, z: quadratic (point lights only)
+};
+
+layout(set = 0, binding = 0) uniform Frame {
+    mat4 view_projection;
+    vec4 camera_position;  // xyz
+    vec4 ambient;          // rgb: La
+    mat4 inverse_view_projection;
+    vec4 viewport;         // width, height, 1/width, 1/height
+} frame;
+
+// The number of lights a draw evaluates, a specialization constant: the
+// light loop then has a fixed trip count the driver can unroll, and every
+// light is read at a constant offset.
+layout(constant_id = 1) const uint LIGHT_COUNT = 0u;
+// The declared length of the light array: LIGHT_COUNT, but at least 1, since
+// a GLSL array cannot be empty.
+layout(constant_id = 2) const uint LIGHT_ARRAY_LENGTH = 1u;

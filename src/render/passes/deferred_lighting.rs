@@ -1,0 +1,205 @@
+//! The deferred lighting subpass: for each group of screen tiles lit by the
+//! same lights (`render::tiles`), one draw of the group's tiles whose
+//! fragment shader reads the G-buffer and depth as input attachments,
+//! rebuilds the position from depth and adds exactly those lights to the
+//! colour target (additive blending over the ambient term the G-buffer
+//! pass wrote). As for forward draws, the light count is a specialization
+//! constant, so each group's loop has a fixed trip count.
+//!
+//! The tiles are drawn at the far plane with a LESS test against the
+//! stored (reversed-Z) depth, so pixels without a surface are never shaded.
+
+use super::{FrameResources, PassSetup, RecordPass};
+use crate::render::gpu_types::GpuLight;
+use crate::render::plan::attachment;
+use crate::render::scene_resources::{gpu_light, pack_blocks};
+use crate::render::RenderError;
+use crate::shaders;
+use crate::vk::{
+    Blend, Buffer, BufferUsage, CommandBuffer, CullModeFlags, DescriptorBinding, DescriptorPool,
+    DescriptorSet, DescriptorSetLayout, DescriptorType, Format, GraphicsPipeline,
+    GraphicsPipelineDesc, PipelineLayout, ShaderModule, ShaderStageFlags, VertexAttribute,
+};
+use ash::vk::CompareOp;
+use std::collections::BTreeMap;
+
+/// One draw: a tile group's vertices and lights.
+struct GroupDraw {
+    light_count: u32,
+    vertex_offset: u64,
+    vertex_count: u32,
+    block_offset: u32,
+}
+
+/// Fields drop in order: sets before their pool, pipelines before layouts.
+pub struct DeferredLightingPass {
+    groups: Vec<GroupDraw>,
+    lights_set: DescriptorSet,
+    inputs_set: DescriptorSet,
+    _pool: DescriptorPool,
+    pipelines: BTreeMap<u32, GraphicsPipeline>,
+    layout: PipelineLayout,
+    _lights_layout: DescriptorSetLayout,
+    _inputs_layout: DescriptorSetLayout,
+    vertices: Buffer,
+    _light_blocks: Buffer,
+}
+
+pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+    let ctx = setup.ctx;
+    let resources = setup.scene_resources()?;
+    let plan = setup.plan;
+    let (w, h) = (plan.width as f32, plan.height as f32);
+
+    // Each group's tiles as two triangles per rectangle, in NDC, and its
+    // lights as one block.
+    let mut vertex_data: Vec<[f32; 2]> = Vec::new();
+    let mut blocks = Vec::new();
+    let mut groups = Vec::new();
+    for group in &plan.tile_groups {
+        let first = vertex_data.len();
+        for r in &group.rects {
+            let x0 = r.x0 as f32 / w * 2.0 - 1.0;
+            let x1 = r.x1 as f32 / w * 2.0 - 1.0;
+            let y0 = r.y0 as f32 / h * 2.0 - 1.0;
+            let y1 = r.y1 as f32 / h * 2.0 - 1.0;
+            vertex_data.extend([[x0, y0], [x1, y0], [x1, y1], [x0, y0], [x1, y1], [x0, y1]]);
+        }
+        let lights: Vec<GpuLight> = group
+            .lights
+            .iter()
+            .map(|&l| gpu_light(&setup.scene.lights[l]))
+            .collect();
+        blocks.push(bytemuck::cast_slice(&lights).to_vec());
+        groups.push(GroupDraw {
+            light_count: group.lights.len() as u32,
+            vertex_offset: (first * std::mem::size_of::<[f32; 2]>()) as u64,
+            vertex_count: (vertex_data.len() - first) as u32,
+            block_offset: 0,
+        });
+    }
+    let (block_bytes, offsets, block_range) =
+        pack_blocks(ctx, &blocks, 0, |i| format!("screen tile group {i}"))?;
+    for (g, offset) in groups.iter_mut().zip(offsets) {
+        g.block_offset = offset;
+    }
+    if vertex_data.is_empty() {
+        // Buffers cannot be empty; with no lit tile there is nothing to draw.
+        vertex_data.push([0.0; 2]);
+    }
+    let vertices = Buffer::with_data(
+        ctx,
+        "light tiles",
+        bytemuck::cast_slice(&vertex_data),
+        BufferUsage::Geometry,
+    )?;
+    let light_blocks = Buffer::with_data(ctx, "tile lights", &block_bytes, BufferUsage::Uniform)?;
+
+    let lights_layout = DescriptorSetLayout::new(
+        ctx,
+        &[DescriptorBinding {
+            binding: 0,
+            kind: DescriptorType::UNIFORM_BUFFER_DYNAMIC,
+            stages: ShaderStageFlags::FRAGMENT,
+        }],
+    )?;
+    let input_names = [
+        attachment::ALBEDO,
+        attachment::NORMAL,
+        attachment::MATERIAL,
+        attachment::DEPTH,
+    ];
+    let input_bindings: Vec<DescriptorBinding> = (0..input_names.len() as u32)
+        .map(|binding| DescriptorBinding {
+            binding,
+            kind: DescriptorType::INPUT_ATTACHMENT,
+            stages: ShaderStageFlags::FRAGMENT,
+        })
+        .collect();
+    let inputs_layout = DescriptorSetLayout::new(ctx, &input_bindings)?;
+    let pool = DescriptorPool::for_layouts(ctx, &[&lights_layout, &inputs_layout])?;
+    let lights_set = pool.allocate(&lights_layout)?;
+    lights_set.write_buffer(
+        0,
+        DescriptorType::UNIFORM_BUFFER_DYNAMIC,
+        &light_blocks,
+        block_range,
+    );
+    let inputs_set = pool.allocate(&inputs_layout)?;
+    for (binding, name) in input_names.iter().enumerate() {
+        inputs_set.write_input_attachment(binding as u32, setup.frame.attachments.get(name)?);
+    }
+    let layout = PipelineLayout::new(
+        ctx,
+        &[&resources.frame_layout, &lights_layout, &inputs_layout],
+    )?;
+
+    let vert = ShaderModule::new(ctx, shaders::TILES_VERT.base())?;
+    let frag = ShaderModule::new(ctx, shaders::DEFERRED_LIGHTING_FRAG.base())?;
+    let attributes = [VertexAttribute {
+        location: 0,
+        format: Format::R32G32_SFLOAT,
+        offset: 0,
+    }];
+    let mut pipelines = BTreeMap::new();
+    for g in &groups {
+        if pipelines.contains_key(&g.light_count) {
+            continue;
+        }
+        let pipeline = GraphicsPipeline::new(
+            ctx,
+            &layout,
+            &setup.render_pass()?.render_pass,
+            &GraphicsPipelineDesc {
+                vertex_shader: &vert,
+                fragment_shader: &frag,
+                specialization: &[(1, g.light_count), (2, g.light_count.max(1))],
+                vertex_stride: std::mem::size_of::<[f32; 2]>() as u32,
+                vertex_attributes: &attributes,
+                cull_mode: CullModeFlags::NONE,
+                // Tiles at depth 0 (the far plane): only pixels whose stored
+                // depth is nearer, i.e. that hold a surface, pass.
+                depth_test: Some(CompareOp::LESS),
+                depth_write: false,
+                blend: &[Blend::Add],
+                subpass: setup.subpass,
+            },
+        )?;
+        pipelines.insert(g.light_count, pipeline);
+    }
+    Ok(Box::new(DeferredLightingPass {
+        groups,
+        lights_set,
+        inputs_set,
+        _pool: pool,
+        pipelines,
+        layout,
+        _lights_layout: lights_layout,
+        _inputs_layout: inputs_layout,
+        vertices,
+        _light_blocks: light_blocks,
+    }))
+}
+
+impl RecordPass for DeferredLightingPass {
+    fn record(&self, cmd: &CommandBuffer, frame: &FrameResources<'_>) -> Result<(), RenderError> {
+        let Some(resources) = frame.scene else {
+            return Ok(());
+        };
+        let mut bound = None;
+        for g in &self.groups {
+            if bound != Some(g.light_count) {
+                cmd.bind_pipeline(&self.pipelines[&g.light_count]);
+                if bound.is_none() {
+                    cmd.bind_descriptor_set(&self.layout, 0, &resources.frame_set, &[]);
+                    cmd.bind_descriptor_set(&self.layout, 2, &self.inputs_set, &[]);
+                }
+                bound = Some(g.light_count);
+            }
+            cmd.bind_descriptor_set(&self.layout, 1, &self.lights_set, &[g.block_offset]);
+            cmd.bind_vertex_buffer(&self.vertices, g.vertex_offset);
+            cmd.draw(g.vertex_count);
+        }
+        Ok(())
+    }
+}

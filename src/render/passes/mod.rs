@@ -1,0 +1,102 @@
+//! The passes a frame is made of, one small type per file, each with a
+//! `create` (its pipelines, descriptor sets and own resources, from what the
+//! plan declared) and a `record` (its commands, recorded once).
+//!
+//! The plan names each pass's `create` function in its [`PassDecl`]
+//! (`crate::render::plan::PassDecl`); the renderer begins the render pass
+//! before the first subpass, moves to the next subpass between subpasses
+//! and ends it after the last, so no pass knows its subpass index or its
+//! neighbours. Adding a pass is a new file here and one entry in
+//! `FramePlan::new`.
+
+pub mod deferred_lighting;
+pub mod surface;
+pub mod tonemap;
+pub mod transfer;
+
+use super::plan::{FramePlan, PassDecl};
+use super::scene_resources::SceneResources;
+use super::{Pixels, RenderError};
+use crate::scene::Scene;
+use crate::vk::{Buffer, CommandBuffer, Context, GraphRenderPass, Image};
+use std::sync::Arc;
+
+/// Creates a pass's GPU objects.
+pub type PassCreate = fn(&PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>;
+
+/// A created pass.
+pub trait RecordPass {
+    /// Records the pass's commands (inside its subpass for subpasses).
+    fn record(&self, cmd: &CommandBuffer, frame: &FrameResources<'_>) -> Result<(), RenderError>;
+
+    /// The buffer an attachment is read back into, for passes that copy
+    /// attachments out.
+    fn readback(&self, _attachment: &str) -> Option<&Buffer> {
+        None
+    }
+}
+
+/// The frame's attachments by name.
+pub struct Attachments<'a> {
+    pub names: Vec<&'static str>,
+    pub images: &'a [Image],
+}
+
+impl Attachments<'_> {
+    pub fn get(&self, name: &str) -> Result<&Image, RenderError> {
+        self.names
+            .iter()
+            .position(|n| *n == name)
+            .map(|i| &self.images[i])
+            .ok_or_else(|| {
+                RenderError::Vulkan(crate::vk::VkError::Graph(format!(
+                    "no attachment called '{name}' in this frame"
+                )))
+            })
+    }
+}
+
+/// What a pass records against: resources shared by several passes.
+pub struct FrameResources<'a> {
+    pub attachments: Attachments<'a>,
+    /// Geometry, per-frame and per-object uniforms and textures; present
+    /// when the plan draws objects.
+    pub scene: Option<&'a SceneResources>,
+}
+
+/// What a pass is created from.
+pub struct PassSetup<'a> {
+    pub ctx: &'a Arc<Context>,
+    pub scene: &'a Scene,
+    pub plan: &'a FramePlan,
+    /// This pass's declaration.
+    pub decl: &'a PassDecl,
+    /// The frame's render pass, and this pass's subpass index in it.
+    pub render_pass: Option<&'a GraphRenderPass>,
+    pub subpass: u32,
+    pub frame: &'a FrameResources<'a>,
+    /// The image an upload pass copies into the HDR attachment.
+    pub hdr_input: Option<&'a Pixels<f32>>,
+}
+
+impl PassSetup<'_> {
+    /// The render pass, for subpasses.
+    pub fn render_pass(&self) -> Result<&GraphRenderPass, RenderError> {
+        self.render_pass.ok_or_else(|| {
+            RenderError::Vulkan(crate::vk::VkError::Graph(format!(
+                "pass '{}' is not a subpass",
+                self.decl.name
+            )))
+        })
+    }
+
+    /// The shared scene resources, for passes that draw objects.
+    pub fn scene_resources(&self) -> Result<&SceneResources, RenderError> {
+        self.frame.scene.ok_or_else(|| {
+            RenderError::Vulkan(crate::vk::VkError::Graph(format!(
+                "pass '{}' draws objects but the frame has no scene resources",
+                self.decl.name
+            )))
+        })
+    }
+}

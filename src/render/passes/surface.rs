@@ -1,0 +1,169 @@
+//! Surface passes: draw the scene's objects. Three declared forms share
+//! this type:
+//! - `opaque`: forward shading into the colour target, depth tested and
+//!   written;
+//! - `transparent`: forward shading blended over the colour target, depth
+//!   tested but not written (the draws are sorted back to front instead);
+//! - `gbuffer`: opaque surfaces for deferred lighting, writing the ambient
+//!   term to the colour target and the G-buffer targets (shader feature
+//!   `GBUFFER`).
+
+use super::{FrameResources, PassSetup, RecordPass};
+use crate::mesh::Vertex;
+use crate::render::plan::{Draw, PipelineKey};
+use crate::render::RenderError;
+use crate::shaders;
+use crate::vk::{
+    Blend, CommandBuffer, CullModeFlags, Format, GraphicsPipeline, GraphicsPipelineDesc,
+    ShaderModule, VertexAttribute,
+};
+use ash::vk::CompareOp;
+use std::collections::BTreeMap;
+
+/// Which form of the pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Form {
+    Opaque,
+    Transparent,
+    GBuffer,
+}
+
+pub struct SurfacePass {
+    draws: Vec<Draw>,
+    pipelines: BTreeMap<PipelineKey, GraphicsPipeline>,
+}
+
+pub fn create_opaque(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+    SurfacePass::create(setup, Form::Opaque)
+}
+
+pub fn create_transparent(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+    SurfacePass::create(setup, Form::Transparent)
+}
+
+pub fn create_gbuffer(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+    SurfacePass::create(setup, Form::GBuffer)
+}
+
+impl SurfacePass {
+    fn create(setup: &PassSetup<'_>, form: Form) -> Result<Box<dyn RecordPass>, RenderError> {
+        let draws = match form {
+            Form::Transparent => setup.plan.transparent.clone(),
+            Form::Opaque | Form::GBuffer => setup.plan.opaque.clone(),
+        };
+        let mut pipelines = BTreeMap::new();
+        if !draws.is_empty() {
+            let resources = setup.scene_resources()?;
+            let render_pass = setup.render_pass()?;
+            let blend = match form {
+                Form::Opaque => vec![Blend::Replace],
+                Form::Transparent => vec![Blend::Alpha],
+                Form::GBuffer => vec![Blend::Replace; 4],
+            };
+            let mut keys: Vec<PipelineKey> = draws.iter().map(|d| d.pipeline).collect();
+            keys.sort();
+            keys.dedup();
+            for key in keys {
+                let mut features = Vec::new();
+                if key.textured {
+                    features.push("BASE_COLOR_TEXTURE");
+                }
+                if form == Form::GBuffer {
+                    features.push("GBUFFER");
+                }
+                let vert = ShaderModule::new(setup.ctx, shaders::OBJECT_VERT.spirv(&features))?;
+                let frag = ShaderModule::new(setup.ctx, shaders::OBJECT_FRAG.spirv(&features))?;
+                let attributes = vertex_attributes(key.textured);
+                let pipeline = GraphicsPipeline::new(
+                    setup.ctx,
+                    resources.layout_for(key.textured)?,
+                    &render_pass.render_pass,
+                    &GraphicsPipelineDesc {
+                        vertex_shader: &vert,
+                        fragment_shader: &frag,
+                        specialization: &[
+                            (0, key.shading as u32),
+                            (1, key.lights),
+                            (2, key.lights.max(1)),
+                        ],
+                        vertex_stride: std::mem::size_of::<Vertex>() as u32,
+                        vertex_attributes: &attributes,
+                        cull_mode: CullModeFlags::BACK,
+                        // Reversed-Z: nearer surfaces have larger depth.
+                        depth_test: Some(CompareOp::GREATER),
+                        // Transparent surfaces test against opaque depth but
+                        // do not hide each other; they are sorted instead.
+                        depth_write: form != Form::Transparent,
+                        blend: &blend,
+                        subpass: setup.subpass,
+                    },
+                )?;
+                pipelines.insert(key, pipeline);
+            }
+        }
+        Ok(Box::new(SurfacePass { draws, pipelines }))
+    }
+}
+
+impl RecordPass for SurfacePass {
+    fn record(&self, cmd: &CommandBuffer, frame: &FrameResources<'_>) -> Result<(), RenderError> {
+        let Some(resources) = frame.scene else {
+            return Ok(());
+        };
+        let mut bound: Option<PipelineKey> = None;
+        for d in &self.draws {
+            let pipeline = &self.pipelines[&d.pipeline];
+            let layout = resources.layout_for(d.pipeline.textured)?;
+            if bound != Some(d.pipeline) {
+                cmd.bind_pipeline(pipeline);
+                if bound.is_none() {
+                    cmd.bind_descriptor_set(layout, 0, &resources.frame_set, &[]);
+                }
+                bound = Some(d.pipeline);
+            }
+            let range = &resources.ranges[d.object];
+            if range.index_count == 0 {
+                continue;
+            }
+            cmd.bind_descriptor_set(
+                layout,
+                1,
+                &resources.object_set,
+                &[resources.block_offsets[d.object]],
+            );
+            if let Some(t) = d.texture {
+                cmd.bind_descriptor_set(layout, 2, &resources.texture_sets[t], &[]);
+            }
+            cmd.bind_geometry(&resources.geometry, range.vertex_offset, range.index_offset);
+            cmd.draw_indexed(range.index_count);
+        }
+        Ok(())
+    }
+}
+
+/// The vertex attributes a pipeline consumes: position and normal always,
+/// UVs only for textured materials. (Tangents stay in the vertex format for
+/// normal mapping but are not fed to shaders that do not read them.)
+fn vertex_attributes(textured: bool) -> Vec<VertexAttribute> {
+    let offset = |f: usize| f as u32;
+    let mut attributes = vec![
+        VertexAttribute {
+            location: 0,
+            format: Format::R32G32B32_SFLOAT,
+            offset: offset(std::mem::offset_of!(Vertex, position)),
+        },
+        VertexAttribute {
+            location: 1,
+            format: Format::R32G32B32_SFLOAT,
+            offset: offset(std::mem::offset_of!(Vertex, normal)),
+        },
+    ];
+    if textured {
+        attributes.push(VertexAttribute {
+            location: 3,
+            format: Format::R32G32_SFLOAT,
+            offset: offset(std::mem::offset_of!(Vertex, uv)),
+        });
+    }
+    attributes
+}

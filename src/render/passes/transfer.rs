@@ -1,0 +1,81 @@
+//! Copies between attachments and host-visible buffers outside the render
+//! pass: an upload copies a given HDR image into the HDR attachment before
+//! it (tone-mapping an existing image), a readback copies attachments out
+//! after it. What to copy comes from the pass's declaration.
+
+use super::{FrameResources, PassSetup, RecordPass};
+use crate::render::plan::{attachment, PassIo};
+use crate::render::RenderError;
+use crate::vk::{Buffer, BufferUsage, CommandBuffer, Format};
+
+pub struct TransferPass {
+    /// (attachment, buffer) copied into the attachment.
+    uploads: Vec<(&'static str, Buffer)>,
+    /// (attachment, buffer) the attachment is copied into.
+    readbacks: Vec<(&'static str, Buffer)>,
+}
+
+pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+    let PassIo::Transfer { reads, writes } = &setup.decl.io else {
+        return Err(RenderError::Vulkan(crate::vk::VkError::Graph(format!(
+            "pass '{}' is not a transfer",
+            setup.decl.name
+        ))));
+    };
+    let mut uploads = Vec::new();
+    for &name in writes {
+        let image = match (name, setup.hdr_input) {
+            (attachment::HDR, Some(image)) => image,
+            _ => {
+                return Err(RenderError::InvalidImage(format!(
+                    "nothing to upload into attachment '{name}'"
+                )))
+            }
+        };
+        let buffer = Buffer::with_data(
+            setup.ctx,
+            "hdr upload",
+            bytemuck::cast_slice(&image.data),
+            BufferUsage::Upload,
+        )?;
+        uploads.push((name, buffer));
+    }
+    let mut readbacks = Vec::new();
+    for &name in reads {
+        let image = setup.frame.attachments.get(name)?;
+        let bytes = texel_size(image.desc.format)
+            * u64::from(image.desc.width)
+            * u64::from(image.desc.height);
+        let buffer = Buffer::new(setup.ctx, name, bytes, BufferUsage::Readback)?;
+        readbacks.push((name, buffer));
+    }
+    Ok(Box::new(TransferPass { uploads, readbacks }))
+}
+
+/// Bytes per texel of the formats attachments are read back in.
+fn texel_size(format: Format) -> u64 {
+    match format {
+        Format::R32G32B32A32_SFLOAT => 16,
+        Format::R16G16B16A16_SFLOAT => 8,
+        _ => 4,
+    }
+}
+
+impl RecordPass for TransferPass {
+    fn record(&self, cmd: &CommandBuffer, frame: &FrameResources<'_>) -> Result<(), RenderError> {
+        for (name, buffer) in &self.uploads {
+            cmd.copy_buffer_to_image(buffer, frame.attachments.get(name)?);
+        }
+        for (name, buffer) in &self.readbacks {
+            cmd.copy_image_to_buffer(frame.attachments.get(name)?, buffer);
+        }
+        Ok(())
+    }
+
+    fn readback(&self, attachment: &str) -> Option<&Buffer> {
+        self.readbacks
+            .iter()
+            .find(|(n, _)| *n == attachment)
+            .map(|(_, b)| b)
+    }
+}

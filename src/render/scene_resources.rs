@@ -1,0 +1,351 @@
+//! GPU resources shared by every pass that draws the scene's objects: one
+//! geometry buffer, the per-frame uniforms, the per-object blocks (a
+//! dynamic uniform buffer, std140) and the base-colour textures, with
+//! their descriptor sets and the two pipeline layouts object pipelines use.
+
+use super::geometry::SceneGeometry;
+use super::gpu_types::{FrameUniforms, GpuLight, ObjectHeader};
+use super::plan::{Draw, FramePlan};
+use super::RenderError;
+use crate::scene::{Light, Scene, TextureFilter};
+use crate::vk::{
+    self, Buffer, BufferUsage, CommandBuffer, Context, DescriptorBinding, DescriptorPool,
+    DescriptorSet, DescriptorSetLayout, DescriptorType, Format, Image, ImageAspectFlags,
+    ImageDesc, ImageUsageFlags, PipelineLayout, Sampler, SamplerFilter, ShaderStageFlags,
+};
+use std::sync::Arc;
+
+const TEXTURE_FORMAT: Format = Format::R8G8B8A8_SRGB;
+
+/// One object's range inside the shared geometry buffer.
+pub struct GeometryRange {
+    pub vertex_offset: u64,
+    pub index_offset: u64,
+    pub index_count: u32,
+}
+
+/// Fields drop in declaration order: sets before their pool, layouts after
+/// the pipelines' users are gone.
+pub struct SceneResources {
+    pub frame_set: DescriptorSet,
+    pub object_set: DescriptorSet,
+    /// One set per texture in `FramePlan::textures`.
+    pub texture_sets: Vec<DescriptorSet>,
+    _pool: DescriptorPool,
+    /// Sets 0 (frame) and 1 (object).
+    pub plain_layout: PipelineLayout,
+    /// Sets 0, 1 and 2 (texture); only when a draw is textured.
+    pub textured_layout: Option<PipelineLayout>,
+    pub frame_layout: DescriptorSetLayout,
+    pub object_layout: DescriptorSetLayout,
+    _texture_layout: Option<DescriptorSetLayout>,
+    _textures: Vec<Image>,
+    _sampler: Option<Sampler>,
+    pub geometry: Buffer,
+    pub ranges: Vec<GeometryRange>,
+    /// Dynamic offset of each object's block.
+    pub block_offsets: Vec<u32>,
+    _frame_buffer: Buffer,
+    _object_buffer: Buffer,
+}
+
+impl SceneResources {
+    pub fn new(
+        ctx: &Arc<Context>,
+        scene: &Scene,
+        geometry: &SceneGeometry,
+        plan: &FramePlan,
+    ) -> Result<SceneResources, RenderError> {
+        let (geometry_buffer, ranges) = upload_geometry(ctx, geometry)?;
+        let frame = FrameUniforms::new(scene, plan.width, plan.height);
+        let frame_buffer = Buffer::with_data(
+            ctx,
+            "frame",
+            bytemuck::bytes_of(&frame),
+            BufferUsage::Uniform,
+        )?;
+
+        // Per-object blocks, each at an aligned offset, all read through one
+        // dynamic uniform-buffer descriptor whose range fits the largest.
+        let blocks: Vec<Vec<u8>> = (0..scene.objects.len())
+            .map(|i| object_block(scene, i, plan.draws().find(|d| d.object == i)))
+            .collect();
+        let (object_bytes, block_offsets, block_range) =
+            pack_blocks(ctx, &blocks, std::mem::size_of::<ObjectHeader>(), |i| {
+                format!("object '{}'", scene.objects[i].name)
+            })?;
+        let object_buffer =
+            Buffer::with_data(ctx, "objects", &object_bytes, BufferUsage::Uniform)?;
+
+        // Textures, only if some material has one.
+        let sampler = if plan.textures.is_empty() {
+            None
+        } else {
+            Some(Sampler::new(
+                ctx,
+                match scene.output.texture_filter {
+                    TextureFilter::Nearest => SamplerFilter::Nearest,
+                    TextureFilter::Bilinear => SamplerFilter::Bilinear,
+                    TextureFilter::Trilinear => SamplerFilter::Trilinear,
+                },
+                16,
+            )?)
+        };
+        let textures = plan
+            .textures
+            .iter()
+            .map(|p| load_texture(ctx, p))
+            .collect::<Result<Vec<_>, _>>()?;
+
+        let all_stages = ShaderStageFlags::VERTEX | ShaderStageFlags::FRAGMENT;
+        let frame_layout = DescriptorSetLayout::new(
+            ctx,
+            &[DescriptorBinding {
+                binding: 0,
+                kind: DescriptorType::UNIFORM_BUFFER,
+                stages: all_stages,
+            }],
+        )?;
+        let object_layout = DescriptorSetLayout::new(
+            ctx,
+            &[DescriptorBinding {
+                binding: 0,
+                kind: DescriptorType::UNIFORM_BUFFER_DYNAMIC,
+                stages: all_stages,
+            }],
+        )?;
+        let texture_layout = if textures.is_empty() {
+            None
+        } else {
+            Some(DescriptorSetLayout::new(
+                ctx,
+                &[DescriptorBinding {
+                    binding: 0,
+                    kind: DescriptorType::COMBINED_IMAGE_SAMPLER,
+                    stages: ShaderStageFlags::FRAGMENT,
+                }],
+            )?)
+        };
+        let mut pool_layouts = vec![&frame_layout, &object_layout];
+        if let Some(t) = &texture_layout {
+            pool_layouts.extend(std::iter::repeat_n(t, textures.len()));
+        }
+        let pool = DescriptorPool::for_layouts(ctx, &pool_layouts)?;
+        let frame_set = pool.allocate(&frame_layout)?;
+        frame_set.write_buffer(
+            0,
+            DescriptorType::UNIFORM_BUFFER,
+            &frame_buffer,
+            std::mem::size_of::<FrameUniforms>() as u64,
+        );
+        let object_set = pool.allocate(&object_layout)?;
+        object_set.write_buffer(
+            0,
+            DescriptorType::UNIFORM_BUFFER_DYNAMIC,
+            &object_buffer,
+            block_range,
+        );
+        let mut texture_sets = Vec::new();
+        if let (Some(layout), Some(sampler)) = (&texture_layout, &sampler) {
+            for t in &textures {
+                let set = pool.allocate(layout)?;
+                set.write_sampled_image(0, t, sampler);
+                texture_sets.push(set);
+            }
+        }
+        let plain_layout = PipelineLayout::new(ctx, &[&frame_layout, &object_layout])?;
+        let textured_layout = match &texture_layout {
+            Some(t) => Some(PipelineLayout::new(
+                ctx,
+                &[&frame_layout, &object_layout, t],
+            )?),
+            None => None,
+        };
+        Ok(SceneResources {
+            frame_set,
+            object_set,
+            texture_sets,
+            _pool: pool,
+            plain_layout,
+            textured_layout,
+            frame_layout,
+            object_layout,
+            _texture_layout: texture_layout,
+            _textures: textures,
+            _sampler: sampler,
+            geometry: geometry_buffer,
+            ranges,
+            block_offsets,
+            _frame_buffer: frame_buffer,
+            _object_buffer: object_buffer,
+        })
+    }
+
+    /// The pipeline layout of a draw.
+    pub fn layout_for(&self, textured: bool) -> Result<&PipelineLayout, RenderError> {
+        if textured {
+            self.textured_layout.as_ref().ok_or_else(|| {
+                RenderError::Vulkan(vk::VkError::Graph(
+                    "a textured draw without a texture layout".into(),
+                ))
+            })
+        } else {
+            Ok(&self.plain_layout)
+        }
+    }
+}
+
+/// Lays `blocks` (a header of `header_size` bytes then lights) out at
+/// offsets aligned for dynamic uniform buffers, each padded to room for at
+/// least one light (the shortest array a shader can declare). Returns the
+/// bytes, each block's offset, and the descriptor range (the largest
+/// block). `name(i)` names block i in the error when it exceeds the
+/// device's uniform range.
+pub fn pack_blocks(
+    ctx: &Context,
+    blocks: &[Vec<u8>],
+    header_size: usize,
+    name: impl Fn(usize) -> String,
+) -> Result<(Vec<u8>, Vec<u32>, u64), RenderError> {
+    let light_size = std::mem::size_of::<GpuLight>();
+    let alignment = ctx.uniform_offset_alignment().max(16);
+    let min_block = (header_size + light_size) as u64;
+    let max_range = ctx.max_uniform_range();
+    if let Some((i, b)) = blocks
+        .iter()
+        .enumerate()
+        .find(|(_, b)| b.len() as u64 > max_range)
+    {
+        return Err(RenderError::TooManyLights {
+            what: name(i),
+            lights: (b.len() - header_size) / light_size,
+            max: (max_range as usize).saturating_sub(header_size) / light_size,
+        });
+    }
+    let range = blocks
+        .iter()
+        .map(|b| b.len() as u64)
+        .max()
+        .unwrap_or(0)
+        .max(min_block);
+    let mut offsets = Vec::with_capacity(blocks.len());
+    let mut bytes = Vec::new();
+    for b in blocks {
+        offsets.push(bytes.len() as u32);
+        bytes.extend_from_slice(b);
+        bytes.resize(
+            (bytes.len() as u64).next_multiple_of(alignment) as usize,
+            0,
+        );
+    }
+    // The last block's descriptor range must still fit in the buffer.
+    let last = offsets.last().copied().unwrap_or(0) as u64;
+    bytes.resize(bytes.len().max((last + range) as usize), 0);
+    Ok((bytes, offsets, range))
+}
+
+fn upload_geometry(
+    ctx: &Arc<Context>,
+    geometry: &SceneGeometry,
+) -> Result<(Buffer, Vec<GeometryRange>), RenderError> {
+    let mut bytes: Vec<u8> = Vec::new();
+    let mut vertex_offsets = Vec::new();
+    for m in &geometry.meshes {
+        vertex_offsets.push(bytes.len() as u64);
+        bytes.extend_from_slice(bytemuck::cast_slice(&m.vertices));
+    }
+    let mut ranges = Vec::new();
+    for (m, vertex_offset) in geometry.meshes.iter().zip(vertex_offsets) {
+        // Index data must be 4-byte aligned for UINT32 indices.
+        bytes.resize(bytes.len().next_multiple_of(4), 0);
+        ranges.push(GeometryRange {
+            vertex_offset,
+            index_offset: bytes.len() as u64,
+            index_count: m.indices.len() as u32,
+        });
+        bytes.extend_from_slice(bytemuck::cast_slice(&m.indices));
+    }
+    // A buffer cannot be empty; a scene without objects still gets one.
+    if bytes.is_empty() {
+        bytes.resize(4, 0);
+    }
+    let buffer = Buffer::with_data(ctx, "geometry", &bytes, BufferUsage::Geometry)?;
+    Ok((buffer, ranges))
+}
+
+/// The per-object block: header, then exactly the lights its draw
+/// evaluates.
+fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
+    let object = &scene.objects[index];
+    let material = &scene.materials[object.material];
+    let model = object.transform.matrix();
+    let normal = glam::Mat4::from_mat3(object.transform.normal_matrix());
+    let lights: Vec<GpuLight> = draw
+        .map(|d| d.lights.iter().map(|&l| gpu_light(&scene.lights[l])).collect())
+        .unwrap_or_default();
+    let header = ObjectHeader {
+        model: model.to_cols_array_2d(),
+        normal_matrix: normal.to_cols_array_2d(),
+        ka: material.ka.extend(0.0).to_array(),
+        kd: material.kd.extend(material.opacity).to_array(),
+        ks: material.ks.extend(material.shininess).to_array(),
+        counts: [lights.len() as u32, 0, 0, 0],
+    };
+    let mut bytes = bytemuck::bytes_of(&header).to_vec();
+    bytes.extend_from_slice(bytemuck::cast_slice(&lights));
+    bytes
+}
+
+/// A light as the shaders read it.
+pub fn gpu_light(light: &Light) -> GpuLight {
+    match light {
+        Light::Point {
+            position,
+            color,
+            attenuation,
+        } => GpuLight {
+            position: position.extend(1.0).to_array(),
+            color: color.extend(0.0).to_array(),
+            attenuation: attenuation.extend(0.0).to_array(),
+        },
+        Light::Directional { direction, color } => GpuLight {
+            position: (-*direction).extend(0.0).to_array(),
+            color: color.extend(0.0).to_array(),
+            attenuation: [1.0, 0.0, 0.0, 0.0],
+        },
+    }
+}
+
+/// Loads a PNG as an sRGB texture with a full mip chain.
+fn load_texture(ctx: &Arc<Context>, path: &std::path::Path) -> Result<Image, RenderError> {
+    let img = image::open(path)
+        .map_err(|e| RenderError::Texture {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?
+        .to_rgba8();
+    let (w, h) = img.dimensions();
+    let mip_levels = 32 - w.max(h).leading_zeros();
+    let linear_blits = vk::supports_linear_filter(ctx, TEXTURE_FORMAT);
+    let mip_levels = if linear_blits { mip_levels } else { 1 };
+    let texture = Image::new(
+        ctx,
+        "texture",
+        ImageDesc {
+            width: w,
+            height: h,
+            format: TEXTURE_FORMAT,
+            usage: ImageUsageFlags::SAMPLED
+                | ImageUsageFlags::TRANSFER_DST
+                | ImageUsageFlags::TRANSFER_SRC,
+            mip_levels,
+            aspect: ImageAspectFlags::COLOR,
+        },
+    )?;
+    let staging = Buffer::with_data(ctx, "texture staging", img.as_raw(), BufferUsage::Upload)?;
+    CommandBuffer::run_once(ctx, |cmd| {
+        cmd.copy_buffer_to_image(&staging, &texture);
+        cmd.generate_mipmaps(&texture);
+    })?;
+    Ok(texture)
+}

@@ -1,0 +1,515 @@
+//! A render pass built from a declared frame: attachments and the subpasses
+//! that read and write them.
+//!
+//! The caller says *what* each subpass does with each attachment; this
+//! module derives everything Vulkan wants spelled out: image usage flags,
+//! load and store operations, the layout of every reference, the final
+//! layouts, and the subpass dependencies. Nothing is listed by hand, so a
+//! new pass cannot forget a dependency, and nothing is stored that nobody
+//! reads afterwards.
+
+use super::{Context, Image, ImageDesc, VkError};
+use ash::vk;
+use std::sync::Arc;
+
+/// How an attachment's contents begin in the render pass.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AttachmentStart {
+    /// Cleared to this colour, or for depth formats to `[depth, ..]`.
+    Clear([f32; 4]),
+    /// Copied in before the render pass (by a transfer the frame records),
+    /// left in the layout of its first use.
+    Loaded,
+    /// Every pixel is written before anything reads it: nothing to load.
+    Undefined,
+}
+
+/// One attachment of the frame.
+#[derive(Clone, Debug)]
+pub struct AttachmentSpec {
+    pub name: &'static str,
+    pub format: vk::Format,
+    pub start: AttachmentStart,
+    /// Copied out (read back) after the render pass: stored, and left in
+    /// TRANSFER_SRC_OPTIMAL.
+    pub read_after: bool,
+}
+
+/// How a subpass uses the depth attachment.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthUse {
+    /// Tested and written.
+    Write,
+    /// Tested only (read-only layout; it may also be an input attachment).
+    Test,
+}
+
+/// One subpass: indices into the attachment list.
+#[derive(Clone, Debug, Default)]
+pub struct SubpassSpec {
+    pub name: &'static str,
+    /// Colour targets, in the fragment shader's output location order.
+    pub colour: Vec<usize>,
+    pub depth: Option<(usize, DepthUse)>,
+    /// Input attachments, in `input_attachment_index` order.
+    pub inputs: Vec<usize>,
+}
+
+/// What a subpass does with one attachment, for deriving layouts and
+/// dependencies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Access {
+    ColourWrite,
+    DepthWrite,
+    DepthTest,
+    Input,
+}
+
+impl Access {
+    fn writes(self) -> bool {
+        matches!(self, Access::ColourWrite | Access::DepthWrite)
+    }
+
+    fn stage_access(self) -> (vk::PipelineStageFlags, vk::AccessFlags) {
+        let depth_stages = vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS
+            | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS;
+        match self {
+            Access::ColourWrite => (
+                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                // Blending reads what it writes.
+                vk::AccessFlags::COLOR_ATTACHMENT_WRITE | vk::AccessFlags::COLOR_ATTACHMENT_READ,
+            ),
+            Access::DepthWrite => (
+                depth_stages,
+                vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE
+                    | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_READ,
+            ),
+            Access::DepthTest => (
+                depth_stages,
+                vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_READ,
+            ),
+            Access::Input => (
+                vk::PipelineStageFlags::FRAGMENT_SHADER,
+                vk::AccessFlags::INPUT_ATTACHMENT_READ,
+            ),
+        }
+    }
+}
+
+fn is_depth(format: vk::Format) -> bool {
+    matches!(
+        format,
+        vk::Format::D16_UNORM
+            | vk::Format::D32_SFLOAT
+            | vk::Format::X8_D24_UNORM_PACK32
+            | vk::Format::D16_UNORM_S8_UINT
+            | vk::Format::D24_UNORM_S8_UINT
+            | vk::Format::D32_SFLOAT_S8_UINT
+    )
+}
+
+/// The layout an attachment is in while a subpass uses it.
+fn layout_for(depth: bool, uses: &[Access]) -> vk::ImageLayout {
+    if depth {
+        if uses.contains(&Access::DepthWrite) {
+            vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL
+        } else {
+            vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL
+        }
+    } else if uses.contains(&Access::ColourWrite) {
+        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL
+    } else {
+        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL
+    }
+}
+
+/// A built render pass with its attachments (created here, sized for the
+/// frame) and framebuffer.
+pub struct GraphRenderPass {
+    pub render_pass: RenderPass,
+    pub framebuffer: Framebuffer,
+    /// One image per [`AttachmentSpec`], in the same order.
+    pub images: Vec<Image>,
+    /// One clear value per attachment (ignored unless cleared).
+    pub clears: Vec<vk::ClearValue>,
+    /// The layout each attachment is left in.
+    pub final_layouts: Vec<vk::ImageLayout>,
+    /// The layout each attachment must be in when the pass begins.
+    pub initial_layouts: Vec<vk::ImageLayout>,
+}
+
+impl GraphRenderPass {
+    /// Derives and creates the render pass, the `width`×`height`
+    /// attachments and the framebuffer for `subpasses` in order.
+    pub fn new(
+        ctx: &Arc<Context>,
+        width: u32,
+        height: u32,
+        attachments: &[AttachmentSpec],
+        subpasses: &[SubpassSpec],
+    ) -> Result<GraphRenderPass, VkError> {
+        let n = attachments.len();
+        // uses[s][a]: what subpass s does with attachment a.
+        let uses: Vec<Vec<Vec<Access>>> = subpasses
+            .iter()
+            .map(|s| {
+                let mut u = vec![Vec::new(); n];
+                for &c in &s.colour {
+                    u[c].push(Access::ColourWrite);
+                }
+                if let Some((d, how)) = s.depth {
+                    u[d].push(match how {
+                        DepthUse::Write => Access::DepthWrite,
+                        DepthUse::Test => Access::DepthTest,
+                    });
+                }
+                for &i in &s.inputs {
+                    u[i].push(Access::Input);
+                }
+                u
+            })
+            .collect();
+        for (s, spec) in subpasses.iter().enumerate() {
+            for (a, u) in uses[s].iter().enumerate() {
+                if u.contains(&Access::Input) && u.iter().any(|x| x.writes()) {
+                    return Err(VkError::Graph(format!(
+                        "subpass '{}' both writes and reads attachment '{}'",
+                        spec.name, attachments[a].name
+                    )));
+                }
+            }
+        }
+        let used_in = |a: usize| -> Vec<usize> {
+            (0..subpasses.len())
+                .filter(|&s| !uses[s][a].is_empty())
+                .collect()
+        };
+
+        let mut descriptions = Vec::with_capacity(n);
+        let mut initial_layouts = Vec::with_capacity(n);
+        let mut final_layouts = Vec::with_capacity(n);
+        let mut usages = Vec::with_capacity(n);
+        for (a, spec) in attachments.iter().enumerate() {
+            let depth = is_depth(spec.format);
+            let users = used_in(a);
+            let (Some(&first), Some(&last)) = (users.first(), users.last()) else {
+                return Err(VkError::Graph(format!(
+                    "attachment '{}' is used by no subpass",
+                    spec.name
+                )));
+            };
+            let mut usage = vk::ImageUsageFlags::empty();
+            for s in &users {
+                for u in &uses[*s][a] {
+                    usage |= match u {
+                        Access::ColourWrite => vk::ImageUsageFlags::COLOR_ATTACHMENT,
+                        Access::DepthWrite | Access::DepthTest => {
+                            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+                        }
+                        Access::Input => vk::ImageUsageFlags::INPUT_ATTACHMENT,
+                    };
+                }
+            }
+            let (load, initial) = match spec.start {
+                AttachmentStart::Clear(_) => {
+                    (vk::AttachmentLoadOp::CLEAR, vk::ImageLayout::UNDEFINED)
+                }
+                AttachmentStart::Undefined => {
+                    (vk::AttachmentLoadOp::DONT_CARE, vk::ImageLayout::UNDEFINED)
+                }
+                AttachmentStart::Loaded => {
+                    usage |= vk::ImageUsageFlags::TRANSFER_DST;
+                    (vk::AttachmentLoadOp::LOAD, layout_for(depth, &uses[first][a]))
+                }
+            };
+            // Stored only when something reads it after the pass.
+            let (store, final_layout) = if spec.read_after {
+                usage |= vk::ImageUsageFlags::TRANSFER_SRC;
+                (
+                    vk::AttachmentStoreOp::STORE,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                )
+            } else {
+                (
+                    vk::AttachmentStoreOp::DONT_CARE,
+                    layout_for(depth, &uses[last][a]),
+                )
+            };
+            descriptions.push(
+                vk::AttachmentDescription::default()
+                    .format(spec.format)
+                    .samples(vk::SampleCountFlags::TYPE_1)
+                    .load_op(load)
+                    .store_op(store)
+                    .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+                    .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+                    .initial_layout(initial)
+                    .final_layout(final_layout),
+            );
+            initial_layouts.push(initial);
+            final_layouts.push(final_layout);
+            usages.push(usage);
+        }
+
+        // Attachment references, kept alive until the pass is created.
+        let reference = |s: usize, a: usize| vk::AttachmentReference {
+            attachment: a as u32,
+            layout: layout_for(is_depth(attachments[a].format), &uses[s][a]),
+        };
+        let colour_refs: Vec<Vec<vk::AttachmentReference>> = subpasses
+            .iter()
+            .enumerate()
+            .map(|(s, spec)| spec.colour.iter().map(|&a| reference(s, a)).collect())
+            .collect();
+        let input_refs: Vec<Vec<vk::AttachmentReference>> = subpasses
+            .iter()
+            .enumerate()
+            .map(|(s, spec)| spec.inputs.iter().map(|&a| reference(s, a)).collect())
+            .collect();
+        let depth_refs: Vec<Option<vk::AttachmentReference>> = subpasses
+            .iter()
+            .enumerate()
+            .map(|(s, spec)| spec.depth.map(|(a, _)| reference(s, a)))
+            .collect();
+        let descs: Vec<vk::SubpassDescription> = (0..subpasses.len())
+            .map(|s| {
+                let mut d = vk::SubpassDescription::default()
+                    .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+                    .color_attachments(&colour_refs[s])
+                    .input_attachments(&input_refs[s]);
+                if let Some(r) = &depth_refs[s] {
+                    d = d.depth_stencil_attachment(r);
+                }
+                d
+            })
+            .collect();
+
+        let dependencies = dependencies(attachments, &uses);
+        let info = vk::RenderPassCreateInfo::default()
+            .attachments(&descriptions)
+            .subpasses(&descs)
+            .dependencies(&dependencies);
+        // SAFETY: valid device; every referenced array is a local alive for
+        // the call, and attachment indices are within `descriptions`.
+        let handle = unsafe { ctx.device.create_render_pass(&info, None) }?;
+        let render_pass = RenderPass {
+            ctx: ctx.clone(),
+            handle,
+        };
+
+        let images = attachments
+            .iter()
+            .zip(&usages)
+            .map(|(spec, &usage)| {
+                Image::new(
+                    ctx,
+                    spec.name,
+                    ImageDesc {
+                        width,
+                        height,
+                        format: spec.format,
+                        usage,
+                        mip_levels: 1,
+                        aspect: if is_depth(spec.format) {
+                            vk::ImageAspectFlags::DEPTH
+                        } else {
+                            vk::ImageAspectFlags::COLOR
+                        },
+                    },
+                )
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let refs: Vec<&Image> = images.iter().collect();
+        let framebuffer = Framebuffer::new(ctx, &render_pass, &refs)?;
+        let clears = attachments
+            .iter()
+            .map(|spec| {
+                let v = match spec.start {
+                    AttachmentStart::Clear(v) => v,
+                    _ => [0.0; 4],
+                };
+                if is_depth(spec.format) {
+                    super::clear_depth(v[0])
+                } else {
+                    super::clear_color(v)
+                }
+            })
+            .collect();
+        Ok(GraphRenderPass {
+            render_pass,
+            framebuffer,
+            images,
+            clears,
+            final_layouts,
+            initial_layouts,
+        })
+    }
+}
+
+/// The dependencies the uses imply:
+/// - from outside into the first subpass using each attachment: the
+///   previous submission of the same frame (or a copy into a loaded
+///   attachment) must be done with it;
+/// - between subpasses: each use waits for the latest earlier use of the
+///   same attachment when either of them writes (read after write, write
+///   after read, write after write), by region since attachments are
+///   pixel-local;
+/// - out of the last subpass using a stored attachment, to the copy that
+///   reads it back.
+///
+/// Dependencies between the same pair of subpasses are merged.
+fn dependencies(
+    attachments: &[AttachmentSpec],
+    uses: &[Vec<Vec<Access>>],
+) -> Vec<vk::SubpassDependency> {
+    let mut deps: Vec<vk::SubpassDependency> = Vec::new();
+    let mut add = |src: u32,
+                   dst: u32,
+                   src_stage: vk::PipelineStageFlags,
+                   src_access: vk::AccessFlags,
+                   dst_stage: vk::PipelineStageFlags,
+                   dst_access: vk::AccessFlags| {
+        let flags = if src != vk::SUBPASS_EXTERNAL && dst != vk::SUBPASS_EXTERNAL {
+            vk::DependencyFlags::BY_REGION
+        } else {
+            vk::DependencyFlags::empty()
+        };
+        if let Some(d) = deps
+            .iter_mut()
+            .find(|d| d.src_subpass == src && d.dst_subpass == dst)
+        {
+            d.src_stage_mask |= src_stage;
+            d.src_access_mask |= src_access;
+            d.dst_stage_mask |= dst_stage;
+            d.dst_access_mask |= dst_access;
+        } else {
+            deps.push(
+                vk::SubpassDependency::default()
+                    .src_subpass(src)
+                    .dst_subpass(dst)
+                    .src_stage_mask(src_stage)
+                    .src_access_mask(src_access)
+                    .dst_stage_mask(dst_stage)
+                    .dst_access_mask(dst_access)
+                    .dependency_flags(flags),
+            );
+        }
+    };
+    let combined = |list: &[Access]| {
+        list.iter().fold(
+            (vk::PipelineStageFlags::empty(), vk::AccessFlags::empty()),
+            |(s, a), u| {
+                let (us, ua) = u.stage_access();
+                (s | us, a | ua)
+            },
+        )
+    };
+    // What the previous submission may still be doing with any attachment:
+    // writing it in a subpass, reading it in a shader, copying out of it or
+    // into it.
+    let previous_stages = vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
+        | vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS
+        | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS
+        | vk::PipelineStageFlags::FRAGMENT_SHADER
+        | vk::PipelineStageFlags::TRANSFER;
+    let previous_writes = vk::AccessFlags::COLOR_ATTACHMENT_WRITE
+        | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE
+        | vk::AccessFlags::TRANSFER_WRITE;
+    for (a, spec) in attachments.iter().enumerate() {
+        let users: Vec<usize> = (0..uses.len()).filter(|&s| !uses[s][a].is_empty()).collect();
+        let Some(&first) = users.first() else {
+            continue;
+        };
+        let (dst_stage, dst_access) = combined(&uses[first][a]);
+        add(
+            vk::SUBPASS_EXTERNAL,
+            first as u32,
+            previous_stages,
+            previous_writes,
+            dst_stage,
+            dst_access,
+        );
+        for pair in users.windows(2) {
+            let (src, dst) = (pair[0], pair[1]);
+            let writes = uses[src][a].iter().chain(&uses[dst][a]).any(|u| u.writes());
+            if writes {
+                let (ss, sa) = combined(&uses[src][a]);
+                let (ds, da) = combined(&uses[dst][a]);
+                add(src as u32, dst as u32, ss, sa, ds, da);
+            }
+        }
+        if spec.read_after {
+            let last = *users.last().expect("non-empty");
+            let (ss, sa) = combined(&uses[last][a]);
+            add(
+                last as u32,
+                vk::SUBPASS_EXTERNAL,
+                ss,
+                sa,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_READ,
+            );
+        }
+    }
+    deps
+}
+
+/// A Vulkan render pass.
+pub struct RenderPass {
+    ctx: Arc<Context>,
+    pub(crate) handle: vk::RenderPass,
+}
+
+impl Drop for RenderPass {
+    fn drop(&mut self) {
+        // SAFETY: pipelines/framebuffers using it are gone or idle.
+        unsafe { self.ctx.device.destroy_render_pass(self.handle, None) };
+    }
+}
+
+/// The attachments of one [`RenderPass`], bound together.
+pub struct Framebuffer {
+    ctx: Arc<Context>,
+    pub(crate) handle: vk::Framebuffer,
+    pub(crate) extent: vk::Extent2D,
+}
+
+impl Framebuffer {
+    /// `attachments` in the render pass's attachment order, all the size of
+    /// the first.
+    pub fn new(
+        ctx: &Arc<Context>,
+        pass: &RenderPass,
+        attachments: &[&Image],
+    ) -> Result<Framebuffer, VkError> {
+        let first = attachments
+            .first()
+            .ok_or_else(|| VkError::Graph("a framebuffer needs an attachment".into()))?;
+        let extent = vk::Extent2D {
+            width: first.desc.width,
+            height: first.desc.height,
+        };
+        let views: Vec<vk::ImageView> = attachments.iter().map(|i| i.view).collect();
+        let info = vk::FramebufferCreateInfo::default()
+            .render_pass(pass.handle)
+            .attachments(&views)
+            .width(extent.width)
+            .height(extent.height)
+            .layers(1);
+        // SAFETY: views match the pass's attachment formats and sizes (the
+        // callers create them from the same description).
+        let handle = unsafe { ctx.device.create_framebuffer(&info, None) }?;
+        Ok(Framebuffer {
+            ctx: ctx.clone(),
+            handle,
+            extent,
+        })
+    }
+}
+
+impl Drop for Framebuffer {
+    fn drop(&mut self) {
+        // SAFETY: no pending command buffer uses it.
+        unsafe { self.ctx.device.destroy_framebuffer(self.handle, None) };
+    }
+}
