@@ -269,9 +269,9 @@ impl FramePlan {
         let mut attachments = vec![AttachmentDecl {
             name: OUTPUT,
             format: OUTPUT_FORMAT,
-            // The tone map writes every pixel; drawn directly, the
-            // background is black.
-            clear: if direct { black } else { None },
+            // The tone map writes every pixel (alpha 1); drawn directly, the
+            // background is opaque black like the tone-mapped one.
+            clear: if direct { Some([0.0, 0.0, 0.0, 1.0]) } else { None },
         }];
         if !direct {
             attachments.push(AttachmentDecl {
