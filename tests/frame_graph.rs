@@ -23,7 +23,12 @@ fn diff_u8(a: &Pixels<u8>, b: &Pixels<u8>) -> (u8, usize) {
     let mut worst = 0;
     let mut differing = 0;
     for (pa, pb) in a.data.chunks_exact(4).zip(b.data.chunks_exact(4)) {
-        let d = pa.iter().zip(pb).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0);
+        let d = pa
+            .iter()
+            .zip(pb)
+            .map(|(x, y)| x.abs_diff(*y))
+            .max()
+            .unwrap_or(0);
         worst = worst.max(d);
         differing += usize::from(d > 0);
     }
@@ -60,9 +65,7 @@ fn deferred_and_forward_agree_on_every_example_scene() {
         );
         common::assert_not_blank(&deferred.output, 0.2);
         let (worst, differing) = diff_u8(&forward.output, &deferred.output);
-        println!(
-            "{name}: forward vs deferred: {differing} pixels differ, by at most {worst}/255"
-        );
+        println!("{name}: forward vs deferred: {differing} pixels differ, by at most {worst}/255");
         assert!(worst <= 2, "{name}: differ by {worst}/255");
         assert!(
             differing * 100 <= 3 * (320 * 180),
@@ -146,14 +149,25 @@ fn a_light_whose_range_misses_a_tile_does_not_change_it() {
             }
         }
     }
-    assert_eq!(changed_outside, 0, "pixels outside the light's tiles changed");
-    assert!(changed_inside > 100, "the light changed only {changed_inside} pixels");
+    assert_eq!(
+        changed_outside, 0,
+        "pixels outside the light's tiles changed"
+    );
+    assert!(
+        changed_inside > 100,
+        "the light changed only {changed_inside} pixels"
+    );
     // The plan lists the light for exactly those tiles.
     let plan = FramePlan::new(&with, &SceneGeometry::new(&with), false);
     for group in &plan.tile_groups {
         for r in &group.rects {
             let inside = in_lit_tile(r.x0, r.y0);
-            assert_eq!(group.lights.contains(&1), inside, "{r:?} {:?}", group.lights);
+            assert_eq!(
+                group.lights.contains(&1),
+                inside,
+                "{r:?} {:?}",
+                group.lights
+            );
         }
     }
 }
@@ -183,7 +197,12 @@ fn ldr_output_is_the_clamped_hdr_image() {
         v * 255.0
     };
     let mut worst = 0.0f32;
-    for (p, h) in direct.output.data.chunks_exact(4).zip(hdr.data.chunks_exact(4)) {
+    for (p, h) in direct
+        .output
+        .data
+        .chunks_exact(4)
+        .zip(hdr.data.chunks_exact(4))
+    {
         for c in 0..3 {
             worst = worst.max((f32::from(p[c]) - srgb(h[c])).abs());
         }

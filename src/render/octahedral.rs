@@ -74,7 +74,11 @@ mod tests {
             .map(|n| n.angle_between(decode(encode(n))))
             .fold(0.0f32, f32::max);
         // float rounding only
-        assert!(worst.to_degrees() < 1e-3, "worst {} deg", worst.to_degrees());
+        assert!(
+            worst.to_degrees() < 1e-3,
+            "worst {} deg",
+            worst.to_degrees()
+        );
     }
 
     #[test]
@@ -86,7 +90,11 @@ mod tests {
             .into_iter()
             .map(|n| n.angle_between(decode(quantize_snorm16(encode(n)))))
             .fold(0.0f32, f32::max);
-        assert!(worst.to_degrees() < 0.01, "worst {} deg", worst.to_degrees());
+        assert!(
+            worst.to_degrees() < 0.01,
+            "worst {} deg",
+            worst.to_degrees()
+        );
         assert!(worst > 0.0, "quantization must show");
     }
 }

@@ -271,7 +271,11 @@ impl FramePlan {
             format: OUTPUT_FORMAT,
             // The tone map writes every pixel (alpha 1); drawn directly, the
             // background is opaque black like the tone-mapped one.
-            clear: if direct { Some([0.0, 0.0, 0.0, 1.0]) } else { None },
+            clear: if direct {
+                Some([0.0, 0.0, 0.0, 1.0])
+            } else {
+                None
+            },
         }];
         if !direct {
             attachments.push(AttachmentDecl {
@@ -482,7 +486,9 @@ mod tests {
         let (_, plan) = load("default.toml");
         assert_eq!(plan.pass_names(), vec!["opaque", "tonemap", "readback"]);
         assert!(plan.textures.is_empty());
-        assert!(plan.draws().all(|d| !d.pipeline.textured && !d.pipeline.blended));
+        assert!(plan
+            .draws()
+            .all(|d| !d.pipeline.textured && !d.pipeline.blended));
         assert!(!plan.has_attachment(attachment::ALBEDO));
     }
 

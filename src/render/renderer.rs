@@ -247,7 +247,9 @@ fn build_render_pass(
             subpasses.push(SubpassSpec {
                 name: decl.name,
                 colour: colour.iter().map(|n| index(n)).collect::<Result<_, _>>()?,
-                depth: depth.map(|(n, how)| index(n).map(|i| (i, how))).transpose()?,
+                depth: depth
+                    .map(|(n, how)| index(n).map(|i| (i, how)))
+                    .transpose()?,
                 inputs: inputs.iter().map(|n| index(n)).collect::<Result<_, _>>()?,
             });
         }

@@ -10,8 +10,8 @@ use super::RenderError;
 use crate::scene::{Light, Scene, TextureFilter};
 use crate::vk::{
     self, Buffer, BufferUsage, CommandBuffer, Context, DescriptorBinding, DescriptorPool,
-    DescriptorSet, DescriptorSetLayout, DescriptorType, Format, Image, ImageAspectFlags,
-    ImageDesc, ImageUsageFlags, PipelineLayout, Sampler, SamplerFilter, ShaderStageFlags,
+    DescriptorSet, DescriptorSetLayout, DescriptorType, Format, Image, ImageAspectFlags, ImageDesc,
+    ImageUsageFlags, PipelineLayout, Sampler, SamplerFilter, ShaderStageFlags,
 };
 use std::sync::Arc;
 
@@ -74,8 +74,7 @@ impl SceneResources {
             pack_blocks(ctx, &blocks, std::mem::size_of::<ObjectHeader>(), |i| {
                 format!("object '{}'", scene.objects[i].name)
             })?;
-        let object_buffer =
-            Buffer::with_data(ctx, "objects", &object_bytes, BufferUsage::Uniform)?;
+        let object_buffer = Buffer::with_data(ctx, "objects", &object_bytes, BufferUsage::Uniform)?;
 
         // Textures, only if some material has one.
         let sampler = if plan.textures.is_empty() {
@@ -233,10 +232,7 @@ pub fn pack_blocks(
     for b in blocks {
         offsets.push(bytes.len() as u32);
         bytes.extend_from_slice(b);
-        bytes.resize(
-            (bytes.len() as u64).next_multiple_of(alignment) as usize,
-            0,
-        );
+        bytes.resize((bytes.len() as u64).next_multiple_of(alignment) as usize, 0);
     }
     // The last block's descriptor range must still fit in the buffer.
     let last = offsets.last().copied().unwrap_or(0) as u64;
@@ -281,7 +277,12 @@ fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
     let model = object.transform.matrix();
     let normal = glam::Mat4::from_mat3(object.transform.normal_matrix());
     let lights: Vec<GpuLight> = draw
-        .map(|d| d.lights.iter().map(|&l| gpu_light(&scene.lights[l])).collect())
+        .map(|d| {
+            d.lights
+                .iter()
+                .map(|&l| gpu_light(&scene.lights[l]))
+                .collect()
+        })
         .unwrap_or_default();
     let header = ObjectHeader {
         model: model.to_cols_array_2d(),

@@ -44,7 +44,12 @@ pub struct TileGroup {
 
 /// The pixel rectangle a light can reach on a `width`×`height` image, or
 /// `None` if it reaches no pixel.
-pub fn light_screen_rect(scene: &Scene, light: usize, width: u32, height: u32) -> Option<PixelRect> {
+pub fn light_screen_rect(
+    scene: &Scene,
+    light: usize,
+    width: u32,
+    height: u32,
+) -> Option<PixelRect> {
     let full = PixelRect {
         x0: 0,
         y0: 0,
@@ -63,7 +68,10 @@ pub fn light_screen_rect(scene: &Scene, light: usize, width: u32, height: u32) -
         return Some(full);
     }
     let vp = camera.view_projection(scene.output.aspect());
-    let (mut lo, mut hi) = (glam::Vec2::splat(f32::INFINITY), glam::Vec2::splat(f32::NEG_INFINITY));
+    let (mut lo, mut hi) = (
+        glam::Vec2::splat(f32::INFINITY),
+        glam::Vec2::splat(f32::NEG_INFINITY),
+    );
     for i in 0..8 {
         let corner = centre
             + radius

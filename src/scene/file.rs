@@ -19,8 +19,8 @@ use glam::Vec3;
 use serde::Deserialize;
 
 use super::{
-    Camera, HdrFormat, Light, Lighting, Material, Object, Output, Scene, SceneError, ShadingModel, Shape,
-    TextureFilter, ToneMap, ToneMapOperator, Transform,
+    Camera, HdrFormat, Light, Lighting, Material, Object, Output, Scene, SceneError, ShadingModel,
+    Shape, TextureFilter, ToneMap, ToneMapOperator, Transform,
 };
 use crate::mesh::MAX_SEGMENTS;
 

@@ -5,7 +5,7 @@
 //! product of knob values, so adding an approximation to the renderer means
 //! adding one entry to [`KNOBS`] and nothing else.
 
-use super::{HdrFormat, Lighting, Scene, ShadingModel, TextureFilter};
+use super::{HdrFormat, Lighting, Scene, ShadingModel, TextureFilter, ToneMapOperator};
 
 /// One named setting.
 pub struct Knob {
@@ -182,6 +182,29 @@ pub const KNOBS: &[Knob] = &[
                 TextureFilter::Nearest => "nearest",
                 TextureFilter::Bilinear => "bilinear",
                 TextureFilter::Trilinear => "trilinear",
+            }
+            .into()
+        },
+    },
+    Knob {
+        name: "tone_map",
+        // The operator changes what the output shows, not how well.
+        best: Best::Unchanged,
+        values: "reinhard | aces | none (none: LDR output, no HDR target without --hdr)",
+        apply: |s, v| {
+            s.tone_map.operator = match v {
+                "reinhard" => ToneMapOperator::Reinhard,
+                "aces" => ToneMapOperator::Aces,
+                "none" => ToneMapOperator::None,
+                _ => return Err("expected reinhard, aces or none".into()),
+            };
+            Ok(())
+        },
+        read: |s| {
+            match s.tone_map.operator {
+                ToneMapOperator::Reinhard => "reinhard",
+                ToneMapOperator::Aces => "aces",
+                ToneMapOperator::None => "none",
             }
             .into()
         },

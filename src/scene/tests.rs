@@ -287,6 +287,7 @@ fn minimal_scene_gets_the_documented_defaults() {
             height: 360,
             hdr_format: HdrFormat::Rgba16F,
             texture_filter: crate::scene::TextureFilter::Trilinear,
+            lighting: crate::scene::Lighting::Forward,
         }
     );
     assert_eq!(scene.camera.up, Vec3::Y);

@@ -6,8 +6,8 @@
 use super::descriptors::DescriptorSet;
 use super::image::ImageState;
 use super::{
-    Buffer, Context, GraphRenderPass, GraphicsPipeline, Image, PipelineLayout,
-    TimestampQueries, VkError,
+    Buffer, Context, GraphRenderPass, GraphicsPipeline, Image, PipelineLayout, TimestampQueries,
+    VkError,
 };
 use ash::vk;
 use std::sync::Arc;
@@ -72,9 +72,7 @@ pub enum ImageUse {
 }
 
 impl ImageUse {
-    fn layout_stage_access(
-        self,
-    ) -> (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags) {
+    fn layout_stage_access(self) -> (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags) {
         match self {
             ImageUse::TransferSrc => (
                 vk::ImageLayout::TRANSFER_SRC_OPTIMAL,

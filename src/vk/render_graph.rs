@@ -84,10 +84,7 @@ impl Access {
                 vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE
                     | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_READ,
             ),
-            Access::DepthTest => (
-                depth_stages,
-                vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_READ,
-            ),
+            Access::DepthTest => (depth_stages, vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_READ),
             Access::Input => (
                 vk::PipelineStageFlags::FRAGMENT_SHADER,
                 vk::AccessFlags::INPUT_ATTACHMENT_READ,
@@ -219,7 +216,10 @@ impl GraphRenderPass {
                 }
                 AttachmentStart::Loaded => {
                     usage |= vk::ImageUsageFlags::TRANSFER_DST;
-                    (vk::AttachmentLoadOp::LOAD, layout_for(depth, &uses[first][a]))
+                    (
+                        vk::AttachmentLoadOp::LOAD,
+                        layout_for(depth, &uses[first][a]),
+                    )
                 }
             };
             // Stored only when something reads it after the pass.
@@ -416,7 +416,9 @@ fn dependencies(
         | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE
         | vk::AccessFlags::TRANSFER_WRITE;
     for (a, spec) in attachments.iter().enumerate() {
-        let users: Vec<usize> = (0..uses.len()).filter(|&s| !uses[s][a].is_empty()).collect();
+        let users: Vec<usize> = (0..uses.len())
+            .filter(|&s| !uses[s][a].is_empty())
+            .collect();
         let Some(&first) = users.first() else {
             continue;
         };
