@@ -69,6 +69,9 @@ pub enum ImageUse {
     FragmentSampled,
     /// Written as a colour attachment (e.g. loaded by a render pass).
     ColourAttachment,
+    /// Read as an input attachment (loaded by a render pass whose first
+    /// use of it is a read).
+    InputAttachment,
 }
 
 impl ImageUse {
@@ -93,6 +96,11 @@ impl ImageUse {
                 vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
                 vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
                 vk::AccessFlags::COLOR_ATTACHMENT_READ | vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+            ),
+            ImageUse::InputAttachment => (
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                vk::PipelineStageFlags::FRAGMENT_SHADER,
+                vk::AccessFlags::INPUT_ATTACHMENT_READ,
             ),
         }
     }
@@ -413,8 +421,13 @@ impl CommandBuffer {
     /// first subpass uses, after whatever wrote it.
     pub fn begin_render_pass(&self, pass: &GraphRenderPass) {
         for (image, initial) in pass.images.iter().zip(&pass.initial_layouts) {
-            if *initial == vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL {
-                self.transition(image, ImageUse::ColourAttachment);
+            match *initial {
+                vk::ImageLayout::UNDEFINED => {}
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL => {
+                    self.transition(image, ImageUse::ColourAttachment)
+                }
+                // A loaded attachment first read as an input attachment.
+                _ => self.transition(image, ImageUse::InputAttachment),
             }
         }
         let extent = pass.framebuffer.extent;

@@ -214,6 +214,12 @@ impl GraphRenderPass {
                 AttachmentStart::Undefined => {
                     (vk::AttachmentLoadOp::DONT_CARE, vk::ImageLayout::UNDEFINED)
                 }
+                AttachmentStart::Loaded if depth => {
+                    return Err(VkError::Graph(format!(
+                        "attachment '{}': loading a depth attachment is not supported",
+                        spec.name
+                    )));
+                }
                 AttachmentStart::Loaded => {
                     usage |= vk::ImageUsageFlags::TRANSFER_DST;
                     (
