@@ -50,7 +50,7 @@
 mod common;
 
 use aerial::render::output;
-use aerial::report::{compare_files, write_diff_png, Comparison, Metric, FLIP_DEFAULT_THRESHOLDS};
+use aerial::report::{compare_files, write_diff_png, ImageDiff, Metric, FLIP_DEFAULT_THRESHOLDS};
 use aerial::scene::Scene;
 use std::path::{Path, PathBuf};
 
@@ -142,11 +142,11 @@ fn remove_if_present(path: &Path) {
 /// One line of the summary table.
 struct Row {
     stem: String,
-    flip: Option<Comparison>,
+    flip: Option<ImageDiff>,
     note: String,
 }
 
-fn row(stem: String, flip: Option<Comparison>, note: &str) -> Row {
+fn row(stem: String, flip: Option<ImageDiff>, note: &str) -> Row {
     Row {
         stem,
         flip,

@@ -5,8 +5,8 @@
 //! can gate on it.
 
 use aerial::render::output;
-use aerial::report::compare::{
-    compare_files, write_diff_png, Comparison, Metric, Thresholds, FLIP_DEFAULT_THRESHOLDS,
+use aerial::report::image_diff::{
+    compare_files, write_diff_png, ImageDiff, Metric, Thresholds, FLIP_DEFAULT_THRESHOLDS,
 };
 use anyhow::bail;
 use std::path::{Path, PathBuf};
@@ -163,7 +163,7 @@ fn print_provenance(reference: &Path, test: &Path) {
     }
 }
 
-fn print_report(cmp: &Comparison, limits: &Thresholds) {
+fn print_report(cmp: &ImageDiff, limits: &Thresholds) {
     let (mean_unit, map_unit) = match cmp.metric {
         Metric::Flip => ("", "FLIP"),
         Metric::Rmse => ("", "RMS error"),
@@ -200,9 +200,9 @@ fn print_report(cmp: &Comparison, limits: &Thresholds) {
 }
 
 /// Human-readable reasons `cmp` fails `limits`, empty when it passes. Each
-/// limit is checked with `Comparison::passes`, so the exit status can never
+/// limit is checked with `ImageDiff::passes`, so the exit status can never
 /// disagree with the library's definition (including its NaN handling).
-fn exceeded(cmp: &Comparison, limits: &Thresholds) -> Vec<String> {
+fn exceeded(cmp: &ImageDiff, limits: &Thresholds) -> Vec<String> {
     let mut reasons = Vec::new();
     if let Some(l) = limits.mean {
         if !cmp.passes(&Thresholds {

@@ -20,7 +20,7 @@
 //!   the reference's own range is the natural scale). Identical images give
 //!   `+inf`.
 //!
-//! # What the fields of [`Comparison`] mean
+//! # What the fields of [`ImageDiff`] mean
 //!
 //! `error_map` holds one value per pixel, row-major from the top-left:
 //! the FLIP value for FLIP, and for RMSE and PSNR the per-pixel RMS error over
@@ -49,11 +49,11 @@
 //!
 //! # Serialisation
 //!
-//! [`Comparison`] serialises to JSON for reports. An infinite `mean` (PSNR of
+//! [`ImageDiff`] serialises to JSON for reports. An infinite `mean` (PSNR of
 //! identical images) is written as `null` and read back as `+inf`, because JSON
 //! cannot represent infinity. `error_map` is *not* serialised (it would be
 //! millions of numbers); write it with [`write_diff_png`] instead, and note
-//! that a deserialised `Comparison` has an empty `error_map`.
+//! that a deserialised `ImageDiff` has an empty `error_map`.
 
 use std::fmt;
 use std::fs::{self, File};
@@ -121,7 +121,7 @@ impl FromStr for Metric {
 /// See the module docs for what `mean`, `p99`, `max` and `error_map` hold for
 /// each metric.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Comparison {
+pub struct ImageDiff {
     /// The metric that produced this result.
     pub metric: Metric,
     /// Mean FLIP, whole-image RMSE, or whole-image PSNR in dB (`+inf` for
@@ -142,7 +142,7 @@ pub struct Comparison {
     pub error_map: Vec<f32>,
 }
 
-/// Pass/fail limits for a [`Comparison`]; a limit left as `None` is not
+/// Pass/fail limits for an [`ImageDiff`]; a limit left as `None` is not
 /// checked.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Thresholds {
@@ -183,7 +183,7 @@ pub const FLIP_DEFAULT_THRESHOLDS: Thresholds = Thresholds {
     p99: Some(0.1),
 };
 
-impl Comparison {
+impl ImageDiff {
     /// Whether this result is within `t`.
     ///
     /// FLIP and RMSE pass when `mean <= t.mean`; PSNR passes when
@@ -306,7 +306,7 @@ pub enum CompareError {
         /// The reference file.
         path: PathBuf,
     },
-    /// `write_diff_png` was given a `Comparison` whose map does not match its
+    /// `write_diff_png` was given an `ImageDiff` whose map does not match its
     /// size (e.g. one read back from JSON, which has no map).
     #[error("cannot write diff {}: error map has {len} values but the image is {width}x{height}", path.display())]
     BadErrorMap {
@@ -390,7 +390,7 @@ impl Loaded {
 /// Compares the reference image `a` with the test image `b` using `metric`.
 ///
 /// See the module docs for supported inputs and the meaning of the result.
-pub fn compare_files(a: &Path, b: &Path, metric: Metric) -> Result<Comparison, CompareError> {
+pub fn compare_files(a: &Path, b: &Path, metric: Metric) -> Result<ImageDiff, CompareError> {
     let reference = load(a)?;
     let test = load(b)?;
     compare_loaded(a, &reference, b, &test, metric)
@@ -424,7 +424,7 @@ pub fn compare_images(
     test_name: &str,
     test: ImageRef<'_>,
     metric: Metric,
-) -> Result<Comparison, CompareError> {
+) -> Result<ImageDiff, CompareError> {
     let (a, b) = (Path::new(reference_name), Path::new(test_name));
     compare_loaded(
         a,
@@ -443,7 +443,7 @@ fn compare_loaded(
     b: &Path,
     test: &Loaded,
     metric: Metric,
-) -> Result<Comparison, CompareError> {
+) -> Result<ImageDiff, CompareError> {
     if matches!(metric, Metric::Flip) {
         // Name whichever input is HDR so the user knows which file to change.
         for (path, img) in [(a, reference), (b, test)] {
@@ -484,7 +484,7 @@ fn compare_loaded(
             let map = nv_flip::flip(ref8, test8, nv_flip::DEFAULT_PIXELS_PER_DEGREE).to_vec();
             let mean = map.iter().map(|&v| f64::from(v)).sum::<f64>() / map.len() as f64;
             let (p99, max) = tail_stats(&map);
-            Ok(Comparison {
+            Ok(ImageDiff {
                 metric,
                 mean,
                 p99,
@@ -529,7 +529,7 @@ fn compare_loaded(
                 }
             };
             let (p99, max) = tail_stats(&map);
-            Ok(Comparison {
+            Ok(ImageDiff {
                 metric,
                 mean,
                 p99,
@@ -814,7 +814,7 @@ fn build_lut(points: &[(u8, [u8; 3])]) -> Vec<[u8; 3]> {
 /// The PNG is written to a temporary file in the same folder and renamed into
 /// place, so a failed write never leaves a partial or stale-looking file at
 /// `path`.
-pub fn write_diff_png(cmp: &Comparison, path: &Path) -> Result<(), CompareError> {
+pub fn write_diff_png(cmp: &ImageDiff, path: &Path) -> Result<(), CompareError> {
     let expected = (cmp.width as usize).checked_mul(cmp.height as usize);
     if cmp.width == 0 || cmp.height == 0 || expected != Some(cmp.error_map.len()) {
         return Err(CompareError::BadErrorMap {
@@ -943,7 +943,7 @@ mod tests {
         fn new(tag: &str) -> Self {
             static N: AtomicUsize = AtomicUsize::new(0);
             let dir = std::env::temp_dir().join(format!(
-                "aerial-compare-{tag}-{}-{}",
+                "aerial-image-diff-{tag}-{}-{}",
                 std::process::id(),
                 N.fetch_add(1, Ordering::Relaxed)
             ));
@@ -1011,7 +1011,7 @@ mod tests {
         let json = serde_json::to_string(&psnr).unwrap();
         assert!(json.contains("\"mean\":null"), "{json}");
         assert!(!json.contains("error_map"), "{json}");
-        let back: Comparison = serde_json::from_str(&json).unwrap();
+        let back: ImageDiff = serde_json::from_str(&json).unwrap();
         assert_eq!(back.mean, f64::INFINITY);
         assert_eq!(back.metric, Metric::Psnr);
         assert!(back.error_map.is_empty());
@@ -1285,7 +1285,7 @@ mod tests {
     #[test]
     fn failed_diff_write_leaves_nothing_behind() {
         let dir = TempDir::new("diff-fail");
-        let c = Comparison {
+        let c = ImageDiff {
             metric: Metric::Flip,
             mean: 0.0,
             p99: 0.0,
@@ -1303,7 +1303,7 @@ mod tests {
         assert_eq!(dir.entries(), ["taken"]);
 
         // A map that does not match the size is refused before any I/O.
-        let bad = Comparison {
+        let bad = ImageDiff {
             error_map: vec![0.0],
             ..c
         };
@@ -1329,7 +1329,7 @@ mod tests {
 
     #[test]
     fn thresholds_and_metric_names() {
-        let c = Comparison {
+        let c = ImageDiff {
             metric: Metric::Rmse,
             mean: 0.1,
             p99: 0.3,
