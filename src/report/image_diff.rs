@@ -745,29 +745,15 @@ fn from_memory(path: &Path, image: ImageRef<'_>) -> Result<Loaded, CompareError>
     })
 }
 
-/// Control points of the magma colour map that FLIP uses for its error maps:
-/// every 16th entry of FLIP's 256-entry table plus the last, as
-/// `(table index, 8-bit sRGB)`. Linear interpolation between them stays within
-/// 3/255 of the full table.
-const MAGMA: [(u8, [u8; 3]); 17] = [
-    (0, [0, 0, 4]),
-    (16, [10, 8, 34]),
-    (32, [29, 17, 71]),
-    (48, [54, 16, 107]),
-    (64, [81, 18, 124]),
-    (80, [106, 28, 129]),
-    (96, [131, 38, 129]),
-    (112, [156, 46, 127]),
-    (128, [183, 55, 121]),
-    (144, [208, 65, 111]),
-    (160, [231, 82, 99]),
-    (176, [245, 107, 92]),
-    (192, [252, 137, 97]),
-    (208, [254, 167, 114]),
-    (224, [254, 196, 136]),
-    (240, [253, 226, 163]),
-    (255, [252, 253, 191]),
-];
+/// FLIP's own magma colour map, 256 entries of 8-bit sRGB, taken from the
+/// FLIP library so our error maps look exactly like those of FLIP's tools.
+fn magma_lut() -> Vec<[u8; 3]> {
+    nv_flip::magma_lut()
+        .to_vec()
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect()
+}
 
 /// Black-red-yellow-white ramp for RMSE/PSNR maps. Deliberately not magma, so
 /// nobody mistakes a relative heat map for FLIP's absolute scale.
@@ -826,7 +812,7 @@ pub fn write_diff_png(cmp: &ImageDiff, path: &Path) -> Result<(), CompareError> 
     }
 
     let (lut, scale) = match cmp.metric {
-        Metric::Flip => (build_lut(&MAGMA), 1.0f32),
+        Metric::Flip => (magma_lut(), 1.0f32),
         Metric::Rmse | Metric::Psnr => {
             let max = cmp.error_map.iter().copied().fold(0.0f32, f32::max);
             let scale = if max > 0.0 && max.is_finite() {
@@ -1316,15 +1302,47 @@ mod tests {
     }
 
     #[test]
-    fn magma_lut_matches_flip_endpoints() {
-        let lut = build_lut(&MAGMA);
+    fn flip_diff_uses_flips_magma_colours() {
+        // Endpoints of the magma table published with FLIP, rounded to
+        // 8 bits: (0.001462, 0.000466, 0.013866) and (0.987053, 0.991438,
+        // 0.749504).
+        let lut = magma_lut();
         assert_eq!(lut.len(), 256);
         assert_eq!(lut[0], [0, 0, 4]);
-        assert_eq!(lut[128], [183, 55, 121]);
-        // Entry 8 of FLIP's table is (0.013708, 0.011771, 0.068667); halfway
-        // between control points 0 and 16 we expect roughly the same.
-        assert_eq!(lut[8], [5, 4, 19]);
         assert_eq!(lut[255], [252, 253, 191]);
+
+        // The diff PNG of a 0..1 ramp is coloured exactly as FLIP's own
+        // colour mapping colours the same values.
+        let ramp: Vec<f32> = (0..300).map(|i| i as f32 / 299.0).collect();
+        let cmp = ImageDiff {
+            metric: Metric::Flip,
+            mean: 0.5,
+            p99: 0.99,
+            max: 1.0,
+            width: 300,
+            height: 1,
+            error_map: ramp.clone(),
+        };
+        let dir = TempDir::new("magma");
+        let out = dir.path("ramp.png");
+        write_diff_png(&cmp, &out).unwrap();
+        let ours = image::open(&out).unwrap().into_rgb8().into_raw();
+        let theirs = nv_flip::FlipImageFloat::with_data(300, 1, &ramp)
+            .apply_color_lut(&nv_flip::magma_lut())
+            .to_vec();
+        assert_eq!(ours, theirs);
+    }
+
+    #[test]
+    fn heat_lut_interpolates_its_control_points() {
+        let lut = build_lut(&HEAT);
+        assert_eq!(lut.len(), 256);
+        assert_eq!(lut[0], [0, 0, 0]);
+        assert_eq!(lut[85], [255, 0, 0]);
+        // 42/85 of the way from black to red: 255 * 42 / 85 = 126.
+        assert_eq!(lut[42], [126, 0, 0]);
+        assert_eq!(lut[170], [255, 255, 0]);
+        assert_eq!(lut[255], [255, 255, 255]);
     }
 
     #[test]
