@@ -31,9 +31,19 @@
 //! dB (higher is better) while `p99`/`max` are per-pixel errors in value units
 //! (lower is better).
 //!
-//! A high percentile is gated as well as the mean because a small, localised
+//! A high percentile is gated as well as the mean because a localised
 //! breakage (a missing object, a few exploded pixels) barely moves the mean
 //! of a large frame but dominates the top percentile.
+//!
+//! `worst_window` catches what is too small even for the 99th percentile
+//! (under 1 % of the pixels): it pools the error over every
+//! [`WINDOW`]x[`WINDOW`]-pixel square inside the image and reports the
+//! worst square. For FLIP that is the mean FLIP value over the square. For
+//! RMSE and PSNR it is the mean of `error_map` over the square divided by
+//! the reference's mean level (per pixel the RMS of R, G, B) over the same
+//! square or over the whole image, whichever is larger, so that one limit
+//! suits HDR images of any brightness; the floor keeps faint changes in
+//! nearly black areas from counting as huge relative errors.
 //!
 //! # Inputs
 //!
@@ -132,6 +142,16 @@ pub struct ImageDiff {
     pub p99: f64,
     /// Largest value of `error_map`.
     pub max: f64,
+    /// Error over the worst [`WINDOW`]x[`WINDOW`]-pixel square: the mean
+    /// FLIP there, or for RMSE and PSNR the RMS error there relative to the
+    /// reference's RMS level (see the module docs). Catches small, local
+    /// defects that the mean and p99 of a large frame hide.
+    #[serde(default)]
+    pub worst_window: f64,
+    /// Whether the images were linear HDR (OpenEXR or [`ImageRef::Linear`]),
+    /// which decides the default limits ([`ImageDiff::default_thresholds`]).
+    #[serde(default)]
+    pub hdr: bool,
     /// Image width in pixels.
     pub width: u32,
     /// Image height in pixels.
@@ -152,35 +172,73 @@ pub struct Thresholds {
     /// The largest acceptable `p99` of the per-pixel error (for every metric,
     /// including PSNR, whose `p99` is a per-pixel RMS error).
     pub p99: Option<f64>,
+    /// The largest acceptable `worst_window` (for every metric).
+    #[serde(default)]
+    pub worst_window: Option<f64>,
 }
 
+/// Side, in pixels, of the square over which `worst_window` pools the
+/// error. At FLIP's 67 pixels per degree 12 pixels are 0.18 degrees: a
+/// small object, but large enough that the error of edges moved by a
+/// fraction of a pixel (a thin line of moderate values) averages out over
+/// it. Images narrower or lower than this use a window as wide or as high
+/// as the image.
+pub const WINDOW: u32 = 12;
+
 /// Default FLIP limits of `aerial compare` and the screenshot regression
-/// suite: mean <= 0.03 and p99 <= 0.1, meaning "looks the same to a viewer,
-/// allowing for a different GPU or driver".
+/// suite: mean <= 0.03, p99 <= 0.1 and worst 12x12 window <= 0.3, meaning
+/// "looks the same to a viewer, allowing for a different GPU or driver".
 ///
-/// Chosen from measurements on the example scenes (lavapipe, at 160x90 and
-/// 640x360; the numbers barely depend on the size):
+/// Chosen from measurements on the example scenes (lavapipe, at 160x90,
+/// 320x180 and 640x360; mean and p99 barely depend on the size; "window" is
+/// `worst_window`):
 ///
-/// | change to the image                      | FLIP mean   | FLIP p99    |
-/// |------------------------------------------|-------------|-------------|
-/// | +-1 LSB noise on half the channels       | 0.011-0.012 | 0.025-0.028 |
-/// | up to +-3 LSB noise on every channel     | 0.024-0.026 | 0.053-0.060 |
-/// | exposure +1 %                            | 0.011-0.019 | 0.034-0.046 |
-/// | camera moved by 1/20 pixel (edges shift) | 0.002-0.013 | 0.020-0.092 |
-/// | exposure +5 %                            | 0.033-0.058 | 0.071-0.107 |
-/// | one light removed                        | 0.067-0.17  | 0.30-0.96   |
-/// | a sphere, torus or flag removed          | 0.021-0.17  | 0.81-0.99   |
+/// | change to the image                      | FLIP mean   | FLIP p99    | window      |
+/// |------------------------------------------|-------------|-------------|-------------|
+/// | +-1 LSB noise on half the channels       | 0.011-0.012 | 0.025-0.028 | 0.016-0.021 |
+/// | up to +-3 LSB noise on every channel     | 0.024-0.026 | 0.053-0.061 | 0.037-0.046 |
+/// | exposure +1 %                            | 0.011-0.019 | 0.033-0.046 | 0.029-0.048 |
+/// | camera turned by 1/20 pixel (edges shift)| 0.002-0.013 | 0.021-0.20  | 0.037-0.208 |
+/// | exposure +5 %                            | 0.033-0.058 | 0.071-0.107 | 0.067-0.112 |
+/// | a sphere, torus or flag removed          | 0.004-0.17  | 0.000-0.99  | 0.41-0.98   |
+/// | 6x6 pixel block inverted                 | 0.000-0.006 | 0.000-0.10  | 0.50-0.54   |
+/// | 12x12 pixel block inverted               | 0.001-0.012 | 0.000-0.45  | 0.80-0.98   |
+/// | small sphere added/removed, 7 px across  | 0.001-0.005 | 0.001-0.11  | 0.36-0.40   |
 ///
 /// The first four are what another driver's rounding, rasterisation rules
-/// or texture filtering plausibly produce, and pass; the last three are
-/// real regressions, and fail. A mean limit of 0.01 would already reject
-/// +-1 LSB rounding noise. Small changes can hide under both limits: a thin
-/// ring covering 0.45 % of a 640x360 frame, removed, gives mean 0.004 and
-/// p99 0.016 (at 160x90 FLIP's blur spreads it to p99 0.20, which fails),
-/// though its `max` is 0.97, so look at `max` and the diff image too.
+/// or texture filtering plausibly produce, and pass (except one p99 of 0.20:
+/// `shading_models` at 320x180 turned vertically, where the toon shading's
+/// bands move); the rest are real regressions, and fail. A mean limit of 0.01 would already reject +-1 LSB
+/// rounding noise. Mean and p99 alone let small defects through: in a
+/// 640x360 frame the inverted 12x12 block has mean 0.001 and p99 0.000,
+/// because it covers only 0.06 % of the pixels. The window limit catches
+/// it; the largest window value of a change that must pass came from the
+/// textured flag, whose texels snap as the camera turns. Defects smaller
+/// than about 6 pixels across (a sphere 5 px across: window 0.23 at 160x90)
+/// can still pass; look at `max` and the diff image too.
 pub const FLIP_DEFAULT_THRESHOLDS: Thresholds = Thresholds {
     mean: Some(0.03),
     p99: Some(0.1),
+    worst_window: Some(0.3),
+};
+
+/// Default limits for comparing linear HDR images (OpenEXR) with RMSE or
+/// PSNR: only `worst_window` <= 0.4, the mean error over the worst 12x12
+/// window relative to the reference's mean level there (or over the whole
+/// image, if larger).
+///
+/// The whole-image RMSE and PSNR scale with the scene's brightness, so they
+/// have no default; the window statistic is relative, so one limit fits any
+/// exposure. Measured on HDR renders of the example scenes at 160x90 and
+/// 320x180: noise of up to +-1 % on every channel gives at most 0.006,
+/// exposure +1 % 0.010, the camera turned by 1/20 pixel 0.021-0.29 (the
+/// most from the flag's texture); a removed sphere, torus or flag 0.44 or
+/// more, a small sphere 7 px across added or removed 0.47-0.68, a 12x12
+/// block with its colour channels rotated 0.41-0.60.
+pub const HDR_DEFAULT_THRESHOLDS: Thresholds = Thresholds {
+    mean: None,
+    p99: None,
+    worst_window: Some(0.4),
 };
 
 impl ImageDiff {
@@ -188,9 +246,10 @@ impl ImageDiff {
     ///
     /// FLIP and RMSE pass when `mean <= t.mean`; PSNR passes when
     /// `mean >= t.mean` (PSNR grows as images get closer, and identical images
-    /// with `+inf` dB pass any PSNR limit). For every metric `p99 <= t.p99` is
-    /// required as well. Any NaN involved makes the check fail, so a broken
-    /// threshold or result can never pass by accident.
+    /// with `+inf` dB pass any PSNR limit). For every metric `p99 <= t.p99`
+    /// and `worst_window <= t.worst_window` are required as well. Any NaN
+    /// involved makes the check fail, so a broken threshold or result can
+    /// never pass by accident.
     pub fn passes(&self, t: &Thresholds) -> bool {
         let mean_ok = match t.mean {
             None => true,
@@ -200,7 +259,23 @@ impl ImageDiff {
             },
         };
         let p99_ok = t.p99.is_none_or(|limit| self.p99 <= limit);
-        mean_ok && p99_ok
+        let window_ok = t
+            .worst_window
+            .is_none_or(|limit| self.worst_window <= limit);
+        mean_ok && p99_ok && window_ok
+    }
+
+    /// The limits `aerial compare` applies when none are given:
+    /// [`FLIP_DEFAULT_THRESHOLDS`] for FLIP, [`HDR_DEFAULT_THRESHOLDS`] for
+    /// RMSE and PSNR of HDR images, and none for RMSE and PSNR of PNGs
+    /// (whose errors are in display-encoded values, where a relative error
+    /// of dark pixels says little).
+    pub fn default_thresholds(&self) -> Thresholds {
+        match (self.metric, self.hdr) {
+            (Metric::Flip, _) => FLIP_DEFAULT_THRESHOLDS,
+            (Metric::Rmse | Metric::Psnr, true) => HDR_DEFAULT_THRESHOLDS,
+            (Metric::Rmse | Metric::Psnr, false) => Thresholds::default(),
+        }
     }
 }
 
@@ -484,11 +559,15 @@ fn compare_loaded(
             let map = nv_flip::flip(ref8, test8, nv_flip::DEFAULT_PIXELS_PER_DEGREE).to_vec();
             let mean = map.iter().map(|&v| f64::from(v)).sum::<f64>() / map.len() as f64;
             let (p99, max) = tail_stats(&map);
+            let worst_window =
+                worst_window(width, height, |i| [f64::from(map[i])], |[sum], n| sum / n);
             Ok(ImageDiff {
                 metric,
                 mean,
                 p99,
                 max,
+                worst_window,
+                hdr: false,
                 width,
                 height,
                 error_map: map,
@@ -529,17 +608,98 @@ fn compare_loaded(
                 }
             };
             let (p99, max) = tail_stats(&map);
+            let worst_window = relative_worst_window(&ra, &map, width, height);
             Ok(ImageDiff {
                 metric,
                 mean,
                 p99,
                 max,
+                worst_window,
+                hdr: matches!(reference.pixels, Pixels::Linear(_)),
                 width,
                 height,
                 error_map: map,
             })
         }
     }
+}
+
+/// The largest `score` over all [`WINDOW`]x[`WINDOW`] squares inside a
+/// `width` x `height` image (clipped to the image size), where `score` gets
+/// the sums over the square of the `N` per-pixel values that `value` gives
+/// for a row-major pixel index, and the number of pixels in the square.
+///
+/// Keeps running column sums, so it needs memory for one row rather than a
+/// summed-area table of the whole image.
+fn worst_window<const N: usize>(
+    width: u32,
+    height: u32,
+    value: impl Fn(usize) -> [f64; N],
+    score: impl Fn([f64; N], f64) -> f64,
+) -> f64 {
+    let (w, h) = (width as usize, height as usize);
+    let (kx, ky) = (w.min(WINDOW as usize), h.min(WINDOW as usize));
+    let count = (kx * ky) as f64;
+    let add = |a: &mut [f64; N], b: [f64; N], sign: f64| {
+        for (x, y) in a.iter_mut().zip(b) {
+            *x += sign * y;
+        }
+    };
+    // columns[x]: sums over the last ky rows of column x.
+    let mut columns = vec![[0.0; N]; w];
+    let mut worst = 0.0f64;
+    for y in 0..h {
+        for (x, column) in columns.iter_mut().enumerate() {
+            add(column, value(y * w + x), 1.0);
+            if y >= ky {
+                add(column, value((y - ky) * w + x), -1.0);
+            }
+        }
+        if y + 1 < ky {
+            continue;
+        }
+        let mut sums = [0.0; N];
+        for (x, &column) in columns.iter().enumerate() {
+            add(&mut sums, column, 1.0);
+            if x >= kx {
+                add(&mut sums, columns[x - kx], -1.0);
+            }
+            if x + 1 >= kx {
+                // Running sums of non-negative values can come out a hair
+                // below zero after subtractions; clamp so a score never
+                // turns NaN from a negative square root.
+                let s = sums.map(|v| v.max(0.0));
+                worst = worst.max(score(s, count));
+            }
+        }
+    }
+    worst
+}
+
+/// `worst_window` for RMSE and PSNR: the mean per-pixel error over the
+/// window divided by the reference's mean level there or over the whole
+/// image, whichever is larger (a pixel's level is the RMS of its R, G, B).
+/// The floor keeps a faint change in a nearly black window, such as one edge
+/// pixel against a black background, from counting as a huge relative
+/// error; an all-black reference uses a level of 1. `reference` is
+/// interleaved RGB, `map` the per-pixel RMS error.
+fn relative_worst_window(reference: &[f32], map: &[f32], width: u32, height: u32) -> f64 {
+    let level = |i: usize| {
+        (reference[3 * i..3 * i + 3]
+            .iter()
+            .map(|&v| f64::from(v) * f64::from(v))
+            .sum::<f64>()
+            / 3.0)
+            .sqrt()
+    };
+    let overall = (0..map.len()).map(level).sum::<f64>() / map.len() as f64;
+    let floor = if overall > 0.0 { overall } else { 1.0 };
+    worst_window(
+        width,
+        height,
+        |i| [f64::from(map[i]), level(i)],
+        |[err, reference], n| (err / n) / (reference / n).max(floor),
+    )
 }
 
 /// 99th percentile and maximum of a non-empty error map.
@@ -990,7 +1150,8 @@ mod tests {
         assert_eq!(psnr.mean, f64::INFINITY);
         assert!(psnr.passes(&Thresholds {
             mean: Some(60.0),
-            p99: Some(0.0)
+            p99: Some(0.0),
+            ..Thresholds::default()
         }));
 
         // JSON has no infinity: it goes out as null and comes back as +inf.
@@ -1027,11 +1188,13 @@ mod tests {
         );
         assert!(psnr.passes(&Thresholds {
             mean: Some(18.0),
-            p99: None
+            p99: None,
+            ..Thresholds::default()
         }));
         assert!(!psnr.passes(&Thresholds {
             mean: Some(19.0),
-            p99: None
+            p99: None,
+            ..Thresholds::default()
         }));
     }
 
@@ -1091,11 +1254,13 @@ mod tests {
         // A mean-only gate at a typical 0.05 would let this through.
         assert!(c.passes(&Thresholds {
             mean: Some(0.05),
-            p99: None
+            p99: None,
+            ..Thresholds::default()
         }));
         assert!(!c.passes(&Thresholds {
             mean: Some(0.05),
-            p99: Some(0.1)
+            p99: Some(0.1),
+            ..Thresholds::default()
         }));
     }
 
@@ -1276,6 +1441,8 @@ mod tests {
             mean: 0.0,
             p99: 0.0,
             max: 0.0,
+            worst_window: 0.0,
+            hdr: false,
             width: 2,
             height: 1,
             error_map: vec![0.0, 1.0],
@@ -1319,6 +1486,8 @@ mod tests {
             mean: 0.5,
             p99: 0.99,
             max: 1.0,
+            worst_window: 0.5,
+            hdr: false,
             width: 300,
             height: 1,
             error_map: ramp.clone(),
@@ -1352,6 +1521,8 @@ mod tests {
             mean: 0.1,
             p99: 0.3,
             max: 0.5,
+            worst_window: 0.5,
+            hdr: false,
             width: 1,
             height: 1,
             error_map: vec![0.5],
@@ -1359,15 +1530,18 @@ mod tests {
         assert!(c.passes(&Thresholds::default()));
         assert!(c.passes(&Thresholds {
             mean: Some(0.1),
-            p99: Some(0.3)
+            p99: Some(0.3),
+            ..Thresholds::default()
         }));
         assert!(!c.passes(&Thresholds {
             mean: Some(0.09),
-            p99: None
+            p99: None,
+            ..Thresholds::default()
         }));
         assert!(!c.passes(&Thresholds {
             mean: None,
-            p99: Some(f64::NAN)
+            p99: Some(f64::NAN),
+            ..Thresholds::default()
         }));
         for m in [Metric::Flip, Metric::Psnr, Metric::Rmse] {
             assert_eq!(m.to_string().parse::<Metric>().unwrap(), m);
