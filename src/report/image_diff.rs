@@ -1468,6 +1468,130 @@ mod tests {
         assert_eq!(dir.entries(), ["taken"]);
     }
 
+    /// The worst window mean by brute force, for checking the running sums.
+    fn brute_worst_mean(map: &[f32], w: usize, h: usize) -> f64 {
+        let (kx, ky) = (w.min(WINDOW as usize), h.min(WINDOW as usize));
+        let mut worst = 0.0f64;
+        for y in 0..=h - ky {
+            for x in 0..=w - kx {
+                let sum: f64 = (y..y + ky)
+                    .flat_map(|r| (x..x + kx).map(move |c| f64::from(map[r * w + c])))
+                    .sum();
+                worst = worst.max(sum / (kx * ky) as f64);
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn worst_window_matches_brute_force() {
+        // Pseudo-random maps of sizes below, at and above the window.
+        let mut state = 7u32;
+        for (w, h) in [(1, 1), (5, 3), (12, 12), (13, 30), (40, 17)] {
+            let map: Vec<f32> = (0..w * h)
+                .map(|_| {
+                    state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                    (state >> 8) as f32 / (1u32 << 24) as f32
+                })
+                .collect();
+            let fast = worst_window(w as u32, h as u32, |i| [f64::from(map[i])], |[s], n| s / n);
+            let slow = brute_worst_mean(&map, w, h);
+            assert!((fast - slow).abs() < 1e-9, "{w}x{h}: {fast} vs {slow}");
+        }
+    }
+
+    #[test]
+    fn relative_window_by_hand_exr() {
+        // Reference 40x30 at level 1 (every channel 1). A 6x6 block raised
+        // to 1.5: per-pixel error 0.5, so the worst window holds 36 such
+        // pixels out of 144: 0.5 * 36 / 144 = 0.125, over a level of 1.
+        let dir = TempDir::new("window-exr");
+        let reference = exr(&dir, "a.exr", 40, 30, [1.0, 1.0, 1.0]);
+        let block = |size: usize, name: &str| {
+            let p = dir.path(name);
+            exr::prelude::write_rgb_file(&p, 40, 30, |x, y| {
+                let v = if (10..10 + size).contains(&x) && (5..5 + size).contains(&y) {
+                    1.5f32
+                } else {
+                    1.0
+                };
+                (v, v, v)
+            })
+            .unwrap();
+            p
+        };
+        let small = compare_files(&reference, &block(6, "b6.exr"), Metric::Rmse).unwrap();
+        assert!((small.worst_window - 0.125).abs() < 1e-9, "{small:?}");
+        assert!(small.hdr);
+        // A 12x12 block fills a window: 0.5.
+        let big = compare_files(&reference, &block(12, "b12.exr"), Metric::Psnr).unwrap();
+        assert!((big.worst_window - 0.5).abs() < 1e-9, "{big:?}");
+        // Defaults for HDR: only the window, at 0.4.
+        assert_eq!(big.default_thresholds(), HDR_DEFAULT_THRESHOLDS);
+        assert!(small.passes(&HDR_DEFAULT_THRESHOLDS));
+        assert!(!big.passes(&HDR_DEFAULT_THRESHOLDS));
+    }
+
+    #[test]
+    fn relative_window_is_floored_at_the_image_level() {
+        // Left half of the reference black, right half at level 2: the
+        // image's mean level is 1. One pixel on the black side turns 0.6:
+        // relative to its black window that would be infinite, but the
+        // floor makes it 0.6 / 144 / 1.
+        let lin = |f: &dyn Fn(usize) -> f32| -> Vec<f32> {
+            (0..32 * 16)
+                .flat_map(|i| {
+                    let v = f(i);
+                    [v, v, v, 1.0]
+                })
+                .collect()
+        };
+        let reference = lin(&|i| if i % 32 < 16 { 0.0 } else { 2.0 });
+        let test = lin(&|i| match i {
+            i if i == 3 * 32 + 2 => 0.6,
+            i if i % 32 < 16 => 0.0,
+            _ => 2.0,
+        });
+        let image = |rgba| ImageRef::Linear {
+            width: 32,
+            height: 16,
+            rgba,
+        };
+        let c = compare_images("a", image(&reference), "b", image(&test), Metric::Rmse).unwrap();
+        assert!((c.worst_window - 0.6 / 144.0).abs() < 1e-9, "{c:?}");
+    }
+
+    #[test]
+    fn flip_window_catches_a_block_that_mean_and_p99_miss() {
+        // A 12x12 block inverted in a 320x180 picture is 0.25 % of it: far
+        // too few pixels to move the mean or p99, yet a window fits inside
+        // it, where FLIP is close to 1 (the block is mid-grey turned into
+        // its complement, with texture around so FLIP sees edges).
+        let picture = RgbImage::from_fn(320, 180, |x, y| {
+            Rgb([(x % 64 * 3) as u8, (y % 48 * 4) as u8, 100])
+        });
+        let mut broken = picture.clone();
+        for y in 80..92 {
+            for x in 150..162 {
+                let p = broken.get_pixel_mut(x, y);
+                p.0 = p.0.map(|c| 255 - c);
+            }
+        }
+        let dir = TempDir::new("flip-window");
+        let a = png(&dir, "a.png", &picture);
+        let b = png(&dir, "b.png", &broken);
+        let c = compare_files(&a, &b, Metric::Flip).unwrap();
+        assert!(c.mean <= 0.03 && c.p99 <= 0.1, "{c:?}");
+        assert!(c.worst_window > 0.5, "{c:?}");
+        assert!((c.worst_window - brute_worst_mean(&c.error_map, 320, 180)).abs() < 1e-9);
+        assert!(!c.hdr);
+        assert_eq!(c.default_thresholds(), FLIP_DEFAULT_THRESHOLDS);
+        assert!(!c.passes(&FLIP_DEFAULT_THRESHOLDS));
+        // PNGs compared with rmse have no default limits.
+        let rmse = compare_files(&a, &b, Metric::Rmse).unwrap();
+        assert_eq!(rmse.default_thresholds(), Thresholds::default());
+    }
+
     #[test]
     fn flip_diff_uses_flips_magma_colours() {
         // Endpoints of the magma table published with FLIP, rounded to
