@@ -77,6 +77,7 @@ fn identical_images_pass() {
     // The defaults are applied and shown.
     assert!(stdout.contains("limit <= 0.03"), "{}", text(&out));
     assert!(stdout.contains("limit <= 0.1"), "{}", text(&out));
+    assert!(stdout.contains("limit <= 0.3"), "{}", text(&out));
     assert!(stdout.contains("result  pass"), "{}", text(&out));
 }
 
@@ -123,6 +124,8 @@ fn a_modified_image_fails_and_writes_the_diff() {
             "--threshold",
             "1",
             "--p99-threshold",
+            "1",
+            "--window-threshold",
             "1",
             "--metric",
             "flip",
@@ -201,6 +204,8 @@ fn bad_options_and_flip_on_exr_are_errors() {
         &["--threshold", "nan"][..],
         &["--threshold", "-0.1"],
         &["--p99-threshold", "-1"],
+        &["--window-threshold", "-0.5"],
+        &["--window-threshold", "nan"],
         &["--metric", "ssim"],
     ] {
         let out = compare(&[&a, &a], bad);

@@ -4,7 +4,7 @@
 //! - [`stats`] turns raw frame-time samples into a [`Summary`] (min, median,
 //!   p95, max, mean, sample standard deviation) that serialises to JSON for
 //!   dashboards and regression checks.
-//! - [`compare`] compares two images (PNG as sRGB 8-bit, OpenEXR as linear
+//! - [`image_diff`] compares two images (PNG as sRGB 8-bit, OpenEXR as linear
 //!   float) with FLIP, PSNR or RMSE, gates the result against [`Thresholds`],
 //!   and writes a diff picture for humans to look at.
 //! - [`sweep`] renders the combinations of knob settings and measures error
@@ -14,13 +14,13 @@
 //! a GPU, e.g. to re-check stored screenshots; the sweep gets its renders
 //! from a closure the caller supplies.
 
-pub mod compare;
+pub mod image_diff;
 pub mod plot;
 pub mod stats;
 pub mod sweep;
 
-pub use compare::{
-    compare_files, compare_images, write_diff_png, CompareError, Comparison, ImageRef, Metric,
+pub use image_diff::{
+    compare_files, compare_images, write_diff_png, CompareError, ImageDiff, ImageRef, Metric,
     Thresholds, FLIP_DEFAULT_THRESHOLDS,
 };
 pub use stats::{percentile, Summary};

@@ -45,7 +45,7 @@
 //! - `flip_mean` and `flip_p99`: FLIP of the tone-mapped 8-bit sRGB outputs
 //!   (what a viewer sees), mean and 99th percentile over the pixels.
 //!
-//! See [`super::compare`] for the exact metric definitions.
+//! See [`super::image_diff`] for the exact metric definitions.
 //!
 //! # Pareto front
 //!
@@ -57,7 +57,7 @@
 //! which keeps this module free of Vulkan and lets it be tested without a
 //! device.
 
-use super::compare::{compare_images, write_atomically, CompareError, ImageRef, Metric};
+use super::image_diff::{compare_images, write_atomically, CompareError, ImageRef, Metric};
 use super::plot::{self, PlotError, PlotPoint};
 use super::stats::Summary;
 use crate::render::reference::{ReferenceError, ReferenceScene};

@@ -20,7 +20,7 @@
 //!   the reference's own range is the natural scale). Identical images give
 //!   `+inf`.
 //!
-//! # What the fields of [`Comparison`] mean
+//! # What the fields of [`ImageDiff`] mean
 //!
 //! `error_map` holds one value per pixel, row-major from the top-left:
 //! the FLIP value for FLIP, and for RMSE and PSNR the per-pixel RMS error over
@@ -31,9 +31,19 @@
 //! dB (higher is better) while `p99`/`max` are per-pixel errors in value units
 //! (lower is better).
 //!
-//! A high percentile is gated as well as the mean because a small, localised
+//! A high percentile is gated as well as the mean because a localised
 //! breakage (a missing object, a few exploded pixels) barely moves the mean
 //! of a large frame but dominates the top percentile.
+//!
+//! `worst_window` catches what is too small even for the 99th percentile
+//! (under 1 % of the pixels): it pools the error over every
+//! [`WINDOW`]x[`WINDOW`]-pixel square inside the image and reports the
+//! worst square. For FLIP that is the mean FLIP value over the square. For
+//! RMSE and PSNR it is the mean of `error_map` over the square divided by
+//! the reference's mean level (per pixel the RMS of R, G, B) over the same
+//! square or over the whole image, whichever is larger, so that one limit
+//! suits HDR images of any brightness; the floor keeps faint changes in
+//! nearly black areas from counting as huge relative errors.
 //!
 //! # Inputs
 //!
@@ -49,11 +59,11 @@
 //!
 //! # Serialisation
 //!
-//! [`Comparison`] serialises to JSON for reports. An infinite `mean` (PSNR of
+//! [`ImageDiff`] serialises to JSON for reports. An infinite `mean` (PSNR of
 //! identical images) is written as `null` and read back as `+inf`, because JSON
 //! cannot represent infinity. `error_map` is *not* serialised (it would be
 //! millions of numbers); write it with [`write_diff_png`] instead, and note
-//! that a deserialised `Comparison` has an empty `error_map`.
+//! that a deserialised `ImageDiff` has an empty `error_map`.
 
 use std::fmt;
 use std::fs::{self, File};
@@ -121,7 +131,7 @@ impl FromStr for Metric {
 /// See the module docs for what `mean`, `p99`, `max` and `error_map` hold for
 /// each metric.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Comparison {
+pub struct ImageDiff {
     /// The metric that produced this result.
     pub metric: Metric,
     /// Mean FLIP, whole-image RMSE, or whole-image PSNR in dB (`+inf` for
@@ -132,6 +142,16 @@ pub struct Comparison {
     pub p99: f64,
     /// Largest value of `error_map`.
     pub max: f64,
+    /// Error over the worst [`WINDOW`]x[`WINDOW`]-pixel square: the mean
+    /// FLIP there, or for RMSE and PSNR the RMS error there relative to the
+    /// reference's RMS level (see the module docs). Catches small, local
+    /// defects that the mean and p99 of a large frame hide.
+    #[serde(default)]
+    pub worst_window: f64,
+    /// Whether the images were linear HDR (OpenEXR or [`ImageRef::Linear`]),
+    /// which decides the default limits ([`ImageDiff::default_thresholds`]).
+    #[serde(default)]
+    pub hdr: bool,
     /// Image width in pixels.
     pub width: u32,
     /// Image height in pixels.
@@ -142,7 +162,7 @@ pub struct Comparison {
     pub error_map: Vec<f32>,
 }
 
-/// Pass/fail limits for a [`Comparison`]; a limit left as `None` is not
+/// Pass/fail limits for an [`ImageDiff`]; a limit left as `None` is not
 /// checked.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Thresholds {
@@ -152,45 +172,84 @@ pub struct Thresholds {
     /// The largest acceptable `p99` of the per-pixel error (for every metric,
     /// including PSNR, whose `p99` is a per-pixel RMS error).
     pub p99: Option<f64>,
+    /// The largest acceptable `worst_window` (for every metric).
+    #[serde(default)]
+    pub worst_window: Option<f64>,
 }
 
+/// Side, in pixels, of the square over which `worst_window` pools the
+/// error. At FLIP's 67 pixels per degree 12 pixels are 0.18 degrees: a
+/// small object, but large enough that the error of edges moved by a
+/// fraction of a pixel (a thin line of moderate values) averages out over
+/// it. Images narrower or lower than this use a window as wide or as high
+/// as the image.
+pub const WINDOW: u32 = 12;
+
 /// Default FLIP limits of `aerial compare` and the screenshot regression
-/// suite: mean <= 0.03 and p99 <= 0.1, meaning "looks the same to a viewer,
-/// allowing for a different GPU or driver".
+/// suite: mean <= 0.03, p99 <= 0.1 and worst 12x12 window <= 0.3, meaning
+/// "looks the same to a viewer, allowing for a different GPU or driver".
 ///
-/// Chosen from measurements on the example scenes (lavapipe, at 160x90 and
-/// 640x360; the numbers barely depend on the size):
+/// Chosen from measurements on the example scenes (lavapipe, at 160x90,
+/// 320x180 and 640x360; mean and p99 barely depend on the size; "window" is
+/// `worst_window`):
 ///
-/// | change to the image                      | FLIP mean   | FLIP p99    |
-/// |------------------------------------------|-------------|-------------|
-/// | +-1 LSB noise on half the channels       | 0.011-0.012 | 0.025-0.028 |
-/// | up to +-3 LSB noise on every channel     | 0.024-0.026 | 0.053-0.060 |
-/// | exposure +1 %                            | 0.011-0.019 | 0.034-0.046 |
-/// | camera moved by 1/20 pixel (edges shift) | 0.002-0.013 | 0.020-0.092 |
-/// | exposure +5 %                            | 0.033-0.058 | 0.071-0.107 |
-/// | one light removed                        | 0.067-0.17  | 0.30-0.96   |
-/// | a sphere, torus or flag removed          | 0.021-0.17  | 0.81-0.99   |
+/// | change to the image                      | FLIP mean   | FLIP p99    | window      |
+/// |------------------------------------------|-------------|-------------|-------------|
+/// | +-1 LSB noise on half the channels       | 0.011-0.012 | 0.025-0.028 | 0.016-0.021 |
+/// | up to +-3 LSB noise on every channel     | 0.024-0.026 | 0.053-0.061 | 0.037-0.046 |
+/// | exposure +1 %                            | 0.011-0.019 | 0.033-0.046 | 0.029-0.048 |
+/// | camera turned by 1/20 pixel (edges shift)| 0.002-0.013 | 0.021-0.20  | 0.037-0.208 |
+/// | exposure +5 %                            | 0.033-0.058 | 0.071-0.107 | 0.067-0.112 |
+/// | a sphere, torus or flag removed          | 0.004-0.17  | 0.000-0.99  | 0.41-0.98   |
+/// | 6x6 pixel block inverted                 | 0.000-0.006 | 0.000-0.10  | 0.50-0.54   |
+/// | 12x12 pixel block inverted               | 0.001-0.012 | 0.000-0.45  | 0.80-0.98   |
+/// | small sphere added/removed, 7 px across  | 0.001-0.005 | 0.001-0.11  | 0.36-0.40   |
 ///
 /// The first four are what another driver's rounding, rasterisation rules
-/// or texture filtering plausibly produce, and pass; the last three are
-/// real regressions, and fail. A mean limit of 0.01 would already reject
-/// +-1 LSB rounding noise. Small changes can hide under both limits: a thin
-/// ring covering 0.45 % of a 640x360 frame, removed, gives mean 0.004 and
-/// p99 0.016 (at 160x90 FLIP's blur spreads it to p99 0.20, which fails),
-/// though its `max` is 0.97, so look at `max` and the diff image too.
+/// or texture filtering plausibly produce, and pass (except one p99 of 0.20:
+/// `shading_models` at 320x180 turned vertically, where the toon shading's
+/// bands move); the rest are real regressions, and fail. A mean limit of 0.01 would already reject +-1 LSB
+/// rounding noise. Mean and p99 alone let small defects through: in a
+/// 640x360 frame the inverted 12x12 block has mean 0.001 and p99 0.000,
+/// because it covers only 0.06 % of the pixels. The window limit catches
+/// it; the largest window value of a change that must pass came from the
+/// textured flag, whose texels snap as the camera turns. Defects smaller
+/// than about 6 pixels across (a sphere 5 px across: window 0.23 at 160x90)
+/// can still pass; look at `max` and the diff image too.
 pub const FLIP_DEFAULT_THRESHOLDS: Thresholds = Thresholds {
     mean: Some(0.03),
     p99: Some(0.1),
+    worst_window: Some(0.3),
 };
 
-impl Comparison {
+/// Default limits for comparing linear HDR images (OpenEXR) with RMSE or
+/// PSNR: only `worst_window` <= 0.4, the mean error over the worst 12x12
+/// window relative to the reference's mean level there (or over the whole
+/// image, if larger).
+///
+/// The whole-image RMSE and PSNR scale with the scene's brightness, so they
+/// have no default; the window statistic is relative, so one limit fits any
+/// exposure. Measured on HDR renders of the example scenes at 160x90 and
+/// 320x180: noise of up to +-1 % on every channel gives at most 0.006,
+/// exposure +1 % 0.010, the camera turned by 1/20 pixel 0.021-0.29 (the
+/// most from the flag's texture); a removed sphere, torus or flag 0.44 or
+/// more, a small sphere 7 px across added or removed 0.47-0.68, a 12x12
+/// block with its colour channels rotated 0.41-0.60.
+pub const HDR_DEFAULT_THRESHOLDS: Thresholds = Thresholds {
+    mean: None,
+    p99: None,
+    worst_window: Some(0.4),
+};
+
+impl ImageDiff {
     /// Whether this result is within `t`.
     ///
     /// FLIP and RMSE pass when `mean <= t.mean`; PSNR passes when
     /// `mean >= t.mean` (PSNR grows as images get closer, and identical images
-    /// with `+inf` dB pass any PSNR limit). For every metric `p99 <= t.p99` is
-    /// required as well. Any NaN involved makes the check fail, so a broken
-    /// threshold or result can never pass by accident.
+    /// with `+inf` dB pass any PSNR limit). For every metric `p99 <= t.p99`
+    /// and `worst_window <= t.worst_window` are required as well. Any NaN
+    /// involved makes the check fail, so a broken threshold or result can
+    /// never pass by accident.
     pub fn passes(&self, t: &Thresholds) -> bool {
         let mean_ok = match t.mean {
             None => true,
@@ -200,7 +259,23 @@ impl Comparison {
             },
         };
         let p99_ok = t.p99.is_none_or(|limit| self.p99 <= limit);
-        mean_ok && p99_ok
+        let window_ok = t
+            .worst_window
+            .is_none_or(|limit| self.worst_window <= limit);
+        mean_ok && p99_ok && window_ok
+    }
+
+    /// The limits `aerial compare` applies when none are given:
+    /// [`FLIP_DEFAULT_THRESHOLDS`] for FLIP, [`HDR_DEFAULT_THRESHOLDS`] for
+    /// RMSE and PSNR of HDR images, and none for RMSE and PSNR of PNGs
+    /// (whose errors are in display-encoded values, where a relative error
+    /// of dark pixels says little).
+    pub fn default_thresholds(&self) -> Thresholds {
+        match (self.metric, self.hdr) {
+            (Metric::Flip, _) => FLIP_DEFAULT_THRESHOLDS,
+            (Metric::Rmse | Metric::Psnr, true) => HDR_DEFAULT_THRESHOLDS,
+            (Metric::Rmse | Metric::Psnr, false) => Thresholds::default(),
+        }
     }
 }
 
@@ -306,7 +381,7 @@ pub enum CompareError {
         /// The reference file.
         path: PathBuf,
     },
-    /// `write_diff_png` was given a `Comparison` whose map does not match its
+    /// `write_diff_png` was given an `ImageDiff` whose map does not match its
     /// size (e.g. one read back from JSON, which has no map).
     #[error("cannot write diff {}: error map has {len} values but the image is {width}x{height}", path.display())]
     BadErrorMap {
@@ -390,7 +465,7 @@ impl Loaded {
 /// Compares the reference image `a` with the test image `b` using `metric`.
 ///
 /// See the module docs for supported inputs and the meaning of the result.
-pub fn compare_files(a: &Path, b: &Path, metric: Metric) -> Result<Comparison, CompareError> {
+pub fn compare_files(a: &Path, b: &Path, metric: Metric) -> Result<ImageDiff, CompareError> {
     let reference = load(a)?;
     let test = load(b)?;
     compare_loaded(a, &reference, b, &test, metric)
@@ -424,7 +499,7 @@ pub fn compare_images(
     test_name: &str,
     test: ImageRef<'_>,
     metric: Metric,
-) -> Result<Comparison, CompareError> {
+) -> Result<ImageDiff, CompareError> {
     let (a, b) = (Path::new(reference_name), Path::new(test_name));
     compare_loaded(
         a,
@@ -443,7 +518,7 @@ fn compare_loaded(
     b: &Path,
     test: &Loaded,
     metric: Metric,
-) -> Result<Comparison, CompareError> {
+) -> Result<ImageDiff, CompareError> {
     if matches!(metric, Metric::Flip) {
         // Name whichever input is HDR so the user knows which file to change.
         for (path, img) in [(a, reference), (b, test)] {
@@ -484,11 +559,15 @@ fn compare_loaded(
             let map = nv_flip::flip(ref8, test8, nv_flip::DEFAULT_PIXELS_PER_DEGREE).to_vec();
             let mean = map.iter().map(|&v| f64::from(v)).sum::<f64>() / map.len() as f64;
             let (p99, max) = tail_stats(&map);
-            Ok(Comparison {
+            let worst_window =
+                worst_window(width, height, |i| [f64::from(map[i])], |[sum], n| sum / n);
+            Ok(ImageDiff {
                 metric,
                 mean,
                 p99,
                 max,
+                worst_window,
+                hdr: false,
                 width,
                 height,
                 error_map: map,
@@ -529,17 +608,98 @@ fn compare_loaded(
                 }
             };
             let (p99, max) = tail_stats(&map);
-            Ok(Comparison {
+            let worst_window = relative_worst_window(&ra, &map, width, height);
+            Ok(ImageDiff {
                 metric,
                 mean,
                 p99,
                 max,
+                worst_window,
+                hdr: matches!(reference.pixels, Pixels::Linear(_)),
                 width,
                 height,
                 error_map: map,
             })
         }
     }
+}
+
+/// The largest `score` over all [`WINDOW`]x[`WINDOW`] squares inside a
+/// `width` x `height` image (clipped to the image size), where `score` gets
+/// the sums over the square of the `N` per-pixel values that `value` gives
+/// for a row-major pixel index, and the number of pixels in the square.
+///
+/// Keeps running column sums, so it needs memory for one row rather than a
+/// summed-area table of the whole image.
+fn worst_window<const N: usize>(
+    width: u32,
+    height: u32,
+    value: impl Fn(usize) -> [f64; N],
+    score: impl Fn([f64; N], f64) -> f64,
+) -> f64 {
+    let (w, h) = (width as usize, height as usize);
+    let (kx, ky) = (w.min(WINDOW as usize), h.min(WINDOW as usize));
+    let count = (kx * ky) as f64;
+    let add = |a: &mut [f64; N], b: [f64; N], sign: f64| {
+        for (x, y) in a.iter_mut().zip(b) {
+            *x += sign * y;
+        }
+    };
+    // columns[x]: sums over the last ky rows of column x.
+    let mut columns = vec![[0.0; N]; w];
+    let mut worst = 0.0f64;
+    for y in 0..h {
+        for (x, column) in columns.iter_mut().enumerate() {
+            add(column, value(y * w + x), 1.0);
+            if y >= ky {
+                add(column, value((y - ky) * w + x), -1.0);
+            }
+        }
+        if y + 1 < ky {
+            continue;
+        }
+        let mut sums = [0.0; N];
+        for (x, &column) in columns.iter().enumerate() {
+            add(&mut sums, column, 1.0);
+            if x >= kx {
+                add(&mut sums, columns[x - kx], -1.0);
+            }
+            if x + 1 >= kx {
+                // Running sums of non-negative values can come out a hair
+                // below zero after subtractions; clamp so a score never
+                // turns NaN from a negative square root.
+                let s = sums.map(|v| v.max(0.0));
+                worst = worst.max(score(s, count));
+            }
+        }
+    }
+    worst
+}
+
+/// `worst_window` for RMSE and PSNR: the mean per-pixel error over the
+/// window divided by the reference's mean level there or over the whole
+/// image, whichever is larger (a pixel's level is the RMS of its R, G, B).
+/// The floor keeps a faint change in a nearly black window, such as one edge
+/// pixel against a black background, from counting as a huge relative
+/// error; an all-black reference uses a level of 1. `reference` is
+/// interleaved RGB, `map` the per-pixel RMS error.
+fn relative_worst_window(reference: &[f32], map: &[f32], width: u32, height: u32) -> f64 {
+    let level = |i: usize| {
+        (reference[3 * i..3 * i + 3]
+            .iter()
+            .map(|&v| f64::from(v) * f64::from(v))
+            .sum::<f64>()
+            / 3.0)
+            .sqrt()
+    };
+    let overall = (0..map.len()).map(level).sum::<f64>() / map.len() as f64;
+    let floor = if overall > 0.0 { overall } else { 1.0 };
+    worst_window(
+        width,
+        height,
+        |i| [f64::from(map[i]), level(i)],
+        |[err, reference], n| (err / n) / (reference / n).max(floor),
+    )
 }
 
 /// 99th percentile and maximum of a non-empty error map.
@@ -745,29 +905,15 @@ fn from_memory(path: &Path, image: ImageRef<'_>) -> Result<Loaded, CompareError>
     })
 }
 
-/// Control points of the magma colour map that FLIP uses for its error maps:
-/// every 16th entry of FLIP's 256-entry table plus the last, as
-/// `(table index, 8-bit sRGB)`. Linear interpolation between them stays within
-/// 3/255 of the full table.
-const MAGMA: [(u8, [u8; 3]); 17] = [
-    (0, [0, 0, 4]),
-    (16, [10, 8, 34]),
-    (32, [29, 17, 71]),
-    (48, [54, 16, 107]),
-    (64, [81, 18, 124]),
-    (80, [106, 28, 129]),
-    (96, [131, 38, 129]),
-    (112, [156, 46, 127]),
-    (128, [183, 55, 121]),
-    (144, [208, 65, 111]),
-    (160, [231, 82, 99]),
-    (176, [245, 107, 92]),
-    (192, [252, 137, 97]),
-    (208, [254, 167, 114]),
-    (224, [254, 196, 136]),
-    (240, [253, 226, 163]),
-    (255, [252, 253, 191]),
-];
+/// FLIP's own magma colour map, 256 entries of 8-bit sRGB, taken from the
+/// FLIP library so our error maps look exactly like those of FLIP's tools.
+fn magma_lut() -> Vec<[u8; 3]> {
+    nv_flip::magma_lut()
+        .to_vec()
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect()
+}
 
 /// Black-red-yellow-white ramp for RMSE/PSNR maps. Deliberately not magma, so
 /// nobody mistakes a relative heat map for FLIP's absolute scale.
@@ -814,7 +960,7 @@ fn build_lut(points: &[(u8, [u8; 3])]) -> Vec<[u8; 3]> {
 /// The PNG is written to a temporary file in the same folder and renamed into
 /// place, so a failed write never leaves a partial or stale-looking file at
 /// `path`.
-pub fn write_diff_png(cmp: &Comparison, path: &Path) -> Result<(), CompareError> {
+pub fn write_diff_png(cmp: &ImageDiff, path: &Path) -> Result<(), CompareError> {
     let expected = (cmp.width as usize).checked_mul(cmp.height as usize);
     if cmp.width == 0 || cmp.height == 0 || expected != Some(cmp.error_map.len()) {
         return Err(CompareError::BadErrorMap {
@@ -826,7 +972,7 @@ pub fn write_diff_png(cmp: &Comparison, path: &Path) -> Result<(), CompareError>
     }
 
     let (lut, scale) = match cmp.metric {
-        Metric::Flip => (build_lut(&MAGMA), 1.0f32),
+        Metric::Flip => (magma_lut(), 1.0f32),
         Metric::Rmse | Metric::Psnr => {
             let max = cmp.error_map.iter().copied().fold(0.0f32, f32::max);
             let scale = if max > 0.0 && max.is_finite() {
@@ -943,7 +1089,7 @@ mod tests {
         fn new(tag: &str) -> Self {
             static N: AtomicUsize = AtomicUsize::new(0);
             let dir = std::env::temp_dir().join(format!(
-                "aerial-compare-{tag}-{}-{}",
+                "aerial-image-diff-{tag}-{}-{}",
                 std::process::id(),
                 N.fetch_add(1, Ordering::Relaxed)
             ));
@@ -1004,14 +1150,15 @@ mod tests {
         assert_eq!(psnr.mean, f64::INFINITY);
         assert!(psnr.passes(&Thresholds {
             mean: Some(60.0),
-            p99: Some(0.0)
+            p99: Some(0.0),
+            ..Thresholds::default()
         }));
 
         // JSON has no infinity: it goes out as null and comes back as +inf.
         let json = serde_json::to_string(&psnr).unwrap();
         assert!(json.contains("\"mean\":null"), "{json}");
         assert!(!json.contains("error_map"), "{json}");
-        let back: Comparison = serde_json::from_str(&json).unwrap();
+        let back: ImageDiff = serde_json::from_str(&json).unwrap();
         assert_eq!(back.mean, f64::INFINITY);
         assert_eq!(back.metric, Metric::Psnr);
         assert!(back.error_map.is_empty());
@@ -1041,11 +1188,13 @@ mod tests {
         );
         assert!(psnr.passes(&Thresholds {
             mean: Some(18.0),
-            p99: None
+            p99: None,
+            ..Thresholds::default()
         }));
         assert!(!psnr.passes(&Thresholds {
             mean: Some(19.0),
-            p99: None
+            p99: None,
+            ..Thresholds::default()
         }));
     }
 
@@ -1105,11 +1254,13 @@ mod tests {
         // A mean-only gate at a typical 0.05 would let this through.
         assert!(c.passes(&Thresholds {
             mean: Some(0.05),
-            p99: None
+            p99: None,
+            ..Thresholds::default()
         }));
         assert!(!c.passes(&Thresholds {
             mean: Some(0.05),
-            p99: Some(0.1)
+            p99: Some(0.1),
+            ..Thresholds::default()
         }));
     }
 
@@ -1285,11 +1436,13 @@ mod tests {
     #[test]
     fn failed_diff_write_leaves_nothing_behind() {
         let dir = TempDir::new("diff-fail");
-        let c = Comparison {
+        let c = ImageDiff {
             metric: Metric::Flip,
             mean: 0.0,
             p99: 0.0,
             max: 0.0,
+            worst_window: 0.0,
+            hdr: false,
             width: 2,
             height: 1,
             error_map: vec![0.0, 1.0],
@@ -1303,7 +1456,7 @@ mod tests {
         assert_eq!(dir.entries(), ["taken"]);
 
         // A map that does not match the size is refused before any I/O.
-        let bad = Comparison {
+        let bad = ImageDiff {
             error_map: vec![0.0],
             ..c
         };
@@ -1315,25 +1468,185 @@ mod tests {
         assert_eq!(dir.entries(), ["taken"]);
     }
 
+    /// The worst window mean by brute force, for checking the running sums.
+    fn brute_worst_mean(map: &[f32], w: usize, h: usize) -> f64 {
+        let (kx, ky) = (w.min(WINDOW as usize), h.min(WINDOW as usize));
+        let mut worst = 0.0f64;
+        for y in 0..=h - ky {
+            for x in 0..=w - kx {
+                let sum: f64 = (y..y + ky)
+                    .flat_map(|r| (x..x + kx).map(move |c| f64::from(map[r * w + c])))
+                    .sum();
+                worst = worst.max(sum / (kx * ky) as f64);
+            }
+        }
+        worst
+    }
+
     #[test]
-    fn magma_lut_matches_flip_endpoints() {
-        let lut = build_lut(&MAGMA);
+    fn worst_window_matches_brute_force() {
+        // Pseudo-random maps of sizes below, at and above the window.
+        let mut state = 7u32;
+        for (w, h) in [(1, 1), (5, 3), (12, 12), (13, 30), (40, 17)] {
+            let map: Vec<f32> = (0..w * h)
+                .map(|_| {
+                    state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                    (state >> 8) as f32 / (1u32 << 24) as f32
+                })
+                .collect();
+            let fast = worst_window(w as u32, h as u32, |i| [f64::from(map[i])], |[s], n| s / n);
+            let slow = brute_worst_mean(&map, w, h);
+            assert!((fast - slow).abs() < 1e-9, "{w}x{h}: {fast} vs {slow}");
+        }
+    }
+
+    #[test]
+    fn relative_window_by_hand_exr() {
+        // Reference 40x30 at level 1 (every channel 1). A 6x6 block raised
+        // to 1.5: per-pixel error 0.5, so the worst window holds 36 such
+        // pixels out of 144: 0.5 * 36 / 144 = 0.125, over a level of 1.
+        let dir = TempDir::new("window-exr");
+        let reference = exr(&dir, "a.exr", 40, 30, [1.0, 1.0, 1.0]);
+        let block = |size: usize, name: &str| {
+            let p = dir.path(name);
+            exr::prelude::write_rgb_file(&p, 40, 30, |x, y| {
+                let v = if (10..10 + size).contains(&x) && (5..5 + size).contains(&y) {
+                    1.5f32
+                } else {
+                    1.0
+                };
+                (v, v, v)
+            })
+            .unwrap();
+            p
+        };
+        let small = compare_files(&reference, &block(6, "b6.exr"), Metric::Rmse).unwrap();
+        assert!((small.worst_window - 0.125).abs() < 1e-9, "{small:?}");
+        assert!(small.hdr);
+        // A 12x12 block fills a window: 0.5.
+        let big = compare_files(&reference, &block(12, "b12.exr"), Metric::Psnr).unwrap();
+        assert!((big.worst_window - 0.5).abs() < 1e-9, "{big:?}");
+        // Defaults for HDR: only the window, at 0.4.
+        assert_eq!(big.default_thresholds(), HDR_DEFAULT_THRESHOLDS);
+        assert!(small.passes(&HDR_DEFAULT_THRESHOLDS));
+        assert!(!big.passes(&HDR_DEFAULT_THRESHOLDS));
+    }
+
+    #[test]
+    fn relative_window_is_floored_at_the_image_level() {
+        // Left half of the reference black, right half at level 2: the
+        // image's mean level is 1. One pixel on the black side turns 0.6:
+        // relative to its black window that would be infinite, but the
+        // floor makes it 0.6 / 144 / 1.
+        let lin = |f: &dyn Fn(usize) -> f32| -> Vec<f32> {
+            (0..32 * 16)
+                .flat_map(|i| {
+                    let v = f(i);
+                    [v, v, v, 1.0]
+                })
+                .collect()
+        };
+        let reference = lin(&|i| if i % 32 < 16 { 0.0 } else { 2.0 });
+        let test = lin(&|i| match i {
+            i if i == 3 * 32 + 2 => 0.6,
+            i if i % 32 < 16 => 0.0,
+            _ => 2.0,
+        });
+        let image = |rgba| ImageRef::Linear {
+            width: 32,
+            height: 16,
+            rgba,
+        };
+        let c = compare_images("a", image(&reference), "b", image(&test), Metric::Rmse).unwrap();
+        assert!((c.worst_window - 0.6 / 144.0).abs() < 1e-9, "{c:?}");
+    }
+
+    #[test]
+    fn flip_window_catches_a_block_that_mean_and_p99_miss() {
+        // A 12x12 block inverted in a 320x180 picture is 0.25 % of it: far
+        // too few pixels to move the mean or p99, yet a window fits inside
+        // it, where FLIP is close to 1 (the block is mid-grey turned into
+        // its complement, with texture around so FLIP sees edges).
+        let picture = RgbImage::from_fn(320, 180, |x, y| {
+            Rgb([(x % 64 * 3) as u8, (y % 48 * 4) as u8, 100])
+        });
+        let mut broken = picture.clone();
+        for y in 80..92 {
+            for x in 150..162 {
+                let p = broken.get_pixel_mut(x, y);
+                p.0 = p.0.map(|c| 255 - c);
+            }
+        }
+        let dir = TempDir::new("flip-window");
+        let a = png(&dir, "a.png", &picture);
+        let b = png(&dir, "b.png", &broken);
+        let c = compare_files(&a, &b, Metric::Flip).unwrap();
+        assert!(c.mean <= 0.03 && c.p99 <= 0.1, "{c:?}");
+        assert!(c.worst_window > 0.5, "{c:?}");
+        assert!((c.worst_window - brute_worst_mean(&c.error_map, 320, 180)).abs() < 1e-9);
+        assert!(!c.hdr);
+        assert_eq!(c.default_thresholds(), FLIP_DEFAULT_THRESHOLDS);
+        assert!(!c.passes(&FLIP_DEFAULT_THRESHOLDS));
+        // PNGs compared with rmse have no default limits.
+        let rmse = compare_files(&a, &b, Metric::Rmse).unwrap();
+        assert_eq!(rmse.default_thresholds(), Thresholds::default());
+    }
+
+    #[test]
+    fn flip_diff_uses_flips_magma_colours() {
+        // Endpoints of the magma table published with FLIP, rounded to
+        // 8 bits: (0.001462, 0.000466, 0.013866) and (0.987053, 0.991438,
+        // 0.749504).
+        let lut = magma_lut();
         assert_eq!(lut.len(), 256);
         assert_eq!(lut[0], [0, 0, 4]);
-        assert_eq!(lut[128], [183, 55, 121]);
-        // Entry 8 of FLIP's table is (0.013708, 0.011771, 0.068667); halfway
-        // between control points 0 and 16 we expect roughly the same.
-        assert_eq!(lut[8], [5, 4, 19]);
         assert_eq!(lut[255], [252, 253, 191]);
+
+        // The diff PNG of a 0..1 ramp is coloured exactly as FLIP's own
+        // colour mapping colours the same values.
+        let ramp: Vec<f32> = (0..300).map(|i| i as f32 / 299.0).collect();
+        let cmp = ImageDiff {
+            metric: Metric::Flip,
+            mean: 0.5,
+            p99: 0.99,
+            max: 1.0,
+            worst_window: 0.5,
+            hdr: false,
+            width: 300,
+            height: 1,
+            error_map: ramp.clone(),
+        };
+        let dir = TempDir::new("magma");
+        let out = dir.path("ramp.png");
+        write_diff_png(&cmp, &out).unwrap();
+        let ours = image::open(&out).unwrap().into_rgb8().into_raw();
+        let theirs = nv_flip::FlipImageFloat::with_data(300, 1, &ramp)
+            .apply_color_lut(&nv_flip::magma_lut())
+            .to_vec();
+        assert_eq!(ours, theirs);
+    }
+
+    #[test]
+    fn heat_lut_interpolates_its_control_points() {
+        let lut = build_lut(&HEAT);
+        assert_eq!(lut.len(), 256);
+        assert_eq!(lut[0], [0, 0, 0]);
+        assert_eq!(lut[85], [255, 0, 0]);
+        // 42/85 of the way from black to red: 255 * 42 / 85 = 126.
+        assert_eq!(lut[42], [126, 0, 0]);
+        assert_eq!(lut[170], [255, 255, 0]);
+        assert_eq!(lut[255], [255, 255, 255]);
     }
 
     #[test]
     fn thresholds_and_metric_names() {
-        let c = Comparison {
+        let c = ImageDiff {
             metric: Metric::Rmse,
             mean: 0.1,
             p99: 0.3,
             max: 0.5,
+            worst_window: 0.5,
+            hdr: false,
             width: 1,
             height: 1,
             error_map: vec![0.5],
@@ -1341,15 +1654,18 @@ mod tests {
         assert!(c.passes(&Thresholds::default()));
         assert!(c.passes(&Thresholds {
             mean: Some(0.1),
-            p99: Some(0.3)
+            p99: Some(0.3),
+            ..Thresholds::default()
         }));
         assert!(!c.passes(&Thresholds {
             mean: Some(0.09),
-            p99: None
+            p99: None,
+            ..Thresholds::default()
         }));
         assert!(!c.passes(&Thresholds {
             mean: None,
-            p99: Some(f64::NAN)
+            p99: Some(f64::NAN),
+            ..Thresholds::default()
         }));
         for m in [Metric::Flip, Metric::Psnr, Metric::Rmse] {
             assert_eq!(m.to_string().parse::<Metric>().unwrap(), m);
