@@ -40,7 +40,7 @@ pub enum VkError {
     Loader(String),
     #[error("VK_LAYER_KHRONOS_validation is not installed (package vulkan-validationlayers; run scripts/setup.sh)")]
     MissingValidationLayer,
-    #[error("no Vulkan 1.2 device matches '{wanted}'; available: {available:?}")]
+    #[error("no Vulkan 1.2 device matches '{wanted}' (give an index or part of a name); available: {}", if available.is_empty() { "none".to_string() } else { available.join(", ") })]
     NoDevice {
         wanted: String,
         available: Vec<String>,
