@@ -39,6 +39,14 @@ const EXIT_ERROR: u8 = 2;
 
 fn main() -> std::process::ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    // An interrupt must not leave temporary output files behind. Exit code
+    // 130 is the shell's convention for "killed by SIGINT". If the handler
+    // cannot be installed, the default (exit without cleanup) remains.
+    let _ = ctrlc::set_handler(|| {
+        aerial::files::remove_pending();
+        eprintln!("interrupted; no output written");
+        std::process::exit(130);
+    });
     match run(Cli::parse()) {
         Ok(code) => code,
         Err(e) => {

@@ -28,6 +28,8 @@ pub enum RenderError {
     TooManyLights { lights: usize, max: usize },
     #[error("invalid HDR input image: {0}")]
     InvalidImage(String),
+    #[error(transparent)]
+    File(#[from] crate::files::FileError),
     #[error("cannot write {path}: {reason}")]
     Output { path: PathBuf, reason: String },
     #[error("cannot read {path}: {reason}")]
