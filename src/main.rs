@@ -9,7 +9,7 @@ use clap::{Parser, Subcommand};
     name = "aerial",
     version,
     about = "An explicit, headless Vulkan renderer",
-    after_help = "Exit status: 0 on success, 1 when `compare` finds a threshold exceeded, 2 on any error."
+    after_help = "Exit status: 0 on success, 1 when `compare` or the `bench` gate finds a threshold exceeded, 2 on any error, 130 when interrupted."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -62,6 +62,6 @@ fn run(cli: Cli) -> anyhow::Result<std::process::ExitCode> {
         Command::Tonemap(args) => cli::tonemap::run(args).map(|()| std::process::ExitCode::SUCCESS),
         Command::Compare(args) => cli::compare::run(args),
         Command::Sweep(args) => cli::sweep::run(args).map(|()| std::process::ExitCode::SUCCESS),
-        Command::Bench(args) => cli::bench::run(args).map(|()| std::process::ExitCode::SUCCESS),
+        Command::Bench(args) => cli::bench::run(args),
     }
 }

@@ -857,8 +857,8 @@ pub fn write_diff_png(cmp: &Comparison, path: &Path) -> Result<(), CompareError>
 /// Writes through `write` into a temporary file for `path` and renames it
 /// into place ([`crate::files`], the crate's one file writer); on any
 /// failure the temporary file is removed. The sweep report writes its files
-/// through this too.
-pub(super) fn write_atomically(
+/// through `crate::files` directly.
+fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> Result<(), CompareError>,
 ) -> Result<(), CompareError> {
