@@ -7,6 +7,7 @@
 
 pub mod app;
 pub mod bench;
+pub mod budget;
 pub mod files;
 pub mod mesh;
 pub mod render;

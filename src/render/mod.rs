@@ -8,6 +8,7 @@ mod frame;
 mod gpu_types;
 pub mod output;
 pub mod plan;
+pub mod preflight;
 pub mod reference;
 mod renderer;
 
@@ -30,6 +31,10 @@ pub enum RenderError {
     InvalidImage(String),
     #[error(transparent)]
     File(#[from] crate::files::FileError),
+    #[error(transparent)]
+    Budget(#[from] crate::budget::BudgetError),
+    #[error("{object}: {reason}")]
+    Object { object: String, reason: String },
     #[error("cannot write {path}: {reason}")]
     Output { path: PathBuf, reason: String },
     #[error("cannot read {path}: {reason}")]

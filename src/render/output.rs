@@ -138,8 +138,36 @@ pub fn write_exr(path: &Path, pixels: &Pixels<f32>) -> Result<(), RenderError> {
 
 /// Reads an EXR written by [`write_exr`] (or any RGBA EXR) back as linear
 /// float RGBA.
+///
+/// The header is read first and the size checked against the largest
+/// image the renderer takes and the memory budget, so a small file that
+/// claims a huge image is refused before anything is allocated for it.
 pub fn read_exr(path: &Path) -> Result<Pixels<f32>, RenderError> {
     use exr::prelude::*;
+    let err = |reason: String| RenderError::Input {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| err(format!("not a readable OpenEXR file: {e}")))?;
+    let max = crate::scene::MAX_OUTPUT_SIZE as usize;
+    let mut size = None;
+    for header in &meta.headers {
+        let s = header.layer_size;
+        if s.width() == 0 || s.height() == 0 || s.width() > max || s.height() > max {
+            return Err(err(format!(
+                "the image is {}x{}; each side must be in 1..={max}",
+                s.width(),
+                s.height()
+            )));
+        }
+        size.get_or_insert((s.width(), s.height()));
+    }
+    let (w, h) = size.ok_or_else(|| err("the file has no image layer".into()))?;
+    crate::budget::MemoryBudget::from_env()?.check(
+        format!("{} ({w}x{h})", path.display()),
+        w as u64 * h as u64 * 16 * 2,
+    )?;
     let image = read_first_rgba_layer_from_file(
         path,
         |resolution, _| Pixels {

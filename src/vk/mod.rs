@@ -52,6 +52,15 @@ pub enum VkError {
         format: ash::vk::Format,
         what: String,
     },
+    #[error("{name} image {width}x{height} is outside this device's limit of {max_width}x{max_height} ({limit})")]
+    ImageSize {
+        name: String,
+        width: u32,
+        height: u32,
+        max_width: u32,
+        max_height: u32,
+        limit: &'static str,
+    },
     #[error("Vulkan call failed: {0}")]
     Api(#[from] ash::vk::Result),
     #[error("memory allocation failed: {0}")]
