@@ -14,7 +14,11 @@ layout(constant_id = 0) const int OPERATOR = TONEMAP_REINHARD;
 layout(constant_id = 1) const float EXPOSURE = 1.0;
 
 void main() {
-    vec3 c = sanitize_hdr(subpassLoad(hdr).rgb) * EXPOSURE;
+    // Exposure first, then sanitize: the product of a large exposure and a
+    // bright value can overflow to +Inf (and the curves then divide Inf by
+    // Inf, giving NaN = black), so it is clamped after scaling. That keeps
+    // the curve monotonic for every finite exposure.
+    vec3 c = sanitize_hdr(subpassLoad(hdr).rgb * EXPOSURE);
     if (OPERATOR == TONEMAP_ACES) {
         out_color = vec4(aces_fit(c), 1.0);
     } else if (OPERATOR == TONEMAP_NONE) {

@@ -5,7 +5,8 @@
 //! run was found clean. [`render_empty_pass`] does the same for the empty
 //! pass that benchmarks measure the driver's floor with.
 
-use crate::render::{empty_pass, EmptyPass, FrameTiming, Pixels, RenderError, Renderer};
+use crate::budget::MemoryBudget;
+use crate::render::{empty_pass, preflight, EmptyPass, FrameTiming, Pixels, RenderError, Renderer};
 use crate::scene::{Scene, ToneMap};
 use crate::vk::validation::ValidationMessage;
 use crate::vk::{Context, ContextOptions, DeviceInfo};
@@ -94,15 +95,29 @@ pub fn run_with_progress(
     settings: &RenderSettings,
     on_frame: &mut dyn FnMut(),
 ) -> Result<RenderRun, RenderError> {
+    // Refuse what does not fit before the device allocates anything.
+    let budget = MemoryBudget::from_env()?;
+    match source {
+        FrameSource::Scene(scene) => preflight::scene_memory(scene, settings.keep_hdr, &budget)?,
+        FrameSource::HdrImage(image, _) => {
+            preflight::image_memory(image.width, image.height, &budget)?
+        }
+        FrameSource::EmptyPass { width, height } => {
+            preflight::image_memory(width, height, &budget)?
+        }
+    }
     let ctx = context(settings)?;
     let log = ctx.validation_log();
     let device = ctx.device_info().clone();
     let (passes, frames, output, hdr) = match source {
-        FrameSource::Scene(scene) => drive(
-            Renderer::new(&ctx, scene, settings.keep_hdr)?,
-            settings,
-            on_frame,
-        )?,
+        FrameSource::Scene(scene) => {
+            let checked = preflight::scene_on_device(scene, &ctx)?;
+            drive(
+                Renderer::new(&ctx, &checked.scene, settings.keep_hdr)?,
+                settings,
+                on_frame,
+            )?
+        }
         FrameSource::HdrImage(image, tone_map) => drive(
             Renderer::for_hdr_image(&ctx, tone_map, image)?,
             settings,

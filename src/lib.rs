@@ -7,6 +7,8 @@
 
 pub mod app;
 pub mod bench;
+pub mod budget;
+pub mod files;
 pub mod mesh;
 pub mod render;
 pub mod report;

@@ -9,7 +9,7 @@ use clap::{Parser, Subcommand};
     name = "aerial",
     version,
     about = "An explicit, headless Vulkan renderer",
-    after_help = "Exit status: 0 on success, 1 when `compare` finds a threshold exceeded, 2 on any error."
+    after_help = "Exit status: 0 on success, 1 when `compare` or the `bench` gate finds a threshold exceeded, 2 on any error, 130 when interrupted."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -39,6 +39,14 @@ const EXIT_ERROR: u8 = 2;
 
 fn main() -> std::process::ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    // An interrupt must not leave temporary output files behind. Exit code
+    // 130 is the shell's convention for "killed by SIGINT". If the handler
+    // cannot be installed, the default (exit without cleanup) remains.
+    let _ = ctrlc::set_handler(|| {
+        aerial::files::remove_pending();
+        eprintln!("interrupted; no output written");
+        std::process::exit(130);
+    });
     match run(Cli::parse()) {
         Ok(code) => code,
         Err(e) => {
@@ -54,6 +62,6 @@ fn run(cli: Cli) -> anyhow::Result<std::process::ExitCode> {
         Command::Tonemap(args) => cli::tonemap::run(args).map(|()| std::process::ExitCode::SUCCESS),
         Command::Compare(args) => cli::compare::run(args),
         Command::Sweep(args) => cli::sweep::run(args).map(|()| std::process::ExitCode::SUCCESS),
-        Command::Bench(args) => cli::bench::run(args).map(|()| std::process::ExitCode::SUCCESS),
+        Command::Bench(args) => cli::bench::run(args),
     }
 }

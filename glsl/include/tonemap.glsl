@@ -2,7 +2,8 @@
 
 // Inf, NaN and negative values must never reach the 8-bit output as garbage:
 // NaN and negatives become 0, +Inf becomes the largest half float, which
-// both operators map to (nearly) 1.
+// both operators map to (nearly) 1. Applied after exposure, so an overflow
+// there saturates too.
 vec3 sanitize_hdr(vec3 c) {
     bvec3 nan = isnan(c);
     c = vec3(nan.x ? 0.0 : c.x, nan.y ? 0.0 : c.y, nan.z ? 0.0 : c.z);

@@ -167,7 +167,8 @@ pub fn compare(current: &BenchReport, baseline: &BenchReport) -> Comparison {
                 key: key.clone(),
                 baseline_ms: *baseline_ms,
                 current_ms: *current_ms,
-                ratio: (*baseline_ms > 0.0).then(|| current_ms / baseline_ms),
+                ratio: (*baseline_ms > 0.0 && baseline_ms.is_finite() && current_ms.is_finite())
+                    .then(|| current_ms / baseline_ms),
             }),
             None => new.push(key.clone()),
         }

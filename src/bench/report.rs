@@ -207,10 +207,17 @@ impl BenchReport {
             reason: e.to_string(),
         })?;
         text.push('\n');
-        std::fs::write(path, text).map_err(|error| BenchError::Io {
-            path: path.to_path_buf(),
-            error,
-        })
+        crate::files::write_bytes(path, text.as_bytes()).map_err(|e| match e {
+            crate::files::FileError::Io { error, .. } => BenchError::Io {
+                path: path.to_path_buf(),
+                error,
+            },
+            crate::files::FileError::Refused { reason, .. } => BenchError::Json {
+                path: path.to_path_buf(),
+                reason: format!("cannot write: {reason}"),
+            },
+        })?;
+        Ok(())
     }
 
     /// The empty pass measured at `resolution`, if any.

@@ -9,6 +9,7 @@ use anyhow::{bail, Context as _};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal as _;
 use std::path::PathBuf;
+use std::process::ExitCode;
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
@@ -61,7 +62,11 @@ pub struct BenchArgs {
     device: Option<String>,
 }
 
-pub fn run(args: BenchArgs) -> anyhow::Result<()> {
+/// Exit status when the gate measured a slowdown past `--max-ratio`: 1, as
+/// `compare` uses for a threshold, so CI can tell it from an error (2).
+const EXIT_SLOWER: u8 = 1;
+
+pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     // Check the gate's argument before spending minutes measuring.
     if let Some(r) = args.max_ratio {
         if !(r.is_finite() && r > 0.0) {
@@ -72,6 +77,20 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         Some(path) => Some(BenchReport::load(path)?),
         None => None,
     };
+    if let Some(json) = &args.json {
+        // Checked before measuring: a bad path must not cost the run.
+        aerial::files::check_destination(json)?;
+        if let Some(base) = &args.compare {
+            if aerial::files::same_file(json, base) {
+                bail!(
+                    "--json and --compare name the same file ({}): this run would replace \
+                     the baseline it is judged against; write it elsewhere and copy it over \
+                     the baseline once trusted",
+                    json.display()
+                );
+            }
+        }
+    }
     let report = match &args.from_json {
         Some(path) => BenchReport::load(path)?,
         None => measure(&args)?,
@@ -84,9 +103,9 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     if let (Some(baseline), Some(path), Some(max_ratio)) =
         (&baseline, &args.compare, args.max_ratio)
     {
-        gate(&compare(&report, baseline), path, baseline, max_ratio)?;
+        return gate(&compare(&report, baseline), path, baseline, max_ratio);
     }
-    Ok(())
+    Ok(ExitCode::SUCCESS)
 }
 
 fn measure(args: &BenchArgs) -> anyhow::Result<BenchReport> {
@@ -233,7 +252,7 @@ fn gate(
     path: &std::path::Path,
     baseline: &BenchReport,
     max_ratio: f64,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<ExitCode> {
     println!();
     println!(
         "compared with {} (commit {}, {} build)",
@@ -281,18 +300,37 @@ fn gate(
             path.display()
         );
     }
+    // A row without a ratio (a baseline median that is zero, negative or
+    // not a number) was not compared; a gate that compared less than it
+    // claims must not pass.
+    let unjudged: Vec<String> = c
+        .rows
+        .iter()
+        .filter(|r| r.ratio.is_none())
+        .map(|r| format!("{} (baseline {} ms)", r.key, r.baseline_ms))
+        .collect();
+    if !unjudged.is_empty() {
+        bail!(
+            "{} row(s) of {} have no usable baseline median (must be a positive number), \
+             so they cannot be compared: {}",
+            unjudged.len(),
+            path.display(),
+            unjudged.join(", ")
+        );
+    }
     let slow = c.exceeding(max_ratio);
     if !slow.is_empty() {
         let list: Vec<String> = slow
             .iter()
             .map(|r| format!("{} ({:.2})", r.key, r.ratio.unwrap_or(f64::NAN)))
             .collect();
-        bail!(
-            "{} row(s) above --max-ratio {max_ratio}: {}",
+        eprintln!(
+            "error: {} row(s) above --max-ratio {max_ratio}: {}",
             slow.len(),
             list.join(", ")
         );
+        return Ok(ExitCode::from(EXIT_SLOWER));
     }
     println!("ok: every median ratio is at most {max_ratio}");
-    Ok(())
+    Ok(ExitCode::SUCCESS)
 }

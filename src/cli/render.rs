@@ -1,6 +1,7 @@
 //! `aerial render`: render one scene to PNG (and optionally EXR).
 
 use aerial::app::{self, RenderSettings};
+use aerial::files;
 use aerial::render::output;
 use aerial::report::stats::Summary;
 use aerial::scene::Scene;
@@ -43,6 +44,18 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     if args.frames == 0 {
         bail!("--frames: must be at least 1");
     }
+    // Outputs are checked before the render, so a bad path fails at once.
+    files::check_destination(&args.out)?;
+    if let Some(hdr) = &args.hdr {
+        files::check_destination(hdr)?;
+        if files::same_file(hdr, &args.out) {
+            bail!("--hdr and --out name the same file: {}", hdr.display());
+        }
+    }
+    let scene_name = match &args.scene {
+        Some(path) => path.display().to_string(),
+        None => "the default scene".to_string(),
+    };
     let run = app::render(
         &scene,
         &RenderSettings {
@@ -53,16 +66,23 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             keep_hdr: args.hdr.is_some(),
         },
     )
-    .context("render failed")?;
+    .with_context(|| format!("rendering {scene_name} failed"))?;
     eprintln!(
         "device: {} ({} {}), Vulkan {}",
         run.device.name, run.device.driver_name, run.device.driver_info, run.device.api_version
     );
     fail_on_validation_messages(&run)?;
-    output::write_png(&args.out, &run.output, &run.png_metadata())?;
-    eprintln!("wrote {}", args.out.display());
+    // Both files are encoded before either is renamed into place, so a
+    // failure leaves neither.
+    let mut outputs = vec![output::png_file(
+        &args.out,
+        &run.output,
+        &run.png_metadata(),
+    )?];
     if let (Some(path), Some(hdr)) = (&args.hdr, &run.hdr) {
-        output::write_exr(path, hdr)?;
+        outputs.push(output::exr_file(path, hdr)?);
+    }
+    for path in files::commit_all(outputs)? {
         eprintln!("wrote {}", path.display());
     }
     if args.frames > 1 {

@@ -70,6 +70,14 @@ fn check_validation(run: &RenderRun) -> anyhow::Result<()> {
 
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     let scene = Scene::load(&args.scene)?;
+    // Before the work: a sweep takes minutes, a bad folder must not.
+    aerial::files::check_output_dir(&args.out_dir)?;
+    for name in ["sweep.csv", "sweep.json", "sweep.svg"] {
+        let path = args.out_dir.join(name);
+        if path.exists() {
+            aerial::files::check_destination(&path)?;
+        }
+    }
     let axes = args
         .knobs
         .iter()

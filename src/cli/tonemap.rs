@@ -39,6 +39,7 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         bail!("--exposure: must be finite and > 0, got {}", args.exposure);
     }
+    aerial::files::check_destination(&args.out)?;
     let image = output::read_exr(&args.input)?;
     let tone_map = ToneMap {
         operator: match args.operator {

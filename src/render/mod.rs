@@ -14,6 +14,7 @@ pub mod octahedral;
 pub mod output;
 pub mod passes;
 pub mod plan;
+pub mod preflight;
 pub mod reference;
 mod renderer;
 mod scene_resources;
@@ -41,6 +42,12 @@ pub enum RenderError {
     },
     #[error("invalid HDR input image: {0}")]
     InvalidImage(String),
+    #[error(transparent)]
+    File(#[from] crate::files::FileError),
+    #[error(transparent)]
+    Budget(#[from] crate::budget::BudgetError),
+    #[error("{object}: {reason}")]
+    Object { object: String, reason: String },
     #[error("cannot write {path}: {reason}")]
     Output { path: PathBuf, reason: String },
     #[error("cannot read {path}: {reason}")]

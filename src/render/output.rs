@@ -1,67 +1,62 @@
 //! Writing rendered images: the tone-mapped PNG and the linear HDR EXR.
 //!
-//! Each file is written to a temporary name in the destination folder and
-//! renamed into place, so a failed run never leaves a half-written image.
+//! Every file goes through [`crate::files`]: written under a unique
+//! temporary name in the destination folder and renamed into place, so a
+//! failed run never leaves a half-written image. The `*_file` functions
+//! prepare a file without committing it, for runs that write several files
+//! and commit them together.
 
 use super::{Pixels, RenderError};
-use std::path::{Path, PathBuf};
+use crate::files::{self, PendingFile};
+use std::io::Write as _;
+use std::path::Path;
 
-/// Writes `write(tmp)` to a temporary sibling of `path`, then renames it.
-fn atomically(
+/// Encodes 8-bit sRGB RGBA pixels as PNG, with `metadata` as text chunks
+/// (the device and driver that rendered it, so a comparison can tell
+/// whether bit-identity is expected), into a temporary file for `path`.
+pub fn png_file(
     path: &Path,
-    write: impl FnOnce(&Path) -> Result<(), String>,
-) -> Result<(), RenderError> {
+    pixels: &Pixels<u8>,
+    metadata: &[(&str, String)],
+) -> Result<PendingFile, RenderError> {
     let err = |reason: String| RenderError::Output {
         path: path.to_path_buf(),
         reason,
     };
-    let name = path
-        .file_name()
-        .ok_or_else(|| err("not a file name".into()))?
-        .to_string_lossy()
-        .into_owned();
-    let tmp: PathBuf = path.with_file_name(format!(".{name}.partial"));
-    if let Err(e) = write(&tmp) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(err(e));
+    let file = PendingFile::create(path)?;
+    let mut out = std::io::BufWriter::new(file.file());
+    let mut encoder = png::Encoder::new(&mut out, pixels.width, pixels.height);
+    encoder.set_color(png::ColorType::Rgba);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+    for (key, value) in metadata {
+        // tEXt is Latin-1 only; a device or driver name outside it (say
+        // with a trademark sign) goes into a UTF-8 iTXt chunk instead.
+        let added = if value.chars().all(|c| (c as u32) < 0x80) {
+            encoder.add_text_chunk(key.to_string(), value.clone())
+        } else {
+            encoder.add_itxt_chunk(key.to_string(), value.clone())
+        };
+        added.map_err(|e| err(e.to_string()))?;
     }
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        err(e.to_string())
-    })
+    let mut writer = encoder.write_header().map_err(|e| err(e.to_string()))?;
+    writer
+        .write_image_data(&pixels.data)
+        .map_err(|e| err(e.to_string()))?;
+    writer.finish().map_err(|e| err(e.to_string()))?;
+    out.flush().map_err(|e| err(e.to_string()))?;
+    drop(out);
+    Ok(file)
 }
 
-/// Saves 8-bit sRGB RGBA pixels as PNG, with `metadata` as text chunks
-/// (the device and driver that rendered it, so a comparison can tell
-/// whether bit-identity is expected).
+/// [`png_file`], committed.
 pub fn write_png(
     path: &Path,
     pixels: &Pixels<u8>,
     metadata: &[(&str, String)],
 ) -> Result<(), RenderError> {
-    atomically(path, |tmp| {
-        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
-        let mut encoder =
-            png::Encoder::new(std::io::BufWriter::new(file), pixels.width, pixels.height);
-        encoder.set_color(png::ColorType::Rgba);
-        encoder.set_depth(png::BitDepth::Eight);
-        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-        for (key, value) in metadata {
-            // tEXt is Latin-1 only; a device or driver name outside it (say
-            // with a trademark sign) goes into a UTF-8 iTXt chunk instead.
-            let added = if value.chars().all(|c| (c as u32) < 0x80) {
-                encoder.add_text_chunk(key.to_string(), value.clone())
-            } else {
-                encoder.add_itxt_chunk(key.to_string(), value.clone())
-            };
-            added.map_err(|e| e.to_string())?;
-        }
-        let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
-        writer
-            .write_image_data(&pixels.data)
-            .map_err(|e| e.to_string())?;
-        writer.finish().map_err(|e| e.to_string())
-    })
+    png_file(path, pixels, metadata)?.commit()?;
+    Ok(())
 }
 
 /// Reads the text chunks (tEXt, zTXt and iTXt, in that order) of a PNG as
@@ -111,23 +106,68 @@ pub fn read_png_text(path: &Path) -> Result<Vec<(String, String)>, RenderError> 
     Ok(text)
 }
 
-/// Saves linear float RGBA pixels as an OpenEXR file (32-bit float channels).
+/// Encodes linear float RGBA pixels as OpenEXR (32-bit float channels)
+/// into a temporary file for `path`.
+pub fn exr_file(path: &Path, pixels: &Pixels<f32>) -> Result<PendingFile, RenderError> {
+    use exr::prelude::*;
+    let file = PendingFile::create(path)?;
+    let w = pixels.width as usize;
+    let channels = SpecificChannels::rgba(|position: Vec2<usize>| {
+        let i = (position.y() * w + position.x()) * 4;
+        let p = &pixels.data[i..i + 4];
+        (p[0], p[1], p[2], p[3])
+    });
+    let mut out = std::io::BufWriter::new(file.file());
+    Image::from_channels((w, pixels.height as usize), channels)
+        .write()
+        .to_buffered(&mut out)
+        .map_err(|e| RenderError::Output {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+    out.flush().map_err(|e| file.io_error(e))?;
+    drop(out);
+    Ok(file)
+}
+
+/// [`exr_file`], committed.
 pub fn write_exr(path: &Path, pixels: &Pixels<f32>) -> Result<(), RenderError> {
-    atomically(path, |tmp| {
-        let w = pixels.width as usize;
-        exr::prelude::write_rgba_file(tmp, w, pixels.height as usize, |x, y| {
-            let i = (y * w + x) * 4;
-            let p = &pixels.data[i..i + 4];
-            (p[0], p[1], p[2], p[3])
-        })
-        .map_err(|e| e.to_string())
-    })
+    files::commit_all(vec![exr_file(path, pixels)?])?;
+    Ok(())
 }
 
 /// Reads an EXR written by [`write_exr`] (or any RGBA EXR) back as linear
 /// float RGBA.
+///
+/// The header is read first and the size checked against the largest
+/// image the renderer takes and the memory budget, so a small file that
+/// claims a huge image is refused before anything is allocated for it.
 pub fn read_exr(path: &Path) -> Result<Pixels<f32>, RenderError> {
     use exr::prelude::*;
+    let err = |reason: String| RenderError::Input {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| err(format!("not a readable OpenEXR file: {e}")))?;
+    let max = crate::scene::MAX_OUTPUT_SIZE as usize;
+    let mut size = None;
+    for header in &meta.headers {
+        let s = header.layer_size;
+        if s.width() == 0 || s.height() == 0 || s.width() > max || s.height() > max {
+            return Err(err(format!(
+                "the image is {}x{}; each side must be in 1..={max}",
+                s.width(),
+                s.height()
+            )));
+        }
+        size.get_or_insert((s.width(), s.height()));
+    }
+    let (w, h) = size.ok_or_else(|| err("the file has no image layer".into()))?;
+    crate::budget::MemoryBudget::from_env()?.check(
+        format!("{} ({w}x{h})", path.display()),
+        w as u64 * h as u64 * 16 * 2,
+    )?;
     let image = read_first_rgba_layer_from_file(
         path,
         |resolution, _| Pixels {

@@ -71,7 +71,6 @@ use std::io::{self, BufWriter, Cursor, Write};
 use std::panic::{self, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use image::codecs::png::PngEncoder;
 use image::{DynamicImage, ExtendedColorType, ImageEncoder, ImageFormat};
@@ -1001,62 +1000,29 @@ pub fn write_diff_png(cmp: &ImageDiff, path: &Path) -> Result<(), CompareError> 
     })
 }
 
-/// Writes through `write` into a fresh temporary file next to `path`, then
-/// renames it over `path`; on any failure the temporary file is removed.
-/// The sweep report writes its files through this too.
-pub(super) fn write_atomically(
+/// Writes through `write` into a temporary file for `path` and renames it
+/// into place ([`crate::files`], the crate's one file writer); on any
+/// failure the temporary file is removed. The sweep report writes its files
+/// through `crate::files` directly.
+fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> Result<(), CompareError>,
 ) -> Result<(), CompareError> {
-    // Distinguishes temp files of concurrent writers in one process (tests,
-    // parallel comparisons); the pid separates processes.
-    static COUNTER: AtomicUsize = AtomicUsize::new(0);
-
     let io_err = |source| CompareError::Write {
         path: path.to_owned(),
         source,
     };
-    let name = path.file_name().ok_or_else(|| {
-        io_err(io::Error::new(
-            io::ErrorKind::InvalidInput,
-            "path does not name a file",
-        ))
-    })?;
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
+    let as_io = |e: crate::files::FileError| match e {
+        crate::files::FileError::Io { error, .. } => io_err(error),
+        refused => io_err(io::Error::other(refused.to_string())),
     };
-    let mut tmp_name = std::ffi::OsString::from(".");
-    tmp_name.push(name);
-    tmp_name.push(format!(
-        ".{}-{}.tmp",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let tmp = dir.join(tmp_name);
-
-    // create_new: never clobber a file we did not create.
-    let file = File::options()
-        .write(true)
-        .create_new(true)
-        .open(&tmp)
-        .map_err(io_err)?;
-    let result = (|| {
-        let mut w = BufWriter::new(file);
-        write(&mut w)?;
-        w.flush().map_err(io_err)?;
-        let file = w.into_inner().map_err(|e| io_err(e.into_error()))?;
-        // Flush to disk before the rename so a crash cannot leave a complete
-        // name pointing at incomplete data.
-        file.sync_all().map_err(io_err)?;
-        drop(file);
-        fs::rename(&tmp, path).map_err(io_err)
-    })();
-    if result.is_err() {
-        // Best effort: the original error is the one worth reporting.
-        let _ = fs::remove_file(&tmp);
-    }
-    result
+    let pending = crate::files::PendingFile::create(path).map_err(as_io)?;
+    let mut w = BufWriter::new(pending.file().try_clone().map_err(io_err)?);
+    write(&mut w)?;
+    w.flush().map_err(io_err)?;
+    drop(w);
+    pending.commit().map_err(as_io)?;
+    Ok(())
 }
 
 /// Serde adapter writing `+inf` as `null` (JSON has no infinity) and reading
@@ -1081,6 +1047,7 @@ mod infinite_as_null {
 mod tests {
     use super::*;
     use image::{Rgb, RgbImage};
+    use std::sync::atomic::{AtomicUsize, Ordering};
 
     /// A fresh empty folder under the system temp dir, removed on drop.
     struct TempDir(PathBuf);

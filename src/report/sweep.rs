@@ -57,7 +57,7 @@
 //! which keeps this module free of Vulkan and lets it be tested without a
 //! device.
 
-use super::image_diff::{compare_images, write_atomically, CompareError, ImageRef, Metric};
+use super::image_diff::{compare_images, CompareError, ImageRef, Metric};
 use super::plot::{self, PlotError, PlotPoint};
 use super::stats::Summary;
 use crate::render::reference::{ReferenceError, ReferenceScene};
@@ -66,7 +66,6 @@ use crate::scene::{Best, Knob, KnobError, Scene};
 use serde::{Serialize, Serializer};
 use std::collections::{HashMap, HashSet};
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
@@ -109,14 +108,17 @@ pub enum SweepError {
         #[source]
         source: CompareError,
     },
-    #[error("cannot create output folder {}: {source}", path.display())]
+    // The OS error is in the message, not a chained source, so that
+    // reporters walking the chain print it once.
+    #[error("cannot create output folder {}: {error}", path.display())]
     CreateDir {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
     #[error(transparent)]
     Write(CompareError),
+    #[error(transparent)]
+    File(crate::files::FileError),
     #[error(transparent)]
     Plot(#[from] PlotError),
     #[error("cannot serialise the sweep as JSON: {0}")]
@@ -920,24 +922,21 @@ pub fn write_outputs(result: &SweepResult, dir: &Path) -> Result<Vec<PathBuf>, S
         ("sweep.json", json),
         ("sweep.svg", to_svg(result)?),
     ];
-    std::fs::create_dir_all(dir).map_err(|source| SweepError::CreateDir {
+    std::fs::create_dir_all(dir).map_err(|error| SweepError::CreateDir {
         path: dir.to_path_buf(),
-        source,
+        error,
     })?;
-    let mut written = Vec::new();
+    // All three are written before any is renamed into place, so a failure
+    // leaves none of them.
+    let mut pending = Vec::new();
     for (name, text) in files {
         let path = dir.join(name);
-        write_atomically(&path, |w| {
-            w.write_all(text.as_bytes())
-                .map_err(|source| CompareError::Write {
-                    path: path.clone(),
-                    source,
-                })
-        })
-        .map_err(SweepError::Write)?;
-        written.push(path);
+        let file = crate::files::PendingFile::create(&path).map_err(SweepError::File)?;
+        std::io::Write::write_all(&mut file.file(), text.as_bytes())
+            .map_err(|e| SweepError::File(file.io_error(e)))?;
+        pending.push(file);
     }
-    Ok(written)
+    crate::files::commit_all(pending).map_err(SweepError::File)
 }
 
 #[cfg(test)]

@@ -24,7 +24,14 @@ impl Camera {
     /// World-to-view matrix: right-handed, the camera looks down `-Z` with
     /// `+Y` up in view space.
     pub fn view(&self) -> Mat4 {
-        Mat4::look_at_rh(self.eye, self.look_at, self.up)
+        // In f64: the view direction is normalised from a difference that
+        // may be tiny (or large) for f32, which would give NaN there.
+        DMat4::look_at_rh(
+            self.eye.as_dvec3(),
+            self.look_at.as_dvec3(),
+            self.up.as_dvec3(),
+        )
+        .as_mat4()
     }
 
     /// View-to-clip matrix for Vulkan with reversed Z.

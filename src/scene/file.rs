@@ -33,17 +33,36 @@ pub const MIN_SEGMENTS: u32 = 3;
 pub const DEFAULT_LIGHT_CUTOFF: f32 = 1e-3;
 /// Default tessellation `[u, v]` when an object does not give one.
 pub const DEFAULT_TESSELLATION: [u32; 2] = [64, 32];
+/// Largest accepted coordinate magnitude (positions, translations): the
+/// GPU works in 32-bit floats, which beyond this cannot place a unit-sized
+/// object to better than about 0.06 units, and sums and differences of
+/// coordinates must not overflow.
+pub const MAX_COORDINATE: f64 = 1e6;
+/// Accepted range of every length (shape sizes, `near`) and scale factor.
+pub const MIN_LENGTH: f64 = 1e-6;
+/// See [`MIN_LENGTH`].
+pub const MAX_LENGTH: f64 = 1e6;
+/// Largest accepted colour, reflectance or light colour times intensity
+/// per channel, and attenuation term: keeps every lighting sum finite in
+/// 32-bit floats.
+pub const MAX_COLOUR: f64 = 1e6;
+/// Smallest accepted field of view in degrees: below it the projection's
+/// focal length overflows 32-bit floats.
+pub const MIN_FOV_Y: f64 = 1e-3;
 /// Default point-light attenuation `[constant, linear, quadratic]`:
 /// inverse-square far away, but finite at the light.
 pub const DEFAULT_ATTENUATION: [f32; 3] = [1.0, 0.0, 1.0];
 
+// Numbers are read as f64 and narrowed to f32 by the checks below, so a
+// value that overflows or underflows f32 (1e308, 1e-300) is reported as
+// out of range rather than as "inf" or "0".
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct SceneFile {
     #[serde(default)]
-    ambient: [f32; 3],
+    ambient: [f64; 3],
     #[serde(default = "default_light_cutoff")]
-    light_cutoff: f32,
+    light_cutoff: f64,
     #[serde(default)]
     output: OutputFile,
     camera: CameraFile,
@@ -82,22 +101,22 @@ impl Default for OutputFile {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CameraFile {
-    eye: [f32; 3],
-    look_at: [f32; 3],
+    eye: [f64; 3],
+    look_at: [f64; 3],
     #[serde(default = "default_up")]
-    up: [f32; 3],
+    up: [f64; 3],
     #[serde(default = "default_fov_y")]
-    fov_y: f32,
+    fov_y: f64,
     #[serde(default = "default_near")]
-    near: f32,
-    far: Option<f32>,
+    near: f64,
+    far: Option<f64>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields, default)]
 struct ToneMapFile {
     operator: ToneMapOperator,
-    exposure: f32,
+    exposure: f64,
 }
 
 impl Default for ToneMapFile {
@@ -121,28 +140,28 @@ enum LightKind {
 struct LightFile {
     #[serde(rename = "type")]
     kind: LightKind,
-    position: Option<[f32; 3]>,
-    direction: Option<[f32; 3]>,
+    position: Option<[f64; 3]>,
+    direction: Option<[f64; 3]>,
     #[serde(default = "white")]
-    color: [f32; 3],
+    color: [f64; 3],
     #[serde(default = "one")]
-    intensity: f32,
-    attenuation: Option<[f32; 3]>,
+    intensity: f64,
+    attenuation: Option<[f64; 3]>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct MaterialFile {
     name: String,
-    ka: Option<[f32; 3]>,
-    kd: [f32; 3],
+    ka: Option<[f64; 3]>,
+    kd: [f64; 3],
     #[serde(default)]
-    ks: [f32; 3],
+    ks: [f64; 3],
     #[serde(default = "default_shininess")]
-    shininess: f32,
+    shininess: f64,
     texture: Option<PathBuf>,
     #[serde(default = "one")]
-    opacity: f32,
+    opacity: f64,
     #[serde(default = "default_shading")]
     shading: ShadingModel,
 }
@@ -156,17 +175,17 @@ struct ObjectFile {
     #[serde(default = "default_tessellation")]
     tessellation: [u32; 2],
     #[serde(default)]
-    translate: [f32; 3],
+    translate: [f64; 3],
     rotate: Option<RotateFile>,
     #[serde(default = "ones")]
-    scale: [f32; 3],
+    scale: [f64; 3],
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RotateFile {
-    axis: [f32; 3],
-    degrees: f32,
+    axis: [f64; 3],
+    degrees: f64,
 }
 
 #[derive(Clone, Copy, Deserialize)]
@@ -184,39 +203,39 @@ enum ShapeKind {
 struct ShapeFile {
     #[serde(rename = "type")]
     kind: ShapeKind,
-    radius: Option<f32>,
-    major_radius: Option<f32>,
-    minor_radius: Option<f32>,
-    width: Option<f32>,
-    depth: Option<f32>,
-    height: Option<f32>,
-    amplitude: Option<f32>,
-    frequency: Option<f32>,
-    phase: Option<f32>,
+    radius: Option<f64>,
+    major_radius: Option<f64>,
+    minor_radius: Option<f64>,
+    width: Option<f64>,
+    depth: Option<f64>,
+    height: Option<f64>,
+    amplitude: Option<f64>,
+    frequency: Option<f64>,
+    phase: Option<f64>,
 }
 
-fn default_light_cutoff() -> f32 {
-    DEFAULT_LIGHT_CUTOFF
+fn default_light_cutoff() -> f64 {
+    DEFAULT_LIGHT_CUTOFF as f64
 }
-fn default_up() -> [f32; 3] {
+fn default_up() -> [f64; 3] {
     [0.0, 1.0, 0.0]
 }
-fn default_fov_y() -> f32 {
+fn default_fov_y() -> f64 {
     45.0
 }
-fn default_near() -> f32 {
+fn default_near() -> f64 {
     0.1
 }
-fn white() -> [f32; 3] {
+fn white() -> [f64; 3] {
     [1.0; 3]
 }
-fn ones() -> [f32; 3] {
+fn ones() -> [f64; 3] {
     [1.0; 3]
 }
-fn one() -> f32 {
+fn one() -> f64 {
     1.0
 }
-fn default_shininess() -> f32 {
+fn default_shininess() -> f64 {
     32.0
 }
 fn default_shading() -> ShadingModel {
@@ -224,6 +243,21 @@ fn default_shading() -> ShadingModel {
 }
 fn default_tessellation() -> [u32; 2] {
     DEFAULT_TESSELLATION
+}
+
+/// `x` (finite) as an f32, or why it cannot be one.
+fn narrow(x: f64) -> std::result::Result<f32, String> {
+    if x.abs() > f64::from(f32::MAX) {
+        return Err(format!(
+            "is {x:e}, out of range (32-bit floats reach about 3.4e38)"
+        ));
+    }
+    if x != 0.0 && x.abs() < f64::from(f32::MIN_POSITIVE) {
+        return Err(format!(
+            "is {x:e}, too close to 0 for a 32-bit float (the smallest is about 1.2e-38)"
+        ));
+    }
+    Ok(x as f32)
 }
 
 /// Parses and validates a scene. See [`Scene::from_toml`].
@@ -253,15 +287,102 @@ impl Check<'_> {
         }
     }
 
-    fn finite(&self, field: &str, x: f32) -> Result<f32> {
-        if x.is_finite() {
-            Ok(x)
+    /// `x` narrowed to f32: finite, and neither too large for f32 nor so
+    /// small that it would become 0 or lose precision (subnormal).
+    fn finite(&self, field: &str, x: f64) -> Result<f32> {
+        if !x.is_finite() {
+            return Err(self.invalid(field, format!("must be a finite number, got {x}")));
+        }
+        narrow(x).map_err(|reason| self.invalid(field, reason))
+    }
+
+    fn vec3(&self, field: &str, v: [f64; 3]) -> Result<Vec3> {
+        let mut out = [0f32; 3];
+        for (i, x) in v.iter().enumerate() {
+            if !x.is_finite() {
+                return Err(self.invalid(
+                    field,
+                    format!("component {i} must be a finite number, got {x}"),
+                ));
+            }
+            out[i] = narrow(*x)
+                .map_err(|reason| self.invalid(field, format!("component {i} {reason}")))?;
+        }
+        Ok(Vec3::from(out))
+    }
+
+    /// A position: every component within `MAX_COORDINATE`.
+    fn coordinates(&self, field: &str, v: [f64; 3]) -> Result<Vec3> {
+        let c = self.vec3(field, v)?;
+        if let Some(i) = v.iter().position(|x| x.abs() > MAX_COORDINATE) {
+            return Err(self.invalid(
+                field,
+                format!(
+                    "component {i} must be between -{MAX_COORDINATE:e} and {MAX_COORDINATE:e}, \
+                     got {:e} (32-bit GPU coordinates lose precision beyond that)",
+                    v[i]
+                ),
+            ));
+        }
+        Ok(c)
+    }
+
+    /// A colour or other per-channel factor: finite, >= 0 and at most
+    /// `MAX_COLOUR` (> 1 is fine, the pipeline is HDR).
+    fn colour(&self, field: &str, v: [f64; 3]) -> Result<Vec3> {
+        let c = self.vec3(field, v)?;
+        if let Some(i) = v.iter().position(|&x| x < 0.0) {
+            return Err(self.invalid(
+                field,
+                format!("component {i} must not be negative, got {}", v[i]),
+            ));
+        }
+        if let Some(i) = v.iter().position(|&x| x > MAX_COLOUR) {
+            return Err(self.invalid(
+                field,
+                format!(
+                    "component {i} must be at most {MAX_COLOUR:e}, got {:e}",
+                    v[i]
+                ),
+            ));
+        }
+        Ok(c)
+    }
+
+    fn positive(&self, field: &str, x: f64) -> Result<f32> {
+        if x.is_finite() && x <= 0.0 {
+            return Err(self.invalid(field, format!("must be greater than 0, got {x}")));
+        }
+        self.finite(field, x)
+    }
+
+    /// A length or scale factor: within `MIN_LENGTH..=MAX_LENGTH`.
+    fn length(&self, field: &str, x: f64) -> Result<f32> {
+        if !x.is_finite() || x <= 0.0 {
+            return self.positive(field, x);
+        }
+        if !(MIN_LENGTH..=MAX_LENGTH).contains(&x) {
+            return Err(self.invalid(
+                field,
+                format!("must be between {MIN_LENGTH:e} and {MAX_LENGTH:e}, got {x:e}"),
+            ));
+        }
+        self.finite(field, x)
+    }
+
+    fn non_negative(&self, field: &str, x: f64) -> Result<f32> {
+        let v = self.finite(field, x)?;
+        if x >= 0.0 {
+            Ok(v)
         } else {
-            Err(self.invalid(field, format!("must be a finite number, got {x}")))
+            Err(self.invalid(field, format!("must not be negative, got {x}")))
         }
     }
 
-    fn vec3(&self, field: &str, v: [f32; 3]) -> Result<Vec3> {
+    /// A direction or axis, returned normalised. Normalised in f64 after
+    /// dividing by the largest component, so neither huge nor tiny
+    /// components overflow or underflow on the way.
+    fn direction(&self, field: &str, v: [f64; 3], what: &str) -> Result<Vec3> {
         for (i, x) in v.iter().enumerate() {
             if !x.is_finite() {
                 return Err(self.invalid(
@@ -270,45 +391,12 @@ impl Check<'_> {
                 ));
             }
         }
-        Ok(Vec3::from(v))
-    }
-
-    /// A colour or other per-channel factor: finite and >= 0 (> 1 is fine,
-    /// the pipeline is HDR).
-    fn colour(&self, field: &str, v: [f32; 3]) -> Result<Vec3> {
-        let c = self.vec3(field, v)?;
-        match v.iter().position(|&x| x < 0.0) {
-            Some(i) => Err(self.invalid(
-                field,
-                format!("component {i} must not be negative, got {}", v[i]),
-            )),
-            None => Ok(c),
+        let v = glam::DVec3::from(v);
+        let largest = v.abs().max_element();
+        if largest == 0.0 {
+            return Err(self.invalid(field, format!("{what} has zero length")));
         }
-    }
-
-    fn positive(&self, field: &str, x: f32) -> Result<f32> {
-        let x = self.finite(field, x)?;
-        if x > 0.0 {
-            Ok(x)
-        } else {
-            Err(self.invalid(field, format!("must be greater than 0, got {x}")))
-        }
-    }
-
-    fn non_negative(&self, field: &str, x: f32) -> Result<f32> {
-        let x = self.finite(field, x)?;
-        if x >= 0.0 {
-            Ok(x)
-        } else {
-            Err(self.invalid(field, format!("must not be negative, got {x}")))
-        }
-    }
-
-    /// A direction or axis, returned normalised.
-    fn direction(&self, field: &str, v: [f32; 3], what: &str) -> Result<Vec3> {
-        self.vec3(field, v)?
-            .try_normalize()
-            .ok_or_else(|| self.invalid(field, format!("{what} has zero length")))
+        Ok((v / largest).normalize().as_vec3())
     }
 
     fn scene(&self, raw: SceneFile) -> Result<Scene> {
@@ -382,17 +470,30 @@ impl Check<'_> {
     }
 
     fn camera(&self, raw: CameraFile) -> Result<Camera> {
-        let eye = self.vec3("camera.eye", raw.eye)?;
-        let look_at = self.vec3("camera.look_at", raw.look_at)?;
-        let up = self.vec3("camera.up", raw.up)?;
-        let fov = self.finite("camera.fov_y", raw.fov_y)?;
-        if !(fov > 0.0 && fov < 180.0) {
+        let eye = self.coordinates("camera.eye", raw.eye)?;
+        let look_at = self.coordinates("camera.look_at", raw.look_at)?;
+        let up = self.direction("camera.up", raw.up, "up")?;
+        if raw.fov_y.is_finite() && !(raw.fov_y > 0.0 && raw.fov_y < 180.0) {
             return Err(self.invalid(
                 "camera.fov_y",
-                format!("must be between 0 and 180 degrees (exclusive), got {fov}"),
+                format!(
+                    "must be between 0 and 180 degrees (exclusive), got {}",
+                    raw.fov_y
+                ),
             ));
         }
-        let near = self.positive("camera.near", raw.near)?;
+        if raw.fov_y < MIN_FOV_Y || 180.0 - raw.fov_y < MIN_FOV_Y {
+            return Err(self.invalid(
+                "camera.fov_y",
+                format!(
+                    "must be between {MIN_FOV_Y} and {} degrees, got {:e}",
+                    180.0 - MIN_FOV_Y,
+                    raw.fov_y
+                ),
+            ));
+        }
+        let fov = self.finite("camera.fov_y", raw.fov_y)?;
+        let near = self.length("camera.near", raw.near)?;
         let far = match raw.far {
             None => None,
             Some(far) => {
@@ -409,15 +510,16 @@ impl Check<'_> {
                 Some(far)
             }
         };
-        let forward = (look_at - eye).try_normalize().ok_or_else(|| {
-            self.invalid(
-                "camera.look_at",
-                "equals camera.eye, so there is no view direction",
-            )
-        })?;
-        let up_dir = up
+        // In f64: the difference of two accepted f32 positions is exact.
+        let forward = (look_at.as_dvec3() - eye.as_dvec3())
             .try_normalize()
-            .ok_or_else(|| self.invalid("camera.up", "up has zero length"))?;
+            .ok_or_else(|| {
+                self.invalid(
+                    "camera.look_at",
+                    "equals camera.eye, so there is no view direction",
+                )
+            })?;
+        let up_dir = up.as_dvec3();
         // sin of the angle between them; below ~0.06 degrees the look-at
         // basis is numerically meaningless.
         if forward.cross(up_dir).length() < 1e-3 {
@@ -429,7 +531,7 @@ impl Check<'_> {
         Ok(Camera {
             eye,
             look_at,
-            up: up_dir,
+            up,
             fov_y_degrees: fov,
             near,
             far,
@@ -440,10 +542,16 @@ impl Check<'_> {
         let field = |name: &str| format!("{path}.{name}");
         let base = self.colour(&field("color"), raw.color)?;
         let intensity = self.non_negative(&field("intensity"), raw.intensity)?;
-        let color = base * intensity;
-        if !color.is_finite() {
-            return Err(self.invalid(field("intensity"), "color * intensity overflows"));
+        let peak = raw.color.iter().fold(0f64, |m, c| m.max(*c)) * raw.intensity;
+        if peak > MAX_COLOUR {
+            return Err(self.invalid(
+                field("intensity"),
+                format!(
+                    "color * intensity must be at most {MAX_COLOUR:e} per channel, got {peak:e}"
+                ),
+            ));
         }
+        let color = base * intensity;
         match raw.kind {
             LightKind::Point => {
                 if raw.direction.is_some() {
@@ -455,15 +563,33 @@ impl Check<'_> {
                 let position = raw
                     .position
                     .ok_or_else(|| self.invalid(field("position"), "required for a point light"))?;
-                let position = self.vec3(&field("position"), position)?;
+                let position = self.coordinates(&field("position"), position)?;
                 let attenuation = self.colour(
                     &field("attenuation"),
-                    raw.attenuation.unwrap_or(DEFAULT_ATTENUATION),
+                    raw.attenuation
+                        .unwrap_or(DEFAULT_ATTENUATION.map(f64::from)),
                 )?;
                 if attenuation == Vec3::ZERO {
                     return Err(self.invalid(
                         field("attenuation"),
                         "all three terms are zero, which would make the light infinitely bright",
+                    ));
+                }
+                // A term is either off (0) or large enough that 1 / term
+                // stays far from overflowing.
+                let attenuation_file = raw
+                    .attenuation
+                    .unwrap_or(DEFAULT_ATTENUATION.map(f64::from));
+                if let Some(i) = attenuation_file
+                    .iter()
+                    .position(|&t| t != 0.0 && t < MIN_LENGTH)
+                {
+                    return Err(self.invalid(
+                        field("attenuation"),
+                        format!(
+                            "term {i} must be 0 or at least {MIN_LENGTH:e}, got {:e}",
+                            attenuation_file[i]
+                        ),
                     ));
                 }
                 Ok(Light::Point {
@@ -597,13 +723,18 @@ impl Check<'_> {
                 ));
             }
         }
-        let translate = self.vec3(&field("translate"), raw.translate)?;
+        let translate = self.coordinates(&field("translate"), raw.translate)?;
         let (rotate_axis, rotate_degrees) = match raw.rotate {
             None => (Vec3::Y, 0.0),
-            Some(rotate) => (
-                self.direction(&field("rotate.axis"), rotate.axis, "axis")?,
-                self.finite(&field("rotate.degrees"), rotate.degrees)?,
-            ),
+            Some(rotate) => {
+                let axis = self.direction(&field("rotate.axis"), rotate.axis, "axis")?;
+                if !rotate.degrees.is_finite() {
+                    self.finite(&field("rotate.degrees"), rotate.degrees)?;
+                }
+                // Reduced in f64 first: 1e30 degrees is a valid angle, but
+                // its f32 radians are not a meaningful one.
+                (axis, rotate.degrees.rem_euclid(360.0) as f32)
+            }
         };
         let scale = self.vec3(&field("scale"), raw.scale)?;
         for (i, s) in scale.to_array().into_iter().enumerate() {
@@ -614,6 +745,15 @@ impl Check<'_> {
                     field("scale"),
                     format!(
                         "component {i} is zero (or too small to invert), which flattens the object"
+                    ),
+                ));
+            }
+            if s > 0.0 && !(MIN_LENGTH..=MAX_LENGTH).contains(&f64::from(s)) {
+                return Err(self.invalid(
+                    field("scale"),
+                    format!(
+                        "component {i} must be between {MIN_LENGTH:e} and {MAX_LENGTH:e}, got {:e}",
+                        raw.scale[i]
                     ),
                 ));
             }
@@ -680,13 +820,20 @@ impl Check<'_> {
             let field = format!("{path}.{name}");
             let value =
                 get(name).ok_or_else(|| self.invalid(&field, format!("required for a {kind}")))?;
-            self.positive(&field, value)
+            self.length(&field, value)
         };
         let number = |name: &str| -> Result<f32> {
             let field = format!("{path}.{name}");
             let value =
                 get(name).ok_or_else(|| self.invalid(&field, format!("required for a {kind}")))?;
-            self.finite(&field, value)
+            let v = self.finite(&field, value)?;
+            if value.abs() > MAX_LENGTH {
+                return Err(self.invalid(
+                    &field,
+                    format!("must be between -{MAX_LENGTH:e} and {MAX_LENGTH:e}, got {value:e}"),
+                ));
+            }
+            Ok(v)
         };
         Ok(match raw.kind {
             ShapeKind::Sphere => Shape::Sphere {
@@ -710,7 +857,11 @@ impl Check<'_> {
                 amplitude: number("amplitude")?,
                 frequency: number("frequency")?,
                 phase: match get("phase") {
-                    Some(phase) => self.finite(&format!("{path}.phase"), phase)?,
+                    Some(phase) => {
+                        self.finite(&format!("{path}.phase"), phase)?;
+                        // Reduced in f64 so a large phase keeps its meaning.
+                        phase.rem_euclid(std::f64::consts::TAU) as f32
+                    }
                     None => 0.0,
                 },
             },

@@ -112,11 +112,25 @@ pub const KNOBS: &[Knob] = &[
             if !(f.is_finite() && f > 0.0) {
                 return Err("must be a positive factor".into());
             }
+            // Above the maximum is refused rather than clamped: a clamped
+            // row would keep a label that does not describe what it drew.
+            // Below the minimum still rounds up to it, so coarse factors
+            // apply to every scene.
+            let max = crate::mesh::MAX_SEGMENTS;
+            for (i, o) in s.objects.iter().enumerate() {
+                let most = o.tessellation.0.max(o.tessellation.1);
+                let scaled = (most as f64 * f).round();
+                if scaled > max as f64 {
+                    return Err(format!(
+                        "objects[{i}] \"{}\" would get {scaled:e} segments (tessellation \
+                         {}x{} times {f}); at most {max} are allowed",
+                        o.name, o.tessellation.0, o.tessellation.1
+                    ));
+                }
+            }
             for o in &mut s.objects {
-                let scale = |n: u32| {
-                    ((n as f64 * f).round() as u32)
-                        .clamp(super::MIN_SEGMENTS, crate::mesh::MAX_SEGMENTS)
-                };
+                let scale =
+                    |n: u32| ((n as f64 * f).round() as u32).clamp(super::MIN_SEGMENTS, max);
                 o.tessellation = (scale(o.tessellation.0), scale(o.tessellation.1));
             }
             Ok(())

@@ -148,8 +148,9 @@ impl Context {
             instance: Some(instance),
             debug,
             validation_log,
+            entry: Some(entry),
         };
-        partial.finish(entry, options)
+        partial.finish(options)
     }
 
     /// The device this context renders on.
@@ -211,14 +212,15 @@ struct PartialInstance {
     // Dropped after Drop::drop destroyed the instance, which may still call
     // the messenger with this as user data.
     validation_log: Option<Arc<ValidationLog>>,
+    // The loader library: dropping it unloads the code that destroying the
+    // instance calls into, so it must outlive the instance. As a field it
+    // is dropped after Drop::drop has destroyed the instance; as a separate
+    // argument of `finish` it was dropped first on the error path (crash).
+    entry: Option<ash::Entry>,
 }
 
 impl PartialInstance {
-    fn finish(
-        mut self,
-        entry: ash::Entry,
-        options: &ContextOptions,
-    ) -> Result<Arc<Context>, VkError> {
+    fn finish(mut self, options: &ContextOptions) -> Result<Arc<Context>, VkError> {
         let instance = self.instance.as_ref().expect("set in new");
         let (physical_device, props) = pick_physical_device(instance, options.device.as_deref())?;
         let queue_family = graphics_queue_family(instance, physical_device)?;
@@ -283,7 +285,7 @@ impl PartialInstance {
         );
 
         Ok(Arc::new(Context {
-            entry,
+            entry: self.entry.take().expect("set in new"),
             instance: self.instance.take().expect("set in new"),
             debug: self.debug.take(),
             physical_device,
@@ -354,7 +356,12 @@ fn pick_physical_device(
     };
     chosen.copied().ok_or_else(|| VkError::NoDevice {
         wanted: wanted.unwrap_or("any").to_string(),
-        available: names,
+        // With indices, since --device takes either.
+        available: names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| format!("{i}: {n}"))
+            .collect(),
     })
 }
 

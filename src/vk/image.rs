@@ -55,6 +55,7 @@ pub struct Image {
 impl Image {
     pub fn new(ctx: &Arc<Context>, name: &str, desc: ImageDesc) -> Result<Image, VkError> {
         check_format(ctx, desc.format, desc.usage)?;
+        check_size(ctx, name, &desc)?;
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(desc.format)
@@ -122,6 +123,39 @@ impl Image {
             layer_count: 1,
         }
     }
+}
+
+/// Fails with a clear error when the image is larger than the device
+/// allows (creating it would be invalid usage, not a reported error).
+fn check_size(ctx: &Context, name: &str, desc: &ImageDesc) -> Result<(), VkError> {
+    let l = &ctx.limits;
+    let mut max = (l.max_image_dimension2_d, l.max_image_dimension2_d);
+    let mut limit = "maxImageDimension2D";
+    if desc.usage.intersects(
+        vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+    ) && (l.max_framebuffer_width, l.max_framebuffer_height) < max
+    {
+        max = (l.max_framebuffer_width, l.max_framebuffer_height);
+        limit = "maxFramebufferWidth/Height";
+    }
+    let full_chain = 32 - desc.width.max(desc.height).leading_zeros();
+    if desc.width == 0
+        || desc.height == 0
+        || desc.width > max.0
+        || desc.height > max.1
+        || desc.mip_levels == 0
+        || desc.mip_levels > full_chain
+    {
+        return Err(VkError::ImageSize {
+            name: name.to_string(),
+            width: desc.width,
+            height: desc.height,
+            max_width: max.0,
+            max_height: max.1,
+            limit,
+        });
+    }
+    Ok(())
 }
 
 /// Fails with a clear error when the device cannot use `format` as asked.

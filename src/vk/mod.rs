@@ -41,7 +41,7 @@ pub enum VkError {
     Loader(String),
     #[error("VK_LAYER_KHRONOS_validation is not installed (package vulkan-validationlayers; run scripts/setup.sh)")]
     MissingValidationLayer,
-    #[error("no Vulkan 1.2 device matches '{wanted}'; available: {available:?}")]
+    #[error("no Vulkan 1.2 device matches '{wanted}' (give an index or part of a name); available: {}", if available.is_empty() { "none".to_string() } else { available.join(", ") })]
     NoDevice {
         wanted: String,
         available: Vec<String>,
@@ -52,6 +52,15 @@ pub enum VkError {
     UnsupportedFormat {
         format: ash::vk::Format,
         what: String,
+    },
+    #[error("{name} image {width}x{height} is outside this device's limit of {max_width}x{max_height} ({limit})")]
+    ImageSize {
+        name: String,
+        width: u32,
+        height: u32,
+        max_width: u32,
+        max_height: u32,
+        limit: &'static str,
     },
     #[error("Vulkan call failed: {0}")]
     Api(#[from] ash::vk::Result),

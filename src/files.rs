@@ -1,0 +1,343 @@
+//! The one way this crate writes an output file: into a uniquely named
+//! temporary file in the destination's folder, renamed over the destination
+//! only once it is complete.
+//!
+//! - Concurrent writers to the same path each get their own temporary file,
+//!   so the destination is always one whole file, never a mix.
+//! - A failed or interrupted write leaves no temporary file behind: the
+//!   temporary file is removed on drop, and [`remove_pending`] removes the
+//!   ones still open when the process is interrupted (the CLI calls it from
+//!   its SIGINT/SIGTERM handler).
+//! - Only regular files are replaced. A destination that is a device, FIFO,
+//!   socket or folder is refused; a symbolic link is written through (its
+//!   target is replaced, the link stays).
+//! - A run that writes several files prepares all of them first and commits
+//!   them together with [`commit_all`], so a failure leaves none of them.
+
+use std::collections::HashSet;
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// Why an output file could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum FileError {
+    /// The destination cannot be written by this program's rules (not a
+    /// regular file, no such folder, ...).
+    #[error("cannot write {}: {reason}", path.display())]
+    Refused { path: PathBuf, reason: String },
+    /// The operating system refused. The error is part of the message, not
+    /// a chained source, so reporters that walk the chain print it once.
+    #[error("cannot write {}: {error}", path.display())]
+    Io {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+}
+
+/// Temporary files currently being written, for [`remove_pending`].
+static PENDING: Mutex<Option<HashSet<PathBuf>>> = Mutex::new(None);
+
+fn pending() -> std::sync::MutexGuard<'static, Option<HashSet<PathBuf>>> {
+    // A panic while holding the lock leaves a consistent set; keep using it.
+    PENDING.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// Removes every temporary file still being written. For an interrupt
+/// handler (which then exits); holding the lock also waits for a rename in
+/// progress, so a file is either complete under its final name or gone.
+pub fn remove_pending() {
+    let mut guard = pending();
+    if let Some(set) = guard.as_mut() {
+        for path in set.drain() {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+    // Leave the lock held until the process exits: no commit may start
+    // after the cleanup. (The guard is forgotten, never unlocked.)
+    std::mem::forget(guard);
+}
+
+/// Checks that `path` can be an output: it names a file in an existing
+/// folder and is not a folder, device, FIFO or socket. Returns the path to
+/// replace (the target when `path` is a symbolic link). Call it before long
+/// work, so a bad output path fails in seconds, not after the render.
+pub fn check_destination(path: &Path) -> Result<PathBuf, FileError> {
+    let refuse = |reason: String| FileError::Refused {
+        path: path.to_path_buf(),
+        reason,
+    };
+    if path.file_name().is_none() {
+        return Err(refuse("the path does not name a file".into()));
+    }
+    let mut dest = path.to_path_buf();
+    if let Ok(meta) = std::fs::symlink_metadata(path) {
+        if meta.file_type().is_symlink() {
+            dest = std::fs::canonicalize(path)
+                .map_err(|e| refuse(format!("symbolic link to a missing target ({e})")))?;
+        }
+        let meta = std::fs::metadata(&dest).map_err(|error| FileError::Io {
+            path: path.to_path_buf(),
+            error,
+        })?;
+        if meta.is_dir() {
+            return Err(refuse("it is a folder".into()));
+        }
+        if !meta.is_file() {
+            return Err(refuse(
+                "it exists and is not a regular file (a device, FIFO or socket); \
+                 refusing to replace it"
+                    .into(),
+            ));
+        }
+    }
+    let dir = parent(&dest);
+    match std::fs::metadata(dir) {
+        Ok(m) if m.is_dir() => Ok(dest),
+        Ok(_) => Err(refuse(format!("{} is not a folder", dir.display()))),
+        Err(e) => Err(refuse(format!("folder {}: {e}", dir.display()))),
+    }
+}
+
+/// Checks that `dir` is a folder or can be created as one (its nearest
+/// existing ancestor is a folder), without creating anything.
+pub fn check_output_dir(dir: &Path) -> Result<(), FileError> {
+    let refuse = |reason: String| FileError::Refused {
+        path: dir.to_path_buf(),
+        reason,
+    };
+    let mut probe = dir;
+    loop {
+        match std::fs::metadata(probe) {
+            Ok(m) if m.is_dir() => return Ok(()),
+            Ok(_) if probe == dir => return Err(refuse("it exists and is not a folder".into())),
+            Ok(_) => {
+                return Err(refuse(format!(
+                    "{} is not a folder, so the folder cannot be created",
+                    probe.display()
+                )))
+            }
+            Err(_) => match probe.parent() {
+                Some(p) if !p.as_os_str().is_empty() => probe = p,
+                // A relative path whose first component is missing: it is
+                // created in the current folder.
+                _ => return Ok(()),
+            },
+        }
+    }
+}
+
+fn parent(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+/// An output file being written under a temporary name. Dropping it
+/// without [`PendingFile::commit`] removes the temporary file.
+pub struct PendingFile {
+    /// The path the caller asked for (used in messages).
+    path: PathBuf,
+    /// The file to replace (differs from `path` through a symbolic link).
+    dest: PathBuf,
+    tmp: Option<tempfile::NamedTempFile>,
+}
+
+impl PendingFile {
+    /// Creates the temporary file for `path` (see [`check_destination`]).
+    pub fn create(path: &Path) -> Result<PendingFile, FileError> {
+        let dest = check_destination(path)?;
+        let name = dest.file_name().unwrap_or_default().to_string_lossy();
+        let prefix = format!(".{name}.");
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".tmp");
+        #[cfg(unix)]
+        {
+            // The file gets the usual mode after the umask rather than
+            // tempfile's owner-only default: it becomes a normal output.
+            use std::os::unix::fs::PermissionsExt;
+            builder.permissions(std::fs::Permissions::from_mode(0o666));
+        }
+        // Registered under the lock, so an interrupt between creating and
+        // registering cannot leave the file behind.
+        let mut guard = pending();
+        let tmp = builder
+            .tempfile_in(parent(&dest))
+            .map_err(|error| FileError::Io {
+                path: path.to_path_buf(),
+                error,
+            })?;
+        guard
+            .get_or_insert_with(HashSet::new)
+            .insert(tmp.path().to_path_buf());
+        Ok(PendingFile {
+            path: path.to_path_buf(),
+            dest,
+            tmp: Some(tmp),
+        })
+    }
+
+    /// The path the caller asked for.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The temporary file to write into (`&File` is `Write` and `Seek`).
+    pub fn file(&self) -> &File {
+        self.tmp.as_ref().expect("present until commit").as_file()
+    }
+
+    /// An I/O error on this file, for callers' encoders.
+    pub fn io_error(&self, error: std::io::Error) -> FileError {
+        FileError::Io {
+            path: self.path.clone(),
+            error,
+        }
+    }
+
+    /// Flushes the data to disk and renames the file into place. The
+    /// destination is checked again, since it may have changed meanwhile.
+    pub fn commit(mut self) -> Result<PathBuf, FileError> {
+        let tmp = self.tmp.take().expect("present until commit");
+        let io = |error| FileError::Io {
+            path: self.path.clone(),
+            error,
+        };
+        // Flushed before the rename so a crash cannot leave a complete name
+        // pointing at incomplete data.
+        tmp.as_file().sync_all().map_err(io)?;
+        let dest = check_destination(&self.path)?;
+        if let Ok(meta) = std::fs::metadata(&dest) {
+            // Replacing a file keeps its permissions.
+            let _ = tmp.as_file().set_permissions(meta.permissions());
+        }
+        let mut guard = pending();
+        let tmp_path = tmp.path().to_path_buf();
+        let result = tmp.persist(&dest);
+        if let Some(set) = guard.as_mut() {
+            set.remove(&tmp_path);
+        }
+        drop(guard);
+        // On failure `PersistError` hands the file back; dropping it removes it.
+        result.map_err(|e| io(e.error))?;
+        Ok(self.path.clone())
+    }
+}
+
+impl Drop for PendingFile {
+    fn drop(&mut self) {
+        if let Some(tmp) = self.tmp.take() {
+            let mut guard = pending();
+            if let Some(set) = guard.as_mut() {
+                set.remove(tmp.path());
+            }
+            // NamedTempFile's own drop removes the file.
+            drop(tmp);
+        }
+        let _ = &self.dest;
+    }
+}
+
+/// Commits every file, in order. If one fails, the ones already renamed
+/// into place are removed again, so a failed run leaves none of its
+/// outputs (a file they replaced is gone too: the run said it would
+/// replace it). Returns the paths written.
+pub fn commit_all(files: Vec<PendingFile>) -> Result<Vec<PathBuf>, FileError> {
+    let mut done = Vec::with_capacity(files.len());
+    for file in files {
+        match file.commit() {
+            Ok(path) => done.push(path),
+            Err(e) => {
+                for path in &done {
+                    let _ = std::fs::remove_file(path);
+                }
+                return Err(e);
+            }
+        }
+    }
+    Ok(done)
+}
+
+/// Writes `bytes` to `path` through a [`PendingFile`].
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<PathBuf, FileError> {
+    use std::io::Write as _;
+    let file = PendingFile::create(path)?;
+    let mut w = std::io::BufWriter::new(file.file());
+    w.write_all(bytes)
+        .and_then(|()| w.flush())
+        .map_err(|e| file.io_error(e))?;
+    drop(w);
+    file.commit()
+}
+
+/// True when `a` and `b` name the same file (or would, once created).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    let resolve = |p: &Path| {
+        std::fs::canonicalize(p).unwrap_or_else(|_| {
+            let dir = std::fs::canonicalize(parent(p)).unwrap_or_else(|_| parent(p).into());
+            dir.join(p.file_name().unwrap_or_default())
+        })
+    };
+    resolve(a) == resolve(b)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dir(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("aerial-files-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    fn entries(d: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn files_refuse_non_regular_destinations_and_missing_folders() {
+        let d = dir("refuse");
+        let msg = write_bytes(&d, b"x").unwrap_err().to_string();
+        assert!(msg.contains("folder"), "{msg}");
+        let msg = write_bytes(Path::new("/dev/null"), b"x")
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("not a regular file"), "{msg}");
+        let msg = write_bytes(&d.join("nodir/x"), b"x")
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("nodir"), "{msg}");
+        assert!(check_output_dir(&d.join("a/b")).is_ok());
+        std::fs::write(d.join("f"), b"").unwrap();
+        assert!(check_output_dir(&d.join("f")).is_err());
+        assert!(check_output_dir(&d.join("f/sub")).is_err());
+        std::fs::remove_dir_all(&d).ok();
+    }
+
+    #[test]
+    fn files_commit_all_or_nothing_and_leave_no_temporaries() {
+        let d = dir("commit");
+        let a = PendingFile::create(&d.join("a")).unwrap();
+        std::io::Write::write_all(&mut a.file(), b"a").unwrap();
+        let b = PendingFile::create(&d.join("b")).unwrap();
+        // Make b's rename fail: its destination becomes a folder.
+        std::fs::create_dir(d.join("b")).unwrap();
+        assert!(commit_all(vec![a, b]).is_err());
+        assert_eq!(entries(&d), ["b"]);
+        // Dropped without commit: nothing left.
+        drop(PendingFile::create(&d.join("c")).unwrap());
+        assert_eq!(entries(&d), ["b"]);
+        write_bytes(&d.join("c"), b"c").unwrap();
+        assert_eq!(std::fs::read(d.join("c")).unwrap(), b"c");
+        assert_eq!(entries(&d), ["b", "c"]);
+        std::fs::remove_dir_all(&d).ok();
+    }
+}

@@ -1,0 +1,386 @@
+//! Checks made before a run allocates anything large, so that every input
+//! the renderer cannot handle is refused with a message naming it, instead
+//! of crashing, aborting on a failed allocation, tripping the validation
+//! layer or silently drawing a wrong image:
+//!
+//! - [`scene_memory`] / [`image_memory`]: the estimated peak memory of the
+//!   run (geometry, attachments, readback, textures) against the
+//!   [`MemoryBudget`];
+//! - [`scene_on_device`]: textures (format detected from the content, size
+//!   within the device's limits), every object's mesh (not empty, finite)
+//!   and the lights each object's uniform block must hold.
+
+use super::gpu_types::{GpuLight, ObjectHeader};
+use super::RenderError;
+use crate::budget::{Bytes, MemoryBudget};
+use crate::scene::{HdrFormat, Scene};
+use crate::vk::Context;
+use std::borrow::Cow;
+use std::io::Read as _;
+use std::path::{Path, PathBuf};
+
+/// The largest decoded texture (RGBA, 8 bits per channel) the PNG decoder
+/// accepts: the `image` crate's default allocation limit.
+pub const MAX_TEXTURE_BYTES: u64 = 512 << 20;
+
+/// Bytes per vertex and per index as uploaded (see `crate::mesh::Vertex`).
+const VERTEX_BYTES: u64 = std::mem::size_of::<crate::mesh::Vertex>() as u64;
+const INDEX_BYTES: u64 = 4;
+/// The f64 copy of each position kept while tessellating one object.
+const EXACT_POSITION_BYTES: u64 = 24;
+
+/// What a texture file is, from its first bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TextureFormat {
+    Png,
+    Jpeg,
+    OpenExr,
+    Unknown,
+}
+
+/// A texture file's format and size, read from its header only.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TextureInfo {
+    pub width: u32,
+    pub height: u32,
+}
+
+/// The format of `bytes`, a file's start, from its signature.
+pub fn sniff(bytes: &[u8]) -> TextureFormat {
+    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
+        TextureFormat::Png
+    } else if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
+        TextureFormat::Jpeg
+    } else if bytes.starts_with(&[0x76, 0x2F, 0x31, 0x01]) {
+        TextureFormat::OpenExr
+    } else {
+        TextureFormat::Unknown
+    }
+}
+
+/// Reads a texture's header: the format from the content (not the file
+/// name) and the size, without decoding the pixels.
+pub fn inspect_texture(path: &Path) -> Result<TextureInfo, RenderError> {
+    let err = |reason: String| RenderError::Texture {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let mut head = [0u8; 8];
+    let mut file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
+    let n = file.read(&mut head).map_err(|e| err(e.to_string()))?;
+    match sniff(&head[..n]) {
+        TextureFormat::Png => {}
+        TextureFormat::Jpeg => {
+            return Err(err(
+                "is a JPEG file; textures must be PNG (convert it, e.g. with ImageMagick)".into(),
+            ))
+        }
+        TextureFormat::OpenExr => {
+            return Err(err(
+                "is an OpenEXR file; textures must be 8-bit PNG (sRGB base colour)".into(),
+            ))
+        }
+        TextureFormat::Unknown => {
+            return Err(err(
+                "is not a PNG file (unrecognised content; the file name is not used to \
+                 decide the format)"
+                    .into(),
+            ))
+        }
+    }
+    let file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
+    let reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .map_err(|e| err(format!("not a readable PNG: {e}")))?;
+    let info = reader.info();
+    Ok(TextureInfo {
+        width: info.width,
+        height: info.height,
+    })
+}
+
+/// Decoded RGBA8 bytes of a texture, plus its mip chain (a third more).
+fn texture_bytes(info: TextureInfo) -> (u64, u64) {
+    let base = info.width as u64 * info.height as u64 * 4;
+    (base, base + base / 3)
+}
+
+/// Estimated peak memory of rendering `scene`, with the largest item named
+/// when over `budget`.
+pub fn scene_memory(
+    scene: &Scene,
+    keep_hdr: bool,
+    budget: &MemoryBudget,
+) -> Result<(), RenderError> {
+    let mut total = 0u64;
+    // Geometry: every mesh is held on the CPU, copied into one upload
+    // array (which may briefly exist twice while it grows) and into the
+    // geometry buffer, so about three copies; plus the f64 positions of the
+    // object being tessellated.
+    let mut largest_transient = 0u64;
+    let mut largest: Option<(String, u64)> = None;
+    for (i, object) in scene.objects.iter().enumerate() {
+        let (u, v) = (object.tessellation.0 as u64, object.tessellation.1 as u64);
+        let vertices = (u + 1) * (v + 1);
+        let geometry = vertices * VERTEX_BYTES + u * v * 6 * INDEX_BYTES;
+        let need = geometry.saturating_mul(3);
+        largest_transient = largest_transient.max(vertices * EXACT_POSITION_BYTES);
+        let what = format!(
+            "objects[{i}] \"{}\" (tessellation {u}x{v}, {} triangles)",
+            object.name,
+            2 * u * v
+        );
+        budget.check(&what, need)?;
+        if largest.as_ref().is_none_or(|(_, n)| need > *n) {
+            largest = Some((what, need));
+        }
+        total = total.saturating_add(need);
+    }
+    total = total.saturating_add(largest_transient);
+    let (w, h) = (scene.output.width as u64, scene.output.height as u64);
+    let attachments = attachment_bytes(w, h, scene.output.hdr_format, keep_hdr);
+    let size_what = format!("output size {w}x{h}");
+    budget.check(&size_what, attachments)?;
+    total = total.saturating_add(attachments);
+    let mut seen: Vec<&PathBuf> = Vec::new();
+    for material in &scene.materials {
+        let Some(path) = &material.texture else {
+            continue;
+        };
+        if seen.contains(&path) {
+            continue;
+        }
+        seen.push(path);
+        let info = inspect_texture(path)?;
+        let (base, with_mips) = texture_bytes(info);
+        if base > MAX_TEXTURE_BYTES {
+            return Err(RenderError::Texture {
+                path: path.clone(),
+                reason: format!(
+                    "{}x{} decodes to {}; textures may decode to at most {} \
+                     (e.g. 8192x8192)",
+                    info.width,
+                    info.height,
+                    Bytes(base),
+                    Bytes(MAX_TEXTURE_BYTES)
+                ),
+            });
+        }
+        // Decoded pixels (twice during conversion to RGBA), staging buffer
+        // and the mipmapped image.
+        let need = 3 * base + with_mips;
+        budget.check(
+            format!(
+                "texture {} ({}x{})",
+                path.display(),
+                info.width,
+                info.height
+            ),
+            need,
+        )?;
+        total = total.saturating_add(need);
+    }
+    if total > budget.bytes {
+        // Each part fits but the sum does not: name the biggest parts.
+        let what = match largest {
+            Some((object, n)) if n > attachments => {
+                format!("the scene (largest part: {object})")
+            }
+            _ => format!("the scene (largest part: {size_what})"),
+        };
+        budget.check(what, total)?;
+    }
+    Ok(())
+}
+
+/// Attachments, readback buffers and the CPU copies of the read-back
+/// images for a `w` x `h` frame.
+fn attachment_bytes(w: u64, h: u64, hdr_format: HdrFormat, keep_hdr: bool) -> u64 {
+    let pixels = w * h;
+    let hdr_texel = match hdr_format {
+        HdrFormat::Rgba16F => 8,
+        HdrFormat::Rgba32F => 16,
+    };
+    // HDR colour, D32 depth, RGBA8 output; output readback and its copy.
+    let mut bytes = pixels * (hdr_texel + 4 + 4) + pixels * 4 * 2;
+    if keep_hdr {
+        // HDR readback, its f32 copy, and the OpenEXR encoder's buffer.
+        bytes += pixels * (hdr_texel + 16 + 16);
+    }
+    bytes
+}
+
+/// Estimated peak memory of tone-mapping a `w` x `h` HDR image that is
+/// already in memory (upload buffer, rgba32f attachment, output, readback).
+pub fn image_memory(w: u32, h: u32, budget: &MemoryBudget) -> Result<(), RenderError> {
+    let (w, h) = (w as u64, h as u64);
+    let need = w * h * 16 + attachment_bytes(w, h, HdrFormat::Rgba32F, false);
+    budget.check(format!("image size {w}x{h}"), need)?;
+    Ok(())
+}
+
+/// A scene checked against the device, possibly with textures redirected
+/// to correctly named links (see [`scene_on_device`]).
+pub struct CheckedScene<'a> {
+    pub scene: Cow<'a, Scene>,
+    /// Holds the links until the render is done.
+    _links: Option<tempfile::TempDir>,
+}
+
+/// Checks `scene` against `ctx`'s limits; see the module documentation.
+pub fn scene_on_device<'a>(
+    scene: &'a Scene,
+    ctx: &Context,
+) -> Result<CheckedScene<'a>, RenderError> {
+    let max_side = ctx.limits.max_image_dimension2_d;
+    let mut scene = Cow::Borrowed(scene);
+    let mut links: Option<tempfile::TempDir> = None;
+    let mut renamed: Vec<(PathBuf, PathBuf)> = Vec::new();
+    for i in 0..scene.materials.len() {
+        let Some(path) = scene.materials[i].texture.clone() else {
+            continue;
+        };
+        let info = inspect_texture(&path)?;
+        if info.width == 0 || info.height == 0 || info.width.max(info.height) > max_side {
+            return Err(RenderError::Texture {
+                path,
+                reason: format!(
+                    "{}x{} is outside this device's image size limit of 1..={max_side} \
+                     pixels per side (maxImageDimension2D)",
+                    info.width, info.height
+                ),
+            });
+        }
+        // The texture loader picks its decoder by file extension; a PNG
+        // under another name is given to it through a `.png` link, so the
+        // content decides the format, not the name.
+        let named_png = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+        if !named_png {
+            let link = match renamed.iter().find(|(from, _)| *from == path) {
+                Some((_, to)) => to.clone(),
+                None => {
+                    let err = |e: std::io::Error| RenderError::Texture {
+                        path: path.clone(),
+                        reason: format!("cannot prepare it for decoding: {e}"),
+                    };
+                    if links.is_none() {
+                        links = Some(tempfile::tempdir().map_err(err)?);
+                    }
+                    let dir = links.as_ref().expect("created above").path();
+                    let to = dir.join(format!("texture{}.png", renamed.len()));
+                    link_or_copy(&path, &to).map_err(err)?;
+                    renamed.push((path.clone(), to.clone()));
+                    to
+                }
+            };
+            scene.to_mut().materials[i].texture = Some(link);
+        }
+    }
+
+    for (i, object) in scene.objects.iter().enumerate() {
+        let name = || format!("objects[{i}] \"{}\"", object.name);
+        let mesh = scene.object_mesh(i);
+        if mesh.indices.is_empty() {
+            return Err(RenderError::Object {
+                object: name(),
+                reason: "its surface tessellates to no triangles (every triangle is \
+                         degenerate: the shape's sizes are too far apart)"
+                    .into(),
+            });
+        }
+        let finite = mesh.vertices.iter().all(|v| {
+            v.position.iter().all(|x| x.is_finite()) && v.normal.iter().all(|x| x.is_finite())
+        });
+        let world = object.transform.matrix();
+        let (centre, radius) = mesh.bounding_sphere();
+        let world_ok = world.is_finite()
+            && world.transform_point3(centre).is_finite()
+            && (radius * object.transform.max_scale()).is_finite();
+        if !finite || !world_ok {
+            return Err(RenderError::Object {
+                object: name(),
+                reason: "its vertices are not finite numbers (sizes too large)".into(),
+            });
+        }
+    }
+
+    // Each object's uniform block holds a header and the lights reaching it.
+    let header = std::mem::size_of::<ObjectHeader>() as u64;
+    let light = std::mem::size_of::<GpuLight>() as u64;
+    let range = ctx.max_uniform_range();
+    if header + scene.lights.len() as u64 * light > range {
+        let max = range.saturating_sub(header) / light;
+        for (i, object) in scene.objects.iter().enumerate() {
+            let lights = scene.lights_reaching(i).len();
+            if lights as u64 > max {
+                return Err(RenderError::Object {
+                    object: format!("objects[{i}] \"{}\"", object.name),
+                    reason: format!(
+                        "it is reached by {lights} lights, but this device's uniform blocks \
+                         hold at most {max} (raise light_cutoff to leave out faint ones, or \
+                         move lights away)"
+                    ),
+                });
+            }
+        }
+    }
+    Ok(CheckedScene {
+        scene,
+        _links: links,
+    })
+}
+
+fn link_or_copy(from: &Path, to: &Path) -> std::io::Result<()> {
+    let from = std::fs::canonicalize(from)?;
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink(&from, to)
+    }
+    #[cfg(not(unix))]
+    {
+        std::fs::copy(&from, to).map(|_| ())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn preflight_sniffs_formats_from_content() {
+        assert_eq!(sniff(b"\x89PNG\r\n\x1a\n...."), TextureFormat::Png);
+        assert_eq!(sniff(&[0xFF, 0xD8, 0xFF, 0xE0]), TextureFormat::Jpeg);
+        assert_eq!(sniff(&[0x76, 0x2F, 0x31, 0x01]), TextureFormat::OpenExr);
+        assert_eq!(sniff(b"GIF89a"), TextureFormat::Unknown);
+        assert_eq!(sniff(b""), TextureFormat::Unknown);
+    }
+
+    #[test]
+    fn preflight_refuses_oversized_scenes_naming_the_object_or_size() {
+        let budget = MemoryBudget {
+            bytes: 64 << 20,
+            from_env: true,
+        };
+        let mut scene = Scene::default_scene();
+        scene.set_output_size(Some(64), Some(64)).unwrap();
+        assert!(scene_memory(&scene, true, &budget).is_ok());
+        scene.objects[0].tessellation = (4096, 4096);
+        let msg = scene_memory(&scene, false, &budget)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains("objects[0]") && msg.contains("4096x4096"),
+            "{msg}"
+        );
+        scene.objects[0].tessellation = (8, 8);
+        scene.set_output_size(Some(16384), Some(16384)).unwrap();
+        let msg = scene_memory(&scene, false, &budget)
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("output size 16384x16384"), "{msg}");
+        let msg = image_memory(16384, 16384, &budget).unwrap_err().to_string();
+        assert!(msg.contains("16384x16384"), "{msg}");
+    }
+}
