@@ -140,11 +140,18 @@ fn nearest_bilinear_and_trilinear_differ_as_their_definitions_say() {
     // Bilinear: level 0 blended between texels, so most pixels are in
     // between; its spread is well below nearest's 0.5 (for uniformly
     // spread sample positions its RMS deviation from 0.5 is 1/6).
-    let rms = |v: &[f64]| (v.iter().map(|x| (x - 0.5).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
+    let rms =
+        |v: &[f64]| (v.iter().map(|x| (x - 0.5).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
     let between = bilinear.iter().filter(|x| **x > 0.02 && **x < 0.98).count();
-    assert!(between * 2 > bilinear.len(), "bilinear is mostly black/white");
+    assert!(
+        between * 2 > bilinear.len(),
+        "bilinear is mostly black/white"
+    );
     let rms_b = rms(&bilinear);
-    assert!((0.1..=0.25).contains(&rms_b), "bilinear RMS deviation {rms_b:.4}");
+    assert!(
+        (0.1..=0.25).contains(&rms_b),
+        "bilinear RMS deviation {rms_b:.4}"
+    );
 
     // Trilinear: the bilinear deviation scaled by 1 - 0.4 pixel by pixel;
     // the least-squares ratio must be 0.6 within 0.06 (the driver's
@@ -153,7 +160,9 @@ fn nearest_bilinear_and_trilinear_differ_as_their_definitions_say() {
     let (num, den) = trilinear
         .iter()
         .zip(&bilinear)
-        .fold((0.0, 0.0), |(n, d), (t, b)| (n + (t - 0.5) * (b - 0.5), d + (b - 0.5).powi(2)));
+        .fold((0.0, 0.0), |(n, d), (t, b)| {
+            (n + (t - 0.5) * (b - 0.5), d + (b - 0.5).powi(2))
+        });
     let ratio = num / den;
     eprintln!("bilinear RMS {rms_b:.4}, trilinear/bilinear ratio {ratio:.4}");
     assert!(
@@ -234,7 +243,10 @@ fn assert_tone_mapped(
         .filter(|(i, _)| i % 4 != 3)
         .map(|(_, (inp, got))| (255.0 * srgb_encode(curve(*inp as f64)) - *got as f64).abs())
         .fold(0.0, f64::max);
-    assert!(unexposed > 10.0, "{what}: exposure {exposure} changed nothing");
+    assert!(
+        unexposed > 10.0,
+        "{what}: exposure {exposure} changed nothing"
+    );
 }
 
 #[test]
@@ -302,5 +314,201 @@ fn the_tonemap_command_honours_operator_and_exposure() {
             curve,
         );
     }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+// ---------------------------------------------------------------------------
+// Timings: the passes run inside the submission the CPU frame time spans
+// (submit to fence), so their sum cannot exceed it. A timestamp period or
+// mask applied wrongly (ticks read as milliseconds, garbage high bits)
+// breaks this by orders of magnitude.
+
+#[test]
+fn the_sum_of_pass_times_does_not_exceed_the_cpu_frame_time() {
+    let mut scene = aerial::scene::Scene::default_scene();
+    scene.set_output_size(Some(160), Some(90)).unwrap();
+    let run = aerial::app::render(
+        &scene,
+        &aerial::app::RenderSettings {
+            validate: aerial::vk::validation::Validation::All,
+            warmup: 1,
+            frames: 5,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    common::assert_no_validation_messages(&run);
+    assert_eq!(run.frames.len(), 5);
+    for (i, f) in run.frames.iter().enumerate() {
+        assert_eq!(
+            f.pass_ms.len(),
+            run.passes.len(),
+            "frame {i}: one time per pass"
+        );
+        let gpu: f64 = f.pass_ms.iter().sum();
+        assert!(
+            f.pass_ms.iter().all(|t| t.is_finite() && *t >= 0.0) && gpu > 0.0,
+            "frame {i}: {:?}",
+            f.pass_ms
+        );
+        assert!(
+            gpu <= f.cpu_ms,
+            "frame {i}: passes sum to {gpu} ms, more than the CPU frame time {} ms",
+            f.cpu_ms
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------
+// What `aerial render` writes: the PNG's device metadata, and the same
+// bytes from two separate processes (what a CI job comparing with stored
+// references relies on).
+
+fn render_with_cli(dir: &Path, name: &str) -> (PathBuf, PathBuf) {
+    let (png, exr) = (
+        dir.join(format!("{name}.png")),
+        dir.join(format!("{name}.exr")),
+    );
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/transparency.toml");
+    let out = aerial()
+        .arg("render")
+        .arg(&scene)
+        .args(["--validate", "--width", "160", "--height", "90", "--out"])
+        .arg(&png)
+        .arg("--hdr")
+        .arg(&exr)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (png, exr)
+}
+
+#[test]
+fn two_processes_render_identical_images_and_record_the_device() {
+    let dir = temp_dir("determinism");
+    let (png_a, exr_a) = render_with_cli(&dir, "a");
+    let (png_b, exr_b) = render_with_cli(&dir, "b");
+
+    let a = image::open(&png_a).unwrap().to_rgba8();
+    let b = image::open(&png_b).unwrap().to_rgba8();
+    assert_eq!(a.dimensions(), (160, 90));
+    let decoded = Pixels {
+        width: a.width(),
+        height: a.height(),
+        data: a.as_raw().clone(),
+    };
+    common::assert_not_blank(&decoded, 0.3);
+    assert!(a.as_raw() == b.as_raw(), "the tone-mapped images differ");
+    let (ha, hb) = (
+        aerial::render::output::read_exr(&exr_a).unwrap(),
+        aerial::render::output::read_exr(&exr_b).unwrap(),
+    );
+    assert!(
+        ha.data
+            .iter()
+            .map(|x| x.to_bits())
+            .eq(hb.data.iter().map(|x| x.to_bits())),
+        "the HDR images differ"
+    );
+
+    // The metadata names the device and driver this process rendered on,
+    // as the library reports them.
+    let text = aerial::render::output::read_png_text(&png_a).unwrap();
+    let get = |key: &str| {
+        text.iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.clone())
+            .unwrap_or_else(|| panic!("no {key} in {text:?}"))
+    };
+    let ctx = aerial::vk::Context::new(&aerial::vk::ContextOptions::default()).unwrap();
+    let info = ctx.device_info().clone();
+    drop(ctx);
+    assert_eq!(get("aerial:device"), info.name);
+    let driver = get("aerial:driver");
+    assert!(
+        driver.contains(&info.driver_name)
+            && driver.contains(&info.driver_info)
+            && driver.contains(&format!("{:#x}", info.driver_version)),
+        "{driver} vs {info:?}"
+    );
+    assert_eq!(get("aerial:vulkan"), info.api_version);
+    assert_eq!(read_png_text_of(&png_b), text);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+fn read_png_text_of(path: &Path) -> Vec<(String, String)> {
+    aerial::render::output::read_png_text(path).unwrap()
+}
+
+// ---------------------------------------------------------------------------
+// The bench gate fails when nothing matched: a gate that compared nothing
+// must not pass.
+
+#[test]
+fn the_bench_gate_fails_when_no_pass_matched() {
+    let dir = temp_dir("gate");
+    let current = dir.join("current.json");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bench/triangle.toml");
+    let out = aerial()
+        .arg("bench")
+        .arg(&scene)
+        .args([
+            "--frames",
+            "2",
+            "--warmup",
+            "0",
+            "--width",
+            "32",
+            "--height",
+            "18",
+            "--validate",
+            "--json",
+        ])
+        .arg(&current)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
+    // The same report compared with itself passes; with every scene renamed
+    // and no empty pass, nothing matches and the gate fails, whatever the
+    // ratio limit.
+    let gate = |baseline: &Path| {
+        aerial()
+            .arg("bench")
+            .arg("--from-json")
+            .arg(&current)
+            .arg("--compare")
+            .arg(baseline)
+            .args(["--max-ratio", "1000"])
+            .output()
+            .unwrap()
+    };
+    let same = gate(&current);
+    assert!(
+        same.status.success(),
+        "{}",
+        String::from_utf8_lossy(&same.stderr)
+    );
+
+    let mut value: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&current).unwrap()).unwrap();
+    value["empty_passes"] = serde_json::json!([]);
+    for s in value["scenes"].as_array_mut().unwrap() {
+        s["file"] = serde_json::json!("some/other/scene.toml");
+    }
+    let baseline = dir.join("baseline.json");
+    std::fs::write(&baseline, serde_json::to_string(&value).unwrap()).unwrap();
+    let out = gate(&baseline);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("nothing to compare"), "{stderr}");
     std::fs::remove_dir_all(&dir).ok();
 }
