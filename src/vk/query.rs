@@ -71,6 +71,13 @@ pub(crate) fn intervals_ns(ticks: &[u64], valid_bits: u32, period_ns: f64) -> Ve
         .collect()
 }
 
+impl Drop for TimestampQueries {
+    fn drop(&mut self) {
+        // SAFETY: no pending submission uses the pool.
+        unsafe { self.ctx.device.destroy_query_pool(self.pool, None) };
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::intervals_ns;
@@ -109,12 +116,5 @@ mod tests {
     fn fewer_than_two_stamps_give_no_interval() {
         assert!(intervals_ns(&[42], BITS, PERIOD_NS).is_empty());
         assert!(intervals_ns(&[], BITS, PERIOD_NS).is_empty());
-    }
-}
-
-impl Drop for TimestampQueries {
-    fn drop(&mut self) {
-        // SAFETY: no pending submission uses the pool.
-        unsafe { self.ctx.device.destroy_query_pool(self.pool, None) };
     }
 }
