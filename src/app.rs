@@ -8,13 +8,14 @@
 use crate::budget::MemoryBudget;
 use crate::render::{empty_pass, preflight, EmptyPass, FrameTiming, Pixels, RenderError, Renderer};
 use crate::scene::{Scene, ToneMap};
-use crate::vk::validation::ValidationMessage;
+use crate::vk::validation::{Validation, ValidationMessage};
 use crate::vk::{Context, ContextOptions, DeviceInfo};
 
 /// What to render and how.
 #[derive(Clone, Debug, Default)]
 pub struct RenderSettings {
-    pub validate: bool,
+    /// Which validation-layer checks to run under (`Off` for none).
+    pub validate: Validation,
     pub device: Option<String>,
     /// Frames submitted and discarded before the measured ones (warm-up:
     /// first-use costs such as shader compilation in the driver).
@@ -52,8 +53,74 @@ impl RenderRun {
                 ),
             ),
             ("aerial:vulkan", self.device.api_version.clone()),
+            ("aerial:host_cpu", host_cpu()),
         ]
     }
+}
+
+/// A run that failed, with what the validation layer said before and
+/// while the device was torn down (empty without validation): a layer
+/// message is often the explanation of the failure.
+#[derive(Debug)]
+pub struct RunError {
+    pub error: RenderError,
+    pub validation: Vec<ValidationMessage>,
+}
+
+impl std::fmt::Display for RunError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.error)?;
+        if !self.validation.is_empty() {
+            write!(f, "; the validation layer also reported:")?;
+            for m in &self.validation {
+                write!(f, "\n  {m}")?;
+            }
+        }
+        Ok(())
+    }
+}
+
+// The inner error is part of Display, not a source, so it is shown once.
+impl std::error::Error for RunError {}
+
+impl From<RenderError> for RunError {
+    fn from(error: RenderError) -> Self {
+        RunError {
+            error,
+            validation: Vec::new(),
+        }
+    }
+}
+
+/// The host CPU's model and the instruction-set extensions a CPU driver's
+/// shader compiler may use (SSE, AVX, FMA, F16C families), from
+/// `/proc/cpuinfo`; `unknown` elsewhere. Recorded with every PNG because a
+/// CPU Vulkan driver such as lavapipe generates different code, and so
+/// slightly different pixels, on CPUs with different extensions.
+pub fn host_cpu() -> String {
+    let Ok(info) = std::fs::read_to_string("/proc/cpuinfo") else {
+        return "unknown".into();
+    };
+    let field = |name: &str| {
+        info.lines()
+            .find(|l| l.split(':').next().is_some_and(|k| k.trim() == name))
+            .and_then(|l| l.split_once(':'))
+            .map(|(_, v)| v.trim().to_string())
+    };
+    let model = field("model name").unwrap_or_else(|| "unknown".into());
+    let mut flags: Vec<&str> = Vec::new();
+    let all = field("flags").unwrap_or_default();
+    for f in all.split_whitespace() {
+        if ["sse", "avx", "fma", "f16c"]
+            .iter()
+            .any(|p| f.starts_with(p))
+        {
+            flags.push(f);
+        }
+    }
+    flags.sort_unstable();
+    flags.dedup();
+    format!("{model} [{}]", flags.join(" "))
 }
 
 /// What a run draws.
@@ -66,10 +133,27 @@ pub enum FrameSource<'a> {
     /// The empty pass (see [`crate::render::empty_pass`]): the driver's
     /// floor at this size; `output` is its constant-coloured attachment.
     EmptyPass { width: u32, height: u32 },
+    /// Draws nothing: makes a deliberate mistake on the run's device, so a
+    /// test can check that the run reports the layer's message (see
+    /// [`Misuse`]). `output` is empty.
+    #[doc(hidden)]
+    ValidationCheck(Misuse),
+}
+
+/// The deliberate mistakes of [`FrameSource::ValidationCheck`].
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Misuse {
+    /// Two writes to one image with no barrier between them.
+    SyncHazard,
+    /// An object still alive when the device is destroyed.
+    Leak,
+    /// A leak, then the run fails: the error must still carry the message.
+    LeakThenFail,
 }
 
 /// Renders `scene`; see [`run`].
-pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderRun, RenderError> {
+pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderRun, RunError> {
     run_with_progress(FrameSource::Scene(scene), settings, &mut || {})
 }
 
@@ -79,13 +163,13 @@ pub fn render_with_progress(
     scene: &Scene,
     settings: &RenderSettings,
     on_frame: &mut dyn FnMut(),
-) -> Result<RenderRun, RenderError> {
+) -> Result<RenderRun, RunError> {
     run_with_progress(FrameSource::Scene(scene), settings, on_frame)
 }
 
 /// Renders `source` `warmup + frames` times with the device and validation
 /// the settings ask for.
-pub fn run(source: FrameSource<'_>, settings: &RenderSettings) -> Result<RenderRun, RenderError> {
+pub fn run(source: FrameSource<'_>, settings: &RenderSettings) -> Result<RenderRun, RunError> {
     run_with_progress(source, settings, &mut || {})
 }
 
@@ -94,9 +178,9 @@ pub fn run_with_progress(
     source: FrameSource<'_>,
     settings: &RenderSettings,
     on_frame: &mut dyn FnMut(),
-) -> Result<RenderRun, RenderError> {
+) -> Result<RenderRun, RunError> {
     // Refuse what does not fit before the device allocates anything.
-    let budget = MemoryBudget::from_env()?;
+    let budget = MemoryBudget::from_env().map_err(RenderError::from)?;
     match source {
         FrameSource::Scene(scene) => preflight::scene_memory(scene, settings.keep_hdr, &budget)?,
         FrameSource::HdrImage(image, _) => {
@@ -105,34 +189,21 @@ pub fn run_with_progress(
         FrameSource::EmptyPass { width, height } => {
             preflight::image_memory(width, height, &budget)?
         }
+        FrameSource::ValidationCheck(_) => {}
     }
     let ctx = context(settings)?;
     let log = ctx.validation_log();
     let device = ctx.device_info().clone();
-    let (passes, frames, output, hdr) = match source {
-        FrameSource::Scene(scene) => {
-            let checked = preflight::scene_on_device(scene, &ctx)?;
-            drive(
-                Renderer::new(&ctx, &checked.scene, settings.keep_hdr)?,
-                settings,
-                on_frame,
-            )?
-        }
-        FrameSource::HdrImage(image, tone_map) => drive(
-            Renderer::for_hdr_image(&ctx, tone_map, image)?,
-            settings,
-            on_frame,
-        )?,
-        FrameSource::EmptyPass { width, height } => {
-            let mut pass = EmptyPass::new(&ctx, width, height)?;
-            let frames = submit_frames(settings, on_frame, || pass.render_frame())?;
-            (vec![empty_pass::PASS_NAME], frames, pass.output(), None)
-        }
-    };
+    let produced = produce(&ctx, source, settings, on_frame);
     // Destroy the device and instance before reading the log, so messages
-    // about leaked objects at teardown are counted too.
+    // about leaked objects at teardown are counted too, on the error path
+    // as well.
     drop(ctx);
     let validation = log.map(|l| l.messages()).unwrap_or_default();
+    let (passes, frames, output, hdr) = match produced {
+        Ok(p) => p,
+        Err(error) => return Err(RunError { error, validation }),
+    };
     Ok(RenderRun {
         device,
         passes,
@@ -140,6 +211,50 @@ pub fn run_with_progress(
         output,
         hdr,
         validation,
+    })
+}
+
+/// Builds the frame for `source` on `ctx` and submits it.
+fn produce(
+    ctx: &std::sync::Arc<Context>,
+    source: FrameSource<'_>,
+    settings: &RenderSettings,
+    on_frame: &mut dyn FnMut(),
+) -> Result<Produced, RenderError> {
+    Ok(match source {
+        FrameSource::Scene(scene) => {
+            let checked = preflight::scene_on_device(scene, ctx)?;
+            drive(
+                Renderer::new(ctx, &checked.scene, settings.keep_hdr)?,
+                settings,
+                on_frame,
+            )?
+        }
+        FrameSource::HdrImage(image, tone_map) => drive(
+            Renderer::for_hdr_image(ctx, tone_map, image)?,
+            settings,
+            on_frame,
+        )?,
+        FrameSource::EmptyPass { width, height } => {
+            let mut pass = EmptyPass::new(ctx, width, height)?;
+            let frames = submit_frames(settings, on_frame, || pass.render_frame())?;
+            (vec![empty_pass::PASS_NAME], frames, pass.output(), None)
+        }
+        FrameSource::ValidationCheck(misuse) => {
+            match misuse {
+                Misuse::SyncHazard => ctx.record_sync_hazard_for_validation_check()?,
+                Misuse::Leak | Misuse::LeakThenFail => ctx.leak_object_for_validation_check()?,
+            }
+            if misuse == Misuse::LeakThenFail {
+                return Err(Context::deliberate_failure_for_validation_check().into());
+            }
+            let nothing = Pixels {
+                width: 0,
+                height: 0,
+                data: Vec::new(),
+            };
+            (Vec::new(), Vec::new(), nothing, None)
+        }
     })
 }
 
@@ -151,7 +266,7 @@ pub fn render_empty_pass(
     height: u32,
     settings: &RenderSettings,
     on_frame: &mut dyn FnMut(),
-) -> Result<RenderRun, RenderError> {
+) -> Result<RenderRun, RunError> {
     run_with_progress(FrameSource::EmptyPass { width, height }, settings, on_frame)
 }
 

@@ -26,13 +26,22 @@ fn bench_scene(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// `aerial bench` on the smallest scene, short and small so it is fast.
+/// `aerial bench` on the smallest scene, short and small so it is fast,
+/// under validation like every render in the tests (any message fails it).
 fn quick_bench(extra: &[&str]) -> Output {
     aerial()
         .arg("bench")
         .arg(bench_scene("triangle.toml"))
         .args([
-            "--frames", "3", "--warmup", "1", "--width", "64", "--height", "48",
+            "--frames",
+            "3",
+            "--warmup",
+            "1",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--validate",
         ])
         .args(extra)
         .output()
@@ -272,7 +281,7 @@ fn empty_pass_is_clean_under_validation_and_takes_time() {
         96,
         64,
         &RenderSettings {
-            validate: true,
+            validate: aerial::vk::validation::Validation::All,
             device: None,
             warmup: 1,
             frames: 3,

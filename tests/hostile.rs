@@ -614,7 +614,7 @@ fn tone_map(values: &[f32], operator: ToneMapOperator, exposure: f32) -> Vec<u8>
     let run = app::run(
         FrameSource::HdrImage(&image, ToneMap { operator, exposure }),
         &RenderSettings {
-            validate: true,
+            validate: aerial::vk::validation::Validation::All,
             device: None,
             warmup: 0,
             frames: 1,

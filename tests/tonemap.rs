@@ -21,7 +21,7 @@ fn tone_map_on_gpu(values: &[[f32; 4]], operator: ToneMapOperator, exposure: f32
     let run = app::run(
         FrameSource::HdrImage(&image, ToneMap { operator, exposure }),
         &RenderSettings {
-            validate: true,
+            validate: aerial::vk::validation::Validation::All,
             device: None,
             warmup: 0,
             frames: 1,
@@ -125,7 +125,7 @@ fn tone_mapping_the_hdr_output_reproduces_the_render() {
     let again = app::run(
         FrameSource::HdrImage(hdr, scene.tone_map),
         &RenderSettings {
-            validate: true,
+            validate: aerial::vk::validation::Validation::All,
             ..Default::default()
         },
     )

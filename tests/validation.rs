@@ -5,7 +5,7 @@ use aerial::vk::{Context, ContextOptions};
 
 fn validated() -> std::sync::Arc<Context> {
     Context::new(&ContextOptions {
-        validate: true,
+        validate: aerial::vk::validation::Validation::All,
         device: None,
     })
     .expect("a Vulkan device with the validation layer")

@@ -16,8 +16,7 @@ pub use report::{
     FORMAT, GPU_TOTAL,
 };
 
-use crate::app::{self, RenderRun, RenderSettings};
-use crate::render::RenderError;
+use crate::app::{self, RenderRun, RenderSettings, RunError};
 use crate::report::stats::Summary;
 use crate::scene::{knob_settings, Scene, SceneError};
 use sha2::{Digest, Sha256};
@@ -34,9 +33,12 @@ pub enum BenchError {
     // The inner errors are shown in Display (not chained as a source), so
     // every message names the run or file once, however it is printed.
     #[error("{run}: {error}")]
-    Render { run: String, error: RenderError },
-    #[error("{run}: {} validation message(s):\n{}", .messages.len(), .messages.join("\n"))]
-    Validation { run: String, messages: Vec<String> },
+    Render { run: String, error: RunError },
+    #[error("{run}: {error}")]
+    Validation {
+        run: String,
+        error: crate::vk::validation::ValidationFailed,
+    },
     #[error("{run}: {what} has no finite samples")]
     BadSamples { run: String, what: String },
     #[error("{}: {error}", .path.display())]
@@ -59,7 +61,7 @@ pub struct BenchSettings {
     pub warmup: u32,
     /// Frames measured (at least 1).
     pub frames: u32,
-    pub validate: bool,
+    pub validate: crate::vk::validation::Validation,
     pub device: Option<String>,
 }
 
@@ -242,21 +244,17 @@ pub fn run(
         }),
         warmup: settings.warmup,
         frames: settings.frames,
-        validate: settings.validate,
+        validate: settings.validate.is_on(),
         empty_passes,
         scenes: reports,
     })
 }
 
 fn check_validation(label: &str, run: &RenderRun) -> Result<(), BenchError> {
-    if run.validation.is_empty() {
-        Ok(())
-    } else {
-        Err(BenchError::Validation {
-            run: label.to_string(),
-            messages: run.validation.iter().map(|m| m.to_string()).collect(),
-        })
-    }
+    crate::vk::validation::check(&run.validation).map_err(|error| BenchError::Validation {
+        run: label.to_string(),
+        error,
+    })
 }
 
 /// Per-pass GPU rows, the GPU total row (both only with timestamps) and

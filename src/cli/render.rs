@@ -5,6 +5,7 @@ use aerial::files;
 use aerial::render::output;
 use aerial::report::stats::Summary;
 use aerial::scene::Scene;
+use aerial::vk::validation::{self, Validation};
 use anyhow::{bail, Context as _};
 use std::path::PathBuf;
 
@@ -27,9 +28,18 @@ pub struct RenderArgs {
     /// Frames to render; with more than one, per-pass GPU times are reported.
     #[arg(long, default_value_t = 1)]
     frames: u32,
-    /// Enable the Khronos validation layer; any message fails the run.
-    #[arg(long)]
-    validate: bool,
+    /// Enable the Khronos validation layer: --validate=core, sync,
+    /// best-practices or all (plain --validate is all).
+    /// Any message fails the run.
+    #[arg(
+        long,
+        value_enum,
+        value_name = "MODE",
+        num_args = 0..=1,
+        require_equals = true,
+        default_missing_value = "all"
+    )]
+    validate: Option<Validation>,
     /// Physical device by index or name substring.
     #[arg(long)]
     device: Option<String>,
@@ -59,7 +69,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let run = app::render(
         &scene,
         &RenderSettings {
-            validate: args.validate,
+            validate: args.validate.unwrap_or_default(),
             device: args.device.clone(),
             warmup: 0,
             frames: args.frames,
@@ -71,7 +81,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         "device: {} ({} {}), Vulkan {}",
         run.device.name, run.device.driver_name, run.device.driver_info, run.device.api_version
     );
-    fail_on_validation_messages(&run)?;
+    validation::check(&run.validation).context("no output written")?;
     // Both files are encoded before either is renamed into place, so a
     // failure leaves neither.
     let mut outputs = vec![output::png_file(
@@ -120,19 +130,4 @@ fn print_timings(run: &app::RenderRun) {
     );
     row("cpu frame", run.frames.iter().map(|f| f.cpu_ms).collect());
     println!("note: {}", aerial::render::SUBPASS_TIMING_NOTE);
-}
-
-/// Prints every validation message and fails the run if there was any, so
-/// that no output file is written from a run the layer objected to.
-pub fn fail_on_validation_messages(run: &app::RenderRun) -> anyhow::Result<()> {
-    if run.validation.is_empty() {
-        return Ok(());
-    }
-    for m in &run.validation {
-        eprintln!("{m}");
-    }
-    bail!(
-        "{} validation message(s); no output written",
-        run.validation.len()
-    )
 }

@@ -1,13 +1,14 @@
 //! `aerial sweep`: render every combination of some knob settings, and
 //! write error against GPU time as CSV, JSON and an SVG plot.
 
-use aerial::app::{self, FrameSource, RenderRun, RenderSettings};
+use aerial::app::{self, FrameSource, RenderSettings};
 use aerial::render::render_reference;
 use aerial::report::sweep::{
     self, Axis, Job, ReferenceKind, Rendered, Sweep, SweepOptions, DEFAULT_MAX_COMBINATIONS,
 };
 use aerial::scene::Scene;
-use anyhow::{anyhow, Context as _};
+use aerial::vk::validation::{self, Validation};
+use anyhow::Context as _;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -43,9 +44,18 @@ pub struct SweepArgs {
     /// settings, or the exact CPU image of each combination's scene.
     #[arg(long, value_enum, default_value = "gpu-best")]
     reference: Reference,
-    /// Enable the Khronos validation layer; any message fails the sweep.
-    #[arg(long)]
-    validate: bool,
+    /// Enable the Khronos validation layer: --validate=core, sync,
+    /// best-practices or all (plain --validate is all).
+    /// Any message fails the sweep.
+    #[arg(
+        long,
+        value_enum,
+        value_name = "MODE",
+        num_args = 0..=1,
+        require_equals = true,
+        default_missing_value = "all"
+    )]
+    validate: Option<Validation>,
     /// Physical device by index or name substring.
     #[arg(long)]
     device: Option<String>,
@@ -55,17 +65,6 @@ pub struct SweepArgs {
 enum Reference {
     GpuBest,
     Cpu,
-}
-
-/// Fails on validation messages, printing them.
-fn check_validation(run: &RenderRun) -> anyhow::Result<()> {
-    if run.validation.is_empty() {
-        return Ok(());
-    }
-    for m in &run.validation {
-        eprintln!("{m}");
-    }
-    Err(anyhow!("{} validation message(s)", run.validation.len()))
 }
 
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
@@ -101,7 +100,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     eprintln!("{total} combinations");
 
     let settings = |warmup, frames, keep_hdr| RenderSettings {
-        validate: args.validate,
+        validate: args.validate.unwrap_or_default(),
         device: args.device.clone(),
         warmup,
         frames,
@@ -119,7 +118,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                     FrameSource::HdrImage(&hdr, scene.tone_map),
                     &settings(0, 1, false),
                 )?;
-                check_validation(&run)?;
+                validation::check(&run.validation)?;
                 return Ok(Rendered {
                     device: run.device.name.clone(),
                     passes: Vec::new(),
@@ -130,7 +129,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             }
         };
         let run = app::render(scene, &settings(warmup, frames, keep_hdr))?;
-        check_validation(&run)?;
+        validation::check(&run.validation)?;
         Ok(Rendered {
             device: run.device.name.clone(),
             passes: run.passes.iter().map(|p| p.to_string()).collect(),

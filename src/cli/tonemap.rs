@@ -5,6 +5,7 @@
 use aerial::app::{self, FrameSource, RenderSettings};
 use aerial::render::output;
 use aerial::scene::{ToneMap, ToneMapOperator};
+use aerial::vk::validation::{self, Validation};
 use anyhow::{bail, Context as _};
 use std::path::PathBuf;
 
@@ -21,9 +22,18 @@ pub struct ToneMapArgs {
     /// Linear scale applied before the operator.
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,
-    /// Enable the Khronos validation layer; any message fails the run.
-    #[arg(long)]
-    validate: bool,
+    /// Enable the Khronos validation layer: --validate=core, sync,
+    /// best-practices or all (plain --validate is all).
+    /// Any message fails the run.
+    #[arg(
+        long,
+        value_enum,
+        value_name = "MODE",
+        num_args = 0..=1,
+        require_equals = true,
+        default_missing_value = "all"
+    )]
+    validate: Option<Validation>,
     /// Physical device by index or name substring.
     #[arg(long)]
     device: Option<String>,
@@ -51,7 +61,7 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
     let run = app::run(
         FrameSource::HdrImage(&image, tone_map),
         &RenderSettings {
-            validate: args.validate,
+            validate: args.validate.unwrap_or_default(),
             device: args.device,
             warmup: 0,
             frames: 1,
@@ -59,7 +69,7 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
         },
     )
     .context("tone mapping failed")?;
-    super::render::fail_on_validation_messages(&run)?;
+    validation::check(&run.validation).context("no output written")?;
     output::write_png(&args.out, &run.output, &run.png_metadata())?;
     eprintln!("wrote {}", args.out.display());
     Ok(())

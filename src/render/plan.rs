@@ -346,6 +346,9 @@ impl FramePlan {
                 passes::tonemap::create,
             ));
         }
+        // Cleared attachments first, so the render pass needs no clear
+        // value for an attachment it does not clear.
+        attachments.sort_by_key(|a| a.clear.is_none());
         let mut reads = vec![OUTPUT];
         if keep_hdr {
             reads.push(HDR);

@@ -5,7 +5,7 @@
 //! itself tears down in the only valid order: wait idle, allocator, device,
 //! messenger, instance, then the validation log the layer wrote into.
 
-use super::validation::{self, ValidationLog};
+use super::validation::{self, Validation, ValidationLog};
 use super::VkError;
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
@@ -18,9 +18,9 @@ const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 /// How to create a [`Context`].
 #[derive(Clone, Debug, Default)]
 pub struct ContextOptions {
-    /// Enable `VK_LAYER_KHRONOS_validation` with synchronization validation
-    /// and count its messages.
-    pub validate: bool,
+    /// Which checks of `VK_LAYER_KHRONOS_validation` to enable; with any
+    /// but `Off`, its messages are counted.
+    pub validate: Validation,
     /// Pick a physical device by index or by a case-insensitive substring of
     /// its name; `None` takes the first device.
     pub device: Option<String>,
@@ -62,8 +62,9 @@ impl Context {
         // before, and the entry is kept alive as long as the instance.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::Loader(e.to_string()))?;
 
-        let validation_log = options.validate.then(|| Arc::new(ValidationLog::default()));
-        if options.validate {
+        let validate = options.validate.is_on();
+        let validation_log = validate.then(|| Arc::new(ValidationLog::default()));
+        if validate {
             // SAFETY: plain query of the loader.
             let layers = unsafe { entry.enumerate_instance_layer_properties() }?;
             let found = layers
@@ -81,12 +82,12 @@ impl Context {
             .engine_name(&app_name)
             .api_version(vk::API_VERSION_1_2);
 
-        let layer_names: Vec<*const c_char> = if options.validate {
+        let layer_names: Vec<*const c_char> = if validate {
             vec![VALIDATION_LAYER.as_ptr()]
         } else {
             vec![]
         };
-        let extension_names: Vec<*const c_char> = if options.validate {
+        let extension_names: Vec<*const c_char> = if validate {
             vec![
                 ash::ext::debug_utils::NAME.as_ptr(),
                 ash::ext::validation_features::NAME.as_ptr(),
@@ -94,9 +95,8 @@ impl Context {
         } else {
             vec![]
         };
-        let enabled_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
-        let mut validation_features =
-            vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_features);
+        let mut validation_features = vk::ValidationFeaturesEXT::default()
+            .enabled_validation_features(options.validate.enabled_features());
         let user_data = validation_log.as_ref().map_or(std::ptr::null_mut(), |l| {
             Arc::as_ptr(l) as *mut std::ffi::c_void
         });
@@ -116,7 +116,7 @@ impl Context {
             .application_info(&app_info)
             .enabled_layer_names(&layer_names)
             .enabled_extension_names(&extension_names);
-        if options.validate {
+        if validate {
             // Chaining the messenger into instance creation also reports
             // messages from vkCreateInstance / vkDestroyInstance.
             instance_info = instance_info
@@ -127,7 +127,7 @@ impl Context {
         // the call.
         let instance = unsafe { entry.create_instance(&instance_info, None) }?;
 
-        let debug = if options.validate {
+        let debug = if validate {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
             // SAFETY: the user data (the ValidationLog) outlives the messenger
             // because Context drops it after destroying the instance.
@@ -229,6 +229,12 @@ impl PartialInstance {
         let queue_infos = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
             .queue_priorities(&priorities)];
+        // Features to enable must be chosen from what the device reports
+        // (best-practices validation warns when vkCreateDevice comes
+        // without this query). The renderer uses no optional feature, so
+        // it enables none of them whatever the device supports.
+        // SAFETY: valid physical device of this instance.
+        let _supported = unsafe { instance.get_physical_device_features(physical_device) };
         let features = vk::PhysicalDeviceFeatures::default();
         let device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)

@@ -5,6 +5,7 @@
 //! block states the invariant it relies on.
 
 mod buffer;
+mod checks;
 mod commands;
 mod context;
 mod descriptors;

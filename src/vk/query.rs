@@ -46,23 +46,75 @@ impl TimestampQueries {
                 vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
             )
         }?;
-        let bits = self.ctx.device_info().timestamp_valid_bits;
-        let mask = if bits >= 64 {
-            u64::MAX
-        } else {
-            (1u64 << bits) - 1
-        };
-        let period = self.ctx.device_info().timestamp_period_ns as f64;
-        Ok(ticks
-            .windows(2)
-            .map(|w| (w[1].wrapping_sub(w[0]) & mask) as f64 * period)
-            .collect())
+        let info = self.ctx.device_info();
+        Ok(intervals_ns(
+            &ticks,
+            info.timestamp_valid_bits,
+            info.timestamp_period_ns as f64,
+        ))
     }
+}
+
+/// The time between consecutive raw timestamps, in nanoseconds: each
+/// difference is taken modulo 2^`valid_bits` (bits above those are
+/// undefined, and the counter may wrap between two stamps), then scaled by
+/// `period_ns`, the nanoseconds per tick.
+pub(crate) fn intervals_ns(ticks: &[u64], valid_bits: u32, period_ns: f64) -> Vec<f64> {
+    let mask = if valid_bits >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << valid_bits) - 1
+    };
+    ticks
+        .windows(2)
+        .map(|w| (w[1].wrapping_sub(w[0]) & mask) as f64 * period_ns)
+        .collect()
 }
 
 impl Drop for TimestampQueries {
     fn drop(&mut self) {
         // SAFETY: no pending submission uses the pool.
         unsafe { self.ctx.device.destroy_query_pool(self.pool, None) };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::intervals_ns;
+
+    const BITS: u32 = 36;
+    const PERIOD_NS: f64 = 2.5;
+
+    /// Ticks as a device with 36 valid bits may return them: the counter
+    /// near its top, then wrapped, with garbage in the undefined high bits.
+    fn raw(counter: u64, garbage: u64) -> u64 {
+        assert!(counter < 1 << BITS);
+        (garbage << BITS) | counter
+    }
+
+    #[test]
+    fn intervals_are_masked_wrapped_and_scaled() {
+        let top = 1u64 << BITS;
+        let ticks = [
+            raw(top - 100, 0xabc),
+            raw(top - 40, 0x123),
+            raw(60, 0xfff_ffff), // wrapped: 100 ticks after the previous
+            raw(1_060, 0),
+        ];
+        let got = intervals_ns(&ticks, BITS, PERIOD_NS);
+        // By hand: 60, 100 and 1000 ticks of 2.5 ns.
+        assert_eq!(got, vec![150.0, 250.0, 2_500.0]);
+    }
+
+    #[test]
+    fn all_64_bits_valid_and_a_unit_period() {
+        let got = intervals_ns(&[u64::MAX - 1, 3], 64, 1.0);
+        assert_eq!(got, vec![5.0]);
+    }
+
+    #[test]
+    fn fewer_than_two_stamps_give_no_interval() {
+        assert!(intervals_ns(&[42], BITS, PERIOD_NS).is_empty());
+        assert!(intervals_ns(&[], BITS, PERIOD_NS).is_empty());
     }
 }

@@ -327,7 +327,14 @@ impl GraphRenderPass {
             .collect::<Result<Vec<_>, _>>()?;
         let refs: Vec<&Image> = images.iter().collect();
         let framebuffer = Framebuffer::new(ctx, &render_pass, &refs)?;
-        let clears = attachments
+        // Clear values up to the last cleared attachment only: best-practices
+        // validation warns about values given for attachments that are not
+        // cleared (callers list cleared attachments first to avoid any).
+        let cleared = attachments
+            .iter()
+            .rposition(|a| matches!(a.start, AttachmentStart::Clear(_)))
+            .map_or(0, |i| i + 1);
+        let clears = attachments[..cleared]
             .iter()
             .map(|spec| {
                 let v = match spec.start {

@@ -23,7 +23,7 @@ pub fn render(scene: &Scene, keep_hdr: bool) -> RenderRun {
     let run = app::render(
         scene,
         &RenderSettings {
-            validate: true,
+            validate: aerial::vk::validation::Validation::All,
             device: None,
             warmup: 0,
             frames: 1,
