@@ -12,6 +12,15 @@ use super::{
 use ash::vk;
 use std::sync::Arc;
 
+/// Every stage at which the renderer reads or writes images.
+const IMAGE_STAGES: vk::PipelineStageFlags = vk::PipelineStageFlags::from_raw(
+    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT.as_raw()
+        | vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS.as_raw()
+        | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS.as_raw()
+        | vk::PipelineStageFlags::FRAGMENT_SHADER.as_raw()
+        | vk::PipelineStageFlags::TRANSFER.as_raw(),
+);
+
 /// A fence, for waiting on a submission.
 pub struct Fence {
     ctx: Arc<Context>,
@@ -219,7 +228,8 @@ impl CommandBuffer {
     /// not needed (they are about to be overwritten). In a frame that is
     /// recorded once and submitted many times, the previous submission's
     /// use of the image is not known at record time, so this waits for
-    /// every earlier command.
+    /// every stage that can touch an image (attachment output, depth
+    /// tests, fragment shading, transfers) and their writes.
     pub fn transition_discarding(&self, image: &Image, next: ImageUse) {
         let (layout, stage, access) = next.layout_stage_access();
         self.image_barrier(
@@ -227,8 +237,10 @@ impl CommandBuffer {
             ImageBarrier {
                 old_layout: vk::ImageLayout::UNDEFINED,
                 new_layout: layout,
-                src_stage: vk::PipelineStageFlags::ALL_COMMANDS,
-                src_access: vk::AccessFlags::MEMORY_WRITE,
+                src_stage: IMAGE_STAGES,
+                src_access: vk::AccessFlags::COLOR_ATTACHMENT_WRITE
+                    | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE
+                    | vk::AccessFlags::TRANSFER_WRITE,
                 dst_stage: stage,
                 dst_access: access,
                 base_mip: 0,
@@ -492,7 +504,7 @@ impl CommandBuffer {
             } else {
                 ImageState {
                     layout: *layout,
-                    stage: vk::PipelineStageFlags::ALL_GRAPHICS,
+                    stage: IMAGE_STAGES,
                     pending_writes: vk::AccessFlags::COLOR_ATTACHMENT_WRITE
                         | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE,
                 }
