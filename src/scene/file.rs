@@ -33,15 +33,16 @@ pub const MIN_SEGMENTS: u32 = 3;
 pub const DEFAULT_LIGHT_CUTOFF: f32 = 1e-3;
 /// Default tessellation `[u, v]` when an object does not give one.
 pub const DEFAULT_TESSELLATION: [u32; 2] = [64, 32];
-/// Largest accepted coordinate magnitude (positions, translations): the
-/// GPU works in 32-bit floats, which beyond this cannot place a unit-sized
-/// object to better than about 0.06 units, and sums and differences of
-/// coordinates must not overflow.
-pub const MAX_COORDINATE: f64 = 1e6;
+/// Largest accepted coordinate magnitude (positions, translations): large
+/// enough for planet-scale scenes (the Moon is 3.8e8 m away), small enough
+/// that sums, differences and squares of coordinates stay finite in
+/// 32-bit floats. Precision at this scale is the scene's business: a
+/// 32-bit float places objects 1e9 away to within about 64 units.
+pub const MAX_COORDINATE: f64 = 1e9;
 /// Accepted range of every length (shape sizes, `near`) and scale factor.
 pub const MIN_LENGTH: f64 = 1e-6;
 /// See [`MIN_LENGTH`].
-pub const MAX_LENGTH: f64 = 1e6;
+pub const MAX_LENGTH: f64 = 1e9;
 /// Largest accepted colour, reflectance or light colour times intensity
 /// per channel, and attenuation term: keeps every lighting sum finite in
 /// 32-bit floats.
