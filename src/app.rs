@@ -223,9 +223,9 @@ fn produce(
 ) -> Result<Produced, RenderError> {
     Ok(match source {
         FrameSource::Scene(scene) => {
-            let checked = preflight::scene_on_device(scene, ctx)?;
+            preflight::scene_on_device(scene, ctx)?;
             drive(
-                Renderer::new(ctx, &checked.scene, settings.keep_hdr)?,
+                Renderer::new(ctx, scene, settings.keep_hdr)?,
                 settings,
                 on_frame,
             )?

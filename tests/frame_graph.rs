@@ -158,7 +158,7 @@ fn a_light_whose_range_misses_a_tile_does_not_change_it() {
         "the light changed only {changed_inside} pixels"
     );
     // The plan lists the light for exactly those tiles.
-    let plan = FramePlan::new(&with, &SceneGeometry::new(&with), false);
+    let plan = FramePlan::new(&with, &SceneGeometry::new(&with).unwrap(), false);
     for group in &plan.tile_groups {
         for r in &group.rects {
             let inside = in_lit_tile(r.x0, r.y0);

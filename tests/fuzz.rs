@@ -51,8 +51,23 @@ impl Rng {
 }
 
 const EXTREMES: &[&str] = &[
-    "0", "-1", "1e308", "-1e308", "1e-308", "nan", "inf", "-0.0", "4294967295", "4294967296",
-    "9223372036854775807", "-9223372036854775808", "3e38", "1e-45", "\"\"", "[]", "{}",
+    "0",
+    "-1",
+    "1e308",
+    "-1e308",
+    "1e-308",
+    "nan",
+    "inf",
+    "-0.0",
+    "4294967295",
+    "4294967296",
+    "9223372036854775807",
+    "-9223372036854775808",
+    "3e38",
+    "1e-45",
+    "\"\"",
+    "[]",
+    "{}",
 ];
 
 /// One mutation of `input`, using `other` for splicing.
@@ -167,7 +182,12 @@ fn root() -> PathBuf {
 /// Every scene file the project ships or tests with.
 fn scene_seeds() -> Vec<Vec<u8>> {
     let mut seeds = Vec::new();
-    for dir in ["assets/scenes", "assets/bench", "assets/sweep", "tests/bad_scenes"] {
+    for dir in [
+        "assets/scenes",
+        "assets/bench",
+        "assets/sweep",
+        "tests/bad_scenes",
+    ] {
         let mut paths: Vec<PathBuf> = std::fs::read_dir(root().join(dir))
             .unwrap()
             .filter_map(|e| e.ok().map(|e| e.path()))

@@ -480,7 +480,7 @@ mod tests {
             .join("assets/scenes")
             .join(file);
         let scene = Scene::load(&path).unwrap();
-        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene), false);
+        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);
         (scene, plan)
     }
 
@@ -534,7 +534,7 @@ mod tests {
     fn ldr_output_has_no_hdr_attachment_and_no_tone_map() {
         let (mut scene, _) = load("default.toml");
         scene.tone_map.operator = ToneMapOperator::None;
-        let geometry = SceneGeometry::new(&scene);
+        let geometry = SceneGeometry::new(&scene).unwrap();
         let plan = FramePlan::new(&scene, &geometry, false);
         assert_eq!(plan.pass_names(), vec!["opaque", "readback"]);
         assert!(!plan.has_attachment(attachment::HDR));
@@ -548,7 +548,7 @@ mod tests {
     fn deferred_lighting_adds_the_gbuffer_and_lighting_subpass() {
         let (mut scene, _) = load("many_lights.toml");
         scene.output.lighting = Lighting::Deferred;
-        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene), false);
+        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);
         assert_eq!(
             plan.pass_names(),
             vec!["gbuffer", "lighting", "tonemap", "readback"]
@@ -568,7 +568,7 @@ mod tests {
         for m in &mut scene.materials {
             m.shading = ShadingModel::Toon;
         }
-        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene), false);
+        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);
         assert_eq!(plan.lighting, Lighting::Forward);
         assert!(!plan.has_attachment(attachment::ALBEDO));
     }

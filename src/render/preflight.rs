@@ -7,15 +7,15 @@
 //!   run (geometry, attachments, readback, textures) against the
 //!   [`MemoryBudget`];
 //! - [`scene_on_device`]: textures (format detected from the content, size
-//!   within the device's limits), every object's mesh (not empty, finite)
-//!   and the lights each object's uniform block must hold.
+//!   within the device's limits) and the lights each object's uniform
+//!   block must hold. Meshes are checked where they are built, once
+//!   (`SceneGeometry::new`).
 
 use super::gpu_types::{GpuLight, ObjectHeader};
 use super::RenderError;
 use crate::budget::{Bytes, MemoryBudget};
 use crate::scene::{HdrFormat, Scene};
 use crate::vk::Context;
-use std::borrow::Cow;
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
 
@@ -219,25 +219,11 @@ pub fn image_memory(w: u32, h: u32, budget: &MemoryBudget) -> Result<(), RenderE
     Ok(())
 }
 
-/// A scene checked against the device, possibly with textures redirected
-/// to correctly named links (see [`scene_on_device`]).
-pub struct CheckedScene<'a> {
-    pub scene: Cow<'a, Scene>,
-    /// Holds the links until the render is done.
-    _links: Option<tempfile::TempDir>,
-}
-
 /// Checks `scene` against `ctx`'s limits; see the module documentation.
-pub fn scene_on_device<'a>(
-    scene: &'a Scene,
-    ctx: &Context,
-) -> Result<CheckedScene<'a>, RenderError> {
+pub fn scene_on_device(scene: &Scene, ctx: &Context) -> Result<(), RenderError> {
     let max_side = ctx.limits.max_image_dimension2_d;
-    let mut scene = Cow::Borrowed(scene);
-    let mut links: Option<tempfile::TempDir> = None;
-    let mut renamed: Vec<(PathBuf, PathBuf)> = Vec::new();
-    for i in 0..scene.materials.len() {
-        let Some(path) = scene.materials[i].texture.clone() else {
+    for material in &scene.materials {
+        let Some(path) = material.texture.clone() else {
             continue;
         };
         let info = inspect_texture(&path)?;
@@ -249,59 +235,6 @@ pub fn scene_on_device<'a>(
                      pixels per side (maxImageDimension2D)",
                     info.width, info.height
                 ),
-            });
-        }
-        // The texture loader picks its decoder by file extension; a PNG
-        // under another name is given to it through a `.png` link, so the
-        // content decides the format, not the name.
-        let named_png = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("png"));
-        if !named_png {
-            let link = match renamed.iter().find(|(from, _)| *from == path) {
-                Some((_, to)) => to.clone(),
-                None => {
-                    let err = |e: std::io::Error| RenderError::Texture {
-                        path: path.clone(),
-                        reason: format!("cannot prepare it for decoding: {e}"),
-                    };
-                    if links.is_none() {
-                        links = Some(tempfile::tempdir().map_err(err)?);
-                    }
-                    let dir = links.as_ref().expect("created above").path();
-                    let to = dir.join(format!("texture{}.png", renamed.len()));
-                    link_or_copy(&path, &to).map_err(err)?;
-                    renamed.push((path.clone(), to.clone()));
-                    to
-                }
-            };
-            scene.to_mut().materials[i].texture = Some(link);
-        }
-    }
-
-    for (i, object) in scene.objects.iter().enumerate() {
-        let name = || format!("objects[{i}] \"{}\"", object.name);
-        let mesh = scene.object_mesh(i);
-        if mesh.indices.is_empty() {
-            return Err(RenderError::Object {
-                object: name(),
-                reason: "its surface tessellates to no triangles (every triangle is \
-                         degenerate: the shape's sizes are too far apart)"
-                    .into(),
-            });
-        }
-        let finite = mesh.vertices.iter().all(|v| {
-            v.position.iter().all(|x| x.is_finite()) && v.normal.iter().all(|x| x.is_finite())
-        });
-        let world = object.transform.matrix();
-        let (centre, radius) = mesh.bounding_sphere();
-        let world_ok = world.is_finite()
-            && world.transform_point3(centre).is_finite()
-            && (radius * object.transform.max_scale()).is_finite();
-        if !finite || !world_ok {
-            return Err(RenderError::Object {
-                object: name(),
-                reason: "its vertices are not finite numbers (sizes too large)".into(),
             });
         }
     }
@@ -326,22 +259,7 @@ pub fn scene_on_device<'a>(
             }
         }
     }
-    Ok(CheckedScene {
-        scene,
-        _links: links,
-    })
-}
-
-fn link_or_copy(from: &Path, to: &Path) -> std::io::Result<()> {
-    let from = std::fs::canonicalize(from)?;
-    #[cfg(unix)]
-    {
-        std::os::unix::fs::symlink(&from, to)
-    }
-    #[cfg(not(unix))]
-    {
-        std::fs::copy(&from, to).map(|_| ())
-    }
+    Ok(())
 }
 
 #[cfg(test)]

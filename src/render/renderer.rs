@@ -50,7 +50,7 @@ impl Renderer {
     /// The renderer for `scene`; `keep_hdr` reads back the linear HDR
     /// image as well as the tone-mapped output.
     pub fn new(ctx: &Arc<Context>, scene: &Scene, keep_hdr: bool) -> Result<Renderer, RenderError> {
-        let geometry = SceneGeometry::new(scene);
+        let geometry = SceneGeometry::new(scene)?;
         let plan = FramePlan::new(scene, &geometry, keep_hdr);
         Renderer::build(ctx, scene, &geometry, plan, None)
     }

@@ -317,13 +317,19 @@ pub fn gpu_light(light: &Light) -> GpuLight {
     }
 }
 
-/// Loads a PNG as an sRGB texture with a full mip chain.
+/// Loads a PNG as an sRGB texture with a full mip chain. The decoder is
+/// chosen from the file's content, not its name.
 fn load_texture(ctx: &Arc<Context>, path: &std::path::Path) -> Result<Image, RenderError> {
-    let img = image::open(path)
-        .map_err(|e| RenderError::Texture {
-            path: path.to_path_buf(),
-            reason: e.to_string(),
-        })?
+    let err = |reason: String| RenderError::Texture {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let img = image::ImageReader::open(path)
+        .map_err(|e| err(e.to_string()))?
+        .with_guessed_format()
+        .map_err(|e| err(e.to_string()))?
+        .decode()
+        .map_err(|e| err(e.to_string()))?
         .to_rgba8();
     let (w, h) = img.dimensions();
     let mip_levels = 32 - w.max(h).leading_zeros();
