@@ -213,3 +213,33 @@ fn ldr_output_is_the_clamped_hdr_image() {
     let (d, _) = diff_u8(&direct.output, &via_hdr.output);
     assert!(d <= 1, "direct and tone-mapped LDR differ by {d}");
 }
+
+/// LDR output with transparent objects, or with deferred lighting, keeps
+/// the HDR target and a clamping tone map (so the image is still exactly
+/// the clamped HDR image); deferred and forward then agree as with any
+/// tone map.
+#[test]
+fn deferred_ldr_with_transparency_agrees_with_forward() {
+    let mut scene = example("transparency.toml");
+    scene.light_cutoff = 0.0;
+    scene.set_output_size(Some(240), Some(135)).unwrap();
+    scene.tone_map.operator = ToneMapOperator::None;
+    let forward = common::render(&scene, false);
+    assert_eq!(
+        forward.passes,
+        vec!["opaque", "transparent", "tonemap", "readback"]
+    );
+    scene.output.lighting = Lighting::Deferred;
+    let deferred = common::render(&scene, false);
+    assert_eq!(
+        deferred.passes,
+        vec!["gbuffer", "lighting", "transparent", "tonemap", "readback"]
+    );
+    common::assert_not_blank(&deferred.output, 0.2);
+    let (worst, differing) = diff_u8(&forward.output, &deferred.output);
+    assert!(worst <= 2, "differ by {worst}/255");
+    assert!(
+        differing * 100 <= 3 * 240 * 135,
+        "{differing} pixels differ"
+    );
+}
