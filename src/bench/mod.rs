@@ -3,14 +3,14 @@
 //! empty pass (the driver's floor) at the same resolution.
 //!
 //! The library side does the measuring ([`run`]), the report types with
-//! their JSON form ([`report`]) and the baseline comparison ([`compare`]),
+//! their JSON form ([`report`]) and the baseline comparison ([`baseline`]),
 //! so tests and other tools can use them without the command line; the
 //! `aerial bench` subcommand only parses arguments and prints.
 
-pub mod compare;
+pub mod baseline;
 pub mod report;
 
-pub use compare::{compare, Comparison, RatioRow, RowKey};
+pub use baseline::{compare, BaselineComparison, RatioRow, RowKey};
 pub use report::{
     BenchReport, DeviceRecord, EmptyPassReport, PassReport, Resolution, SceneReport, CPU_FRAME,
     FORMAT, GPU_TOTAL,
@@ -161,7 +161,7 @@ pub fn run(
     let mut device = None;
     let mut empty_passes = Vec::new();
     for resolution in resolutions {
-        let label = compare::empty_pass_scene(resolution);
+        let label = baseline::empty_pass_scene(resolution);
         progress.run(&label);
         let run = app::render_empty_pass(
             resolution.width,
