@@ -128,6 +128,8 @@ pub enum SweepError {
     Plot(#[from] PlotError),
     #[error("cannot serialise the sweep as JSON: {0}")]
     Json(#[from] serde_json::Error),
+    #[error("cannot write the sweep as CSV: {0}")]
+    Csv(#[from] csv::Error),
 }
 
 /// What each combination's error is measured against (see the module docs).

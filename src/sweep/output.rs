@@ -6,20 +6,12 @@ use crate::report::plot::{self, PlotPoint};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// RFC 4180 field: quoted when it holds a comma, quote or line break.
-pub(super) fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
 /// The sweep as CSV: one row per combination, knob columns first, then the
 /// reference's settings, per-pass and total times in ms, the error metrics
 /// and the Pareto flag. Times are rounded to 0.1 µs (far below the noise
-/// between frames); errors keep every digit.
-pub fn to_csv(result: &SweepResult) -> String {
+/// between frames); errors keep every digit. Fields are quoted only where
+/// RFC 4180 needs it (a comma, quote or line break), lines end in `\n`.
+pub fn to_csv(result: &SweepResult) -> Result<String, SweepError> {
     let mut header: Vec<String> = result.knobs.clone();
     header.push("reference".into());
     header.push("is_reference".into());
@@ -36,13 +28,8 @@ pub fn to_csv(result: &SweepResult) -> String {
         ]
         .map(String::from),
     );
-    let mut out = String::new();
-    let line = |out: &mut String, fields: Vec<String>| {
-        let fields: Vec<String> = fields.iter().map(|f| csv_field(f)).collect();
-        out.push_str(&fields.join(","));
-        out.push('\n');
-    };
-    line(&mut out, header);
+    let mut out = csv::Writer::from_writer(Vec::new());
+    out.write_record(&header)?;
     for row in &result.rows {
         let mut fields: Vec<String> = result
             .knobs
@@ -84,9 +71,13 @@ pub fn to_csv(result: &SweepResult) -> String {
             row.flip_p99.to_string(),
             row.pareto.to_string(),
         ]);
-        line(&mut out, fields);
+        out.write_record(&fields)?;
     }
-    out
+    let bytes = out
+        .into_inner()
+        .map_err(|e| csv::Error::from(e.into_error()))?;
+    // Every field was a `String`, so the bytes are UTF-8 and nothing is lost.
+    Ok(String::from_utf8_lossy(&bytes).into_owned())
 }
 
 /// The sweep as a fixed-width table for the terminal.
@@ -238,7 +229,7 @@ pub fn write_outputs(result: &SweepResult, dir: &Path) -> Result<Vec<PathBuf>, S
     let mut json = serde_json::to_string_pretty(result)?;
     json.push('\n');
     let files = [
-        ("sweep.csv", to_csv(result)),
+        ("sweep.csv", to_csv(result)?),
         ("sweep.json", json),
         ("sweep.svg", to_svg(result)?),
     ];

@@ -82,7 +82,7 @@ fn csv_has_a_header_and_one_line_per_row() {
             ),
         ],
     };
-    let csv = to_csv(&result);
+    let csv = to_csv(&result).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(
         lines,
@@ -101,10 +101,30 @@ fn csv_has_a_header_and_one_line_per_row() {
 
 #[test]
 fn csv_fields_are_quoted_when_needed() {
-    assert_eq!(output::csv_field("plain"), "plain");
-    assert_eq!(output::csv_field("a,b"), "\"a,b\"");
-    assert_eq!(output::csv_field("say \"hi\""), "\"say \"\"hi\"\"\"");
-    assert_eq!(output::csv_field("two\nlines"), "\"two\nlines\"");
+    // One knob per case; the value is the row's first fields.
+    let cases = ["plain", "a,b", "say \"hi\"", "two\nlines"];
+    let knobs: Vec<String> = (0..cases.len()).map(|i| format!("k{i}")).collect();
+    let settings: Vec<(&str, &str)> = knobs
+        .iter()
+        .zip(cases)
+        .map(|(k, v)| (k.as_str(), v))
+        .collect();
+    let result = SweepResult {
+        scene: "s.toml".into(),
+        device: "dev".into(),
+        frames: 1,
+        warmup: 0,
+        reference: ReferenceKind::Cpu,
+        knobs: knobs.clone(),
+        passes: vec![],
+        rows: vec![row(&settings, 1.0, 0.5, true)],
+    };
+    let csv = to_csv(&result).unwrap();
+    let line = csv.split_once('\n').unwrap().1;
+    assert!(
+        line.starts_with("plain,\"a,b\",\"say \"\"hi\"\"\",\"two\nlines\",cpu,"),
+        "{csv}"
+    );
 }
 
 #[test]
@@ -428,7 +448,7 @@ fn cpu_reference_is_per_scene_and_never_the_row_itself() {
     assert_eq!(result.reference, ReferenceKind::Cpu);
     assert!(result.rows.iter().all(|r| !r.is_reference && r.rmse > 0.0));
     assert!(result.rows[0].rmse > result.rows[2].rmse);
-    let csv = to_csv(&result);
+    let csv = to_csv(&result).unwrap();
     assert!(
         csv.lines().skip(1).all(|l| l.contains(",cpu,false,")),
         "{csv}"
