@@ -3,7 +3,8 @@
 //!
 //! - [`stats`] turns raw frame-time samples into a [`Summary`] (min, median,
 //!   p95, max, mean, sample standard deviation) that serialises to JSON for
-//!   dashboards and regression checks.
+//!   dashboards and regression checks, and a run's per-frame pass times into
+//!   one per pass plus the frame total.
 //! - [`image_diff`] compares two images (PNG as sRGB 8-bit, OpenEXR as linear
 //!   float) with FLIP, PSNR or RMSE, gates the result against [`Thresholds`],
 //!   and writes a diff picture for humans to look at.
@@ -21,4 +22,4 @@ pub use image_diff::{
     compare_files, compare_images, write_diff_png, CompareError, ImageDiff, ImageRef, Metric,
     Thresholds, FLIP_DEFAULT_THRESHOLDS,
 };
-pub use stats::{percentile, Summary};
+pub use stats::{percentile, summarise_passes, PassSummaries, PassTimesError, Summary};

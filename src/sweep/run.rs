@@ -6,7 +6,7 @@ use super::{ReferenceKind, Row, SweepError, SweepResult};
 use crate::render::reference::ReferenceScene;
 use crate::render::{FrameTiming, Pixels};
 use crate::report::image_diff::{compare_images, ImageRef, Metric};
-use crate::report::stats::Summary;
+use crate::report::stats::{summarise_passes, Summary};
 use crate::scene::{Best, Knob, Scene};
 use std::collections::{HashMap, HashSet};
 use std::fmt::Write as _;
@@ -463,24 +463,18 @@ struct Timings {
 
 /// Per-pass medians, the per-frame GPU total and the CPU frame time.
 fn timings(what: &str, run: &Rendered) -> Result<Timings, SweepError> {
-    if run.frames.is_empty() || run.frames.iter().any(|f| f.pass_ms.is_empty()) {
-        return Err(SweepError::NoTimings { what: what.into() });
-    }
     let bad = || SweepError::BadTimings { what: what.into() };
-    let mut pass_median_ms = Vec::new();
-    for (i, name) in run.passes.iter().enumerate() {
-        let samples: Vec<f64> = run
-            .frames
-            .iter()
-            .filter_map(|f| f.pass_ms.get(i).copied())
-            .collect();
-        pass_median_ms.push((name.clone(), Summary::of(&samples).ok_or_else(bad)?.median));
-    }
-    let totals: Vec<f64> = run.frames.iter().map(|f| f.pass_ms.iter().sum()).collect();
+    let gpu = summarise_passes(&run.passes, run.frames.iter().map(|f| f.pass_ms.as_slice()))
+        .map_err(|_| bad())?
+        .ok_or_else(|| SweepError::NoTimings { what: what.into() })?;
     let cpu: Vec<f64> = run.frames.iter().map(|f| f.cpu_ms).collect();
     Ok(Timings {
-        pass_median_ms,
-        gpu_ms: Summary::of(&totals).ok_or_else(bad)?,
+        pass_median_ms: gpu
+            .passes
+            .into_iter()
+            .map(|(name, s)| (name, s.median))
+            .collect(),
+        gpu_ms: gpu.total,
         cpu_ms: Summary::of(&cpu).ok_or_else(bad)?,
     })
 }
