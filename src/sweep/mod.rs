@@ -121,8 +121,6 @@ pub enum SweepError {
         error: std::io::Error,
     },
     #[error(transparent)]
-    Write(CompareError),
-    #[error(transparent)]
     File(crate::files::FileError),
     #[error(transparent)]
     Plot(#[from] PlotError),
@@ -136,7 +134,7 @@ pub enum SweepError {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ReferenceKind {
-    /// The GPU image with every swept knob at its [`Best`] value.
+    /// The GPU image with every swept knob at its [`Best`](crate::scene::Best) value.
     #[default]
     GpuBest,
     /// The exact CPU image of the combination's own scene.
