@@ -267,7 +267,7 @@ fn summarise(
         run: label.to_string(),
         what: what.to_string(),
     };
-    let report = |name: &str, ms: Summary| PassReport {
+    let pass_report = |name: &str, ms: Summary| PassReport {
         name: name.to_string(),
         ms,
         empty_pass_multiple: None,
@@ -281,14 +281,14 @@ fn summarise(
         Some(gpu) => (
             gpu.passes
                 .iter()
-                .map(|(name, ms)| report(name, *ms))
+                .map(|(name, ms)| pass_report(name, *ms))
                 .collect(),
-            Some(report(GPU_TOTAL, gpu.total)),
+            Some(pass_report(GPU_TOTAL, gpu.total)),
         ),
         None => (Vec::new(), None),
     };
     let cpu: Vec<f64> = run.frames.iter().map(|f| f.cpu_ms).collect();
-    let cpu_frame = report(CPU_FRAME, Summary::of(&cpu).ok_or_else(|| bad(CPU_FRAME))?);
+    let cpu_frame = pass_report(CPU_FRAME, Summary::of(&cpu).ok_or_else(|| bad(CPU_FRAME))?);
     Ok((passes, gpu_total, cpu_frame))
 }
 
