@@ -13,6 +13,7 @@ pub mod mesh;
 pub mod render;
 pub mod report;
 pub mod scene;
+pub mod sweep;
 pub mod vk;
 
 /// SPIR-V of every shader in `glsl/`, compiled by `build.rs`: one

@@ -3,21 +3,21 @@
 //! empty pass (the driver's floor) at the same resolution.
 //!
 //! The library side does the measuring ([`run`]), the report types with
-//! their JSON form ([`report`]) and the baseline comparison ([`compare`]),
+//! their JSON form ([`report`]) and the baseline comparison ([`baseline`]),
 //! so tests and other tools can use them without the command line; the
 //! `aerial bench` subcommand only parses arguments and prints.
 
-pub mod compare;
+pub mod baseline;
 pub mod report;
 
-pub use compare::{compare, Comparison, RatioRow, RowKey};
+pub use baseline::{compare, BaselineComparison, RatioRow, RowKey};
 pub use report::{
     BenchReport, DeviceRecord, EmptyPassReport, PassReport, Resolution, SceneReport, CPU_FRAME,
     FORMAT, GPU_TOTAL,
 };
 
 use crate::app::{self, RenderRun, RenderSettings, RunError};
-use crate::report::stats::Summary;
+use crate::report::stats::{summarise_passes, PassTimesError, Summary};
 use crate::scene::{knob_settings, Scene, SceneError};
 use sha2::{Digest, Sha256};
 use std::path::{Path, PathBuf};
@@ -161,7 +161,7 @@ pub fn run(
     let mut device = None;
     let mut empty_passes = Vec::new();
     for resolution in resolutions {
-        let label = compare::empty_pass_scene(resolution);
+        let label = baseline::empty_pass_scene(resolution);
         progress.run(&label);
         let run = app::render_empty_pass(
             resolution.width,
@@ -263,39 +263,32 @@ fn summarise(
     label: &str,
     run: &RenderRun,
 ) -> Result<(Vec<PassReport>, Option<PassReport>, PassReport), BenchError> {
-    let row = |name: &str, samples: Vec<f64>| {
-        Summary::of(&samples)
-            .map(|ms| PassReport {
-                name: name.to_string(),
-                ms,
-                empty_pass_multiple: None,
-            })
-            .ok_or_else(|| BenchError::BadSamples {
-                run: label.to_string(),
-                what: name.to_string(),
-            })
+    let bad = |what: &str| BenchError::BadSamples {
+        run: label.to_string(),
+        what: what.to_string(),
     };
-    // Without timestamps every frame's pass_ms is empty; a partial frame
-    // would be a driver bug, and is treated as "no timestamps" too.
-    let timed = run
-        .frames
-        .iter()
-        .all(|f| f.pass_ms.len() == run.passes.len());
-    let mut passes = Vec::new();
-    let mut gpu_total = None;
-    if timed && !run.passes.is_empty() {
-        for (i, name) in run.passes.iter().enumerate() {
-            passes.push(row(
-                name,
-                run.frames.iter().map(|f| f.pass_ms[i]).collect(),
-            )?);
-        }
-        gpu_total = Some(row(
-            GPU_TOTAL,
-            run.frames.iter().map(|f| f.pass_ms.iter().sum()).collect(),
-        )?);
-    }
-    let cpu_frame = row(CPU_FRAME, run.frames.iter().map(|f| f.cpu_ms).collect())?;
+    let pass_report = |name: &str, ms: Summary| PassReport {
+        name: name.to_string(),
+        ms,
+        empty_pass_multiple: None,
+    };
+    let gpu = summarise_passes(&run.passes, run.frames.iter().map(|f| f.pass_ms.as_slice()))
+        .map_err(|e| match e {
+            PassTimesError::Pass(name) => bad(&name),
+            PassTimesError::Total => bad(GPU_TOTAL),
+        })?;
+    let (passes, gpu_total) = match gpu {
+        Some(gpu) => (
+            gpu.passes
+                .iter()
+                .map(|(name, ms)| pass_report(name, *ms))
+                .collect(),
+            Some(pass_report(GPU_TOTAL, gpu.total)),
+        ),
+        None => (Vec::new(), None),
+    };
+    let cpu: Vec<f64> = run.frames.iter().map(|f| f.cpu_ms).collect();
+    let cpu_frame = pass_report(CPU_FRAME, Summary::of(&cpu).ok_or_else(|| bad(CPU_FRAME))?);
     Ok((passes, gpu_total, cpu_frame))
 }
 

@@ -2,7 +2,7 @@
 //! JSON, and optionally gate against a baseline by median ratio.
 
 use aerial::bench::{
-    self, compare, BenchReport, BenchScene, BenchSettings, Comparison, PassReport, Progress,
+    self, compare, BaselineComparison, BenchReport, BenchScene, BenchSettings, PassReport, Progress,
 };
 use aerial::scene::Knob;
 use aerial::vk::validation::Validation;
@@ -258,7 +258,7 @@ fn print_rows<'a>(rows: impl Iterator<Item = &'a PassReport>) {
 /// Prints the comparison and fails if any ratio is above `max_ratio`, or if
 /// nothing matched (a gate that checked nothing must not pass silently).
 fn gate(
-    c: &Comparison,
+    c: &BaselineComparison,
     path: &std::path::Path,
     baseline: &BenchReport,
     max_ratio: f64,

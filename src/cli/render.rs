@@ -1,9 +1,10 @@
 //! `aerial render`: render one scene to PNG (and optionally EXR).
 
 use aerial::app::{self, RenderSettings};
+use aerial::bench::{CPU_FRAME, GPU_TOTAL};
 use aerial::files;
 use aerial::render::output;
-use aerial::report::stats::Summary;
+use aerial::report::stats::{summarise_passes, Summary};
 use aerial::scene::Scene;
 use aerial::vk::validation::{self, Validation};
 use anyhow::{bail, Context as _};
@@ -107,27 +108,25 @@ fn print_timings(run: &app::RenderRun) {
         "{:<12} {:>10} {:>10} {:>10} {:>10}",
         "pass", "median ms", "min ms", "p95 ms", "max ms"
     );
-    let row = |name: &str, samples: Vec<f64>| {
-        if let Some(s) = Summary::of(&samples) {
-            println!(
-                "{name:<12} {:>10.3} {:>10.3} {:>10.3} {:>10.3}",
-                s.median, s.min, s.p95, s.max
-            );
-        }
-    };
-    for (i, name) in run.passes.iter().enumerate() {
-        row(
-            name,
-            run.frames
-                .iter()
-                .filter_map(|f| f.pass_ms.get(i).copied())
-                .collect(),
+    let row = |name: &str, s: &Summary| {
+        println!(
+            "{name:<12} {:>10.3} {:>10.3} {:>10.3} {:>10.3}",
+            s.median, s.min, s.p95, s.max
         );
+    };
+    match summarise_passes(&run.passes, run.frames.iter().map(|f| f.pass_ms.as_slice())) {
+        Ok(Some(gpu)) => {
+            for (name, s) in &gpu.passes {
+                row(name, s);
+            }
+            row(GPU_TOTAL, &gpu.total);
+        }
+        Ok(None) => println!("(no GPU timestamps on this device: CPU frame time only)"),
+        Err(e) => eprintln!("warning: no GPU times shown: {e}"),
     }
-    row(
-        "gpu total",
-        run.frames.iter().map(|f| f.pass_ms.iter().sum()).collect(),
-    );
-    row("cpu frame", run.frames.iter().map(|f| f.cpu_ms).collect());
+    let cpu: Vec<f64> = run.frames.iter().map(|f| f.cpu_ms).collect();
+    if let Some(s) = Summary::of(&cpu) {
+        row(CPU_FRAME, &s);
+    }
     println!("note: {}", aerial::render::SUBPASS_TIMING_NOTE);
 }

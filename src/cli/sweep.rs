@@ -3,10 +3,10 @@
 
 use aerial::app::{self, FrameSource, RenderSettings};
 use aerial::render::render_reference;
-use aerial::report::sweep::{
+use aerial::scene::Scene;
+use aerial::sweep::{
     self, Axis, Job, ReferenceKind, Rendered, Sweep, SweepOptions, DEFAULT_MAX_COMBINATIONS,
 };
-use aerial::scene::Scene;
 use aerial::vk::validation::{self, Validation};
 use anyhow::Context as _;
 use std::path::PathBuf;

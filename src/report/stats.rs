@@ -22,6 +22,12 @@
 //! [`Summary::std_dev`] is the *sample* standard deviation (divisor `n - 1`,
 //! Bessel's correction), because benchmark runs are a sample of the frame-time
 //! distribution, not the whole population. It is defined as 0 for one sample.
+//!
+//! # Per-pass GPU times
+//!
+//! [`summarise_passes`] turns the per-frame pass times of a run into one
+//! [`Summary`] per pass plus one of the per-frame total, the same way for
+//! `aerial render --frames`, `aerial bench` and `aerial sweep`.
 
 use serde::{Deserialize, Serialize};
 
@@ -85,6 +91,56 @@ impl Summary {
             std_dev,
         })
     }
+}
+
+/// Each pass's GPU time over a run's frames, and the per-frame total.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PassSummaries {
+    /// One per pass, in the order of the names given.
+    pub passes: Vec<(String, Summary)>,
+    /// The sum of the pass times of each frame.
+    pub total: Summary,
+}
+
+/// Why [`summarise_passes`] could not summarise a run's pass times.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum PassTimesError {
+    #[error("pass {0}: its times are not all finite numbers")]
+    Pass(String),
+    #[error("the per-frame sum of the pass times is not finite")]
+    Total,
+}
+
+/// Summarises per-frame pass times: `frames` holds one slice per frame,
+/// with one time per name in `names`, in that order.
+///
+/// Returns `Ok(None)` when there is nothing to summarise: no passes, no
+/// frames, or a frame without a time for every pass. A device without
+/// timestamp queries gives every frame an empty slice; a partial frame would
+/// be a driver bug, and is treated as "no timestamps" too rather than
+/// pairing times with the wrong pass. A non-finite time is an error naming
+/// the pass (see [`Summary::of`] for why it is not skipped).
+pub fn summarise_passes<'a>(
+    names: &[impl AsRef<str>],
+    frames: impl IntoIterator<Item = &'a [f64]>,
+) -> Result<Option<PassSummaries>, PassTimesError> {
+    let frames: Vec<&[f64]> = frames.into_iter().collect();
+    if names.is_empty() || frames.is_empty() || frames.iter().any(|f| f.len() != names.len()) {
+        return Ok(None);
+    }
+    let passes = names
+        .iter()
+        .enumerate()
+        .map(|(i, name)| {
+            let samples: Vec<f64> = frames.iter().map(|f| f[i]).collect();
+            Summary::of(&samples)
+                .map(|s| (name.as_ref().to_string(), s))
+                .ok_or_else(|| PassTimesError::Pass(name.as_ref().to_string()))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let totals: Vec<f64> = frames.iter().map(|f| f.iter().sum()).collect();
+    let total = Summary::of(&totals).ok_or(PassTimesError::Total)?;
+    Ok(Some(PassSummaries { passes, total }))
 }
 
 /// Percentile `p` (in `[0, 100]`) of `sorted`, which must be sorted
@@ -203,6 +259,42 @@ mod tests {
         let s = Summary::of(&[base + 4.0, base + 7.0, base + 13.0, base + 16.0]).unwrap();
         // deviations -6 -3 3 6 -> ss = 90, var = 30
         assert!((s.std_dev - 30.0f64.sqrt()).abs() < 1e-6);
+    }
+
+    #[test]
+    fn pass_summaries_by_hand() {
+        let frames = [vec![1.0, 10.0], vec![3.0, 30.0], vec![2.0, 20.0]];
+        let s = summarise_passes(&["opaque", "tonemap"], frames.iter().map(Vec::as_slice))
+            .unwrap()
+            .unwrap();
+        let names: Vec<&str> = s.passes.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["opaque", "tonemap"]);
+        assert_eq!(s.passes[0].1, Summary::of(&[1.0, 3.0, 2.0]).unwrap());
+        assert_eq!(s.passes[1].1, Summary::of(&[10.0, 30.0, 20.0]).unwrap());
+        assert_eq!(s.total, Summary::of(&[11.0, 33.0, 22.0]).unwrap());
+    }
+
+    #[test]
+    fn pass_summaries_without_timestamps_are_none() {
+        let none = |names: &[&str], frames: &[Vec<f64>]| {
+            summarise_passes(names, frames.iter().map(Vec::as_slice)).unwrap()
+        };
+        // No timestamps: every frame empty.
+        assert_eq!(none(&["opaque"], &[vec![], vec![]]), None);
+        // A partial frame.
+        assert_eq!(none(&["a", "b"], &[vec![1.0, 2.0], vec![1.0]]), None);
+        assert_eq!(none(&["opaque"], &[]), None);
+        assert_eq!(none(&[], &[vec![]]), None);
+    }
+
+    #[test]
+    fn pass_summaries_name_a_non_finite_pass() {
+        let frames = [vec![1.0, f64::NAN]];
+        let e = summarise_passes(&["opaque", "tonemap"], frames.iter().map(Vec::as_slice));
+        assert_eq!(e, Err(PassTimesError::Pass("tonemap".into())));
+        let frames = [vec![f64::MAX, f64::MAX]];
+        let e = summarise_passes(&["a", "b"], frames.iter().map(Vec::as_slice));
+        assert_eq!(e, Err(PassTimesError::Total));
     }
 
     #[test]

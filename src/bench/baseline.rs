@@ -48,7 +48,7 @@ impl RatioRow {
 
 /// The result of [`compare`].
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Comparison {
+pub struct BaselineComparison {
     /// Rows present in both, in the current run's order.
     pub rows: Vec<RatioRow>,
     /// Rows of the baseline that this run lacks.
@@ -59,7 +59,7 @@ pub struct Comparison {
     pub warnings: Vec<String>,
 }
 
-impl Comparison {
+impl BaselineComparison {
     /// The rows whose ratio is above `max_ratio`.
     pub fn exceeding(&self, max_ratio: f64) -> Vec<&RatioRow> {
         self.rows.iter().filter(|r| r.exceeds(max_ratio)).collect()
@@ -95,7 +95,7 @@ pub fn rows(report: &BenchReport) -> Vec<(RowKey, f64)> {
 }
 
 /// Compares `current` with `baseline`.
-pub fn compare(current: &BenchReport, baseline: &BenchReport) -> Comparison {
+pub fn compare(current: &BenchReport, baseline: &BenchReport) -> BaselineComparison {
     let mut warnings = Vec::new();
     if current.device != baseline.device {
         warnings.push(format!(
@@ -178,7 +178,7 @@ pub fn compare(current: &BenchReport, baseline: &BenchReport) -> Comparison {
         .filter(|(k, _)| !current_rows.iter().any(|(c, _)| c == k))
         .map(|(k, _)| k)
         .collect();
-    Comparison {
+    BaselineComparison {
         rows: matched,
         missing,
         new,

@@ -1,0 +1,210 @@
+//! Error against run time: render every combination of some knob settings,
+//! time each one, measure how far its image is from a reference, and find
+//! the combinations worth using (the Pareto front).
+//!
+//! # The reference
+//!
+//! A combination is compared with the same scene rendered with every *swept*
+//! knob at its [`Best`](crate::scene::Best) value:
+//!
+//! - [`Best::Fixed`](crate::scene::Best::Fixed)`(v)`: `v`, whether or not the sweep lists it;
+//! - [`Best::LastListed`](crate::scene::Best::LastListed): the last value listed for that knob in this sweep,
+//!   so **list values cheapest first** (e.g. `tessellation=0.25,0.5,1,2`);
+//! - [`Best::Unchanged`](crate::scene::Best::Unchanged) (image size): the combination's own value, so both
+//!   images always have the same size. Each size then has its own reference.
+//!
+//! Knobs that are not swept keep the scene's own setting in the combination
+//! and in its reference alike: a tessellation sweep of a scene that mixes
+//! shading models must not be measured against an all-Phong version of it.
+//! Each distinct reference is rendered once. A combination that is its own
+//! reference is compared with its own image, so its error is exactly 0.
+//!
+//! With [`ReferenceKind::Cpu`] the reference is instead the exact image of
+//! the combination's *own* scene ([`crate::render::render_reference`]):
+//! every knob is applied first, because some (`lights`, `light_cutoff`)
+//! change what the exact image is, and the rest (tessellation, HDR format)
+//! only change how far the GPU is from it. References are cached by
+//! [`ReferenceScene`](crate::render::reference::ReferenceScene), everything the CPU renderer reads, so a sweep over
+//! tessellation and format renders each size's reference once or, where
+//! the tessellation moves a bounding sphere across a light's cutoff, once
+//! per light set. No combination is its own reference then, and every
+//! error is above 0. A scene the CPU renderer cannot draw (a torus, a
+//! texture, ...) is refused before anything is rendered.
+//!
+//! # Measurements
+//!
+//! - GPU time: per frame the sum of the pass times; the median (and p95)
+//!   over the timed frames, plus the median of each pass. The timed run does
+//!   not read the HDR image back: that copy is a cost of measuring, not of
+//!   rendering, and as it is twice as large in `rgba32f` it would make that
+//!   format look slower than it is. The images come from a second,
+//!   single-frame run with the HDR readback on.
+//! - `rmse`, the primary error: whole-image RMSE of the linear HDR images
+//!   over all pixels and the R, G, B channels (alpha ignored), in the scene's
+//!   linear radiance units.
+//! - `flip_mean` and `flip_p99`: FLIP of the tone-mapped 8-bit sRGB outputs
+//!   (what a viewer sees), mean and 99th percentile over the pixels.
+//!
+//! See [`crate::report::image_diff`] for the exact metric definitions.
+//!
+//! # Pareto front
+//!
+//! A combination is on the front when no other combination is at least as
+//! fast and at least as accurate (by `rmse`) and strictly better in one of
+//! the two; see [`pareto_front`].
+//!
+//! # Layout
+//!
+//! [`run`] lists and measures the combinations; [`output`] turns the result
+//! into the terminal table, `sweep.csv`, `sweep.json` and `sweep.svg`. This
+//! file holds what both share: the errors and the result types.
+//!
+//! Rendering is left to the caller (a closure taking a scene and a [`Job`]),
+//! which keeps this module free of Vulkan and lets it be tested without a
+//! device.
+
+pub mod output;
+pub mod run;
+
+pub use output::{to_csv, to_svg, to_table, write_outputs};
+pub use run::{
+    pareto_front, Axis, Combination, Job, Rendered, Sweep, SweepOptions, DEFAULT_MAX_COMBINATIONS,
+};
+
+use crate::render::reference::ReferenceError;
+use crate::report::image_diff::CompareError;
+use crate::report::plot::PlotError;
+use crate::report::stats::Summary;
+use crate::scene::KnobError;
+use serde::{Serialize, Serializer};
+use std::path::PathBuf;
+
+/// Everything that can stop a sweep. Each message names the knob, value,
+/// combination or file involved.
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    #[error("--knob '{arg}': {reason} (expected NAME=VALUE[,VALUE...])")]
+    Syntax { arg: String, reason: &'static str },
+    #[error(transparent)]
+    Knob(#[from] KnobError),
+    #[error("--reference cpu: {what}: {source}")]
+    NoCpuReference {
+        what: String,
+        #[source]
+        source: ReferenceError,
+    },
+    #[error("knob {knob} is given twice; list all its values in one --knob")]
+    DuplicateKnob { knob: &'static str },
+    #[error("knob {knob}: value '{value}' is listed twice")]
+    DuplicateValue { knob: &'static str, value: String },
+    #[error("nothing to sweep: give at least one --knob NAME=VALUE[,VALUE...]")]
+    NoKnobs,
+    #[error("the sweep has {count} combinations, more than the limit of {max} (raise it with --max-combinations)")]
+    TooMany { count: String, max: usize },
+    #[error("rendering {what} failed: {reason}")]
+    Render { what: String, reason: String },
+    #[error("{what}: the device recorded no pass timings (no timestamp queries), so there is no GPU time to plot")]
+    NoTimings { what: String },
+    #[error("{what}: frame timings are not finite numbers")]
+    BadTimings { what: String },
+    #[error("comparing {what} with its reference: {source}")]
+    Compare {
+        what: String,
+        #[source]
+        source: CompareError,
+    },
+    // The OS error is in the message, not a chained source, so that
+    // reporters walking the chain print it once.
+    #[error("cannot create output folder {}: {error}", path.display())]
+    CreateDir {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+    #[error(transparent)]
+    File(crate::files::FileError),
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+    #[error("cannot serialise the sweep as JSON: {0}")]
+    Json(#[from] serde_json::Error),
+    #[error("cannot write the sweep as CSV: {0}")]
+    Csv(#[from] csv::Error),
+}
+
+/// What each combination's error is measured against (see the module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ReferenceKind {
+    /// The GPU image with every swept knob at its [`Best`](crate::scene::Best) value.
+    #[default]
+    GpuBest,
+    /// The exact CPU image of the combination's own scene.
+    Cpu,
+}
+
+impl ReferenceKind {
+    /// How tables, plots and the CSV name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            ReferenceKind::GpuBest => "gpu_best",
+            ReferenceKind::Cpu => "cpu",
+        }
+    }
+}
+
+/// One measured combination.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    /// Knob name and value, in the order of the sweep's axes.
+    #[serde(serialize_with = "ordered_map")]
+    pub settings: Vec<(String, String)>,
+    /// The settings of the scene the reference image was made from (with a
+    /// CPU reference, the row's own).
+    #[serde(serialize_with = "ordered_map")]
+    pub reference: Vec<(String, String)>,
+    /// Whether this combination is its own reference (error 0; never with
+    /// a CPU reference).
+    pub is_reference: bool,
+    /// Median GPU time of each pass, in ms.
+    #[serde(serialize_with = "ordered_map")]
+    pub pass_median_ms: Vec<(String, f64)>,
+    /// Per-frame GPU time (sum of the passes), in ms.
+    pub gpu_ms: Summary,
+    /// Per-frame CPU time from submit to fence, in ms.
+    pub cpu_ms: Summary,
+    /// Whole-image RMSE of the linear HDR image against the reference.
+    pub rmse: f64,
+    /// Mean FLIP of the sRGB output against the reference's.
+    pub flip_mean: f64,
+    /// 99th percentile of the per-pixel FLIP.
+    pub flip_p99: f64,
+    /// On the Pareto front of (GPU median, rmse).
+    pub pareto: bool,
+}
+
+/// A finished sweep: what `sweep.json` holds.
+#[derive(Clone, Debug, Serialize)]
+pub struct SweepResult {
+    pub scene: String,
+    pub device: String,
+    pub frames: u32,
+    pub warmup: u32,
+    /// What the errors are measured against: `"gpu_best"` or `"cpu"`.
+    pub reference: ReferenceKind,
+    /// Swept knob names, in axis order.
+    pub knobs: Vec<String>,
+    /// Every pass name seen, in frame order.
+    pub passes: Vec<String>,
+    pub rows: Vec<Row>,
+}
+
+/// Serialises `(key, value)` pairs as a JSON object in their own order
+/// (serde_json's `Map` would sort the keys).
+fn ordered_map<S: Serializer, V: Serialize>(
+    pairs: &[(String, V)],
+    s: S,
+) -> Result<S::Ok, S::Error> {
+    s.collect_map(pairs.iter().map(|(k, v)| (k, v)))
+}
+
+#[cfg(test)]
+mod tests;

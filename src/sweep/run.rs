@@ -1,0 +1,497 @@
+//! Running a sweep: parse and check the knob axes, list the combinations,
+//! have the caller render each one (timed, then for its images), compare
+//! it with its reference and mark the Pareto front.
+
+use super::{ReferenceKind, Row, SweepError, SweepResult};
+use crate::render::reference::ReferenceScene;
+use crate::render::{FrameTiming, Pixels};
+use crate::report::image_diff::{compare_images, ImageRef, Metric};
+use crate::report::stats::{summarise_passes, Summary};
+use crate::scene::{Best, Knob, Scene};
+use std::collections::{HashMap, HashSet};
+use std::fmt::Write as _;
+use std::rc::Rc;
+
+/// Combinations a sweep may have unless the caller raises the limit: at a
+/// few seconds per combination, more is an accident (a typo in a list, one
+/// knob too many) rather than a plan.
+pub const DEFAULT_MAX_COMBINATIONS: usize = 256;
+
+/// One swept knob and its values, in the order given.
+#[derive(Clone)]
+pub struct Axis {
+    pub knob: &'static Knob,
+    pub values: Vec<String>,
+}
+
+impl std::fmt::Debug for Axis {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}={}", self.knob.name, self.values.join(","))
+    }
+}
+
+impl Axis {
+    /// Parses `NAME=VALUE[,VALUE...]`; the knob must exist. Values are
+    /// checked against a scene by [`Sweep::new`].
+    pub fn parse(arg: &str) -> Result<Axis, SweepError> {
+        let syntax = |reason| SweepError::Syntax {
+            arg: arg.to_string(),
+            reason,
+        };
+        let (name, list) = arg.split_once('=').ok_or_else(|| syntax("no '='"))?;
+        let knob = Knob::find(name.trim())?;
+        let mut values: Vec<String> = Vec::new();
+        for value in list.split(',').map(str::trim) {
+            if value.is_empty() {
+                return Err(syntax("empty value"));
+            }
+            if values.iter().any(|v| v == value) {
+                return Err(SweepError::DuplicateValue {
+                    knob: knob.name,
+                    value: value.to_string(),
+                });
+            }
+            values.push(value.to_string());
+        }
+        Ok(Axis { knob, values })
+    }
+}
+
+/// How each combination is measured.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SweepOptions {
+    /// Timed frames per combination (at least 1; 0 counts as 1).
+    pub frames: u32,
+    /// Frames rendered and discarded before the timed ones.
+    pub warmup: u32,
+    /// Refuse sweeps with more combinations than this.
+    pub max_combinations: usize,
+    /// What the errors are measured against.
+    pub reference: ReferenceKind,
+}
+
+impl Default for SweepOptions {
+    fn default() -> Self {
+        SweepOptions {
+            frames: 10,
+            warmup: 2,
+            max_combinations: DEFAULT_MAX_COMBINATIONS,
+            reference: ReferenceKind::GpuBest,
+        }
+    }
+}
+
+/// A render the sweep asks its caller for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Job {
+    /// Measure time: `warmup` discarded frames, then `frames` timed ones,
+    /// *without* reading the HDR image back (see the module docs).
+    Timing { warmup: u32, frames: u32 },
+    /// One frame with the HDR image read back, for the error metrics.
+    Images,
+    /// The exact image of the scene, for [`ReferenceKind::Cpu`]: `hdr` from
+    /// [`crate::render::render_reference`] and `output` that image through
+    /// the renderer's tone-map pass, so the FLIP columns compare like with
+    /// like. `frames` and `passes` are not read.
+    Reference,
+}
+
+/// What the caller's render closure hands back.
+pub struct Rendered {
+    /// The device, for the report.
+    pub device: String,
+    /// Pass names in the order of each `FrameTiming::pass_ms`.
+    pub passes: Vec<String>,
+    pub frames: Vec<FrameTiming>,
+    pub output: Pixels<u8>,
+    /// Required for [`Job::Images`] and [`Job::Reference`].
+    pub hdr: Option<Pixels<f32>>,
+}
+
+/// One combination and the reference it is compared with, as values in
+/// the order of the sweep's axes (with a CPU reference, the combination's
+/// own values: the reference is the exact image of its own scene).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Combination {
+    pub values: Vec<String>,
+    pub reference: Vec<String>,
+}
+
+/// A validated sweep, ready to run.
+pub struct Sweep {
+    scene_name: String,
+    base: Scene,
+    axes: Vec<Axis>,
+    combinations: Vec<Combination>,
+    options: SweepOptions,
+}
+
+impl Sweep {
+    /// Checks the axes against `base` (every value is applied to a copy of
+    /// the scene, so a bad value fails before anything is rendered) and
+    /// lists the combinations, the last axis changing fastest.
+    /// `scene_name` is only for the report.
+    pub fn new(
+        scene_name: impl Into<String>,
+        base: Scene,
+        axes: Vec<Axis>,
+        options: SweepOptions,
+    ) -> Result<Sweep, SweepError> {
+        if axes.is_empty() {
+            return Err(SweepError::NoKnobs);
+        }
+        let mut seen = HashSet::new();
+        for axis in &axes {
+            if !seen.insert(axis.knob.name) {
+                return Err(SweepError::DuplicateKnob {
+                    knob: axis.knob.name,
+                });
+            }
+        }
+        // Count in u128 so a typo like 1000 values x 1000 values x ... gives
+        // a clear error instead of an overflow or an enormous allocation.
+        let count = axes
+            .iter()
+            .try_fold(1u128, |n, a| n.checked_mul(a.values.len() as u128));
+        if count.is_none_or(|c| c > options.max_combinations as u128) {
+            return Err(SweepError::TooMany {
+                count: count.map_or_else(|| "too many".into(), |c| c.to_string()),
+                max: options.max_combinations,
+            });
+        }
+        for axis in &axes {
+            let best = match axis.knob.best {
+                Best::Fixed(v) => Some(v),
+                Best::LastListed | Best::Unchanged => None,
+            };
+            for value in axis.values.iter().map(String::as_str).chain(best) {
+                axis.knob.set(&mut base.clone(), value)?;
+            }
+        }
+
+        let mut combinations = vec![Vec::new()];
+        for axis in &axes {
+            combinations = combinations
+                .into_iter()
+                .flat_map(|prefix: Vec<String>| {
+                    axis.values.iter().map(move |v| {
+                        let mut c = prefix.clone();
+                        c.push(v.clone());
+                        c
+                    })
+                })
+                .collect();
+        }
+        let combinations: Vec<Combination> = combinations
+            .into_iter()
+            .map(|values| {
+                let reference = match options.reference {
+                    ReferenceKind::GpuBest => reference_values(&axes, &values),
+                    ReferenceKind::Cpu => values.clone(),
+                };
+                Combination { values, reference }
+            })
+            .collect();
+        let sweep = Sweep {
+            scene_name: scene_name.into(),
+            base,
+            axes,
+            combinations,
+            options,
+        };
+        if options.reference == ReferenceKind::Cpu {
+            // Refuse a scene the CPU cannot draw now, not after minutes of
+            // GPU timing.
+            for c in &sweep.combinations {
+                sweep.cpu_reference_scene(&c.values)?;
+            }
+        }
+        Ok(sweep)
+    }
+
+    /// What the CPU reference of combination `values` depends on.
+    fn cpu_reference_scene(&self, values: &[String]) -> Result<ReferenceScene, SweepError> {
+        ReferenceScene::new(&self.scene_for(values)?).map_err(|source| SweepError::NoCpuReference {
+            what: self.describe(values),
+            source,
+        })
+    }
+
+    pub fn combinations(&self) -> &[Combination] {
+        &self.combinations
+    }
+
+    /// The base scene with the knobs set to `values` (in axis order).
+    pub fn scene_for(&self, values: &[String]) -> Result<Scene, SweepError> {
+        let mut scene = self.base.clone();
+        for (axis, value) in self.axes.iter().zip(values) {
+            axis.knob.set(&mut scene, value)?;
+        }
+        Ok(scene)
+    }
+
+    /// `name=value` pairs for `values`, for labels and errors.
+    fn describe(&self, values: &[String]) -> String {
+        self.axes
+            .iter()
+            .zip(values)
+            .map(|(a, v)| format!("{}={v}", a.knob.name))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    fn pairs(&self, values: &[String]) -> Vec<(String, String)> {
+        self.axes
+            .iter()
+            .zip(values)
+            .map(|(a, v)| (a.knob.name.to_string(), v.clone()))
+            .collect()
+    }
+
+    /// Renders and measures every combination. `render` does the GPU work
+    /// for one scene (see [`Job`]); `on_row` is called after each
+    /// combination with its index, for progress output.
+    pub fn run<E>(
+        &self,
+        mut render: impl FnMut(&Scene, Job) -> Result<Rendered, E>,
+        mut on_row: impl FnMut(usize, &Row),
+    ) -> Result<SweepResult, SweepError>
+    where
+        E: Into<Box<dyn std::error::Error + Send + Sync>>,
+    {
+        let cpu = self.options.reference == ReferenceKind::Cpu;
+        // GPU images kept because they serve as references (none with a
+        // CPU reference: then every GPU image is compared once).
+        let references: HashSet<&[String]> = self
+            .combinations
+            .iter()
+            .filter(|_| !cpu)
+            .map(|c| c.reference.as_slice())
+            .collect();
+        let mut cache: HashMap<Vec<String>, Rc<Images>> = HashMap::new();
+        // CPU references by what they depend on; a short list, searched
+        // linearly (`ReferenceScene` holds floats, so it is not `Hash`).
+        let mut cpu_cache: Vec<(ReferenceScene, Rc<Images>)> = Vec::new();
+        let mut device = String::new();
+        let mut passes: Vec<String> = Vec::new();
+        let mut rows = Vec::with_capacity(self.combinations.len());
+
+        for (index, c) in self.combinations.iter().enumerate() {
+            let what = self.describe(&c.values);
+            let scene = self.scene_for(&c.values)?;
+            let job = Job::Timing {
+                warmup: self.options.warmup,
+                frames: self.options.frames.max(1),
+            };
+            let timed = render(&scene, job).map_err(|e| render_error(&what, "timed run", e))?;
+            let Timings {
+                pass_median_ms,
+                gpu_ms,
+                cpu_ms,
+            } = timings(&what, &timed)?;
+            if device.is_empty() {
+                device = timed.device.clone();
+            }
+            for name in &timed.passes {
+                if !passes.contains(name) {
+                    passes.push(name.clone());
+                }
+            }
+            drop(timed);
+
+            let mut images = |values: &[String]| -> Result<Rc<Images>, SweepError> {
+                if let Some(hit) = cache.get(values) {
+                    return Ok(hit.clone());
+                }
+                let what = self.describe(values);
+                let run = render(&self.scene_for(values)?, Job::Images)
+                    .map_err(|e| render_error(&what, "image run", e))?;
+                let hdr = run.hdr.ok_or_else(|| SweepError::Render {
+                    what: what.clone(),
+                    reason: "the image run returned no HDR image".into(),
+                })?;
+                let images = Rc::new(Images {
+                    output: run.output,
+                    hdr,
+                });
+                // Only references are needed again; other images are
+                // dropped after their one comparison.
+                if references.contains(values) {
+                    cache.insert(values.to_vec(), images.clone());
+                }
+                Ok(images)
+            };
+            let test = images(&c.values)?;
+            let (reference, ref_name) = if cpu {
+                let key = self.cpu_reference_scene(&c.values)?;
+                let hit = cpu_cache.iter().find(|(k, _)| *k == key);
+                let reference = match hit {
+                    Some((_, images)) => images.clone(),
+                    None => {
+                        let run = render(&scene, Job::Reference)
+                            .map_err(|e| render_error(&what, "CPU reference", e))?;
+                        let hdr = run.hdr.ok_or_else(|| SweepError::Render {
+                            what: format!("{what} (CPU reference)"),
+                            reason: "no HDR image was returned".into(),
+                        })?;
+                        let images = Rc::new(Images {
+                            output: run.output,
+                            hdr,
+                        });
+                        cpu_cache.push((key, images.clone()));
+                        images
+                    }
+                };
+                (reference, format!("CPU reference ({what})"))
+            } else {
+                let name = format!("reference ({})", self.describe(&c.reference));
+                (images(&c.reference)?, name)
+            };
+            let compare_err = |source| SweepError::Compare {
+                what: what.clone(),
+                source,
+            };
+            let rmse = compare_images(
+                &ref_name,
+                linear(&reference.hdr),
+                &what,
+                linear(&test.hdr),
+                Metric::Rmse,
+            )
+            .map_err(compare_err)?;
+            let flip = compare_images(
+                &ref_name,
+                srgb(&reference.output),
+                &what,
+                srgb(&test.output),
+                Metric::Flip,
+            )
+            .map_err(compare_err)?;
+
+            let row = Row {
+                settings: self.pairs(&c.values),
+                reference: self.pairs(&c.reference),
+                is_reference: !cpu && c.values == c.reference,
+                pass_median_ms,
+                gpu_ms,
+                cpu_ms,
+                rmse: rmse.mean,
+                flip_mean: flip.mean,
+                flip_p99: flip.p99,
+                pareto: false,
+            };
+            on_row(index, &row);
+            rows.push(row);
+        }
+
+        let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.gpu_ms.median, r.rmse)).collect();
+        for (row, on_front) in rows.iter_mut().zip(pareto_front(&points)) {
+            row.pareto = on_front;
+        }
+        Ok(SweepResult {
+            scene: self.scene_name.clone(),
+            device,
+            frames: self.options.frames.max(1),
+            warmup: self.options.warmup,
+            reference: self.options.reference,
+            knobs: self.axes.iter().map(|a| a.knob.name.to_string()).collect(),
+            passes,
+            rows,
+        })
+    }
+}
+
+/// The images of one render, kept while they may serve as a reference.
+struct Images {
+    output: Pixels<u8>,
+    hdr: Pixels<f32>,
+}
+
+fn linear(p: &Pixels<f32>) -> ImageRef<'_> {
+    ImageRef::Linear {
+        width: p.width,
+        height: p.height,
+        rgba: &p.data,
+    }
+}
+
+fn srgb(p: &Pixels<u8>) -> ImageRef<'_> {
+    ImageRef::Srgb8 {
+        width: p.width,
+        height: p.height,
+        rgba: &p.data,
+    }
+}
+
+/// The reference's values for a combination's `values`: see the module docs.
+fn reference_values(axes: &[Axis], values: &[String]) -> Vec<String> {
+    axes.iter()
+        .zip(values)
+        .map(|(axis, own)| match axis.knob.best {
+            Best::Fixed(v) => v.to_string(),
+            Best::LastListed => axis.values.last().unwrap_or(own).clone(),
+            Best::Unchanged => own.clone(),
+        })
+        .collect()
+}
+
+/// A render error with its whole cause chain in one line.
+fn render_error(
+    what: &str,
+    run: &str,
+    e: impl Into<Box<dyn std::error::Error + Send + Sync>>,
+) -> SweepError {
+    let e = e.into();
+    let mut reason = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        let _ = write!(reason, ": {s}");
+        source = s.source();
+    }
+    SweepError::Render {
+        what: format!("{what} ({run})"),
+        reason,
+    }
+}
+
+/// The timing columns of a row.
+struct Timings {
+    pass_median_ms: Vec<(String, f64)>,
+    gpu_ms: Summary,
+    cpu_ms: Summary,
+}
+
+/// Per-pass medians, the per-frame GPU total and the CPU frame time.
+fn timings(what: &str, run: &Rendered) -> Result<Timings, SweepError> {
+    let bad = || SweepError::BadTimings { what: what.into() };
+    let gpu = summarise_passes(&run.passes, run.frames.iter().map(|f| f.pass_ms.as_slice()))
+        .map_err(|_| bad())?
+        .ok_or_else(|| SweepError::NoTimings { what: what.into() })?;
+    let cpu: Vec<f64> = run.frames.iter().map(|f| f.cpu_ms).collect();
+    Ok(Timings {
+        pass_median_ms: gpu
+            .passes
+            .into_iter()
+            .map(|(name, s)| (name, s.median))
+            .collect(),
+        gpu_ms: gpu.total,
+        cpu_ms: Summary::of(&cpu).ok_or_else(bad)?,
+    })
+}
+
+/// Which of the `(time, error)` points are on the Pareto front: point `i`
+/// is unless some other point is no slower and no less accurate, and
+/// strictly better in at least one. Identical points do not dominate each
+/// other, so duplicates are on the front together. A point with a NaN
+/// coordinate compares false with everything: it neither dominates nor is
+/// dominated (the sweep never produces one).
+pub fn pareto_front(points: &[(f64, f64)]) -> Vec<bool> {
+    points
+        .iter()
+        .map(|&(t, e)| {
+            !points
+                .iter()
+                .any(|&(t2, e2)| t2 <= t && e2 <= e && (t2 < t || e2 < e))
+        })
+        .collect()
+}

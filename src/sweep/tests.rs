@@ -1,0 +1,540 @@
+//! The sweep on a stand-in renderer and hand-made results (no Vulkan
+//! needed): combinations and references, the Pareto front, and every output.
+
+use super::*;
+use crate::render::{FrameTiming, Pixels};
+use crate::scene::Scene;
+use std::cell::RefCell;
+use std::path::Path;
+
+fn axes(args: &[&str]) -> Vec<Axis> {
+    args.iter().map(|a| Axis::parse(a).unwrap()).collect()
+}
+
+fn summary(ms: f64) -> Summary {
+    Summary::of(&[ms]).unwrap()
+}
+
+fn row(values: &[(&str, &str)], ms: f64, rmse: f64, pareto: bool) -> Row {
+    let pairs = |v: &[(&str, &str)]| {
+        v.iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect::<Vec<_>>()
+    };
+    Row {
+        settings: pairs(values),
+        reference: pairs(&[("tessellation", "1"), ("hdr_format", "rgba32f")]),
+        is_reference: rmse == 0.0,
+        pass_median_ms: vec![("opaque".into(), ms * 0.75), ("tonemap".into(), ms * 0.25)],
+        gpu_ms: summary(ms),
+        cpu_ms: summary(ms + 1.0),
+        rmse,
+        flip_mean: rmse / 2.0,
+        flip_p99: rmse,
+        pareto,
+    }
+}
+
+#[test]
+fn pareto_front_by_hand() {
+    // (time, error): a is fastest, d most accurate, b between them on
+    // the front; c is dominated by b (slower and worse); e duplicates b.
+    let points = [
+        (1.0, 0.5),  // a
+        (2.0, 0.2),  // b
+        (3.0, 0.3),  // c: b is faster and better
+        (4.0, 0.0),  // d
+        (2.0, 0.2),  // e: same as b, neither dominates the other
+        (4.0, 0.1),  // f: d is as fast and better
+        (1.0, 0.6),  // g: a is as fast and better
+        (0.5, 0.55), // h: fastest of all
+    ];
+    assert_eq!(
+        pareto_front(&points),
+        [true, true, false, true, true, false, false, true]
+    );
+    assert_eq!(pareto_front(&[]), Vec::<bool>::new());
+    assert_eq!(pareto_front(&[(1.0, 1.0)]), [true]);
+}
+
+#[test]
+fn csv_has_a_header_and_one_line_per_row() {
+    let result = SweepResult {
+        scene: "s.toml".into(),
+        device: "dev".into(),
+        frames: 1,
+        warmup: 0,
+        reference: ReferenceKind::GpuBest,
+        knobs: vec!["tessellation".into(), "hdr_format".into()],
+        passes: vec!["opaque".into(), "tonemap".into(), "transparent".into()],
+        rows: vec![
+            row(
+                &[("tessellation", "0.5"), ("hdr_format", "rgba16f")],
+                2.0,
+                0.25,
+                true,
+            ),
+            row(
+                &[("tessellation", "1"), ("hdr_format", "rgba32f")],
+                4.0,
+                0.0,
+                true,
+            ),
+        ],
+    };
+    let csv = to_csv(&result).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(
+        lines,
+        [
+            "tessellation,hdr_format,reference,is_reference,opaque_median_ms,\
+                 tonemap_median_ms,transparent_median_ms,gpu_median_ms,gpu_p95_ms,\
+                 cpu_median_ms,rmse,flip_mean,flip_p99,pareto",
+            "0.5,rgba16f,tessellation=1 hdr_format=rgba32f,false,\
+                 1.5000,0.5000,,2.0000,2.0000,3.0000,0.25,0.125,0.25,true",
+            "1,rgba32f,tessellation=1 hdr_format=rgba32f,true,\
+                 3.0000,1.0000,,4.0000,4.0000,5.0000,0,0,0,true",
+        ]
+    );
+    assert!(csv.ends_with('\n'));
+}
+
+#[test]
+fn csv_fields_are_quoted_when_needed() {
+    // One knob per case; the value is the row's first fields.
+    let cases = ["plain", "a,b", "say \"hi\"", "two\nlines"];
+    let knobs: Vec<String> = (0..cases.len()).map(|i| format!("k{i}")).collect();
+    let settings: Vec<(&str, &str)> = knobs
+        .iter()
+        .zip(cases)
+        .map(|(k, v)| (k.as_str(), v))
+        .collect();
+    let result = SweepResult {
+        scene: "s.toml".into(),
+        device: "dev".into(),
+        frames: 1,
+        warmup: 0,
+        reference: ReferenceKind::Cpu,
+        knobs: knobs.clone(),
+        passes: vec![],
+        rows: vec![row(&settings, 1.0, 0.5, true)],
+    };
+    let csv = to_csv(&result).unwrap();
+    let line = csv.split_once('\n').unwrap().1;
+    assert!(
+        line.starts_with("plain,\"a,b\",\"say \"\"hi\"\"\",\"two\nlines\",cpu,"),
+        "{csv}"
+    );
+}
+
+#[test]
+fn json_keeps_knob_order_and_has_the_metrics() {
+    let result = SweepResult {
+        scene: "s.toml".into(),
+        device: "dev".into(),
+        frames: 1,
+        warmup: 0,
+        reference: ReferenceKind::GpuBest,
+        knobs: vec!["tessellation".into(), "hdr_format".into()],
+        passes: vec!["opaque".into()],
+        rows: vec![row(
+            &[("tessellation", "1"), ("hdr_format", "rgba32f")],
+            4.0,
+            0.0,
+            true,
+        )],
+    };
+    let json = serde_json::to_string(&result).unwrap();
+    assert!(
+        json.contains(r#""settings":{"tessellation":"1","hdr_format":"rgba32f"}"#),
+        "{json}"
+    );
+    for key in [
+        "\"rmse\":0.0",
+        "\"pareto\":true",
+        "\"gpu_ms\":{",
+        "\"p95\":",
+    ] {
+        assert!(json.contains(key), "{key} missing: {json}");
+    }
+}
+
+#[test]
+fn axis_parsing_errors_name_the_knob_and_value() {
+    let msg = |arg: &str| Axis::parse(arg).unwrap_err().to_string();
+    assert!(msg("nope=1,2").contains("nope"), "{}", msg("nope=1,2"));
+    assert!(msg("tessellation").contains("tessellation"));
+    assert!(msg("tessellation=1,,2").contains("empty value"));
+    let dup = msg("tessellation=1,2,1");
+    assert!(dup.contains("tessellation") && dup.contains("'1'"), "{dup}");
+    let a = Axis::parse(" tessellation = 0.5, 1 ").unwrap();
+    assert_eq!(
+        (a.knob.name, a.values),
+        ("tessellation", vec!["0.5".into(), "1".into()])
+    );
+}
+
+#[test]
+fn bad_sweeps_are_refused_before_rendering() {
+    let scene = Scene::default_scene();
+    let new = |args: &[&str], max| {
+        Sweep::new(
+            "default",
+            scene.clone(),
+            axes(args),
+            SweepOptions {
+                max_combinations: max,
+                ..SweepOptions::default()
+            },
+        )
+        .err()
+        .map(|e| e.to_string())
+    };
+    let bad = new(&["tessellation=1,-2"], 256).unwrap();
+    assert!(bad.contains("tessellation=-2"), "{bad}");
+    let twice = new(&["tessellation=1", "tessellation=2"], 256).unwrap();
+    assert!(
+        twice.contains("tessellation") && twice.contains("twice"),
+        "{twice}"
+    );
+    let many = new(&["tessellation=1,2,3", "hdr_format=rgba16f,rgba32f"], 5).unwrap();
+    assert!(
+        many.contains("6 combinations") && many.contains("--max-combinations"),
+        "{many}"
+    );
+    assert!(new(&["tessellation=1,2,3", "hdr_format=rgba16f,rgba32f"], 6).is_none());
+    assert!(new(&[], 256).unwrap().contains("nothing to sweep"));
+}
+
+#[test]
+fn references_follow_best() {
+    let sweep = Sweep::new(
+        "default",
+        Scene::default_scene(),
+        axes(&[
+            "size=64x32,32x16",
+            "tessellation=0.5,2,1",
+            "hdr_format=rgba32f,rgba16f",
+        ]),
+        SweepOptions::default(),
+    )
+    .unwrap();
+    let c = sweep.combinations();
+    assert_eq!(c.len(), 12);
+    // Last axis fastest.
+    assert_eq!(c[1].values, ["64x32", "0.5", "rgba16f"]);
+    // Size unchanged, tessellation last listed (1, not the largest),
+    // hdr_format fixed.
+    assert_eq!(c[1].reference, ["64x32", "1", "rgba32f"]);
+    assert_eq!(c[11].values, ["32x16", "1", "rgba16f"]);
+    assert_eq!(c[11].reference, ["32x16", "1", "rgba32f"]);
+    assert_eq!(c[10].values, c[10].reference);
+}
+
+/// A stand-in renderer: a flat image whose value depends on the
+/// tessellation and format, and times that grow with tessellation.
+fn fake_render(scene: &Scene, job: Job) -> Result<Rendered, String> {
+    let tris: u32 = scene
+        .objects
+        .iter()
+        .map(|o| o.tessellation.0 * o.tessellation.1)
+        .sum();
+    // The exact image is the limit of infinite tessellation, 1.
+    let mut value = 1.0 - 1.0 / tris as f32;
+    if job == Job::Reference {
+        value = 1.0;
+    } else if scene.output.hdr_format == crate::scene::HdrFormat::Rgba16F {
+        value += 1e-6;
+    }
+    let (w, h) = (scene.output.width, scene.output.height);
+    let n = (w * h) as usize;
+    let frames = match job {
+        Job::Timing { frames, .. } => frames,
+        Job::Images | Job::Reference => 1,
+    };
+    Ok(Rendered {
+        device: "fake".into(),
+        passes: vec!["opaque".into(), "tonemap".into()],
+        frames: (0..frames)
+            .map(|i| FrameTiming {
+                pass_ms: vec![tris as f64 / 100.0 + i as f64 * 0.01, 1.0],
+                cpu_ms: 1.0,
+            })
+            .collect(),
+        output: Pixels {
+            width: w,
+            height: h,
+            data: [(value * 200.0) as u8, 0, 0, 255].repeat(n),
+        },
+        hdr: (!matches!(job, Job::Timing { .. })).then(|| Pixels {
+            width: w,
+            height: h,
+            data: [value, 0.0, 0.0, 1.0].repeat(n),
+        }),
+    })
+}
+
+#[test]
+fn run_renders_each_reference_once_and_scores_it_zero() {
+    let sweep = Sweep::new(
+        "default",
+        Scene::default_scene(),
+        axes(&["size=32x16", "tessellation=0.5,1", "hdr_format=rgba16f"]),
+        SweepOptions {
+            frames: 3,
+            warmup: 0,
+            max_combinations: 4,
+            reference: ReferenceKind::GpuBest,
+        },
+    )
+    .unwrap();
+    let jobs = RefCell::new(Vec::new());
+    let result = sweep
+        .run(
+            |scene, job| {
+                let key = (scene.output.hdr_format, scene.objects[0].tessellation);
+                jobs.borrow_mut().push((key, job));
+                fake_render(scene, job)
+            },
+            |_, _| {},
+        )
+        .unwrap();
+    let jobs = jobs.into_inner();
+    // 2 timed runs, 2 image runs, and the rgba32f reference (not in
+    // the sweep) once, though both rows use it.
+    assert_eq!(jobs.len(), 5, "{jobs:?}");
+    assert_eq!(jobs.iter().filter(|(_, j)| *j == Job::Images).count(), 3);
+    assert!(jobs.iter().all(|(_, j)| *j == Job::Images
+        || *j
+            == Job::Timing {
+                warmup: 0,
+                frames: 3
+            }));
+    assert_eq!(result.rows.len(), 2);
+    assert!(result.rows.iter().all(|r| !r.is_reference));
+    // Median of 3 frames: the middle one.
+    let r = &result.rows[0];
+    assert_eq!(r.gpu_ms.count, 3);
+    assert!((r.gpu_ms.median - (r.pass_median_ms[0].1 + 1.0)).abs() < 1e-9);
+    // Coarser is faster and worse: both on the front.
+    assert!(result.rows[0].rmse > result.rows[1].rmse);
+    assert!(result.rows[1].rmse > 0.0);
+    assert!(result.rows.iter().all(|r| r.pareto));
+
+    // Sweeping the reference itself: error exactly 0, rendered once
+    // for its images.
+    let sweep = Sweep::new(
+        "default",
+        Scene::default_scene(),
+        axes(&["size=32x16", "tessellation=0.5,1"]),
+        SweepOptions::default(),
+    )
+    .unwrap();
+    let image_runs = RefCell::new(0);
+    let result = sweep
+        .run(
+            |scene, job| {
+                *image_runs.borrow_mut() += usize::from(job == Job::Images);
+                fake_render(scene, job)
+            },
+            |_, _| {},
+        )
+        .unwrap();
+    assert_eq!(image_runs.into_inner(), 2);
+    assert!(result.rows[1].is_reference);
+    assert_eq!((result.rows[1].rmse, result.rows[1].flip_mean), (0.0, 0.0));
+    assert!(result.rows[0].rmse > 0.0);
+}
+
+#[test]
+fn render_failures_name_the_combination() {
+    let sweep = Sweep::new(
+        "default",
+        Scene::default_scene(),
+        axes(&["size=32x16", "tessellation=0.5"]),
+        SweepOptions::default(),
+    )
+    .unwrap();
+    let err = sweep
+        .run(|_, _| Err::<Rendered, _>("device lost"), |_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("tessellation=0.5") && err.contains("device lost"),
+        "{err}"
+    );
+
+    let err = sweep
+        .run(
+            |scene, job| {
+                let mut r = fake_render(scene, job)?;
+                r.frames.iter_mut().for_each(|f| f.pass_ms.clear());
+                Ok::<_, String>(r)
+            },
+            |_, _| {},
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("no pass timings"), "{err}");
+}
+
+/// A phong sphere on a plane, every light reaching everything
+/// (light_cutoff 0), so the light sets do not depend on tessellation.
+const CPU_SCENE: &str = r#"
+light_cutoff = 0.0
+[camera]
+eye = [0.0, 1.0, 4.0]
+look_at = [0.0, 0.5, 0.0]
+[[lights]]
+type = "point"
+position = [2.0, 3.0, 2.0]
+intensity = 5.0
+[[lights]]
+type = "directional"
+direction = [0.0, -1.0, -1.0]
+[[materials]]
+name = "m"
+kd = [0.5, 0.4, 0.3]
+ks = [0.2, 0.2, 0.2]
+[[objects]]
+name = "ball"
+material = "m"
+shape = { type = "sphere", radius = 0.5 }
+translate = [0.0, 0.5, 0.0]
+[[objects]]
+name = "floor"
+material = "m"
+shape = { type = "plane", width = 4.0, depth = 4.0 }
+"#;
+
+fn cpu_sweep(args: &[&str]) -> Result<Sweep, SweepError> {
+    let scene = Scene::from_toml(CPU_SCENE, "cpu.toml", Path::new(".")).unwrap();
+    Sweep::new(
+        "cpu.toml",
+        scene,
+        axes(args),
+        SweepOptions {
+            frames: 1,
+            warmup: 0,
+            reference: ReferenceKind::Cpu,
+            ..SweepOptions::default()
+        },
+    )
+}
+
+#[test]
+fn cpu_reference_is_per_scene_and_never_the_row_itself() {
+    let sweep = cpu_sweep(&[
+        "size=16x8",
+        "tessellation=0.5,1",
+        "hdr_format=rgba16f,rgba32f",
+    ])
+    .unwrap();
+    let c = sweep.combinations();
+    assert!(c.iter().all(|c| c.values == c.reference));
+    let references = RefCell::new(0);
+    let result = sweep
+        .run(
+            |scene, job| {
+                *references.borrow_mut() += usize::from(job == Job::Reference);
+                fake_render(scene, job)
+            },
+            |_, _| {},
+        )
+        .unwrap();
+    // Neither tessellation nor format changes the exact image: one
+    // reference for all four rows.
+    assert_eq!(references.into_inner(), 1);
+    assert_eq!(result.reference, ReferenceKind::Cpu);
+    assert!(result.rows.iter().all(|r| !r.is_reference && r.rmse > 0.0));
+    assert!(result.rows[0].rmse > result.rows[2].rmse);
+    let csv = to_csv(&result).unwrap();
+    assert!(
+        csv.lines().skip(1).all(|l| l.contains(",cpu,false,")),
+        "{csv}"
+    );
+    let json = serde_json::to_string(&result).unwrap();
+    assert!(json.contains(r#""reference":"cpu""#), "{json}");
+    assert!(to_table(&result).starts_with("errors against the exact CPU image"));
+    let svg = to_svg(&result).unwrap();
+    assert!(svg.contains("exact CPU image") && !svg.contains("(reference)"));
+
+    // Fewer lights is another exact image: one reference per count.
+    let sweep = cpu_sweep(&["size=16x8", "lights=1,2", "hdr_format=rgba16f,rgba32f"]).unwrap();
+    let references = RefCell::new(0);
+    sweep
+        .run(
+            |scene, job| {
+                *references.borrow_mut() += usize::from(job == Job::Reference);
+                fake_render(scene, job)
+            },
+            |_, _| {},
+        )
+        .unwrap();
+    assert_eq!(references.into_inner(), 2);
+}
+
+#[test]
+fn cpu_reference_refuses_unsupported_scenes_before_rendering() {
+    let err = Sweep::new(
+        "default",
+        Scene::default_scene(),
+        axes(&["tessellation=0.5,1"]),
+        SweepOptions {
+            reference: ReferenceKind::Cpu,
+            ..SweepOptions::default()
+        },
+    )
+    .err()
+    .map(|e| e.to_string())
+    .unwrap();
+    assert!(
+        err.contains("--reference cpu") && err.contains("'ring'") && err.contains("torus"),
+        "{err}"
+    );
+    let err = cpu_sweep(&["shading=phong,toon"])
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        err.contains("shading=toon") && err.contains("toon shading"),
+        "{err}"
+    );
+}
+
+#[test]
+fn outputs_are_written_whole() {
+    let dir = std::env::temp_dir().join(format!("aerial-sweep-unit-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let sweep = Sweep::new(
+        "default",
+        Scene::default_scene(),
+        axes(&[
+            "size=32x16",
+            "tessellation=0.5,1",
+            "hdr_format=rgba16f,rgba32f",
+        ]),
+        SweepOptions {
+            frames: 2,
+            ..SweepOptions::default()
+        },
+    )
+    .unwrap();
+    let result = sweep.run(fake_render, |_, _| {}).unwrap();
+    let written = write_outputs(&result, &dir).unwrap();
+    assert_eq!(written.len(), 3);
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["sweep.csv", "sweep.json", "sweep.svg"]);
+    let svg = std::fs::read_to_string(dir.join("sweep.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert!(svg.contains("0.5, rgba16f"), "labels use the varying knobs");
+    assert!(
+        !svg.contains("32x16, 0.5"),
+        "fixed knobs are not in the labels"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
