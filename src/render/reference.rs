@@ -169,7 +169,7 @@ impl Surface {
                 radius: f(radius),
                 height: f(height),
             }),
-            Shape::Torus { .. } | Shape::Flag { .. } => None,
+            Shape::Torus { .. } | Shape::Flag { .. } | Shape::Mesh { .. } => None,
         }
     }
 

@@ -286,9 +286,16 @@ impl Scene {
     /// Tessellates object `index` in object space. An index out of range
     /// gives an empty mesh.
     pub fn object_mesh(&self, index: usize) -> Mesh {
-        match self.objects.get(index) {
-            Some(object) => tessellate(
-                object.shape.surface().as_ref(),
+        let Some(object) = self.objects.get(index) else {
+            return Mesh::default();
+        };
+        if let Shape::Mesh { mesh } = &object.shape {
+            // Loaded (and smoothed) once with the scene; this is a copy.
+            return mesh.as_ref().clone();
+        }
+        match object.shape.surface() {
+            Some(surface) => tessellate(
+                surface.as_ref(),
                 object.tessellation.0,
                 object.tessellation.1,
             ),
