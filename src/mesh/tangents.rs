@@ -6,7 +6,8 @@
 //! so averaging never crosses a UV seam or a mirrored seam (where `+T` and
 //! `-T` would cancel). Triangles with zero area or zero UV area add nothing;
 //! a vertex left with no valid contribution gets an orthonormal frame built
-//! from its normal alone. `T` is made orthogonal to the normal
+//! from its normal alone. Triangles collapsed to a line or a point are left
+//! out: they cover no pixels and have no normal of their own. `T` is made orthogonal to the normal
 //! (Gram-Schmidt) and `tangent.w` holds the handedness, so that
 //! `B = w * cross(N, T)`.
 
@@ -19,6 +20,8 @@ use super::{Mesh, Vertex};
 /// Statistics of one [`build_mesh`] call, for reports and tests.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TangentStats {
+    /// Triangles collapsed to a line or point, left out of the mesh.
+    pub collapsed: usize,
     /// Triangles with zero area or zero UV area (no tangent contribution).
     pub degenerate: usize,
     /// Triangles whose UVs are mirrored (handedness -1).
@@ -42,6 +45,7 @@ pub fn build_mesh(
 
     // Per triangle: unit T and B (zero when degenerate), handedness.
     let mut triangle = Vec::with_capacity(corners / 3);
+    let mut collapsed = Vec::with_capacity(corners / 3);
     for t in 0..corners / 3 {
         let [a, b, c] = [0, 1, 2].map(|k| positions[3 * t + k].as_dvec3());
         let [ta, tb, tc] = [0, 1, 2].map(|k| uv(3 * t + k).as_dvec2());
@@ -49,6 +53,13 @@ pub fn build_mesh(
         let (d1, d2) = (tb - ta, tc - ta);
         let det = d1.x * d2.y - d2.x * d1.y;
         let area = e1.cross(e2).length();
+        let longest = e1
+            .length_squared()
+            .max(e2.length_squared())
+            .max((c - b).length_squared());
+        // Same test as the tessellator: only truly collapsed triangles,
+        // which have no normal of their own to shade with.
+        collapsed.push(area.is_nan() || area <= 1e-10 * longest);
         let uv_scale = d1.length_squared().max(d2.length_squared());
         let valid = area > 0.0 && det.abs() > 1e-12 * uv_scale && det.is_finite();
         if !valid {
@@ -75,6 +86,9 @@ pub fn build_mesh(
     let mut vertices: Vec<Vertex> = Vec::new();
     let mut indices = Vec::with_capacity(corners);
     for c in 0..corners {
+        if collapsed[c / 3] {
+            continue;
+        }
         let (t, b, sign) = triangle[c / 3];
         let p = positions[c] + Vec3::ZERO;
         let n = normals[c] + Vec3::ZERO;
@@ -142,6 +156,7 @@ pub fn build_mesh(
             sign as f32,
         ];
     }
+    stats.collapsed = collapsed.iter().filter(|&&c| c).count();
     (Mesh { vertices, indices }, stats)
 }
 

@@ -930,6 +930,11 @@ impl Check<'_> {
         let mut own: HashMap<Option<usize>, usize> = HashMap::new();
         let mut objects = Vec::with_capacity(meshes.len());
         for (i, (part, (mesh, _))) in model.parts.iter().zip(meshes).enumerate() {
+            // A group whose faces all collapsed draws nothing; an empty
+            // vertex buffer is not a valid draw.
+            if mesh.indices.is_empty() {
+                continue;
+            }
             let material = match over {
                 Some(m) => m,
                 None => match own.get(&part.material) {
@@ -961,6 +966,15 @@ impl Check<'_> {
                 material,
                 transform,
             });
+        }
+        if objects.is_empty() {
+            return Err(self.invalid(
+                field("shape.path"),
+                format!(
+                    "{}: every triangle is collapsed to a line or a point",
+                    resolved.display()
+                ),
+            ));
         }
         Ok(objects)
     }
