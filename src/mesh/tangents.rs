@@ -32,8 +32,8 @@ pub struct TangentStats {
 
 /// Joins a soup (three corners per triangle; `normals` unit length, never
 /// NaN) into an indexed [`Mesh`] with tangent frames. `uvs` are the file's
-/// (v up) and are used for the frames; each vertex stores `(u, 1 - v)`,
-/// because images are addressed from the top row.
+/// (v up, as the renderer's texture coordinates; the shader flips v to
+/// address image rows); without them every frame comes from the normal.
 pub fn build_mesh(
     positions: &[Vec3],
     normals: &[Vec3],
@@ -110,7 +110,7 @@ pub fn build_mesh(
                 position: p.to_array(),
                 normal: n.to_array(),
                 tangent: [0.0, 0.0, 0.0, sign as f32],
-                uv: [u.x, 1.0 - u.y],
+                uv: [u.x, u.y],
             });
             sums.push((DVec3::ZERO, DVec3::ZERO));
             vertices.len() as u32 - 1

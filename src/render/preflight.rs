@@ -121,8 +121,14 @@ pub fn scene_memory(
     let mut largest: Option<(String, u64)> = None;
     for (i, object) in scene.objects.iter().enumerate() {
         let (u, v) = (object.tessellation.0 as u64, object.tessellation.1 as u64);
-        let vertices = (u + 1) * (v + 1);
-        let geometry = vertices * VERTEX_BYTES + u * v * 6 * INDEX_BYTES;
+        let mut vertices = (u + 1) * (v + 1);
+        let mut geometry = vertices * VERTEX_BYTES + u * v * 6 * INDEX_BYTES;
+        // A loaded model's size is known exactly; its tessellation is unused.
+        if let crate::scene::Shape::Mesh { mesh } = &object.shape {
+            vertices = 0;
+            geometry =
+                mesh.vertices.len() as u64 * VERTEX_BYTES + mesh.indices.len() as u64 * INDEX_BYTES;
+        }
         let need = geometry.saturating_mul(3);
         largest_transient = largest_transient.max(vertices * EXACT_POSITION_BYTES);
         let what = format!(

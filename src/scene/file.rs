@@ -165,6 +165,8 @@ struct MaterialFile {
     #[serde(default = "default_shininess")]
     shininess: f64,
     texture: Option<PathBuf>,
+    normal_map: Option<PathBuf>,
+    normal_map_green: Option<GreenFile>,
     #[serde(default = "one")]
     opacity: f64,
     #[serde(default = "default_shading")]
@@ -207,6 +209,13 @@ enum ShapeKind {
     Cylinder,
     Flag,
     Obj,
+}
+
+#[derive(Clone, Copy, Deserialize, PartialEq)]
+#[serde(rename_all = "lowercase")]
+enum GreenFile {
+    Up,
+    Down,
 }
 
 #[derive(Clone, Copy, Deserialize)]
@@ -678,25 +687,27 @@ impl Check<'_> {
                 format!("must be between 0 and 1, got {opacity}"),
             ));
         }
-        let texture = match raw.texture {
-            None => None,
-            Some(texture) => {
-                let resolved = self.base_dir.join(&texture);
-                if !resolved.exists() {
-                    return Err(self.invalid(
-                        field("texture"),
-                        format!("file not found: {}", resolved.display()),
-                    ));
-                }
-                if !resolved.is_file() {
-                    return Err(self.invalid(
-                        field("texture"),
-                        format!("not a file: {}", resolved.display()),
-                    ));
-                }
-                Some(resolved)
+        let file_at = |name: &str, given: Option<PathBuf>| -> Result<Option<PathBuf>> {
+            let Some(given) = given else { return Ok(None) };
+            let resolved = self.base_dir.join(&given);
+            if !resolved.exists() {
+                return Err(self.invalid(
+                    field(name),
+                    format!("file not found: {}", resolved.display()),
+                ));
             }
+            if !resolved.is_file() {
+                return Err(
+                    self.invalid(field(name), format!("not a file: {}", resolved.display()))
+                );
+            }
+            Ok(Some(resolved))
         };
+        let texture = file_at("texture", raw.texture)?;
+        let normal_map = file_at("normal_map", raw.normal_map)?;
+        if raw.normal_map_green.is_some() && normal_map.is_none() {
+            return Err(self.invalid(field("normal_map_green"), "given without a normal_map"));
+        }
         Ok(Material {
             name: raw.name,
             ka,
@@ -705,6 +716,8 @@ impl Check<'_> {
             shininess,
             texture,
             opacity,
+            normal_map,
+            normal_map_green_down: raw.normal_map_green == Some(GreenFile::Down),
             shading: raw.shading,
         })
     }
@@ -1016,6 +1029,8 @@ impl Check<'_> {
             shininess: mtl.shininess.min(MAX_COLOUR as f32),
             texture: mtl.texture.clone(),
             opacity: mtl.opacity,
+            normal_map: mtl.normal_map.clone(),
+            normal_map_green_down: false,
             shading: ShadingModel::Phong,
         });
         by_name.insert(name, materials.len() - 1);
