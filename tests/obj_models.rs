@@ -460,3 +460,76 @@ fn multi_object_model_renders_clean_with_mtl_materials() {
     assert!(over.objects.iter().all(|o| o.material == 0));
     assert_eq!(over.materials.len(), 1);
 }
+
+/// Corner positions and UVs of a torus grid of about `triangles` triangles,
+/// cut into 4 objects along u (boundary vertices repeated).
+fn torus_soup(triangles: usize) -> Vec<(Vec<Vec3>, Vec<Vec2>)> {
+    let v_segments = ((triangles / 8) as f64).sqrt().round().max(3.0) as u32;
+    let u_segments = 4 * v_segments;
+    (0..4)
+        .map(|cut| {
+            let (mut positions, mut uvs) = (Vec::new(), Vec::new());
+            let (i0, i1) = (u_segments * cut / 4, u_segments * (cut + 1) / 4);
+            for i in i0..i1 {
+                for j in 0..v_segments {
+                    let corner = |di: u32, dj: u32| {
+                        let (u, v) = (
+                            (i + di) as f32 / u_segments as f32,
+                            (j + dj) as f32 / v_segments as f32,
+                        );
+                        (torus(u, v).0, Vec2::new(u, v))
+                    };
+                    let [a, b, c, d] = [corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1)];
+                    for (p, t) in [a, b, c, a, c, d] {
+                        positions.push(p);
+                        uvs.push(t);
+                    }
+                }
+            }
+            (positions, uvs)
+        })
+        .collect()
+}
+
+/// Smoothing and tangent time for 10^4..10^6 triangles, next to the naive
+/// algorithm where it finishes quickly. A measurement, run in release:
+/// `cargo test --release --test obj_models -- --ignored --nocapture`.
+/// Release target: 10^6 triangles in at most 1 s.
+#[test]
+#[ignore = "timing; run in release"]
+fn smoothing_and_tangent_time() {
+    use std::time::Instant;
+    for triangles in [10_000, 100_000, 1_000_000] {
+        let soup = torus_soup(triangles);
+        let count: usize = soup.iter().map(|(p, _)| p.len() / 3).sum();
+        let positions: Vec<&[Vec3]> = soup.iter().map(|(p, _)| p.as_slice()).collect();
+        let options = SmoothingOptions {
+            mode: Smoothing::Model,
+            crease_degrees: 60.0,
+            weld_distance: 1e-5 * 2.8 * 1.4,
+        };
+        let start = Instant::now();
+        let normals = smooth_normals(&positions, &options);
+        let smoothing = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        for ((p, t), n) in soup.iter().zip(&normals) {
+            let (mesh, _) = build_mesh(p, n, Some(t));
+            assert!(max_orthonormality_error(&mesh) < 1e-5);
+        }
+        let tangents = start.elapsed().as_secs_f64();
+        let naive = if count <= 10_000 {
+            let start = Instant::now();
+            naive_normals(&positions, &options);
+            format!("{:.3} s", start.elapsed().as_secs_f64())
+        } else {
+            "not run".into()
+        };
+        println!(
+            "{count} triangles: smoothing {smoothing:.3} s, tangents {tangents:.3} s, \
+             naive smoothing {naive}"
+        );
+        if count >= 1_000_000 && !cfg!(debug_assertions) {
+            assert!(smoothing + tangents <= 1.0, "{smoothing} + {tangents} s");
+        }
+    }
+}

@@ -8,8 +8,44 @@
 //! kept as a test oracle.
 
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 use glam::{DVec3, Vec3};
+
+/// A fast, non-cryptographic hasher for the integer keys of welding and
+/// vertex merging (the standard SipHash is DoS-resistant but several times
+/// slower, and these keys come from a file the user chose to load).
+#[derive(Default, Clone, Copy)]
+pub struct FxHasher(u64);
+
+impl Hasher for FxHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        // Integer arrays hash as their bytes: take them eight at a time.
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from_le_bytes(word));
+        }
+    }
+    fn write_u32(&mut self, i: u32) {
+        self.write_u64(u64::from(i));
+    }
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn write_i64(&mut self, i: i64) {
+        self.write_u64(i as u64);
+    }
+    fn write_usize(&mut self, i: usize) {
+        self.write_u64(i as u64);
+    }
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+/// A `HashMap` with [`FxHasher`].
+pub type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FxHasher>>;
 
 /// How shading normals are made (`smoothing` in the scene file).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -73,12 +109,14 @@ fn face_data(positions: &[Vec3]) -> Vec<(DVec3, [f64; 3])> {
 }
 
 /// Groups of point indices within `distance` of one another (transitively),
-/// as one group id per point.
+/// as one group id per point (each id below `points.len()`).
 pub fn weld(points: &[Vec3], distance: f32) -> Vec<usize> {
     // Exact duplicates first: corners of neighbouring triangles repeat the
     // same position many times, and the hash below need see each once.
     let mut unique: Vec<Vec3> = Vec::new();
-    let mut exact: HashMap<[u32; 3], usize> = HashMap::new();
+    // Sized for the usual six corners per position, so it rarely rehashes.
+    let mut exact: FastMap<[u32; 3], usize> =
+        FastMap::with_capacity_and_hasher(points.len() / 4, Default::default());
     let point_to_unique: Vec<usize> = points
         .iter()
         .map(|p| {
@@ -100,14 +138,25 @@ pub fn weld(points: &[Vec3], distance: f32) -> Vec<usize> {
     }
     let distance = f64::from(distance);
     if distance > 0.0 {
-        let cell = |p: Vec3| (p.as_dvec3() / distance).floor().as_i64vec3().to_array();
-        let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+        // Cells four tolerances wide: a point near no cell face (half of
+        // each axis) needs only its own cell along that axis, so on average
+        // about 3.4 cells are visited instead of 27.
+        let size = 4.0 * distance;
+        let mut grid: FastMap<[i64; 3], Vec<usize>> = FastMap::default();
         for (i, p) in unique.iter().enumerate() {
-            let [x, y, z] = cell(*p);
-            for dx in -1..=1 {
-                for dy in -1..=1 {
-                    for dz in -1..=1 {
-                        let Some(others) = grid.get(&[x + dx, y + dy, z + dz]) else {
+            let scaled = p.as_dvec3() / size;
+            let cell = scaled.floor();
+            let fraction = scaled - cell;
+            let cell = cell.as_i64vec3().to_array();
+            let range = |f: f64| -> (i64, i64) {
+                (if f < 0.25 { -1 } else { 0 }, if f > 0.75 { 1 } else { 0 })
+            };
+            let (rx, ry, rz) = (range(fraction.x), range(fraction.y), range(fraction.z));
+            for dx in rx.0..=rx.1 {
+                for dy in ry.0..=ry.1 {
+                    for dz in rz.0..=rz.1 {
+                        let key = [cell[0] + dx, cell[1] + dy, cell[2] + dz];
+                        let Some(others) = grid.get(&key) else {
                             continue;
                         };
                         for &j in others {
@@ -119,7 +168,7 @@ pub fn weld(points: &[Vec3], distance: f32) -> Vec<usize> {
                     }
                 }
             }
-            grid.entry([x, y, z]).or_default().push(i);
+            grid.entry(cell).or_default().push(i);
         }
     }
     point_to_unique
@@ -161,22 +210,34 @@ pub fn smooth_normals(parts: &[&[Vec3]], options: &SmoothingOptions) -> Vec<Vec<
         }
         let points: Vec<Vec3> = scope.iter().map(|&(p, c)| parts[p][c]).collect();
         let ids = weld(&points, options.weld_distance);
-        let mut groups: HashMap<usize, Vec<usize>> = HashMap::new();
-        for (k, id) in ids.into_iter().enumerate() {
-            groups.entry(id).or_default().push(k);
+        // Members of each weld group as contiguous runs, by a counting sort
+        // on the group id (ids are below the number of points): linear, and
+        // cheaper than a map of small vectors.
+        let mut starts = vec![0usize; points.len() + 1];
+        for &id in &ids {
+            starts[id + 1] += 1;
         }
-        for members in groups.values() {
-            let contribution = |k: usize| {
+        for i in 0..points.len() {
+            starts[i + 1] += starts[i];
+        }
+        let mut order = vec![(0usize, 0usize); ids.len()];
+        let mut next = starts.clone();
+        for (k, &id) in ids.iter().enumerate() {
+            order[next[id]] = (id, k);
+            next[id] += 1;
+        }
+        let mut contributions: Vec<(DVec3, DVec3)> = Vec::new();
+        for run in order.chunk_by(|a, b| a.0 == b.0) {
+            contributions.clear();
+            contributions.extend(run.iter().map(|&(_, k)| {
                 let (p, c) = scope[k];
                 let (n, w) = faces[p][c / 3];
                 (n, n * w[c % 3])
-            };
-            let total: DVec3 = members.iter().map(|&k| contribution(k).1).sum();
-            for &k in members {
-                let (own, _) = contribution(k);
-                let sum: DVec3 = members
+            }));
+            let total: DVec3 = contributions.iter().map(|c| c.1).sum();
+            for (&(_, k), &(own, _)) in run.iter().zip(&contributions) {
+                let sum: DVec3 = contributions
                     .iter()
-                    .map(|&m| contribution(m))
                     .filter(|(n, _)| own.dot(*n) >= cos_crease - 1e-12)
                     .map(|(_, weighted)| weighted)
                     .sum();

@@ -11,10 +11,9 @@
 //! (Gram-Schmidt) and `tangent.w` holds the handedness, so that
 //! `B = w * cross(N, T)`.
 
-use std::collections::HashMap;
-
 use glam::{DVec3, Vec2, Vec3};
 
+use super::smoothing::FastMap;
 use super::{Mesh, Vertex};
 
 /// Statistics of one [`build_mesh`] call, for reports and tests.
@@ -81,7 +80,8 @@ pub fn build_mesh(
     }
 
     // Vertex key: exact bits of position, normal, UV, and the handedness.
-    let mut index_of: HashMap<[u32; 9], u32> = HashMap::new();
+    let mut index_of: FastMap<[u32; 9], u32> =
+        FastMap::with_capacity_and_hasher(corners / 4, Default::default());
     let mut sums: Vec<(DVec3, DVec3)> = Vec::new();
     let mut vertices: Vec<Vertex> = Vec::new();
     let mut indices = Vec::with_capacity(corners);
