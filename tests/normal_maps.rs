@@ -176,3 +176,32 @@ fn flat_map_is_identity_and_textured_maps_render_clean() {
         common::assert_not_blank(&common::render(&s, false).output, 0.1);
     }
 }
+
+/// Bad normal-map input is an error naming the field or the group.
+#[test]
+fn normal_map_errors_name_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let plane = "{ type = \"plane\", width = 2, depth = 2 }";
+    let attempt = |material: &str, shape: &str| {
+        let toml = format!(
+            "[camera]\neye = [0, 4, 1]\nlook_at = [0, 0, 0]\n\
+             [[materials]]\nname = \"m\"\nkd = [1, 1, 1]\n{material}\n\
+             [[objects]]\nname = \"o\"\nmaterial = \"m\"\nshape = {shape}\n"
+        );
+        Scene::from_toml(&toml, "t.toml", d)
+            .unwrap_err()
+            .to_string()
+    };
+    let e = attempt("normal_map = \"missing.png\"", plane);
+    assert!(e.contains("materials[0].normal_map: file not found"), "{e}");
+    let e = attempt("normal_map_green = \"down\"", plane);
+    assert!(e.contains("materials[0].normal_map_green"), "{e}");
+    write_map(&d.join("flat.png"), [0.0, 0.0, 1.0]);
+    std::fs::write(d.join("no_uv.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let e = attempt(
+        "normal_map = \"flat.png\"",
+        "{ type = \"obj\", path = \"no_uv.obj\" }",
+    );
+    assert!(e.contains("without texture coordinates"), "{e}");
+}

@@ -970,6 +970,18 @@ impl Check<'_> {
             } else {
                 part.name.clone()
             };
+            // Without UVs there is no tangent space to read a map in.
+            if materials[material].normal_map.is_some() && part.uvs.is_none() {
+                return Err(self.invalid(
+                    field("shape.path"),
+                    format!(
+                        "{}: object \"{part_name}\" has faces without texture coordinates, \
+                         but its material \"{}\" has a normal map",
+                        resolved.display(),
+                        materials[material].name
+                    ),
+                ));
+            }
             objects.push(Object {
                 name: format!("{}/{part_name}", raw.name),
                 shape: Shape::Mesh {
