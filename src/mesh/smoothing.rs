@@ -213,35 +213,43 @@ pub fn smooth_normals(parts: &[&[Vec3]], options: &SmoothingOptions) -> Vec<Vec<
         // Members of each weld group as contiguous runs, by a counting sort
         // on the group id (ids are below the number of points): linear, and
         // cheaper than a map of small vectors.
-        let mut starts = vec![0usize; points.len() + 1];
+        // u32 offsets halve the memory traffic of these corner-sized arrays
+        // (mesh indices are u32 as well).
+        let count = points.len();
+        let mut starts = vec![0u32; count + 1];
         for &id in &ids {
             starts[id + 1] += 1;
         }
-        for i in 0..points.len() {
+        for i in 0..count {
             starts[i + 1] += starts[i];
         }
-        let mut order = vec![(0usize, 0usize); ids.len()];
+        let mut order = vec![0u32; count];
         let mut next = starts.clone();
         for (k, &id) in ids.iter().enumerate() {
-            order[next[id]] = (id, k);
+            order[next[id] as usize] = k as u32;
             next[id] += 1;
         }
+        drop(next);
         let mut contributions: Vec<(DVec3, DVec3)> = Vec::new();
-        for run in order.chunk_by(|a, b| a.0 == b.0) {
+        for group in 0..count {
+            let run = &order[starts[group] as usize..starts[group + 1] as usize];
+            if run.is_empty() {
+                continue;
+            }
             contributions.clear();
-            contributions.extend(run.iter().map(|&(_, k)| {
-                let (p, c) = scope[k];
+            contributions.extend(run.iter().map(|&k| {
+                let (p, c) = scope[k as usize];
                 let (n, w) = faces[p][c / 3];
                 (n, n * w[c % 3])
             }));
             let total: DVec3 = contributions.iter().map(|c| c.1).sum();
-            for (&(_, k), &(own, _)) in run.iter().zip(&contributions) {
+            for (&k, &(own, _)) in run.iter().zip(&contributions) {
                 let sum: DVec3 = contributions
                     .iter()
                     .filter(|(n, _)| own.dot(*n) >= cos_crease - 1e-12)
                     .map(|(_, weighted)| weighted)
                     .sum();
-                let (p, c) = scope[k];
+                let (p, c) = scope[k as usize];
                 normals[p][c] = unit_or(sum, unit_or(total, DVec3::Y).as_dvec3());
             }
         }
