@@ -402,7 +402,36 @@ fn bad_models_are_clear_errors() {
     assert!(error.contains("without normals"), "{error}");
     let error =
         scene_with_obj(dir.path(), &format!("{tri}f 1 2 3\n"), "crease_angle = 200").unwrap_err();
-    assert!(error.contains("crease_angle"), "{error}");
+    assert!(error.contains("objects[0].crease_angle"), "{error}");
+    let error = scene_with_obj(
+        dir.path(),
+        &format!("{tri}f 1 2 3\n"),
+        "weld_tolerance = -1",
+    )
+    .unwrap_err();
+    assert!(error.contains("objects[0].weld_tolerance"), "{error}");
+    // The model fields belong to obj shapes only, and other shapes still
+    // need a material.
+    let sphere = |extra: &str| {
+        Scene::from_toml(
+            &format!(
+                "[camera]\neye = [0, 1, 4]\nlook_at = [0, 0, 0]\n\
+                 [[materials]]\nname = \"m\"\nkd = [1, 1, 1]\n[[objects]]\nname = \"s\"\n\
+                 shape = {{ type = \"sphere\", radius = 1 }}\n{extra}"
+            ),
+            "t.toml",
+            dir.path(),
+        )
+        .unwrap_err()
+        .to_string()
+    };
+    let error = sphere("material = \"m\"\nsmoothing = \"face\"");
+    assert!(
+        error.contains("objects[0].smoothing: only an obj shape"),
+        "{error}"
+    );
+    let error = sphere("");
+    assert!(error.contains("objects[0].material: required"), "{error}");
 }
 
 /// A degenerate file normal (zero length) falls back to the face normal:
