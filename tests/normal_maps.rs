@@ -205,3 +205,28 @@ fn normal_map_errors_name_the_field() {
     );
     assert!(e.contains("without texture coordinates"), "{e}");
 }
+
+/// Only objects whose material has a normal map take the `NORMAL_MAP`
+/// variant, and a map shared by two materials is loaded once.
+#[test]
+fn plan_uses_the_normal_map_variant_only_where_needed() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_map(&d.join("flat.png"), [0.0, 0.0, 1.0]);
+    let toml = "[camera]\neye = [0, 4, 6]\nlook_at = [0, 0, 0]\n\
+         [[materials]]\nname = \"a\"\nkd = [1, 1, 1]\nnormal_map = \"flat.png\"\n\
+         [[materials]]\nname = \"b\"\nkd = [1, 0, 0]\nnormal_map = \"flat.png\"\n\
+         [[materials]]\nname = \"plain\"\nkd = [0, 1, 0]\n\
+         [[objects]]\nname = \"x\"\nmaterial = \"a\"\nshape = { type = \"sphere\", radius = 1 }\n\
+         [[objects]]\nname = \"y\"\nmaterial = \"b\"\nshape = { type = \"sphere\", radius = 1 }\n\
+         [[objects]]\nname = \"z\"\nmaterial = \"plain\"\nshape = { type = \"sphere\", radius = 1 }\n";
+    let scene = Scene::from_toml(toml, "t.toml", d).unwrap();
+    let geometry = aerial::render::geometry::SceneGeometry::new(&scene);
+    let plan = aerial::render::FramePlan::new(&scene, &geometry, false);
+    assert_eq!(plan.normal_maps.len(), 1);
+    for draw in plan.draws() {
+        let mapped = scene.objects[draw.object].material != 2;
+        assert_eq!(draw.pipeline.normal_mapped, mapped, "{draw:?}");
+        assert_eq!(draw.normal_map.is_some(), mapped, "{draw:?}");
+    }
+}
