@@ -230,3 +230,40 @@ fn plan_uses_the_normal_map_variant_only_where_needed() {
         assert_eq!(draw.normal_map.is_some(), mapped, "{draw:?}");
     }
 }
+
+/// A normal map that is not a PNG is refused before rendering, naming the
+/// file (the same checks as base-colour textures).
+#[test]
+fn non_png_normal_map_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(
+        d.join("map.jpg"),
+        [0xFF, 0xD8, 0xFF, 0xE0, 0, 0x10, b'J', b'F'],
+    )
+    .unwrap();
+    let s = scene(
+        d,
+        "forward",
+        "normal_map = \"map.jpg\"",
+        "{ type = \"plane\", width = 2, depth = 2 }",
+        0.0,
+    );
+    let error = match aerial::app::render(
+        &s,
+        &aerial::app::RenderSettings {
+            validate: aerial::vk::validation::Validation::All,
+            device: None,
+            warmup: 0,
+            frames: 1,
+            keep_hdr: false,
+        },
+    ) {
+        Ok(_) => panic!("a JPEG normal map rendered"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        error.contains("map.jpg") && error.contains("JPEG"),
+        "{error}"
+    );
+}

@@ -149,10 +149,12 @@ pub fn scene_memory(
     budget.check(&size_what, attachments)?;
     total = total.saturating_add(attachments);
     let mut seen: Vec<&PathBuf> = Vec::new();
-    for material in &scene.materials {
-        let Some(path) = &material.texture else {
-            continue;
-        };
+    // Base-colour textures and normal maps cost the same.
+    let images = scene
+        .materials
+        .iter()
+        .flat_map(|m| m.texture.iter().chain(m.normal_map.iter()));
+    for path in images {
         if seen.contains(&path) {
             continue;
         }
@@ -282,6 +284,22 @@ pub fn scene_on_device<'a>(
                 }
             };
             scene.to_mut().materials[i].texture = Some(link);
+        }
+    }
+
+    // Normal maps are decoded by content, so need no renaming; only the
+    // device's size limit applies.
+    for path in scene.materials.iter().filter_map(|m| m.normal_map.as_ref()) {
+        let info = inspect_texture(path)?;
+        if info.width == 0 || info.height == 0 || info.width.max(info.height) > max_side {
+            return Err(RenderError::Texture {
+                path: path.clone(),
+                reason: format!(
+                    "{}x{} is outside this device's image size limit of 1..={max_side} \
+                     pixels per side (maxImageDimension2D)",
+                    info.width, info.height
+                ),
+            });
         }
     }
 
