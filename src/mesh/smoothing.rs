@@ -98,7 +98,10 @@ fn face_data(positions: &[Vec3]) -> Vec<(DVec3, [f64; 3])> {
             let Some(n) = n.try_normalize() else {
                 return (DVec3::ZERO, [0.0; 3]);
             };
-            let angle = |p: DVec3, q: DVec3, r: DVec3| (q - p).angle_between(r - p);
+            // In f32: a weight needs no more, and f32 acos is much cheaper.
+            let angle = |p: DVec3, q: DVec3, r: DVec3| {
+                f64::from((q - p).as_vec3().angle_between((r - p).as_vec3()))
+            };
             let w = [angle(a, b, c), angle(b, c, a), angle(c, a, b)];
             if w.iter().any(|x| !x.is_finite()) {
                 return (DVec3::ZERO, [0.0; 3]);

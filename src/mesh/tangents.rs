@@ -124,7 +124,11 @@ pub fn build_mesh(
             1 => (y, z, x),
             _ => (z, x, y),
         };
-        let angle = (next - here).angle_between(prev - here);
+        let angle = f64::from(
+            (next - here)
+                .as_vec3()
+                .angle_between((prev - here).as_vec3()),
+        );
         let weight = if angle.is_finite() { angle } else { 0.0 };
         let s = &mut sums[index as usize];
         s.0 += t * weight;
