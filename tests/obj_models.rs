@@ -633,3 +633,33 @@ fn thread_cpu_seconds() -> f64 {
     unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
     t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9
 }
+
+/// Relative (negative) indices, quads, `g` groups and faces with and
+/// without UVs load: every group is a part, quads become two triangles,
+/// and when any face of the file lacks UVs no part has them (rather than
+/// the neighbour's values the parser fills in).
+#[test]
+fn groups_relative_indices_and_polygons_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(
+        dir.path(),
+        "g.obj",
+        "g first\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+         f -4/-4 -3/-3 -2/-2 -1/-1\n\
+         g second\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 5 6 7\n",
+    );
+    let model = load_obj(&path).unwrap();
+    let names: Vec<&str> = model.parts.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(names, ["first", "second"]);
+    assert_eq!(model.parts[0].triangle_count(), 2);
+    assert!(model.parts[0].uvs.is_none());
+    assert_eq!(model.parts[1].triangle_count(), 1);
+    assert!(model.parts[1].uvs.is_none());
+    let meshes = model_meshes(&model, &ModelOptions::default(), "g.obj").unwrap();
+    for (mesh, _) in &meshes {
+        assert!(max_orthonormality_error(mesh) < 1e-5);
+        for v in &mesh.vertices {
+            assert!(Vec3::from(v.normal).distance(Vec3::Z) < 1e-6, "{v:?}");
+        }
+    }
+}

@@ -75,9 +75,11 @@ pub struct ObjPart {
     pub name: String,
     /// Corner positions.
     pub positions: Vec<Vec3>,
-    /// Corner texture coordinates, `None` when any face lacks them.
+    /// Corner texture coordinates, `None` when any face of the file lacks
+    /// them.
     pub uvs: Option<Vec<Vec2>>,
-    /// Corner normals from the file, `None` when any face lacks them.
+    /// Corner normals from the file, `None` when any face of the file
+    /// lacks them.
     pub normals: Option<Vec<Vec3>>,
     /// Index into [`ObjModel::materials`].
     pub material: Option<usize>,
@@ -131,7 +133,7 @@ pub fn load_obj(path: &Path) -> Result<ObjModel, ObjError> {
 /// [`load_obj`] on text already read; `file` is only used in messages and
 /// `base_dir` is where MTL libraries and textures are looked for.
 pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, ObjError> {
-    prescan(text, file)?;
+    let corners = prescan(text, file)?;
     let options = tobj::LoadOptions {
         triangulate: true,
         ignore_points: true,
@@ -178,7 +180,10 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
             .collect::<Option<Vec<_>>>()
             .ok_or_else(|| out_of_range("vertex"))?;
         let full = |indices: &[u32]| indices.len() == mesh.indices.len();
-        let uvs = if full(&mesh.texcoord_indices) && !mesh.texcoords.is_empty() {
+        // `tobj` fills a corner without an index with a neighbour's value,
+        // so attributes are only used when the pre-scan saw them on every
+        // corner of the file.
+        let uvs = if corners.all_uv && full(&mesh.texcoord_indices) && !mesh.texcoords.is_empty() {
             Some(
                 mesh.texcoord_indices
                     .iter()
@@ -189,17 +194,18 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
         } else {
             None
         };
-        let normals = if full(&mesh.normal_indices) && !mesh.normals.is_empty() {
-            Some(
-                mesh.normal_indices
-                    .iter()
-                    .map(|&i| corner(&mesh.normals, i, 3).map(|n| Vec3::new(n[0], n[1], n[2])))
-                    .collect::<Option<Vec<_>>>()
-                    .ok_or_else(|| out_of_range("normal"))?,
-            )
-        } else {
-            None
-        };
+        let normals =
+            if corners.all_normal && full(&mesh.normal_indices) && !mesh.normals.is_empty() {
+                Some(
+                    mesh.normal_indices
+                        .iter()
+                        .map(|&i| corner(&mesh.normals, i, 3).map(|n| Vec3::new(n[0], n[1], n[2])))
+                        .collect::<Option<Vec<_>>>()
+                        .ok_or_else(|| out_of_range("normal"))?,
+                )
+            } else {
+                None
+            };
         parts.push(ObjPart {
             name: model.name.clone(),
             positions,
@@ -274,12 +280,22 @@ fn material(m: &tobj::Material, file: &str, base_dir: &Path) -> Result<ObjMateri
     })
 }
 
+/// Which attributes every face corner of a file has.
+struct Corners {
+    all_uv: bool,
+    all_normal: bool,
+}
+
 /// Checks every `v`, `vt`, `vn` and `f` line: numbers finite, indices
 /// (1-based, or negative for relative) within the elements defined so far,
 /// and at least one face.
-fn prescan(text: &str, file: &str) -> Result<(), ObjError> {
+fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
     let mut counts = [0usize; 3]; // v, vt, vn
     let mut faces = 0usize;
+    let mut all = Corners {
+        all_uv: true,
+        all_normal: true,
+    };
     for (number, line) in text.lines().enumerate() {
         let error = |reason: String| ObjError::Line {
             file: file.to_owned(),
@@ -299,6 +315,10 @@ fn prescan(text: &str, file: &str) -> Result<(), ObjError> {
                 let mut corners = 0;
                 for word in words {
                     corners += 1;
+                    let mut slots = word.split('/');
+                    slots.next();
+                    all.all_uv &= slots.next().is_some_and(|t| !t.is_empty());
+                    all.all_normal &= slots.next().is_some_and(|n| !n.is_empty());
                     for (k, index) in word.split('/').enumerate().take(3) {
                         if index.is_empty() {
                             if k == 0 {
@@ -362,7 +382,7 @@ fn prescan(text: &str, file: &str) -> Result<(), ObjError> {
             reason: "no faces (an OBJ model needs at least one triangle)".into(),
         });
     }
-    Ok(())
+    Ok(all)
 }
 
 /// How an [`ObjModel`] becomes meshes (`smoothing`, `crease_angle`,
