@@ -92,7 +92,8 @@ fn bumps(size: u32) -> image::RgbaImage {
         let (dx, dy) = (fx.fract() - 0.5, fy.fract() - 0.5);
         let d = (dx * dx + dy * dy).sqrt();
         let (gx, gy) = if d < radius && d > 0.0 {
-            // h = cos^2(pi d / 2r): dh/dd = -(pi / 2r) sin(pi d / r) / ... (chain rule)
+            // h = cos^2(k d) with k = pi / 2r, so dh/dd = -k sin(2 k d);
+            // the gradient points along (dx, dy) / d.
             let k = PI / (2.0 * radius);
             let dh = -k * (2.0 * k * d).sin();
             (dh * dx / d, dh * dy / d)
