@@ -267,3 +267,58 @@ fn non_png_normal_map_is_a_clear_error() {
         "{error}"
     );
 }
+
+/// A hostile model — collapsed, repeated and mirrored UVs, repeated
+/// corners, slivers — normal-mapped, forward and deferred: validation-clean
+/// and no NaN or Inf in the linear HDR image.
+#[test]
+fn stress_model_with_normal_map_renders_finite_and_clean() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_map(&d.join("tilt.png"), [0.5, -0.3, 0.81]);
+    let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let mut text = String::new();
+    for _ in 0..10 {
+        let p = [next(), next(), next()].map(|x| x * 2.0 - 1.0);
+        text.push_str(&format!("v {} {} {}\n", p[0], p[1], p[2]));
+    }
+    // Few distinct UVs, one repeated: zero-UV-area triangles are common.
+    for uv in ["0 0", "1 0", "0 1", "1 0", "0.5 0.5"] {
+        text.push_str(&format!("vt {uv}\n"));
+    }
+    for _ in 0..80 {
+        let corner = |n: &mut dyn FnMut() -> f32| {
+            let v = (n() * 10.0) as usize % 10 + 1;
+            let t = (n() * 5.0) as usize % 5 + 1;
+            format!("{v}/{t}")
+        };
+        let (a, b, c) = (corner(&mut next), corner(&mut next), corner(&mut next));
+        text.push_str(&format!("f {a} {b} {c}\n"));
+    }
+    std::fs::write(d.join("stress.obj"), text).unwrap();
+    for lighting in ["forward", "deferred"] {
+        let s = scene(
+            d,
+            lighting,
+            "normal_map = \"tilt.png\"",
+            "{ type = \"obj\", path = \"stress.obj\" }",
+            0.0,
+        );
+        let run = common::render(&s, true);
+        let hdr = run.hdr.expect("HDR kept");
+        assert!(
+            hdr.data.iter().all(|x| x.is_finite()),
+            "{lighting}: non-finite HDR"
+        );
+        for i in 0..s.objects.len() {
+            let mesh = s.object_mesh(i);
+            assert!(aerial::mesh::tangents::max_orthonormality_error(&mesh) < 1e-5);
+        }
+    }
+}
