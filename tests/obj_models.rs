@@ -403,13 +403,19 @@ fn bad_models_are_clear_errors() {
     let error =
         scene_with_obj(dir.path(), &format!("{tri}f 1 2 3\n"), "crease_angle = 200").unwrap_err();
     assert!(error.contains("objects[0].crease_angle"), "{error}");
+    for bad in ["-1", "0.01"] {
+        let extra = format!("weld_tolerance = {bad}");
+        let error = scene_with_obj(dir.path(), &format!("{tri}f 1 2 3\n"), &extra).unwrap_err();
+        assert!(error.contains("objects[0].weld_tolerance"), "{error}");
+    }
+    // Finite coordinates whose range overflows f32.
     let error = scene_with_obj(
         dir.path(),
-        &format!("{tri}f 1 2 3\n"),
-        "weld_tolerance = -1",
+        "v -3e38 0 0\nv 3e38 0 0\nv 0 1 0\nf 1 2 3\n",
+        "",
     )
     .unwrap_err();
-    assert!(error.contains("objects[0].weld_tolerance"), "{error}");
+    assert!(error.contains("too large"), "{error}");
     // The model fields belong to obj shapes only, and other shapes still
     // need a material.
     let sphere = |extra: &str| {

@@ -439,13 +439,22 @@ pub fn model_meshes(
             ),
         });
     }
+    let diagonal = model.diagonal();
+    if !diagonal.is_finite() {
+        return Err(ObjError::File {
+            file: file.to_owned(),
+            reason: "the coordinates span a range too large to represent (the bounding box \
+                     diagonal overflows)"
+                .into(),
+        });
+    }
     let positions: Vec<&[Vec3]> = model.parts.iter().map(|p| p.positions.as_slice()).collect();
     let generated = smooth_normals(
         &positions,
         &SmoothingOptions {
             mode,
             crease_degrees: options.crease_degrees,
-            weld_distance: options.weld_tolerance * model.diagonal(),
+            weld_distance: options.weld_tolerance * diagonal,
         },
     );
     Ok(model

@@ -908,11 +908,14 @@ impl Check<'_> {
             None => obj::DEFAULT_WELD_TOLERANCE,
             Some(x) => {
                 let x = self.finite(&field("weld_tolerance"), x)?;
-                if !(0.0..=0.1).contains(&x) {
+                // Up to 1e-3: welding further apart merges real features,
+                // and the hash cells would hold so many points that welding
+                // turns quadratic.
+                if !(0.0..=1e-3).contains(&x) {
                     return Err(self.invalid(
                         field("weld_tolerance"),
                         format!(
-                            "must be between 0 and 0.1 (a fraction of the model's \
+                            "must be between 0 and 0.001 (a fraction of the model's \
                              bounding-box diagonal), got {x}"
                         ),
                     ));
