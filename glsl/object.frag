@@ -5,8 +5,12 @@
 // the lighting pass adds the lights; the other shading models are still
 // shaded here and write a zero material, so the lighting pass adds nothing
 // to them.
+// With NORMAL_MAP, the shading normal comes from a tangent-space normal
+// map: T along increasing u, B = sign * cross(N, T) along increasing v,
+// a texel holding 0.5 + 0.5 * (x, y, z).
 // feature: BASE_COLOR_TEXTURE
 // feature: GBUFFER
+// feature: NORMAL_MAP
 #include "scene_data.glsl"
 #include "lighting.glsl"
 #include "object_lighting.glsl"
@@ -14,10 +18,13 @@
 
 layout(location = 0) in vec3 in_world_position;
 layout(location = 1) in vec3 in_normal;
-#ifdef BASE_COLOR_TEXTURE
+#if defined(BASE_COLOR_TEXTURE) || defined(NORMAL_MAP)
 layout(location = 2) in vec2 in_uv;
 #endif
 layout(location = 3) in vec3 in_gouraud;
+#ifdef NORMAL_MAP
+layout(location = 4) in vec4 in_tangent;
+#endif
 
 layout(location = 0) out vec4 out_color;
 #ifdef GBUFFER
@@ -29,6 +36,14 @@ layout(location = 3) out vec4 out_material;
 #ifdef BASE_COLOR_TEXTURE
 layout(set = 2, binding = 0) uniform sampler2D base_color;
 #endif
+#ifdef NORMAL_MAP
+// The next set after the base colour's, if any.
+#ifdef BASE_COLOR_TEXTURE
+layout(set = 3, binding = 0) uniform sampler2D normal_map;
+#else
+layout(set = 2, binding = 0) uniform sampler2D normal_map;
+#endif
+#endif
 
 void main() {
     vec4 base = vec4(1.0);
@@ -39,6 +54,24 @@ void main() {
     float alpha = object.kd.a * base.a;
     // Interpolated normals are shorter than 1: re-normalize per pixel.
     vec3 n = normalize(in_normal);
+#ifdef NORMAL_MAP
+    vec3 m = texture(normal_map, vec2(in_uv.x, 1.0 - in_uv.y)).xyz * 2.0 - 1.0;
+    if (object.counts.y != 0u) {
+        m.y = -m.y;
+    }
+    // Re-orthogonalize the interpolated tangent against this normal.
+    vec3 t = in_tangent.xyz - n * dot(n, in_tangent.xyz);
+    float t_length = length(t);
+    if (t_length > 1e-6) {
+        t /= t_length;
+        vec3 b = (in_tangent.w < 0.0 ? -1.0 : 1.0) * cross(n, t);
+        vec3 mapped = t * m.x + b * m.y + n * m.z;
+        // A texel of (0.5, 0.5, 0.5) is no direction: keep the normal.
+        if (dot(mapped, mapped) > 1e-12) {
+            n = normalize(mapped);
+        }
+    }
+#endif
     vec3 kd = object.kd.rgb * base.rgb;
     vec3 ka = object.ka.rgb * base.rgb;
 #ifdef GBUFFER

@@ -19,6 +19,6 @@ layout(std140, set = 1, binding = 0) uniform ObjectBlock {
     vec4 ka;             // rgb
     vec4 kd;             // rgb, a: opacity
     vec4 ks;             // rgb, a: shininess
-    uvec4 counts;        // x: number of lights in `lights` (= LIGHT_COUNT)
+    uvec4 counts;        // x: number of lights in `lights` (= LIGHT_COUNT); y: 1 for a normal map with green down
     Light lights[LIGHT_ARRAY_LENGTH];
 } object;

@@ -1,12 +1,16 @@
-//! Triangle meshes tessellated from analytic parametric surfaces.
+//! Triangle meshes tessellated from analytic parametric surfaces or loaded
+//! from OBJ models (`obj`, with `smoothing` and `tangents`).
 //!
 //! A [`ParametricSurface`] supplies `r(u, v)` and its exact derivatives;
 //! [`tessellate`] samples it on a regular grid and emits GPU-ready
 //! [`Vertex`] data with analytic normals and tangents, so shading quality
 //! does not depend on how finely the surface is cut.
 
+pub mod obj;
 mod shapes;
+pub mod smoothing;
 mod surface;
+pub mod tangents;
 
 pub use shapes::{CylinderSurface, FlagSurface, PlaneSurface, SphereSurface, TorusSurface};
 pub use surface::{derived_normal, derived_tangent, ParametricSurface};

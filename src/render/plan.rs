@@ -29,6 +29,9 @@ use std::path::PathBuf;
 pub struct PipelineKey {
     pub shading: ShadingKey,
     pub textured: bool,
+    /// Tangent-space normal map (shader feature `NORMAL_MAP`, the tangent
+    /// attribute and one more descriptor set).
+    pub normal_mapped: bool,
     pub blended: bool,
     /// Lights in the object's block.
     pub lights: u32,
@@ -59,6 +62,8 @@ pub struct Draw {
     pub pipeline: PipelineKey,
     /// Index into `FramePlan::textures`.
     pub texture: Option<usize>,
+    /// Index into `FramePlan::normal_maps`.
+    pub normal_map: Option<usize>,
     /// Indices into `Scene::lights` evaluated while drawing the object
     /// (empty for surfaces lit later by the deferred lighting pass).
     pub lights: Vec<usize>,
@@ -174,6 +179,8 @@ pub struct FramePlan {
     pub transparent: Vec<Draw>,
     /// Distinct base-colour textures, each loaded once.
     pub textures: Vec<PathBuf>,
+    /// Distinct normal maps, each loaded once (linear, not sRGB).
+    pub normal_maps: Vec<PathBuf>,
     /// Deferred lighting: screen tiles grouped by the lights that reach
     /// them (empty in forward mode).
     pub tile_groups: Vec<TileGroup>,
@@ -190,6 +197,8 @@ impl FramePlan {
     pub fn new(scene: &Scene, geometry: &SceneGeometry, keep_hdr: bool) -> FramePlan {
         let mut textures: Vec<PathBuf> = Vec::new();
         let mut texture_index = BTreeMap::new();
+        let mut normal_maps: Vec<PathBuf> = Vec::new();
+        let mut normal_map_index = BTreeMap::new();
         let mut opaque = Vec::new();
         let mut transparent = Vec::new();
         // Deferred lighting applies to opaque Phong surfaces; Gouraud and
@@ -207,6 +216,12 @@ impl FramePlan {
                     textures.len() - 1
                 })
             });
+            let normal_map = material.normal_map.as_ref().map(|path| {
+                *normal_map_index.entry(path.clone()).or_insert_with(|| {
+                    normal_maps.push(path.clone());
+                    normal_maps.len() - 1
+                })
+            });
             let blended = material.opacity < 1.0;
             let lit_later = deferred && !blended && material.shading == ShadingModel::Phong;
             let lights = if lit_later {
@@ -220,10 +235,12 @@ impl FramePlan {
                 pipeline: PipelineKey {
                     shading: material.shading.into(),
                     textured: texture.is_some(),
+                    normal_mapped: normal_map.is_some(),
                     blended,
                     lights: lights.len() as u32,
                 },
                 texture,
+                normal_map,
                 lights,
             };
             if blended {
@@ -239,8 +256,8 @@ impl FramePlan {
         // before they are shaded.
         let mut keyed: Vec<(f32, Draw)> = opaque.into_iter().map(|d| (distance(&d), d)).collect();
         keyed.sort_by(|a, b| {
-            (a.1.pipeline, a.1.texture)
-                .cmp(&(b.1.pipeline, b.1.texture))
+            (a.1.pipeline, a.1.texture, a.1.normal_map)
+                .cmp(&(b.1.pipeline, b.1.texture, b.1.normal_map))
                 .then(a.0.total_cmp(&b.0))
         });
         let opaque: Vec<Draw> = keyed.into_iter().map(|(_, d)| d).collect();
@@ -379,6 +396,7 @@ impl FramePlan {
             opaque,
             transparent,
             textures,
+            normal_maps,
             tile_groups,
             attachments,
             passes,
@@ -402,6 +420,7 @@ impl FramePlan {
             opaque: Vec::new(),
             transparent: Vec::new(),
             textures: Vec::new(),
+            normal_maps: Vec::new(),
             tile_groups: Vec::new(),
             attachments: vec![
                 AttachmentDecl {

@@ -121,8 +121,14 @@ pub fn scene_memory(
     let mut largest: Option<(String, u64)> = None;
     for (i, object) in scene.objects.iter().enumerate() {
         let (u, v) = (object.tessellation.0 as u64, object.tessellation.1 as u64);
-        let vertices = (u + 1) * (v + 1);
-        let geometry = vertices * VERTEX_BYTES + u * v * 6 * INDEX_BYTES;
+        let mut vertices = (u + 1) * (v + 1);
+        let mut geometry = vertices * VERTEX_BYTES + u * v * 6 * INDEX_BYTES;
+        // A loaded model's size is known exactly; its tessellation is unused.
+        if let crate::scene::Shape::Mesh { mesh } = &object.shape {
+            vertices = 0;
+            geometry =
+                mesh.vertices.len() as u64 * VERTEX_BYTES + mesh.indices.len() as u64 * INDEX_BYTES;
+        }
         let need = geometry.saturating_mul(3);
         largest_transient = largest_transient.max(vertices * EXACT_POSITION_BYTES);
         let what = format!(
@@ -143,10 +149,12 @@ pub fn scene_memory(
     budget.check(&size_what, attachments)?;
     total = total.saturating_add(attachments);
     let mut seen: Vec<&PathBuf> = Vec::new();
-    for material in &scene.materials {
-        let Some(path) = &material.texture else {
-            continue;
-        };
+    // Base-colour textures and normal maps cost the same.
+    let images = scene
+        .materials
+        .iter()
+        .flat_map(|m| m.texture.iter().chain(m.normal_map.iter()));
+    for path in images {
         if seen.contains(&path) {
             continue;
         }
@@ -222,14 +230,17 @@ pub fn image_memory(w: u32, h: u32, budget: &MemoryBudget) -> Result<(), RenderE
 /// Checks `scene` against `ctx`'s limits; see the module documentation.
 pub fn scene_on_device(scene: &Scene, ctx: &Context) -> Result<(), RenderError> {
     let max_side = ctx.limits.max_image_dimension2_d;
-    for material in &scene.materials {
-        let Some(path) = material.texture.clone() else {
-            continue;
-        };
-        let info = inspect_texture(&path)?;
+    // Base-colour textures and normal maps (both decoded by content): only
+    // the device's size limit applies here.
+    let textures = scene
+        .materials
+        .iter()
+        .flat_map(|m| m.texture.iter().chain(m.normal_map.iter()));
+    for path in textures {
+        let info = inspect_texture(path)?;
         if info.width == 0 || info.height == 0 || info.width.max(info.height) > max_side {
             return Err(RenderError::Texture {
-                path,
+                path: path.clone(),
                 reason: format!(
                     "{}x{} is outside this device's image size limit of 1..={max_side} \
                      pixels per side (maxImageDimension2D)",

@@ -169,7 +169,7 @@ impl Surface {
                 radius: f(radius),
                 height: f(height),
             }),
-            Shape::Torus { .. } | Shape::Flag { .. } => None,
+            Shape::Torus { .. } | Shape::Flag { .. } | Shape::Mesh { .. } => None,
         }
     }
 
@@ -300,6 +300,8 @@ impl ReferenceScene {
                 })?;
             let feature = if material.texture.is_some() {
                 Some("a texture".to_string())
+            } else if material.normal_map.is_some() {
+                Some("a normal map".to_string())
             } else if material.is_transparent() {
                 Some(format!("transparency (opacity {})", material.opacity))
             } else {

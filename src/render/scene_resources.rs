@@ -16,6 +16,8 @@ use crate::vk::{
 use std::sync::Arc;
 
 const TEXTURE_FORMAT: Format = Format::R8G8B8A8_SRGB;
+/// Normal maps: linear 8-bit, decoded as `2 * texel - 1` in the shader.
+const NORMAL_MAP_FORMAT: Format = Format::R8G8B8A8_UNORM;
 
 /// One object's range inside the shared geometry buffer.
 pub struct GeometryRange {
@@ -31,15 +33,21 @@ pub struct SceneResources {
     pub object_set: DescriptorSet,
     /// One set per texture in `FramePlan::textures`.
     pub texture_sets: Vec<DescriptorSet>,
+    /// One set per `FramePlan::normal_maps` entry (same layout as a
+    /// base-colour texture's set).
+    pub normal_sets: Vec<DescriptorSet>,
     _pool: DescriptorPool,
     /// Sets 0 (frame) and 1 (object).
     pub plain_layout: PipelineLayout,
     /// Sets 0, 1 and 2 (texture); only when a draw is textured.
     pub textured_layout: Option<PipelineLayout>,
+    /// Base colour at set 2 and normal map at set 3.
+    pub textured_normal_layout: Option<PipelineLayout>,
     pub frame_layout: DescriptorSetLayout,
     pub object_layout: DescriptorSetLayout,
     _texture_layout: Option<DescriptorSetLayout>,
     _textures: Vec<Image>,
+    _normal_maps: Vec<Image>,
     _sampler: Option<Sampler>,
     pub geometry: Buffer,
     pub ranges: Vec<GeometryRange>,
@@ -77,7 +85,7 @@ impl SceneResources {
         let object_buffer = Buffer::with_data(ctx, "objects", &object_bytes, BufferUsage::Uniform)?;
 
         // Textures, only if some material has one.
-        let sampler = if plan.textures.is_empty() {
+        let sampler = if plan.textures.is_empty() && plan.normal_maps.is_empty() {
             None
         } else {
             Some(Sampler::new(
@@ -93,7 +101,14 @@ impl SceneResources {
         let textures = plan
             .textures
             .iter()
-            .map(|p| load_texture(ctx, p))
+            .map(|p| load_texture(ctx, p, TEXTURE_FORMAT))
+            .collect::<Result<Vec<_>, _>>()?;
+        // Normal maps hold vectors, not colours: decoding them as sRGB
+        // would bend every normal.
+        let normal_maps = plan
+            .normal_maps
+            .iter()
+            .map(|p| load_texture(ctx, p, NORMAL_MAP_FORMAT))
             .collect::<Result<Vec<_>, _>>()?;
 
         let all_stages = ShaderStageFlags::VERTEX | ShaderStageFlags::FRAGMENT;
@@ -113,7 +128,7 @@ impl SceneResources {
                 stages: all_stages,
             }],
         )?;
-        let texture_layout = if textures.is_empty() {
+        let texture_layout = if textures.is_empty() && normal_maps.is_empty() {
             None
         } else {
             Some(DescriptorSetLayout::new(
@@ -127,7 +142,7 @@ impl SceneResources {
         };
         let mut pool_layouts = vec![&frame_layout, &object_layout];
         if let Some(t) = &texture_layout {
-            pool_layouts.extend(std::iter::repeat_n(t, textures.len()));
+            pool_layouts.extend(std::iter::repeat_n(t, textures.len() + normal_maps.len()));
         }
         let pool = DescriptorPool::for_layouts(ctx, &pool_layouts)?;
         let frame_set = pool.allocate(&frame_layout)?;
@@ -152,6 +167,14 @@ impl SceneResources {
                 texture_sets.push(set);
             }
         }
+        let mut normal_sets = Vec::new();
+        if let (Some(layout), Some(sampler)) = (&texture_layout, &sampler) {
+            for t in &normal_maps {
+                let set = pool.allocate(layout)?;
+                set.write_sampled_image(0, t, sampler);
+                normal_sets.push(set);
+            }
+        }
         let plain_layout = PipelineLayout::new(ctx, &[&frame_layout, &object_layout])?;
         let textured_layout = match &texture_layout {
             Some(t) => Some(PipelineLayout::new(
@@ -160,17 +183,26 @@ impl SceneResources {
             )?),
             None => None,
         };
+        let textured_normal_layout = match &texture_layout {
+            Some(t) if !textures.is_empty() && !normal_maps.is_empty() => Some(
+                PipelineLayout::new(ctx, &[&frame_layout, &object_layout, t, t])?,
+            ),
+            _ => None,
+        };
         Ok(SceneResources {
             frame_set,
             object_set,
             texture_sets,
+            normal_sets,
             _pool: pool,
             plain_layout,
             textured_layout,
+            textured_normal_layout,
             frame_layout,
             object_layout,
             _texture_layout: texture_layout,
             _textures: textures,
+            _normal_maps: normal_maps,
             _sampler: sampler,
             geometry: geometry_buffer,
             ranges,
@@ -181,6 +213,24 @@ impl SceneResources {
     }
 
     /// The pipeline layout of a draw.
+    /// The pipeline layout for a draw with these image sets: a normal map
+    /// alone takes set 2 (the textured layout), after a base colour set 3.
+    pub fn layout_for_images(
+        &self,
+        textured: bool,
+        normal_mapped: bool,
+    ) -> Result<&PipelineLayout, RenderError> {
+        if textured && normal_mapped {
+            self.textured_normal_layout.as_ref().ok_or_else(|| {
+                RenderError::Vulkan(vk::VkError::Graph(
+                    "a textured, normal-mapped draw without its layout".into(),
+                ))
+            })
+        } else {
+            self.layout_for(textured || normal_mapped)
+        }
+    }
+
     pub fn layout_for(&self, textured: bool) -> Result<&PipelineLayout, RenderError> {
         if textured {
             self.textured_layout.as_ref().ok_or_else(|| {
@@ -290,7 +340,13 @@ fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
         ka: material.ka.extend(0.0).to_array(),
         kd: material.kd.extend(material.opacity).to_array(),
         ks: material.ks.extend(material.shininess).to_array(),
-        counts: [lights.len() as u32, 0, 0, 0],
+        // y: 1 when the normal map's green channel points down the image.
+        counts: [
+            lights.len() as u32,
+            u32::from(material.normal_map_green_down),
+            0,
+            0,
+        ],
     };
     let mut bytes = bytemuck::bytes_of(&header).to_vec();
     bytes.extend_from_slice(bytemuck::cast_slice(&lights));
@@ -317,9 +373,13 @@ pub fn gpu_light(light: &Light) -> GpuLight {
     }
 }
 
-/// Loads a PNG as an sRGB texture with a full mip chain. The decoder is
+/// Loads a PNG as a `format` texture with a full mip chain. The decoder is
 /// chosen from the file's content, not its name.
-fn load_texture(ctx: &Arc<Context>, path: &std::path::Path) -> Result<Image, RenderError> {
+fn load_texture(
+    ctx: &Arc<Context>,
+    path: &std::path::Path,
+    format: Format,
+) -> Result<Image, RenderError> {
     let err = |reason: String| RenderError::Texture {
         path: path.to_path_buf(),
         reason,
@@ -333,7 +393,7 @@ fn load_texture(ctx: &Arc<Context>, path: &std::path::Path) -> Result<Image, Ren
         .to_rgba8();
     let (w, h) = img.dimensions();
     let mip_levels = 32 - w.max(h).leading_zeros();
-    let linear_blits = vk::supports_linear_filter(ctx, TEXTURE_FORMAT);
+    let linear_blits = vk::supports_linear_filter(ctx, format);
     let mip_levels = if linear_blits { mip_levels } else { 1 };
     let texture = Image::new(
         ctx,
@@ -341,7 +401,7 @@ fn load_texture(ctx: &Arc<Context>, path: &std::path::Path) -> Result<Image, Ren
         ImageDesc {
             width: w,
             height: h,
-            format: TEXTURE_FORMAT,
+            format,
             usage: ImageUsageFlags::SAMPLED
                 | ImageUsageFlags::TRANSFER_DST
                 | ImageUsageFlags::TRANSFER_SRC,

@@ -22,6 +22,10 @@ use super::{
     Camera, HdrFormat, Light, Lighting, Material, Object, Output, Scene, SceneError, ShadingModel,
     Shape, TextureFilter, ToneMap, ToneMapOperator, Transform,
 };
+use std::sync::Arc;
+
+use crate::mesh::obj;
+use crate::mesh::smoothing::Smoothing;
 use crate::mesh::MAX_SEGMENTS;
 
 /// Largest accepted output width or height.
@@ -161,6 +165,8 @@ struct MaterialFile {
     #[serde(default = "default_shininess")]
     shininess: f64,
     texture: Option<PathBuf>,
+    normal_map: Option<PathBuf>,
+    normal_map_green: Option<GreenFile>,
     #[serde(default = "one")]
     opacity: f64,
     #[serde(default = "default_shading")]
@@ -171,8 +177,13 @@ struct MaterialFile {
 #[serde(deny_unknown_fields)]
 struct ObjectFile {
     name: String,
-    material: String,
+    // Required except for an `obj` shape, whose MTL materials apply when it
+    // is absent.
+    material: Option<String>,
     shape: ShapeFile,
+    smoothing: Option<SmoothingFile>,
+    crease_angle: Option<f64>,
+    weld_tolerance: Option<f64>,
     #[serde(default = "default_tessellation")]
     tessellation: [u32; 2],
     #[serde(default)]
@@ -197,6 +208,23 @@ enum ShapeKind {
     Plane,
     Cylinder,
     Flag,
+    Obj,
+}
+
+#[derive(Clone, Copy, Deserialize, PartialEq)]
+#[serde(rename_all = "lowercase")]
+enum GreenFile {
+    Up,
+    Down,
+}
+
+#[derive(Clone, Copy, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum SmoothingFile {
+    Face,
+    Object,
+    Model,
+    File,
 }
 
 #[derive(Deserialize)]
@@ -213,6 +241,7 @@ struct ShapeFile {
     amplitude: Option<f64>,
     frequency: Option<f64>,
     phase: Option<f64>,
+    path: Option<PathBuf>,
 }
 
 fn default_light_cutoff() -> f64 {
@@ -433,12 +462,15 @@ impl Check<'_> {
             materials.push(material);
         }
 
-        let objects = raw
-            .objects
-            .into_iter()
-            .enumerate()
-            .map(|(i, object)| self.object(&format!("objects[{i}]"), object, &materials, &by_name))
-            .collect::<Result<Vec<_>>>()?;
+        let mut objects = Vec::with_capacity(raw.objects.len());
+        for (i, object) in raw.objects.into_iter().enumerate() {
+            let path = format!("objects[{i}]");
+            if matches!(object.shape.kind, ShapeKind::Obj) {
+                objects.extend(self.obj_object(&path, object, &mut materials, &mut by_name)?);
+            } else {
+                objects.push(self.object(&path, object, &materials, &by_name)?);
+            }
+        }
 
         Ok(Scene {
             output,
@@ -655,25 +687,27 @@ impl Check<'_> {
                 format!("must be between 0 and 1, got {opacity}"),
             ));
         }
-        let texture = match raw.texture {
-            None => None,
-            Some(texture) => {
-                let resolved = self.base_dir.join(&texture);
-                if !resolved.exists() {
-                    return Err(self.invalid(
-                        field("texture"),
-                        format!("file not found: {}", resolved.display()),
-                    ));
-                }
-                if !resolved.is_file() {
-                    return Err(self.invalid(
-                        field("texture"),
-                        format!("not a file: {}", resolved.display()),
-                    ));
-                }
-                Some(resolved)
+        let file_at = |name: &str, given: Option<PathBuf>| -> Result<Option<PathBuf>> {
+            let Some(given) = given else { return Ok(None) };
+            let resolved = self.base_dir.join(&given);
+            if !resolved.exists() {
+                return Err(self.invalid(
+                    field(name),
+                    format!("file not found: {}", resolved.display()),
+                ));
             }
+            if !resolved.is_file() {
+                return Err(
+                    self.invalid(field(name), format!("not a file: {}", resolved.display()))
+                );
+            }
+            Ok(Some(resolved))
         };
+        let texture = file_at("texture", raw.texture)?;
+        let normal_map = file_at("normal_map", raw.normal_map)?;
+        if raw.normal_map_green.is_some() && normal_map.is_none() {
+            return Err(self.invalid(field("normal_map_green"), "given without a normal_map"));
+        }
         Ok(Material {
             name: raw.name,
             ka,
@@ -682,6 +716,8 @@ impl Check<'_> {
             shininess,
             texture,
             opacity,
+            normal_map,
+            normal_map_green_down: raw.normal_map_green == Some(GreenFile::Down),
             shading: raw.shading,
         })
     }
@@ -697,21 +733,21 @@ impl Check<'_> {
         if raw.name.trim().is_empty() {
             return Err(self.invalid(field("name"), "must not be empty"));
         }
-        let material = *by_name.get(&raw.material).ok_or_else(|| {
-            let known: Vec<_> = materials
-                .iter()
-                .map(|m| format!("\"{}\"", m.name))
-                .collect();
-            let known = if known.is_empty() {
-                "none are defined".to_owned()
-            } else {
-                format!("defined: {}", known.join(", "))
-            };
-            self.invalid(
-                field("material"),
-                format!("unknown material \"{}\" ({known})", raw.material),
-            )
-        })?;
+        for (given, name) in [
+            (raw.smoothing.is_some(), "smoothing"),
+            (raw.crease_angle.is_some(), "crease_angle"),
+            (raw.weld_tolerance.is_some(), "weld_tolerance"),
+        ] {
+            if given {
+                return Err(self.invalid(field(name), "only an obj shape takes this"));
+            }
+        }
+        let material = self.material_index(
+            &field("material"),
+            raw.material.as_deref(),
+            materials,
+            by_name,
+        )?;
         let shape = self.shape(&field("shape"), &raw.shape)?;
         for (direction, segments) in ["u", "v"].into_iter().zip(raw.tessellation) {
             if !(MIN_SEGMENTS..=MAX_SEGMENTS).contains(&segments) {
@@ -724,8 +760,47 @@ impl Check<'_> {
                 ));
             }
         }
+        let transform = self.transform(path, &raw)?;
+        Ok(Object {
+            name: raw.name,
+            shape,
+            tessellation: (raw.tessellation[0], raw.tessellation[1]),
+            material,
+            transform,
+        })
+    }
+
+    /// The index of the material `name` (at `field`), which is required.
+    fn material_index(
+        &self,
+        field: &str,
+        name: Option<&str>,
+        materials: &[Material],
+        by_name: &HashMap<String, usize>,
+    ) -> Result<usize> {
+        let name = name.ok_or_else(|| {
+            self.invalid(field, "required (only an obj shape has its own materials)")
+        })?;
+        let material = *by_name.get(name).ok_or_else(|| {
+            let known: Vec<_> = materials
+                .iter()
+                .map(|m| format!("\"{}\"", m.name))
+                .collect();
+            let known = if known.is_empty() {
+                "none are defined".to_owned()
+            } else {
+                format!("defined: {}", known.join(", "))
+            };
+            self.invalid(field, format!("unknown material \"{name}\" ({known})"))
+        })?;
+        Ok(material)
+    }
+
+    /// The object transform of `raw` (object at `path`).
+    fn transform(&self, path: &str, raw: &ObjectFile) -> Result<Transform> {
+        let field = |name: &str| format!("{path}.{name}");
         let translate = self.coordinates(&field("translate"), raw.translate)?;
-        let (rotate_axis, rotate_degrees) = match raw.rotate {
+        let (rotate_axis, rotate_degrees) = match &raw.rotate {
             None => (Vec3::Y, 0.0),
             Some(rotate) => {
                 let axis = self.direction(&field("rotate.axis"), rotate.axis, "axis")?;
@@ -768,22 +843,221 @@ impl Check<'_> {
                 ));
             }
         }
-        Ok(Object {
-            name: raw.name,
-            shape,
-            tessellation: (raw.tessellation[0], raw.tessellation[1]),
-            material,
-            transform: Transform {
-                translate,
-                rotate_axis,
-                rotate_degrees,
-                scale,
-            },
+        Ok(Transform {
+            translate,
+            rotate_axis,
+            rotate_degrees,
+            scale,
         })
     }
 
+    /// An `obj` shape: the model is loaded, smoothed and given tangent
+    /// frames here, once, and becomes one object per object/group of the
+    /// file (named `name/group`), each with its MTL material unless the
+    /// scene object names one.
+    fn obj_object(
+        &self,
+        path: &str,
+        raw: ObjectFile,
+        materials: &mut Vec<Material>,
+        by_name: &mut HashMap<String, usize>,
+    ) -> Result<Vec<Object>> {
+        let field = |name: &str| format!("{path}.{name}");
+        if raw.name.trim().is_empty() {
+            return Err(self.invalid(field("name"), "must not be empty"));
+        }
+        let shape = &raw.shape;
+        let given = [
+            ("radius", shape.radius),
+            ("major_radius", shape.major_radius),
+            ("minor_radius", shape.minor_radius),
+            ("width", shape.width),
+            ("depth", shape.depth),
+            ("height", shape.height),
+            ("amplitude", shape.amplitude),
+            ("frequency", shape.frequency),
+            ("phase", shape.phase),
+        ];
+        if let Some((name, _)) = given.iter().find(|(_, v)| v.is_some()) {
+            return Err(self.invalid(
+                field(&format!("shape.{name}")),
+                format!("an obj has no {name} (it takes path)"),
+            ));
+        }
+        let model_path = shape
+            .path
+            .as_ref()
+            .ok_or_else(|| self.invalid(field("shape.path"), "required for an obj"))?;
+        let resolved = self.base_dir.join(model_path);
+        let model = obj::load_obj(&resolved)
+            .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
+        let crease_degrees = match raw.crease_angle {
+            None => obj::DEFAULT_CREASE_DEGREES,
+            Some(x) => {
+                let x = self.finite(&field("crease_angle"), x)?;
+                if !(0.0..=180.0).contains(&x) {
+                    return Err(self.invalid(
+                        field("crease_angle"),
+                        format!("must be between 0 and 180 degrees, got {x}"),
+                    ));
+                }
+                x
+            }
+        };
+        let weld_tolerance = match raw.weld_tolerance {
+            None => obj::DEFAULT_WELD_TOLERANCE,
+            Some(x) => {
+                let x = self.finite(&field("weld_tolerance"), x)?;
+                // Up to 1e-3: welding further apart merges real features,
+                // and the hash cells would hold so many points that welding
+                // turns quadratic.
+                if !(0.0..=1e-3).contains(&x) {
+                    return Err(self.invalid(
+                        field("weld_tolerance"),
+                        format!(
+                            "must be between 0 and 0.001 (a fraction of the model's \
+                             bounding-box diagonal), got {x}"
+                        ),
+                    ));
+                }
+                x
+            }
+        };
+        let options = obj::ModelOptions {
+            smoothing: raw.smoothing.map(|s| match s {
+                SmoothingFile::Face => Smoothing::Face,
+                SmoothingFile::Object => Smoothing::Object,
+                SmoothingFile::Model => Smoothing::Model,
+                SmoothingFile::File => Smoothing::File,
+            }),
+            crease_degrees,
+            weld_tolerance,
+        };
+        let meshes = obj::model_meshes(&model, &options, &resolved.display().to_string())
+            .map_err(|e| self.invalid(field("smoothing"), e.to_string()))?;
+        let transform = self.transform(path, &raw)?;
+        let over = match &raw.material {
+            Some(name) => {
+                Some(self.material_index(&field("material"), Some(name), materials, by_name)?)
+            }
+            None => None,
+        };
+        // The model's own materials, added on first use as `name/material`.
+        let mut own: HashMap<Option<usize>, usize> = HashMap::new();
+        let mut objects = Vec::with_capacity(meshes.len());
+        for (i, (part, (mesh, _))) in model.parts.iter().zip(meshes).enumerate() {
+            // A group whose faces all collapsed draws nothing; an empty
+            // vertex buffer is not a valid draw.
+            if mesh.indices.is_empty() {
+                continue;
+            }
+            let material = match over {
+                Some(m) => m,
+                None => match own.get(&part.material) {
+                    Some(&m) => m,
+                    None => {
+                        let m = self.mtl_material(
+                            &field("shape.path"),
+                            &raw.name,
+                            part.material.map(|m| &model.materials[m]),
+                            materials,
+                            by_name,
+                        )?;
+                        own.insert(part.material, m);
+                        m
+                    }
+                },
+            };
+            let part_name = if part.name.is_empty() {
+                format!("{i}")
+            } else {
+                part.name.clone()
+            };
+            // Without UVs there is no tangent space to read a map in.
+            if materials[material].normal_map.is_some() && part.uvs.is_none() {
+                return Err(self.invalid(
+                    field("shape.path"),
+                    format!(
+                        "{}: object \"{part_name}\" has faces without texture coordinates, \
+                         but its material \"{}\" has a normal map",
+                        resolved.display(),
+                        materials[material].name
+                    ),
+                ));
+            }
+            objects.push(Object {
+                name: format!("{}/{part_name}", raw.name),
+                shape: Shape::Mesh {
+                    mesh: Arc::new(mesh),
+                },
+                tessellation: (raw.tessellation[0], raw.tessellation[1]),
+                material,
+                transform,
+            });
+        }
+        if objects.is_empty() {
+            return Err(self.invalid(
+                field("shape.path"),
+                format!(
+                    "{}: every triangle is collapsed to a line or a point",
+                    resolved.display()
+                ),
+            ));
+        }
+        Ok(objects)
+    }
+
+    /// Adds the scene material for an MTL material (or the default grey for
+    /// faces without one) and returns its index.
+    fn mtl_material(
+        &self,
+        field: &str,
+        object: &str,
+        mtl: Option<&obj::ObjMaterial>,
+        materials: &mut Vec<Material>,
+        by_name: &mut HashMap<String, usize>,
+    ) -> Result<usize> {
+        let default = obj::ObjMaterial {
+            name: "default".into(),
+            ka: None,
+            kd: Vec3::splat(0.8),
+            ks: Vec3::ZERO,
+            shininess: 32.0,
+            opacity: 1.0,
+            texture: None,
+            normal_map: None,
+        };
+        let mtl = mtl.unwrap_or(&default);
+        let name = format!("{object}/{}", mtl.name);
+        if by_name.contains_key(&name) {
+            return Err(self.invalid(
+                field,
+                format!("the model's material \"{name}\" clashes with a scene material name"),
+            ));
+        }
+        let bounded = |v: Vec3| v.min(Vec3::splat(MAX_COLOUR as f32));
+        materials.push(Material {
+            name: name.clone(),
+            ka: bounded(mtl.ka.unwrap_or(mtl.kd)),
+            kd: bounded(mtl.kd),
+            ks: bounded(mtl.ks),
+            shininess: mtl.shininess.min(MAX_COLOUR as f32),
+            texture: mtl.texture.clone(),
+            opacity: mtl.opacity,
+            normal_map: mtl.normal_map.clone(),
+            normal_map_green_down: false,
+            shading: ShadingModel::Phong,
+        });
+        by_name.insert(name, materials.len() - 1);
+        Ok(materials.len() - 1)
+    }
+
     fn shape(&self, path: &str, raw: &ShapeFile) -> Result<Shape> {
+        if raw.path.is_some() {
+            return Err(self.invalid(format!("{path}.path"), "only an obj shape has a path"));
+        }
         let (kind, required, optional): (&str, &[&str], &[&str]) = match raw.kind {
+            ShapeKind::Obj => return Err(self.invalid(path, "an obj is loaded by obj_object")),
             ShapeKind::Sphere => ("sphere", &["radius"], &[]),
             ShapeKind::Torus => ("torus", &["major_radius", "minor_radius"], &[]),
             ShapeKind::Plane => ("plane", &["width", "depth"], &[]),
@@ -837,6 +1111,7 @@ impl Check<'_> {
             Ok(v)
         };
         Ok(match raw.kind {
+            ShapeKind::Obj => return Err(self.invalid(path, "an obj is loaded by obj_object")),
             ShapeKind::Sphere => Shape::Sphere {
                 radius: size("radius")?,
             },

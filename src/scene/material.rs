@@ -37,6 +37,13 @@ pub struct Material {
     pub texture: Option<PathBuf>,
     /// Opacity in `[0, 1]`; 1 is opaque.
     pub opacity: f32,
+    /// Tangent-space normal map (read as linear, not sRGB), resolved like
+    /// `texture`. T follows increasing u, B increasing v, N outward; a texel
+    /// stores `0.5 + 0.5 * c`.
+    pub normal_map: Option<PathBuf>,
+    /// True when the map's green channel points down the image (`-v`,
+    /// DirectX style, `normal_map_green = "down"`).
+    pub normal_map_green_down: bool,
     /// Shading model.
     pub shading: ShadingModel,
 }

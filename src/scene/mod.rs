@@ -191,6 +191,8 @@ impl Scene {
     /// texture = "../textures/checker.png"  # optional, relative to the scene file; must exist
     /// opacity = 1.0                        # [1]; in [0, 1]
     /// shading = "phong"                    # ["phong"] | "gouraud" | "toon"
+    /// normal_map = "bumps.png"             # optional tangent-space normal map, relative to the scene file
+    /// normal_map_green = "up"              # ["up"] | "down"
     /// [[objects]]
     /// name = "ball"                        # required, not empty
     /// material = "red"                     # required, a material name
@@ -205,7 +207,10 @@ impl Scene {
     /// (`major_radius`, `minor_radius`), `plane` (`width`, `depth`; XZ
     /// plane, normal +Y), `cylinder` (`radius`, `height`; open, axis Y),
     /// `flag` (`width`, `height`, `amplitude`, `frequency` in radians over
-    /// the width, optional `phase`, default 0). Every number must be finite.
+    /// the width, optional `phase`, default 0), `obj` (`path` to an OBJ
+    /// model, relative to the scene file; the object's `material` becomes
+    /// optional and it takes `smoothing`, `crease_angle` and
+    /// `weld_tolerance`, see `crate::mesh::obj`). Every number must be finite.
     ///
     /// # Errors
     ///
@@ -286,9 +291,16 @@ impl Scene {
     /// Tessellates object `index` in object space. An index out of range
     /// gives an empty mesh.
     pub fn object_mesh(&self, index: usize) -> Mesh {
-        match self.objects.get(index) {
-            Some(object) => tessellate(
-                object.shape.surface().as_ref(),
+        let Some(object) = self.objects.get(index) else {
+            return Mesh::default();
+        };
+        if let Shape::Mesh { mesh } = &object.shape {
+            // Loaded (and smoothed) once with the scene; this is a copy.
+            return mesh.as_ref().clone();
+        }
+        match object.shape.surface() {
+            Some(surface) => tessellate(
+                surface.as_ref(),
                 object.tessellation.0,
                 object.tessellation.1,
             ),

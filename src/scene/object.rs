@@ -1,10 +1,13 @@
-//! Scene [`Object`]s: an analytic [`Shape`], how finely to tessellate it, a
+//! Scene [`Object`]s: an analytic [`Shape`] or a loaded mesh, how finely to tessellate it, a
 //! material and a [`Transform`].
+
+use std::sync::Arc;
 
 use glam::{Mat3, Mat4, Quat, Vec3};
 
 use crate::mesh::{
-    CylinderSurface, FlagSurface, ParametricSurface, PlaneSurface, SphereSurface, TorusSurface,
+    CylinderSurface, FlagSurface, Mesh, ParametricSurface, PlaneSurface, SphereSurface,
+    TorusSurface,
 };
 
 /// One object to draw.
@@ -78,7 +81,7 @@ impl Transform {
 }
 
 /// An analytic surface with its dimensions (all lengths > 0 after loading).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Shape {
     /// Sphere centred at the origin.
     Sphere {
@@ -120,13 +123,21 @@ pub enum Shape {
         /// `alpha`, radians.
         phase: f32,
     },
+    /// A triangle mesh loaded from a model file (one object or group of an
+    /// OBJ), already smoothed and given tangent frames; shared, so that a
+    /// scene clone does not copy it.
+    Mesh {
+        /// The mesh in object space.
+        mesh: Arc<Mesh>,
+    },
 }
 
 impl Shape {
-    /// The parametric surface to tessellate.
-    pub fn surface(&self) -> Box<dyn ParametricSurface> {
+    /// The parametric surface to tessellate; `None` for a loaded mesh.
+    pub fn surface(&self) -> Option<Box<dyn ParametricSurface>> {
         let f = f64::from;
-        match *self {
+        Some(match *self {
+            Shape::Mesh { .. } => return None,
             Shape::Sphere { radius } => Box::new(SphereSurface { radius: f(radius) }),
             Shape::Torus {
                 major_radius,
@@ -156,7 +167,7 @@ impl Shape {
                 frequency: f(frequency),
                 phase: f(phase),
             }),
-        }
+        })
     }
 
     /// The `type` name used in scene files.
@@ -167,6 +178,7 @@ impl Shape {
             Shape::Plane { .. } => "plane",
             Shape::Cylinder { .. } => "cylinder",
             Shape::Flag { .. } => "flag",
+            Shape::Mesh { .. } => "obj",
         }
     }
 }

@@ -68,15 +68,18 @@ impl SurfacePass {
                 if key.textured {
                     features.push("BASE_COLOR_TEXTURE");
                 }
+                if key.normal_mapped {
+                    features.push("NORMAL_MAP");
+                }
                 if form == Form::GBuffer {
                     features.push("GBUFFER");
                 }
                 let vert = ShaderModule::new(setup.ctx, shaders::OBJECT_VERT.spirv(&features))?;
                 let frag = ShaderModule::new(setup.ctx, shaders::OBJECT_FRAG.spirv(&features))?;
-                let attributes = vertex_attributes(key.textured);
+                let attributes = vertex_attributes(key.textured, key.normal_mapped);
                 let pipeline = GraphicsPipeline::new(
                     setup.ctx,
-                    resources.layout_for(key.textured)?,
+                    resources.layout_for_images(key.textured, key.normal_mapped)?,
                     &render_pass.render_pass,
                     &GraphicsPipelineDesc {
                         vertex_shader: &vert,
@@ -113,7 +116,8 @@ impl RecordPass for SurfacePass {
         let mut bound: Option<PipelineKey> = None;
         for d in &self.draws {
             let pipeline = &self.pipelines[&d.pipeline];
-            let layout = resources.layout_for(d.pipeline.textured)?;
+            let layout =
+                resources.layout_for_images(d.pipeline.textured, d.pipeline.normal_mapped)?;
             if bound != Some(d.pipeline) {
                 cmd.bind_pipeline(pipeline);
                 if bound.is_none() {
@@ -134,6 +138,10 @@ impl RecordPass for SurfacePass {
             if let Some(t) = d.texture {
                 cmd.bind_descriptor_set(layout, 2, &resources.texture_sets[t], &[]);
             }
+            if let Some(n) = d.normal_map {
+                let set = if d.texture.is_some() { 3 } else { 2 };
+                cmd.bind_descriptor_set(layout, set, &resources.normal_sets[n], &[]);
+            }
             cmd.bind_geometry(&resources.geometry, range.vertex_offset, range.index_offset);
             cmd.draw_indexed(range.index_count);
         }
@@ -142,9 +150,9 @@ impl RecordPass for SurfacePass {
 }
 
 /// The vertex attributes a pipeline consumes: position and normal always,
-/// UVs only for textured materials. (Tangents stay in the vertex format for
-/// normal mapping but are not fed to shaders that do not read them.)
-fn vertex_attributes(textured: bool) -> Vec<VertexAttribute> {
+/// UVs for textured or normal-mapped materials, tangents only for
+/// normal-mapped ones (shaders that do not read them are not fed them).
+fn vertex_attributes(textured: bool, normal_mapped: bool) -> Vec<VertexAttribute> {
     let offset = |f: usize| f as u32;
     let mut attributes = vec![
         VertexAttribute {
@@ -158,7 +166,14 @@ fn vertex_attributes(textured: bool) -> Vec<VertexAttribute> {
             offset: offset(std::mem::offset_of!(Vertex, normal)),
         },
     ];
-    if textured {
+    if normal_mapped {
+        attributes.push(VertexAttribute {
+            location: 2,
+            format: Format::R32G32B32A32_SFLOAT,
+            offset: offset(std::mem::offset_of!(Vertex, tangent)),
+        });
+    }
+    if textured || normal_mapped {
         attributes.push(VertexAttribute {
             location: 3,
             format: Format::R32G32_SFLOAT,

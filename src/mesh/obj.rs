@@ -1,0 +1,478 @@
+//! Wavefront OBJ models: every object and group of a file as a triangle
+//! soup (one position, UV and normal per corner), with its MTL material.
+//!
+//! Parsing is done by `tobj`; a line-aware pre-scan comes first so that bad
+//! input (non-finite numbers, indices out of range, an empty file) is
+//! reported with the file and line rather than a bare parser error code, and
+//! so that nothing non-finite ever reaches a vertex.
+
+use std::path::{Path, PathBuf};
+
+use glam::{Vec2, Vec3};
+
+use super::smoothing::{smooth_normals, Smoothing, SmoothingOptions};
+use super::tangents::{build_mesh, TangentStats};
+use super::Mesh;
+
+/// Why a model could not be loaded. The message names the file and, where
+/// there is one, the line.
+#[derive(Debug, thiserror::Error)]
+pub enum ObjError {
+    /// The file could not be read.
+    #[error("{file}: cannot read model: {reason}")]
+    Io {
+        /// The model file.
+        file: String,
+        /// The underlying error.
+        reason: std::io::Error,
+    },
+    /// A line of the file is unacceptable.
+    #[error("{file}:{line}: {reason}")]
+    Line {
+        /// The model file.
+        file: String,
+        /// One-based line number.
+        line: usize,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The file as a whole is unacceptable (no triangles, parser failure).
+    #[error("{file}: {reason}")]
+    File {
+        /// The model file.
+        file: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// An MTL material, with texture paths resolved against the OBJ's folder.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ObjMaterial {
+    /// Name in the MTL file.
+    pub name: String,
+    /// `Ka`, if given.
+    pub ka: Option<Vec3>,
+    /// `Kd` (default 0.8 grey, the MTL convention when absent).
+    pub kd: Vec3,
+    /// `Ks` (default black).
+    pub ks: Vec3,
+    /// `Ns` (default 32).
+    pub shininess: f32,
+    /// `d` (default 1, opaque).
+    pub opacity: f32,
+    /// `map_Kd`.
+    pub texture: Option<PathBuf>,
+    /// `norm` / `map_Bump` / `bump`, read as a tangent-space normal map.
+    pub normal_map: Option<PathBuf>,
+}
+
+/// One object or group of the file, triangulated: three corners per
+/// triangle, counter-clockwise (the OBJ convention).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ObjPart {
+    /// The object/group name (may be empty).
+    pub name: String,
+    /// Corner positions.
+    pub positions: Vec<Vec3>,
+    /// Corner texture coordinates, `None` when any face of the file lacks
+    /// them.
+    pub uvs: Option<Vec<Vec2>>,
+    /// Corner normals from the file, `None` when any face of the file
+    /// lacks them.
+    pub normals: Option<Vec<Vec3>>,
+    /// Index into [`ObjModel::materials`].
+    pub material: Option<usize>,
+}
+
+impl ObjPart {
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.positions.len() / 3
+    }
+}
+
+/// A loaded OBJ file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ObjModel {
+    /// The parts with at least one triangle, in file order.
+    pub parts: Vec<ObjPart>,
+    /// Materials of the MTL libraries the file names.
+    pub materials: Vec<ObjMaterial>,
+}
+
+impl ObjModel {
+    /// True when every corner of every part has a file normal.
+    pub fn has_all_normals(&self) -> bool {
+        self.parts.iter().all(|p| p.normals.is_some())
+    }
+
+    /// Length of the diagonal of the bounding box of all positions.
+    pub fn diagonal(&self) -> f32 {
+        let mut points = self.parts.iter().flat_map(|p| p.positions.iter().copied());
+        let Some(first) = points.next() else {
+            return 0.0;
+        };
+        let (lo, hi) = points.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        (hi - lo).length()
+    }
+}
+
+/// Loads `path`: pre-scan, then `tobj` with triangulation, then the MTL
+/// libraries it names (relative to the OBJ's folder).
+pub fn load_obj(path: &Path) -> Result<ObjModel, ObjError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|reason| ObjError::Io {
+        file: file.clone(),
+        reason,
+    })?;
+    let base_dir = path.parent().unwrap_or_else(|| Path::new(""));
+    parse_obj(&text, &file, base_dir)
+}
+
+/// [`load_obj`] on text already read; `file` is only used in messages and
+/// `base_dir` is where MTL libraries and textures are looked for.
+pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, ObjError> {
+    let corners = prescan(text, file)?;
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let mut reader = std::io::BufReader::new(text.as_bytes());
+    let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |mtl| {
+        tobj::load_mtl(base_dir.join(mtl))
+    })
+    .map_err(|e| ObjError::File {
+        file: file.to_owned(),
+        reason: format!("cannot parse OBJ: {e}"),
+    })?;
+    // A missing or broken MTL library is an error rather than a silent grey
+    // model: the file asked for those materials.
+    let materials = materials.map_err(|e| ObjError::File {
+        file: file.to_owned(),
+        reason: format!("cannot load its MTL library: {e}"),
+    })?;
+    let materials = materials
+        .iter()
+        .map(|m| material(m, file, base_dir))
+        .collect::<Result<Vec<_>, _>>()?;
+
+    let mut parts = Vec::new();
+    for model in models {
+        let mesh = &model.mesh;
+        if mesh.indices.is_empty() {
+            continue;
+        }
+        let corner = |array: &[f32], index: u32, n: usize| -> Option<Vec<f32>> {
+            let start = index as usize * n;
+            array.get(start..start + n).map(<[f32]>::to_vec)
+        };
+        let out_of_range = |what: &str| ObjError::File {
+            file: file.to_owned(),
+            reason: format!("object \"{}\": {what} index out of range", model.name),
+        };
+        let positions = mesh
+            .indices
+            .iter()
+            .map(|&i| corner(&mesh.positions, i, 3).map(|p| Vec3::new(p[0], p[1], p[2])))
+            .collect::<Option<Vec<_>>>()
+            .ok_or_else(|| out_of_range("vertex"))?;
+        let full = |indices: &[u32]| indices.len() == mesh.indices.len();
+        // `tobj` fills a corner without an index with a neighbour's value,
+        // so attributes are only used when the pre-scan saw them on every
+        // corner of the file.
+        let uvs = if corners.all_uv && full(&mesh.texcoord_indices) && !mesh.texcoords.is_empty() {
+            Some(
+                mesh.texcoord_indices
+                    .iter()
+                    .map(|&i| corner(&mesh.texcoords, i, 2).map(|t| Vec2::new(t[0], t[1])))
+                    .collect::<Option<Vec<_>>>()
+                    .ok_or_else(|| out_of_range("texture coordinate"))?,
+            )
+        } else {
+            None
+        };
+        let normals =
+            if corners.all_normal && full(&mesh.normal_indices) && !mesh.normals.is_empty() {
+                Some(
+                    mesh.normal_indices
+                        .iter()
+                        .map(|&i| corner(&mesh.normals, i, 3).map(|n| Vec3::new(n[0], n[1], n[2])))
+                        .collect::<Option<Vec<_>>>()
+                        .ok_or_else(|| out_of_range("normal"))?,
+                )
+            } else {
+                None
+            };
+        parts.push(ObjPart {
+            name: model.name.clone(),
+            positions,
+            uvs,
+            normals,
+            material: mesh.material_id.filter(|&m| m < materials.len()),
+        });
+    }
+    if parts.is_empty() {
+        return Err(ObjError::File {
+            file: file.to_owned(),
+            reason: "no faces (an OBJ model needs at least one triangle)".into(),
+        });
+    }
+    Ok(ObjModel { parts, materials })
+}
+
+fn material(m: &tobj::Material, file: &str, base_dir: &Path) -> Result<ObjMaterial, ObjError> {
+    let bad = |what: &str| ObjError::File {
+        file: file.to_owned(),
+        reason: format!("material \"{}\": {what} must be finite and >= 0", m.name),
+    };
+    let colour = |c: Option<[f32; 3]>, what: &str| -> Result<Option<Vec3>, ObjError> {
+        match c.map(Vec3::from) {
+            Some(v) if !v.is_finite() || v.min_element() < 0.0 => Err(bad(what)),
+            other => Ok(other),
+        }
+    };
+    let shininess = m.shininess.unwrap_or(32.0);
+    if !shininess.is_finite() || shininess < 0.0 {
+        return Err(bad("Ns"));
+    }
+    let opacity = m.dissolve.unwrap_or(1.0);
+    if !opacity.is_finite() {
+        return Err(bad("d"));
+    }
+    let texture = |name: &Option<String>, what: &str| -> Result<Option<PathBuf>, ObjError> {
+        let Some(name) = name else { return Ok(None) };
+        // Texture statements may carry options (`-bm 1.0 file.png`); the
+        // file name is the last word.
+        let Some(last) = name.split_whitespace().last() else {
+            return Ok(None);
+        };
+        let resolved = base_dir.join(last);
+        if !resolved.is_file() {
+            return Err(ObjError::File {
+                file: file.to_owned(),
+                reason: format!(
+                    "material \"{}\": {what} file not found: {}",
+                    m.name,
+                    resolved.display()
+                ),
+            });
+        }
+        Ok(Some(resolved))
+    };
+    let normal_name = m
+        .normal_texture
+        .clone()
+        .or_else(|| m.unknown_param.get("norm").cloned());
+    Ok(ObjMaterial {
+        name: m.name.clone(),
+        ka: colour(m.ambient, "Ka")?,
+        kd: colour(m.diffuse, "Kd")?.unwrap_or(Vec3::splat(0.8)),
+        ks: colour(m.specular, "Ks")?.unwrap_or(Vec3::ZERO),
+        // Ns = 0 is common in exported files and means "no highlight";
+        // the shader's pow(0, 0) is undefined, so the smallest exponent is 1.
+        shininess: shininess.max(1.0),
+        opacity: opacity.clamp(0.0, 1.0),
+        texture: texture(&m.diffuse_texture, "map_Kd")?,
+        normal_map: texture(&normal_name, "normal map")?,
+    })
+}
+
+/// Which attributes every face corner of a file has.
+struct Corners {
+    all_uv: bool,
+    all_normal: bool,
+}
+
+/// Checks every `v`, `vt`, `vn` and `f` line: numbers finite, indices
+/// (1-based, or negative for relative) within the elements defined so far,
+/// and at least one face.
+fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
+    let mut counts = [0usize; 3]; // v, vt, vn
+    let mut faces = 0usize;
+    let mut all = Corners {
+        all_uv: true,
+        all_normal: true,
+    };
+    for (number, line) in text.lines().enumerate() {
+        let error = |reason: String| ObjError::Line {
+            file: file.to_owned(),
+            line: number + 1,
+            reason,
+        };
+        let line = line.split('#').next().unwrap_or("");
+        let mut words = line.split_whitespace();
+        let Some(keyword) = words.next() else {
+            continue;
+        };
+        let (slot, least) = match keyword {
+            "v" => (0, 3),
+            "vt" => (1, 1),
+            "vn" => (2, 3),
+            "f" => {
+                let mut corners = 0;
+                for word in words {
+                    corners += 1;
+                    let mut slots = word.split('/');
+                    slots.next();
+                    all.all_uv &= slots.next().is_some_and(|t| !t.is_empty());
+                    all.all_normal &= slots.next().is_some_and(|n| !n.is_empty());
+                    for (k, index) in word.split('/').enumerate().take(3) {
+                        if index.is_empty() {
+                            if k == 0 {
+                                return Err(error(format!(
+                                    "face corner \"{word}\" has no vertex index"
+                                )));
+                            }
+                            continue;
+                        }
+                        let what = ["vertex", "texture coordinate", "normal"][k];
+                        let i: i64 = index.parse().map_err(|_| {
+                            error(format!(
+                                "face corner \"{word}\": \"{index}\" is not an integer"
+                            ))
+                        })?;
+                        let defined = counts[k] as i64;
+                        let valid = if i > 0 {
+                            i <= defined
+                        } else {
+                            i < 0 && -i <= defined
+                        };
+                        if !valid {
+                            return Err(error(format!(
+                                "face corner \"{word}\": {what} index {i} is out of range \
+                                 ({defined} defined so far)"
+                            )));
+                        }
+                    }
+                }
+                if corners < 3 {
+                    return Err(error(format!(
+                        "a face needs at least 3 corners, got {corners}"
+                    )));
+                }
+                faces += 1;
+                continue;
+            }
+            _ => continue,
+        };
+        let name = ["vertex", "texture coordinate", "normal"][slot];
+        let mut n = 0;
+        for word in words {
+            let x: f64 = word
+                .parse()
+                .map_err(|_| error(format!("{name}: \"{word}\" is not a number")))?;
+            if !x.is_finite() || (x as f32).is_infinite() {
+                return Err(error(format!("{name}: \"{word}\" is not a finite number")));
+            }
+            n += 1;
+        }
+        if n < least {
+            return Err(error(format!(
+                "{name} needs at least {least} numbers, got {n}"
+            )));
+        }
+        counts[slot] += 1;
+    }
+    if faces == 0 {
+        return Err(ObjError::File {
+            file: file.to_owned(),
+            reason: "no faces (an OBJ model needs at least one triangle)".into(),
+        });
+    }
+    Ok(all)
+}
+
+/// How an [`ObjModel`] becomes meshes (`smoothing`, `crease_angle`,
+/// `weld_tolerance` in the scene file).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModelOptions {
+    /// Smoothing mode; `None` picks `File` when every corner has a file
+    /// normal, otherwise `Model`.
+    pub smoothing: Option<Smoothing>,
+    /// Crease angle in degrees.
+    pub crease_degrees: f32,
+    /// Weld tolerance relative to the bounding-box diagonal.
+    pub weld_tolerance: f32,
+}
+
+/// Default crease angle, degrees: smooth curvature (tessellated spheres and
+/// tori differ by far less between neighbouring faces) is averaged, the
+/// edges of boxes and prisms (90 degrees) stay sharp.
+pub const DEFAULT_CREASE_DEGREES: f32 = 60.0;
+/// Default weld tolerance, relative to the bounding-box diagonal: well above
+/// f32 round-off of exported coordinates, well below any real feature.
+pub const DEFAULT_WELD_TOLERANCE: f32 = 1e-5;
+
+impl Default for ModelOptions {
+    fn default() -> Self {
+        ModelOptions {
+            smoothing: None,
+            crease_degrees: DEFAULT_CREASE_DEGREES,
+            weld_tolerance: DEFAULT_WELD_TOLERANCE,
+        }
+    }
+}
+
+/// One indexed mesh per part of `model`, with shading normals and tangent
+/// frames. `file` names the model in messages.
+pub fn model_meshes(
+    model: &ObjModel,
+    options: &ModelOptions,
+    file: &str,
+) -> Result<Vec<(Mesh, TangentStats)>, ObjError> {
+    let mode = options.smoothing.unwrap_or(if model.has_all_normals() {
+        Smoothing::File
+    } else {
+        Smoothing::Model
+    });
+    if mode == Smoothing::File && !model.has_all_normals() {
+        let part = model.parts.iter().find(|p| p.normals.is_none());
+        return Err(ObjError::File {
+            file: file.to_owned(),
+            reason: format!(
+                "smoothing = \"file\" but object \"{}\" has faces without normals \
+                 (use \"model\", \"object\" or \"face\")",
+                part.map_or("", |p| p.name.as_str())
+            ),
+        });
+    }
+    let diagonal = model.diagonal();
+    if !diagonal.is_finite() {
+        return Err(ObjError::File {
+            file: file.to_owned(),
+            reason: "the coordinates span a range too large to represent (the bounding box \
+                     diagonal overflows)"
+                .into(),
+        });
+    }
+    let positions: Vec<&[Vec3]> = model.parts.iter().map(|p| p.positions.as_slice()).collect();
+    let generated = smooth_normals(
+        &positions,
+        &SmoothingOptions {
+            mode,
+            crease_degrees: options.crease_degrees,
+            weld_distance: options.weld_tolerance * diagonal,
+        },
+    );
+    Ok(model
+        .parts
+        .iter()
+        .zip(generated)
+        .map(|(part, generated)| {
+            let normals = match (&part.normals, mode) {
+                // A file normal that cannot be normalised takes the face
+                // normal instead, so that no vertex is ever NaN.
+                (Some(file_normals), Smoothing::File) => file_normals
+                    .iter()
+                    .zip(&generated)
+                    .map(|(n, face)| n.try_normalize().unwrap_or(*face))
+                    .collect(),
+                _ => generated,
+            };
+            build_mesh(&part.positions, &normals, part.uvs.as_deref())
+        })
+        .collect())
+}

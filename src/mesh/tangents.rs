@@ -1,0 +1,191 @@
+//! Indexed meshes with tangent frames from triangle soups.
+//!
+//! Each triangle's tangent `T` and bitangent `B` follow its UV deltas
+//! (`T` along increasing u, `B` along increasing v). Corners are merged
+//! into one vertex only when position, normal, UV and handedness all agree,
+//! so averaging never crosses a UV seam or a mirrored seam (where `+T` and
+//! `-T` would cancel). Triangles with zero area or zero UV area add nothing;
+//! a vertex left with no valid contribution gets an orthonormal frame built
+//! from its normal alone. Triangles collapsed to a line or a point are left
+//! out: they cover no pixels and have no normal of their own. `T` is made orthogonal to the normal
+//! (Gram-Schmidt) and `tangent.w` holds the handedness, so that
+//! `B = w * cross(N, T)`.
+
+use glam::{DVec3, Vec2, Vec3};
+
+use super::smoothing::FastMap;
+use super::{Mesh, Vertex};
+
+/// Statistics of one [`build_mesh`] call, for reports and tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TangentStats {
+    /// Triangles collapsed to a line or point, left out of the mesh.
+    pub collapsed: usize,
+    /// Triangles with zero area or zero UV area (no tangent contribution).
+    pub degenerate: usize,
+    /// Triangles whose UVs are mirrored (handedness -1).
+    pub mirrored: usize,
+    /// Vertices whose frame came from the normal alone.
+    pub from_normal: usize,
+}
+
+/// Joins a soup (three corners per triangle; `normals` unit length, never
+/// NaN) into an indexed [`Mesh`] with tangent frames. `uvs` are the file's
+/// (v up, as the renderer's texture coordinates; the shader flips v to
+/// address image rows); without them every frame comes from the normal.
+pub fn build_mesh(
+    positions: &[Vec3],
+    normals: &[Vec3],
+    uvs: Option<&[Vec2]>,
+) -> (Mesh, TangentStats) {
+    let mut stats = TangentStats::default();
+    let corners = positions.len() / 3 * 3;
+    let uv = |c: usize| uvs.map_or(Vec2::ZERO, |u| u[c]);
+
+    // Per triangle: unit T and B (zero when degenerate), handedness.
+    let mut triangle = Vec::with_capacity(corners / 3);
+    let mut collapsed = Vec::with_capacity(corners / 3);
+    for t in 0..corners / 3 {
+        let [a, b, c] = [0, 1, 2].map(|k| positions[3 * t + k].as_dvec3());
+        let [ta, tb, tc] = [0, 1, 2].map(|k| uv(3 * t + k).as_dvec2());
+        let (e1, e2) = (b - a, c - a);
+        let (d1, d2) = (tb - ta, tc - ta);
+        let det = d1.x * d2.y - d2.x * d1.y;
+        let area = e1.cross(e2).length();
+        let longest = e1
+            .length_squared()
+            .max(e2.length_squared())
+            .max((c - b).length_squared());
+        // Same test as the tessellator: only truly collapsed triangles,
+        // which have no normal of their own to shade with.
+        collapsed.push(area.is_nan() || area <= 1e-10 * longest);
+        let uv_scale = d1.length_squared().max(d2.length_squared());
+        let valid = area > 0.0 && det.abs() > 1e-12 * uv_scale && det.is_finite();
+        if !valid {
+            stats.degenerate += 1;
+            triangle.push((DVec3::ZERO, DVec3::ZERO, 1.0));
+            continue;
+        }
+        let tangent = (e1 * d2.y - e2 * d1.y) / det;
+        let bitangent = (e2 * d1.x - e1 * d2.x) / det;
+        let sign = if det < 0.0 { -1.0 } else { 1.0 };
+        if sign < 0.0 {
+            stats.mirrored += 1;
+        }
+        triangle.push((
+            tangent.try_normalize().unwrap_or(DVec3::ZERO),
+            bitangent.try_normalize().unwrap_or(DVec3::ZERO),
+            sign,
+        ));
+    }
+
+    // Vertex key: exact bits of position, normal, UV, and the handedness.
+    let mut index_of: FastMap<[u32; 9], u32> =
+        FastMap::with_capacity_and_hasher(corners / 4, Default::default());
+    let mut sums: Vec<(DVec3, DVec3)> = Vec::new();
+    let mut vertices: Vec<Vertex> = Vec::new();
+    let mut indices = Vec::with_capacity(corners);
+    for c in 0..corners {
+        if collapsed[c / 3] {
+            continue;
+        }
+        let (t, b, sign) = triangle[c / 3];
+        let p = positions[c] + Vec3::ZERO;
+        let n = normals[c] + Vec3::ZERO;
+        let u = uv(c) + Vec2::ZERO;
+        let bits = |x: f32| x.to_bits();
+        let key = [
+            bits(p.x),
+            bits(p.y),
+            bits(p.z),
+            bits(n.x),
+            bits(n.y),
+            bits(n.z),
+            bits(u.x),
+            bits(u.y),
+            (sign < 0.0) as u32,
+        ];
+        let index = *index_of.entry(key).or_insert_with(|| {
+            vertices.push(Vertex {
+                position: p.to_array(),
+                normal: n.to_array(),
+                tangent: [0.0, 0.0, 0.0, sign as f32],
+                uv: [u.x, u.y],
+            });
+            sums.push((DVec3::ZERO, DVec3::ZERO));
+            vertices.len() as u32 - 1
+        });
+        // Weighted by the corner angle, like the normals, so that how the
+        // surface is cut into triangles does not bias the frame.
+        let [x, y, z] = [0, 1, 2].map(|k| positions[c / 3 * 3 + k].as_dvec3());
+        let corner = c % 3;
+        let (here, next, prev) = match corner {
+            0 => (x, y, z),
+            1 => (y, z, x),
+            _ => (z, x, y),
+        };
+        let angle = f64::from(
+            (next - here)
+                .as_vec3()
+                .angle_between((prev - here).as_vec3()),
+        );
+        let weight = if angle.is_finite() { angle } else { 0.0 };
+        let s = &mut sums[index as usize];
+        s.0 += t * weight;
+        s.1 += b * weight;
+        indices.push(index);
+    }
+
+    for (vertex, (t, b)) in vertices.iter_mut().zip(sums) {
+        let n = Vec3::from(vertex.normal).as_dvec3();
+        let sign = f64::from(vertex.tangent[3]);
+        // Gram-Schmidt against the normal; if T vanished (or is parallel to
+        // the normal), fall back to B turned into a tangent, then to any
+        // direction orthogonal to the normal.
+        let from_t = (t - n * n.dot(t)).try_normalize();
+        let from_b = (b - n * n.dot(b))
+            .try_normalize()
+            .map(|b| b.cross(n) * sign);
+        let tangent = match from_t.or(from_b) {
+            Some(tangent) => tangent,
+            None => {
+                stats.from_normal += 1;
+                n.any_orthonormal_vector()
+            }
+        };
+        vertex.tangent = [
+            tangent.x as f32,
+            tangent.y as f32,
+            tangent.z as f32,
+            sign as f32,
+        ];
+    }
+    stats.collapsed = collapsed.iter().filter(|&&c| c).count();
+    (Mesh { vertices, indices }, stats)
+}
+
+/// Largest deviation from an orthonormal frame over the mesh: `| |N| - 1 |`,
+/// `| |T| - 1 |` and `|N . T|`, and 1 for any non-finite attribute.
+pub fn max_orthonormality_error(mesh: &Mesh) -> f32 {
+    mesh.vertices
+        .iter()
+        .map(|v| {
+            let all = v
+                .position
+                .iter()
+                .chain(&v.normal)
+                .chain(&v.tangent)
+                .chain(&v.uv);
+            if !all.into_iter().all(|x| x.is_finite()) {
+                return 1.0;
+            }
+            let n = Vec3::from(v.normal);
+            let t = Vec3::from_slice(&v.tangent[..3]);
+            let w_error = (v.tangent[3].abs() - 1.0).abs();
+            ((n.length() - 1.0).abs())
+                .max((t.length() - 1.0).abs())
+                .max(n.dot(t).abs())
+                .max(w_error)
+        })
+        .fold(0.0, f32::max)
+}
