@@ -30,6 +30,8 @@ enum Command {
     Sweep(cli::sweep::SweepArgs),
     /// Time scenes and the empty pass; write JSON; gate against a baseline.
     Bench(cli::bench::BenchArgs),
+    /// Convert a height map (PNG) into a tangent-space normal map.
+    Normalmap(cli::normalmap::NormalMapArgs),
 }
 
 /// Exit status for errors (bad input, failed render). 2 rather than 1 so
@@ -63,5 +65,8 @@ fn run(cli: Cli) -> anyhow::Result<std::process::ExitCode> {
         Command::Compare(args) => cli::compare::run(args),
         Command::Sweep(args) => cli::sweep::run(args).map(|()| std::process::ExitCode::SUCCESS),
         Command::Bench(args) => cli::bench::run(args),
+        Command::Normalmap(args) => {
+            cli::normalmap::run(args).map(|()| std::process::ExitCode::SUCCESS)
+        }
     }
 }

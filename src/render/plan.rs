@@ -69,6 +69,14 @@ pub struct Draw {
     pub lights: Vec<usize>,
 }
 
+/// Where a normal map comes from: a normal-map file, or a height map
+/// converted when the textures are loaded (`height_scale` set).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NormalMapSource {
+    pub path: PathBuf,
+    pub height_scale: Option<f32>,
+}
+
 /// The attachment names passes refer to.
 pub mod attachment {
     /// Float HDR colour, before tone mapping.
@@ -180,7 +188,7 @@ pub struct FramePlan {
     /// Distinct base-colour textures, each loaded once.
     pub textures: Vec<PathBuf>,
     /// Distinct normal maps, each loaded once (linear, not sRGB).
-    pub normal_maps: Vec<PathBuf>,
+    pub normal_maps: Vec<NormalMapSource>,
     /// Deferred lighting: screen tiles grouped by the lights that reach
     /// them (empty in forward mode).
     pub tile_groups: Vec<TileGroup>,
@@ -197,7 +205,7 @@ impl FramePlan {
     pub fn new(scene: &Scene, geometry: &SceneGeometry, keep_hdr: bool) -> FramePlan {
         let mut textures: Vec<PathBuf> = Vec::new();
         let mut texture_index = BTreeMap::new();
-        let mut normal_maps: Vec<PathBuf> = Vec::new();
+        let mut normal_maps: Vec<NormalMapSource> = Vec::new();
         let mut normal_map_index = BTreeMap::new();
         let mut opaque = Vec::new();
         let mut transparent = Vec::new();
@@ -217,8 +225,13 @@ impl FramePlan {
                 })
             });
             let normal_map = material.normal_map.as_ref().map(|path| {
-                *normal_map_index.entry(path.clone()).or_insert_with(|| {
-                    normal_maps.push(path.clone());
+                let source = NormalMapSource {
+                    path: path.clone(),
+                    height_scale: material.height_scale,
+                };
+                let key = (path.clone(), material.height_scale.map(f32::to_bits));
+                *normal_map_index.entry(key).or_insert_with(|| {
+                    normal_maps.push(source);
                     normal_maps.len() - 1
                 })
             });

@@ -7,6 +7,7 @@ use super::geometry::SceneGeometry;
 use super::gpu_types::{FrameUniforms, GpuLight, ObjectHeader};
 use super::plan::{Draw, FramePlan};
 use super::RenderError;
+use crate::mesh::height::{encode_normal_map, GreenAxis, HeightEdge, HeightFilter, HeightMap};
 use crate::scene::{Light, Scene, TextureFilter};
 use crate::vk::{
     self, Buffer, BufferUsage, CommandBuffer, Context, DescriptorBinding, DescriptorPool,
@@ -108,7 +109,29 @@ impl SceneResources {
         let normal_maps = plan
             .normal_maps
             .iter()
-            .map(|p| load_texture(ctx, p, NORMAL_MAP_FORMAT))
+            .map(|source| match source.height_scale {
+                None => load_texture(ctx, &source.path, NORMAL_MAP_FORMAT),
+                Some(scale) => {
+                    let heights =
+                        HeightMap::load(&source.path).map_err(|e| RenderError::Texture {
+                            path: source.path.clone(),
+                            reason: e.to_string(),
+                        })?;
+                    let normals = heights
+                        .normals(scale, HeightFilter::Central, HeightEdge::Wrap)
+                        .map_err(|e| RenderError::Texture {
+                            path: source.path.clone(),
+                            reason: e.to_string(),
+                        })?;
+                    upload_texture(
+                        ctx,
+                        heights.width,
+                        heights.height,
+                        &encode_normal_map(&normals, GreenAxis::Up),
+                        NORMAL_MAP_FORMAT,
+                    )
+                }
+            })
             .collect::<Result<Vec<_>, _>>()?;
 
         let all_stages = ShaderStageFlags::VERTEX | ShaderStageFlags::FRAGMENT;
@@ -392,6 +415,18 @@ fn load_texture(
         .map_err(|e| err(e.to_string()))?
         .to_rgba8();
     let (w, h) = img.dimensions();
+    upload_texture(ctx, w, h, img.as_raw(), format)
+}
+
+/// A `w`×`h` texture from RGBA8 `pixels` (top row first), with a full mip
+/// chain built by blits where the format supports linear blits.
+fn upload_texture(
+    ctx: &Arc<Context>,
+    w: u32,
+    h: u32,
+    pixels: &[u8],
+    format: Format,
+) -> Result<Image, RenderError> {
     let mip_levels = 32 - w.max(h).leading_zeros();
     let linear_blits = vk::supports_linear_filter(ctx, format);
     let mip_levels = if linear_blits { mip_levels } else { 1 };
@@ -409,7 +444,7 @@ fn load_texture(
             aspect: ImageAspectFlags::COLOR,
         },
     )?;
-    let staging = Buffer::with_data(ctx, "texture staging", img.as_raw(), BufferUsage::Upload)?;
+    let staging = Buffer::with_data(ctx, "texture staging", pixels, BufferUsage::Upload)?;
     CommandBuffer::run_once(ctx, |cmd| {
         cmd.copy_buffer_to_image(&staging, &texture);
         cmd.generate_mipmaps(&texture);

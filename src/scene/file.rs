@@ -167,6 +167,8 @@ struct MaterialFile {
     texture: Option<PathBuf>,
     normal_map: Option<PathBuf>,
     normal_map_green: Option<GreenFile>,
+    height_map: Option<PathBuf>,
+    height_scale: Option<f64>,
     #[serde(default = "one")]
     opacity: f64,
     #[serde(default = "default_shading")]
@@ -704,9 +706,35 @@ impl Check<'_> {
             Ok(Some(resolved))
         };
         let texture = file_at("texture", raw.texture)?;
-        let normal_map = file_at("normal_map", raw.normal_map)?;
+        let mut normal_map = file_at("normal_map", raw.normal_map)?;
         if raw.normal_map_green.is_some() && normal_map.is_none() {
             return Err(self.invalid(field("normal_map_green"), "given without a normal_map"));
+        }
+        let height_map = file_at("height_map", raw.height_map)?;
+        let height_scale = match (&height_map, raw.height_scale) {
+            (Some(_), _) if normal_map.is_some() => {
+                return Err(self.invalid(
+                    field("height_map"),
+                    "give a normal_map or a height_map, not both",
+                ))
+            }
+            (None, Some(_)) => {
+                return Err(self.invalid(field("height_scale"), "given without a height_map"))
+            }
+            (Some(_), scale) => {
+                let scale = scale.unwrap_or(1.0);
+                if !(scale.is_finite() && scale > 0.0 && scale <= MAX_LENGTH) {
+                    return Err(self.invalid(
+                        field("height_scale"),
+                        format!("must be greater than 0 and at most {MAX_LENGTH:e}, got {scale}"),
+                    ));
+                }
+                Some(scale as f32)
+            }
+            (None, None) => None,
+        };
+        if height_map.is_some() {
+            normal_map = height_map;
         }
         Ok(Material {
             name: raw.name,
@@ -718,6 +746,7 @@ impl Check<'_> {
             opacity,
             normal_map,
             normal_map_green_down: raw.normal_map_green == Some(GreenFile::Down),
+            height_scale,
             shading: raw.shading,
         })
     }
@@ -1046,6 +1075,7 @@ impl Check<'_> {
             opacity: mtl.opacity,
             normal_map: mtl.normal_map.clone(),
             normal_map_green_down: false,
+            height_scale: None,
             shading: ShadingModel::Phong,
         });
         by_name.insert(name, materials.len() - 1);

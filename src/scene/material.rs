@@ -44,6 +44,11 @@ pub struct Material {
     /// True when the map's green channel points down the image (`-v`,
     /// DirectX style, `normal_map_green = "down"`).
     pub normal_map_green_down: bool,
+    /// When set, `normal_map` is a height map (`height_map`) turned into a
+    /// normal map when the scene is rendered, with this `height_scale`
+    /// (texel widths spanned by the full height range; see
+    /// `crate::mesh::height`).
+    pub height_scale: Option<f32>,
     /// Shading model.
     pub shading: ShadingModel,
 }

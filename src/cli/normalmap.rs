@@ -1,0 +1,53 @@
+//! `aerial normalmap`: convert a height map (PNG, 8- or 16-bit grey) into a
+//! tangent-space normal map (RGBA8 PNG) with the convention the renderer
+//! reads (`src/mesh/height.rs`).
+
+use aerial::mesh::height::{encode_normal_map, GreenAxis, HeightEdge, HeightFilter, HeightMap};
+use aerial::render::{output, Pixels};
+use anyhow::bail;
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct NormalMapArgs {
+    /// Height map: PNG, grey (colour is reduced to luma), 8 or 16 bits.
+    input: PathBuf,
+    /// The normal map to write (RGBA8 PNG).
+    #[arg(long)]
+    out: PathBuf,
+    /// How many texel widths the full height range 0..1 spans.
+    #[arg(long, default_value_t = 1.0)]
+    scale: f32,
+    /// Derivative estimate.
+    #[arg(long, value_enum, default_value = "central")]
+    filter: HeightFilter,
+    /// What lies beyond the edges: the image repeated, or its edge texel.
+    #[arg(long, value_enum, default_value = "wrap")]
+    edge: HeightEdge,
+    /// Which way the green channel points: up the image (OpenGL style, as
+    /// the renderer reads by default) or down (DirectX style).
+    #[arg(long, value_enum, default_value = "up")]
+    green: GreenAxis,
+}
+
+pub fn run(args: NormalMapArgs) -> anyhow::Result<()> {
+    if !(args.scale.is_finite() && args.scale > 0.0) {
+        bail!("--scale: must be finite and > 0, got {}", args.scale);
+    }
+    if aerial::files::same_file(&args.input, &args.out) {
+        bail!(
+            "--out: {} is the input; write the normal map elsewhere",
+            args.out.display()
+        );
+    }
+    aerial::files::check_destination(&args.out)?;
+    let heights = HeightMap::load(&args.input)?;
+    let normals = heights.normals(args.scale, args.filter, args.edge)?;
+    let pixels = Pixels {
+        width: heights.width,
+        height: heights.height,
+        data: encode_normal_map(&normals, args.green),
+    };
+    output::write_png(&args.out, &pixels, &[])?;
+    eprintln!("wrote {}", args.out.display());
+    Ok(())
+}
