@@ -30,6 +30,9 @@ enum Command {
     Sweep(cli::sweep::SweepArgs),
     /// Time scenes and the empty pass; write JSON; gate against a baseline.
     Bench(cli::bench::BenchArgs),
+    /// Report what the OBJ loader makes of a model: counts, welded
+    /// boundaries, degenerate and mirrored triangles, frame errors, timings.
+    Mesh(cli::mesh::MeshArgs),
     /// Convert a height map (PNG) into a tangent-space normal map.
     Normalmap(cli::normalmap::NormalMapArgs),
 }
@@ -65,6 +68,7 @@ fn run(cli: Cli) -> anyhow::Result<std::process::ExitCode> {
         Command::Compare(args) => cli::compare::run(args),
         Command::Sweep(args) => cli::sweep::run(args).map(|()| std::process::ExitCode::SUCCESS),
         Command::Bench(args) => cli::bench::run(args),
+        Command::Mesh(args) => cli::mesh::run(args).map(|()| std::process::ExitCode::SUCCESS),
         Command::Normalmap(args) => {
             cli::normalmap::run(args).map(|()| std::process::ExitCode::SUCCESS)
         }

@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod compare;
+pub mod mesh;
 pub mod normalmap;
 pub mod render;
 pub mod sweep;

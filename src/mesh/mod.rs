@@ -7,6 +7,7 @@
 //! does not depend on how finely the surface is cut.
 
 pub mod height;
+pub mod inspect;
 pub mod obj;
 mod shapes;
 pub mod smoothing;

@@ -423,6 +423,17 @@ pub fn model_meshes(
     options: &ModelOptions,
     file: &str,
 ) -> Result<Vec<(Mesh, TangentStats)>, ObjError> {
+    let (_, normals) = model_normals(model, options, file)?;
+    Ok(model_frames(model, normals))
+}
+
+/// The smoothing stage: each part's per-corner shading normals (unit
+/// length, never NaN), and the mode used.
+pub fn model_normals(
+    model: &ObjModel,
+    options: &ModelOptions,
+    file: &str,
+) -> Result<(Smoothing, Vec<Vec<Vec3>>), ObjError> {
     let mode = options.smoothing.unwrap_or(if model.has_all_normals() {
         Smoothing::File
     } else {
@@ -457,22 +468,31 @@ pub fn model_meshes(
             weld_distance: options.weld_tolerance * diagonal,
         },
     );
-    Ok(model
+    let normals = model
         .parts
         .iter()
         .zip(generated)
-        .map(|(part, generated)| {
-            let normals = match (&part.normals, mode) {
-                // A file normal that cannot be normalised takes the face
-                // normal instead, so that no vertex is ever NaN.
-                (Some(file_normals), Smoothing::File) => file_normals
-                    .iter()
-                    .zip(&generated)
-                    .map(|(n, face)| n.try_normalize().unwrap_or(*face))
-                    .collect(),
-                _ => generated,
-            };
-            build_mesh(&part.positions, &normals, part.uvs.as_deref())
+        .map(|(part, generated)| match (&part.normals, mode) {
+            // A file normal that cannot be normalised takes the face
+            // normal instead, so that no vertex is ever NaN.
+            (Some(file_normals), Smoothing::File) => file_normals
+                .iter()
+                .zip(&generated)
+                .map(|(n, face)| n.try_normalize().unwrap_or(*face))
+                .collect(),
+            _ => generated,
         })
-        .collect())
+        .collect();
+    Ok((mode, normals))
+}
+
+/// The tangent stage: each part as an indexed mesh with tangent frames,
+/// from the normals of [`model_normals`].
+pub fn model_frames(model: &ObjModel, normals: Vec<Vec<Vec3>>) -> Vec<(Mesh, TangentStats)> {
+    model
+        .parts
+        .iter()
+        .zip(normals)
+        .map(|(part, normals)| build_mesh(&part.positions, &normals, part.uvs.as_deref()))
+        .collect()
 }

@@ -1,0 +1,134 @@
+//! What the OBJ loader makes of a model file, for `aerial mesh`: counts of
+//! objects, triangles and vertices, how many boundary points were welded
+//! across objects, degenerate and mirrored triangles, non-finite
+//! attributes, the worst tangent-frame error, and the time of each stage.
+
+use super::obj::{load_obj, model_frames, model_normals, ModelOptions, ObjError};
+use super::smoothing::weld;
+use super::tangents::max_orthonormality_error;
+use std::path::Path;
+use std::time::Instant;
+
+/// Seconds per stage.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct StageSeconds {
+    /// Reading and parsing the OBJ and its MTL.
+    pub load: f64,
+    /// Welding and normal generation.
+    pub smoothing: f64,
+    /// Tangent frames and splitting vertices at seams.
+    pub tangents: f64,
+}
+
+/// The report of one model.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct MeshReport {
+    pub file: String,
+    /// `face`, `object`, `model` or `file`.
+    pub smoothing: &'static str,
+    pub objects: usize,
+    /// Triangles in the file (after splitting polygons).
+    pub triangles: usize,
+    /// Triangle corners as read (three per triangle).
+    pub corners: usize,
+    /// Vertices after joining equal corners and splitting at UV seams and
+    /// handedness changes.
+    pub vertices: usize,
+    /// Weld points shared by corners of more than one object: the
+    /// boundaries `model` smoothing joins.
+    pub welded_boundary_points: usize,
+    /// Triangles collapsed to a line or a point (left out).
+    pub collapsed_triangles: usize,
+    /// Triangles with zero area or zero UV area (no tangent contribution).
+    pub degenerate_triangles: usize,
+    /// Triangles whose UVs are mirrored (handedness −1).
+    pub mirrored_triangles: usize,
+    /// Vertex attribute values that are NaN or infinite (0 by design).
+    pub non_finite_attributes: usize,
+    /// Largest | |N| − 1 |, | |T| − 1 |, |N·T| or | |w| − 1 | over the vertices.
+    pub max_orthonormality_error: f32,
+    pub seconds: StageSeconds,
+}
+
+/// Loads `path` as the renderer would with `options` and reports on it.
+pub fn inspect(path: &Path, options: &ModelOptions) -> Result<MeshReport, ObjError> {
+    let file = path.display().to_string();
+    let start = Instant::now();
+    let model = load_obj(path)?;
+    let load = start.elapsed().as_secs_f64();
+
+    let start = Instant::now();
+    let (mode, normals) = model_normals(&model, options, &file)?;
+    let smoothing = start.elapsed().as_secs_f64();
+
+    let start = Instant::now();
+    let meshes = model_frames(&model, normals);
+    let tangents = start.elapsed().as_secs_f64();
+
+    // Boundary points: weld groups holding corners of two or more parts.
+    let points: Vec<glam::Vec3> = model
+        .parts
+        .iter()
+        .flat_map(|p| p.positions.iter().copied())
+        .collect();
+    let part_of: Vec<usize> = model
+        .parts
+        .iter()
+        .enumerate()
+        .flat_map(|(i, p)| std::iter::repeat_n(i, p.positions.len()))
+        .collect();
+    let groups = weld(&points, options.weld_tolerance * model.diagonal());
+    let mut first_part = vec![usize::MAX; points.len()];
+    let mut shared = vec![false; points.len()];
+    for (point, &group) in groups.iter().enumerate() {
+        let part = part_of[point];
+        if first_part[group] == usize::MAX {
+            first_part[group] = part;
+        } else if first_part[group] != part {
+            shared[group] = true;
+        }
+    }
+
+    let mut report = MeshReport {
+        file,
+        smoothing: mode.name(),
+        objects: model.parts.len(),
+        triangles: model.parts.iter().map(|p| p.triangle_count()).sum(),
+        corners: points.len(),
+        vertices: 0,
+        welded_boundary_points: shared.iter().filter(|&&s| s).count(),
+        collapsed_triangles: 0,
+        degenerate_triangles: 0,
+        mirrored_triangles: 0,
+        non_finite_attributes: 0,
+        max_orthonormality_error: 0.0,
+        seconds: StageSeconds {
+            load,
+            smoothing,
+            tangents,
+        },
+    };
+    for (mesh, stats) in &meshes {
+        report.vertices += mesh.vertices.len();
+        report.collapsed_triangles += stats.collapsed;
+        report.degenerate_triangles += stats.degenerate;
+        report.mirrored_triangles += stats.mirrored;
+        report.non_finite_attributes += mesh
+            .vertices
+            .iter()
+            .map(|v| {
+                v.position
+                    .iter()
+                    .chain(&v.normal)
+                    .chain(&v.tangent)
+                    .chain(&v.uv)
+                    .filter(|x| !x.is_finite())
+                    .count()
+            })
+            .sum::<usize>();
+        report.max_orthonormality_error = report
+            .max_orthonormality_error
+            .max(max_orthonormality_error(mesh));
+    }
+    Ok(report)
+}

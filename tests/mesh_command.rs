@@ -1,0 +1,92 @@
+//! `aerial mesh`: the report on a small model whose counts are known by
+//! construction.
+
+use std::path::Path;
+
+/// Two objects, each a unit square of two triangles, side by side and
+/// sharing the edge x = 1 through duplicated vertices (2 boundary points).
+/// The second object's UVs run backwards in u (mirrored), and a third
+/// object holds one triangle with all three UVs equal (zero UV area).
+fn write_model(path: &Path) {
+    let text = "\
+o left
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+vt 0 0
+vt 1 0
+vt 1 1
+vt 0 1
+f 1/1 2/2 3/3
+f 1/1 3/3 4/4
+o right
+v 1 0 0
+v 2 0 0
+v 2 1 0
+v 1 1 0
+vt 1 0
+vt 0 0
+vt 0 1
+vt 1 1
+f 5/5 6/6 7/7
+f 5/5 7/7 8/8
+o flat_uv
+v 5 0 0
+v 6 0 0
+v 5 1 0
+vt 0.5 0.5
+f 9/9 10/9 11/9
+";
+    std::fs::write(path, text).unwrap();
+}
+
+#[test]
+fn mesh_reports_counts_known_by_construction() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("m.obj");
+    let json = dir.path().join("m.json");
+    write_model(&model);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
+        .arg("mesh")
+        .arg(&model)
+        .arg("--json")
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["objects"], 3);
+    assert_eq!(report["triangles"], 5);
+    assert_eq!(report["corners"], 15);
+    // Each square's four corners become four vertices; the flat-UV
+    // triangle three.
+    assert_eq!(report["vertices"], 11);
+    assert_eq!(report["welded_boundary_points"], 2);
+    assert_eq!(report["mirrored_triangles"], 2);
+    assert_eq!(report["degenerate_triangles"], 1);
+    assert_eq!(report["non_finite_attributes"], 0);
+    assert!(report["max_orthonormality_error"].as_f64().unwrap() < 1e-5);
+    for stage in ["load", "smoothing", "tangents"] {
+        let s = report["seconds"][stage].as_f64().unwrap();
+        assert!((0.0..10.0).contains(&s), "{stage}: {s}");
+    }
+
+    // A missing file and a bad option are errors (exit 2) naming the cause.
+    for (args, needle) in [
+        (vec![dir.path().join("none.obj").display().to_string()], "none.obj"),
+        (
+            vec![model.display().to_string(), "--crease".into(), "200".into()],
+            "--crease",
+        ),
+    ] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
+            .arg("mesh")
+            .args(&args)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2));
+        assert!(String::from_utf8_lossy(&out.stderr).contains(needle));
+    }
+}
