@@ -15,6 +15,7 @@ packages=(
   spirv-tools           # static SPIRV-Tools libraries shaderc links against
   pkg-config
   g++                   # nv-flip builds NVIDIA FLIP from C++ source
+  assimp-testmodels     # real OBJ models (multi-group, JPEG textures, odd files) for tests/real_models.rs
 )
 
 missing=()

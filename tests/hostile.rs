@@ -249,7 +249,7 @@ fn texture_formats_are_detected_from_the_content() {
         &["render", s(&fixture("texture_jpeg.toml")), "--out", s(&out)],
         &[],
     );
-    assert_fails(&jpeg, 2, &["jpeg_texture.png", "is a JPEG file"]);
+    assert_fails(&jpeg, 2, &["jpeg_texture.png", "not a readable JPEG file"]);
     assert!(!out.exists());
 }
 

@@ -54,7 +54,11 @@ fn mesh_reports_counts_known_by_construction() {
         .arg(&json)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(report["objects"], 3);
@@ -75,7 +79,10 @@ fn mesh_reports_counts_known_by_construction() {
 
     // A missing file and a bad option are errors (exit 2) naming the cause.
     for (args, needle) in [
-        (vec![dir.path().join("none.obj").display().to_string()], "none.obj"),
+        (
+            vec![dir.path().join("none.obj").display().to_string()],
+            "none.obj",
+        ),
         (
             vec![model.display().to_string(), "--crease".into(), "200".into()],
             "--crease",

@@ -122,10 +122,14 @@ impl ObjModel {
 /// libraries it names (relative to the OBJ's folder).
 pub fn load_obj(path: &Path) -> Result<ObjModel, ObjError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|reason| ObjError::Io {
+    let bytes = std::fs::read(path).map_err(|reason| ObjError::Io {
         file: file.clone(),
         reason,
     })?;
+    // OBJ is ASCII; bytes outside UTF-8 (Latin-1 comments and names from
+    // older exporters) only ever occur in comments and names, so they are
+    // replaced rather than refusing the file.
+    let text = String::from_utf8_lossy(&bytes);
     let base_dir = path.parent().unwrap_or_else(|| Path::new(""));
     parse_obj(&text, &file, base_dir)
 }
@@ -142,7 +146,12 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
     };
     let mut reader = std::io::BufReader::new(text.as_bytes());
     let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |mtl| {
-        tobj::load_mtl(base_dir.join(mtl))
+        // Read like the OBJ: non-UTF-8 bytes (in comments and names) are
+        // replaced rather than refusing the library.
+        let bytes =
+            std::fs::read(base_dir.join(mtl)).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        let text = String::from_utf8_lossy(&bytes);
+        tobj::load_mtl_buf(&mut std::io::BufReader::new(text.as_bytes()))
     })
     .map_err(|e| ObjError::File {
         file: file.to_owned(),
@@ -249,7 +258,8 @@ fn material(m: &tobj::Material, file: &str, base_dir: &Path) -> Result<ObjMateri
         let Some(last) = name.split_whitespace().last() else {
             return Ok(None);
         };
-        let resolved = base_dir.join(last);
+        // Windows exporters write `.\\dir\\file.jpg`.
+        let resolved = base_dir.join(last.replace('\\', "/"));
         if !resolved.is_file() {
             return Err(ObjError::File {
                 file: file.to_owned(),

@@ -68,35 +68,30 @@ pub fn inspect_texture(path: &Path) -> Result<TextureInfo, RenderError> {
     let mut head = [0u8; 8];
     let mut file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
     let n = file.read(&mut head).map_err(|e| err(e.to_string()))?;
-    match sniff(&head[..n]) {
-        TextureFormat::Png => {}
-        TextureFormat::Jpeg => {
-            return Err(err(
-                "is a JPEG file; textures must be PNG (convert it, e.g. with ImageMagick)".into(),
-            ))
-        }
+    let kind = match sniff(&head[..n]) {
+        TextureFormat::Png => "PNG",
+        TextureFormat::Jpeg => "JPEG",
         TextureFormat::OpenExr => {
             return Err(err(
-                "is an OpenEXR file; textures must be 8-bit PNG (sRGB base colour)".into(),
+                "is an OpenEXR file; textures must be 8- or 16-bit PNG or JPEG".into(),
             ))
         }
         TextureFormat::Unknown => {
             return Err(err(
-                "is not a PNG file (unrecognised content; the file name is not used to \
-                 decide the format)"
+                "is neither a PNG nor a JPEG file (unrecognised content; the file name \
+                 is not used to decide the format)"
                     .into(),
             ))
         }
-    }
-    let file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
-    let reader = png::Decoder::new(std::io::BufReader::new(file))
-        .read_info()
-        .map_err(|e| err(format!("not a readable PNG: {e}")))?;
-    let info = reader.info();
-    Ok(TextureInfo {
-        width: info.width,
-        height: info.height,
-    })
+    };
+    // The header alone: the size is known before anything is decoded.
+    let (width, height) = image::ImageReader::open(path)
+        .map_err(|e| err(e.to_string()))?
+        .with_guessed_format()
+        .map_err(|e| err(e.to_string()))?
+        .into_dimensions()
+        .map_err(|e| err(format!("not a readable {kind} file: {e}")))?;
+    Ok(TextureInfo { width, height })
 }
 
 /// Decoded RGBA8 bytes of a texture, plus its mip chain (a third more).
