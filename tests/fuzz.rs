@@ -1,7 +1,8 @@
-//! A mutation fuzzer for the input readers: the scene loader, the PNG
-//! readers (texture header inspection, metadata chunks, the image
-//! comparison's decoder) and the OpenEXR readers (the tone-map input and
-//! the image comparison's decoder).
+//! A mutation fuzzer for the input readers: the scene loader, the OBJ/MTL
+//! loader with smoothing and tangent frames, the texture
+//! readers (PNG and JPEG: header inspection and decoding as the renderer
+//! does them, PNG metadata chunks, the image comparison's decoder) and the
+//! OpenEXR readers (the tone-map input and the image comparison's decoder).
 //!
 //! Why this tool: it runs on stable Rust with nothing to install (cargo
 //! fuzz needs a nightly compiler; AFL needs its own toolchain), so anyone
@@ -20,11 +21,12 @@
 //! AERIAL_FUZZ_ITERATIONS=1000000 cargo test --release --test fuzz -- --ignored --nocapture
 //! ```
 //!
-//! (`AERIAL_FUZZ_TARGETS=scene,png,exr` picks targets, `AERIAL_FUZZ_SEED`
+//! (`AERIAL_FUZZ_TARGETS=scene,obj,png,exr` picks targets, `AERIAL_FUZZ_SEED`
 //! the seed)
 //!
 //! and saves any input that panicked to `target/fuzz-crashes/` for replay.
 
+use aerial::mesh::obj::{model_meshes, parse_obj, ModelOptions};
 use aerial::render::output::{read_exr, read_png_text, write_exr, write_png};
 use aerial::render::preflight::inspect_texture;
 use aerial::render::Pixels;
@@ -218,6 +220,20 @@ fn image_seeds(dir: &Path) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
         pngs.push(std::fs::read(&path).unwrap());
     }
     pngs.push(std::fs::read(root().join("assets/textures/checker.png")).unwrap());
+    // JPEG seeds share the texture target: textures are PNG or JPEG,
+    // recognised by content.
+    for (w, h) in [(8, 8), (13, 5)] {
+        let img = image::RgbImage::from_fn(w, h, |x, y| {
+            image::Rgb([(x * 17) as u8, (y * 29) as u8, 90])
+        });
+        let mut bytes = Vec::new();
+        img.write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Jpeg,
+        )
+        .unwrap();
+        pngs.push(bytes);
+    }
     let mut exrs = Vec::new();
     for (w, h) in [(1, 1), (3, 2), (8, 8)] {
         let path = dir.join(format!("seed_{w}x{h}.exr"));
@@ -233,7 +249,7 @@ fn image_seeds(dir: &Path) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
 }
 
 /// Whether `target` is selected by `AERIAL_FUZZ_TARGETS` (a comma-separated
-/// list of scene, png, exr; all when unset).
+/// list of scene, obj, png, exr; all when unset).
 fn selected(target: &str) -> bool {
     std::env::var("AERIAL_FUZZ_TARGETS").map_or(true, |v| v.split(',').any(|t| t.trim() == target))
 }
@@ -269,6 +285,26 @@ fn run_all(iterations: u64, seed: u64) -> usize {
             })
         });
     }
+    if selected("obj") {
+        let models = root().join("assets/models");
+        let mut seeds: Vec<Vec<u8>> = Vec::new();
+        for name in ["cut_sphere.obj", "cut_torus.obj"] {
+            seeds.push(std::fs::read(models.join(name)).unwrap());
+        }
+        // Small hand-made cases: polygons, negative indices, missing parts.
+        seeds.push(
+            b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 1\nf 1/1 2/2 3/1 4/2\n".to_vec(),
+        );
+        seeds.push(b"o a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf -3//1 -2//1 -1//1\n".to_vec());
+        crashes += timed("obj", &mut || {
+            fuzz("obj", &seeds, iterations, seed, &crash_dir, |input| {
+                let text = String::from_utf8_lossy(input);
+                if let Ok(model) = parse_obj(&text, "fuzz.obj", &models) {
+                    let _ = model_meshes(&model, &ModelOptions::default(), "fuzz.obj");
+                }
+            })
+        });
+    }
     let (pngs, exrs) = image_seeds(work.path());
     let input_path = work.path().join("input");
     if selected("png") {
@@ -276,7 +312,15 @@ fn run_all(iterations: u64, seed: u64) -> usize {
         crashes += timed("png", &mut || {
             fuzz("png", &pngs, iterations, seed, &crash_dir, |input| {
                 std::fs::write(&input_path, input).unwrap();
-                let _ = inspect_texture(&input_path);
+                // As the renderer does: the header first, then a full
+                // decode of what is small enough.
+                if let Ok(info) = inspect_texture(&input_path) {
+                    if u64::from(info.width) * u64::from(info.height) <= 1 << 20 {
+                        let _ = image::ImageReader::open(&input_path)
+                            .and_then(|r| r.with_guessed_format())
+                            .map(|r| r.decode());
+                    }
+                }
                 let _ = read_png_text(&input_path);
                 let _ = compare_files(&reference, &input_path, Metric::Rmse);
             })

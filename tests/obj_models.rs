@@ -360,6 +360,11 @@ fn bad_models_are_clear_errors() {
             "m.obj:4: face corner \"4\": vertex index 4 is out of range",
         ),
         (&format!("{tri}f 1 2 -4\n"), "m.obj:4:"),
+        // i64::MIN once overflowed the range check (found by tests/fuzz.rs).
+        (
+            &format!("{tri}f 1 2 -9223372036854775808\n"),
+            "vertex index -9223372036854775808 is out of range",
+        ),
         (
             "v 0 0 nan\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
             "m.obj:1: vertex: \"nan\" is not a finite number",

@@ -345,10 +345,12 @@ fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
                             ))
                         })?;
                         let defined = counts[k] as i64;
+                        // unsigned_abs: -i overflows for i64::MIN (found by
+                        // the fuzzer).
                         let valid = if i > 0 {
                             i <= defined
                         } else {
-                            i < 0 && -i <= defined
+                            i < 0 && i.unsigned_abs() <= defined as u64
                         };
                         if !valid {
                             return Err(error(format!(
