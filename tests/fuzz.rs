@@ -18,13 +18,16 @@
 //! run is
 //!
 //! ```sh
-//! AERIAL_FUZZ_ITERATIONS=1000000 cargo test --release --test fuzz -- --ignored --nocapture
+//! CARGO_PROFILE_RELEASE_OVERFLOW_CHECKS=true AERIAL_FUZZ_ITERATIONS=1000000 \
+//!     cargo test --release --test fuzz -- --ignored --nocapture
 //! ```
 //!
 //! (`AERIAL_FUZZ_TARGETS=scene,obj,png,exr` picks targets, `AERIAL_FUZZ_SEED`
 //! the seed)
 //!
-//! and saves any input that panicked to `target/fuzz-crashes/` for replay.
+//! (overflow checks on, so an arithmetic overflow is a panic here rather
+//! than a silently wrong value) and saves any input that panicked to
+//! `target/fuzz-crashes/` for replay.
 
 use aerial::mesh::obj::{model_meshes, parse_obj, ModelOptions};
 use aerial::render::output::{read_exr, read_png_text, write_exr, write_png};
