@@ -8,21 +8,34 @@
 // With NORMAL_MAP, the shading normal comes from a tangent-space normal
 // map: T along increasing u, B = sign * cross(N, T) along increasing v,
 // a texel holding 0.5 + 0.5 * (x, y, z).
+// With DEBUG_VIEW, the fragment writes one attribute instead of a colour
+// (DEBUG_ATTRIBUTE: world-space normal after normal mapping, tangent,
+// bitangent, UV, or albedo), for finding seams and broken frames.
 // feature: BASE_COLOR_TEXTURE
 // feature: GBUFFER
 // feature: NORMAL_MAP
+// feature: DEBUG_VIEW
+// feature: GOURAUD
 #include "scene_data.glsl"
 #include "lighting.glsl"
 #include "object_lighting.glsl"
 #include "octahedral.glsl"
 
+// Each input exists only in the variants that read it, so the vertex
+// stage never writes an output nobody consumes.
+#if !defined(GOURAUD) && !defined(DEBUG_VIEW)
 layout(location = 0) in vec3 in_world_position;
+#endif
+#ifndef GOURAUD
 layout(location = 1) in vec3 in_normal;
-#if defined(BASE_COLOR_TEXTURE) || defined(NORMAL_MAP)
+#endif
+#if defined(BASE_COLOR_TEXTURE) || defined(NORMAL_MAP) || defined(DEBUG_VIEW)
 layout(location = 2) in vec2 in_uv;
 #endif
+#ifdef GOURAUD
 layout(location = 3) in vec3 in_gouraud;
-#ifdef NORMAL_MAP
+#endif
+#if defined(NORMAL_MAP) || defined(DEBUG_VIEW)
 layout(location = 4) in vec4 in_tangent;
 #endif
 
@@ -45,6 +58,15 @@ layout(set = 2, binding = 0) uniform sampler2D normal_map;
 #endif
 #endif
 
+#ifdef DEBUG_VIEW
+const uint DEBUG_NORMALS = 1u;
+const uint DEBUG_TANGENTS = 2u;
+const uint DEBUG_BITANGENTS = 3u;
+const uint DEBUG_UV = 4u;
+const uint DEBUG_ALBEDO = 5u;
+layout(constant_id = 3) const uint DEBUG_ATTRIBUTE = DEBUG_NORMALS;
+#endif
+
 void main() {
     vec4 base = vec4(1.0);
 #ifdef BASE_COLOR_TEXTURE
@@ -52,6 +74,15 @@ void main() {
     base = texture(base_color, vec2(in_uv.x, 1.0 - in_uv.y));
 #endif
     float alpha = object.kd.a * base.a;
+#ifdef GOURAUD
+    // Lit per vertex; the texture multiplies the interpolated colour.
+    out_color = vec4(in_gouraud * base.rgb, alpha);
+#ifdef GBUFFER
+    out_albedo = vec4(0.0);
+    out_normal = vec2(0.0);
+    out_material = vec4(0.0);
+#endif
+#else
     // Interpolated normals are shorter than 1: re-normalize per pixel.
     vec3 n = normalize(in_normal);
 #ifdef NORMAL_MAP
@@ -74,6 +105,19 @@ void main() {
 #endif
     vec3 kd = object.kd.rgb * base.rgb;
     vec3 ka = object.ka.rgb * base.rgb;
+#ifdef DEBUG_VIEW
+    // The frame as the normal map uses it: T re-orthogonalized against the
+    // (mapped) normal, B = sign * cross(N, T).
+    vec3 debug_t = in_tangent.xyz - n * dot(n, in_tangent.xyz);
+    debug_t = dot(debug_t, debug_t) > 1e-12 ? normalize(debug_t) : vec3(0.0);
+    vec3 debug_b = (in_tangent.w < 0.0 ? -1.0 : 1.0) * cross(n, debug_t);
+    vec3 value = DEBUG_ATTRIBUTE == DEBUG_NORMALS ? n
+               : DEBUG_ATTRIBUTE == DEBUG_TANGENTS ? debug_t
+               : DEBUG_ATTRIBUTE == DEBUG_BITANGENTS ? debug_b
+               : DEBUG_ATTRIBUTE == DEBUG_UV ? vec3(in_uv, 0.0)
+               : kd;
+    out_color = vec4(value, 1.0);
+#else
 #ifdef GBUFFER
     if (SHADING_MODEL == SHADING_PHONG) {
         out_color = vec4(ka * frame.ambient.rgb, alpha);
@@ -86,10 +130,6 @@ void main() {
     out_normal = vec2(0.0);
     out_material = vec4(0.0);
 #endif
-    if (SHADING_MODEL == SHADING_GOURAUD) {
-        out_color = vec4(in_gouraud * base.rgb, alpha);
-        return;
-    }
     vec3 v = normalize(frame.camera_position.xyz - in_world_position);
     if (SHADING_MODEL == SHADING_TOON) {
         vec3 c = abs(dot(n, v)) < TOON_SILHOUETTE ? vec3(0.0) : toon(in_world_position, n, v, kd, ka);
@@ -97,4 +137,6 @@ void main() {
     } else {
         out_color = vec4(blinn_phong(in_world_position, n, v, kd, ka), alpha);
     }
+#endif
+#endif
 }

@@ -10,10 +10,24 @@ const int TONEMAP_REINHARD = 0;
 const int TONEMAP_ACES = 1;
 // No curve: the exposed value clamped to [0, 1] (LDR output with --hdr).
 const int TONEMAP_NONE = 2;
+// Debug views: a signed attribute v shown as 0.5 + 0.5 v in the PNG. The
+// target encodes sRGB, so the linear value that encodes to it is written.
+const int TONEMAP_DEBUG = 3;
+
+vec3 srgb_to_linear(vec3 c) {
+    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
+}
 layout(constant_id = 0) const int OPERATOR = TONEMAP_REINHARD;
 layout(constant_id = 1) const float EXPOSURE = 1.0;
 
 void main() {
+    if (OPERATOR == TONEMAP_DEBUG) {
+        vec3 v = subpassLoad(hdr).rgb;
+        bvec3 nan = isnan(v);
+        v = vec3(nan.x ? 0.0 : v.x, nan.y ? 0.0 : v.y, nan.z ? 0.0 : v.z);
+        out_color = vec4(srgb_to_linear(clamp(0.5 + 0.5 * v, 0.0, 1.0)), 1.0);
+        return;
+    }
     // Exposure first, then sanitize: the product of a large exposure and a
     // bright value can overflow to +Inf (and the curves then divide Inf by
     // Inf, giving NaN = black), so it is clamped after scaling. That keeps

@@ -29,6 +29,11 @@ pub struct RenderArgs {
     /// Frames to render; with more than one, per-pass GPU times are reported.
     #[arg(long, default_value_t = 1)]
     frames: u32,
+    /// Draw one surface attribute instead of the lit image: the HDR output
+    /// (--hdr) holds the attribute (world space, signed for vectors,
+    /// background 0), the PNG shows 0.5 + 0.5 v.
+    #[arg(long, value_enum)]
+    debug_view: Option<aerial::scene::DebugView>,
     /// Enable the Khronos validation layer: --validate=core, sync,
     /// best-practices or all (plain --validate is all).
     /// Any message fails the run.
@@ -52,6 +57,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         None => Scene::default_scene(),
     };
     scene.set_output_size(args.width, args.height)?;
+    if args.debug_view.is_some() {
+        scene.output.debug_view = args.debug_view;
+    }
     if args.frames == 0 {
         bail!("--frames: must be at least 1");
     }

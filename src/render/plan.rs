@@ -35,6 +35,9 @@ pub struct PipelineKey {
     pub blended: bool,
     /// Lights in the object's block.
     pub lights: u32,
+    /// The attribute a debug view draws (`DebugView as u32`), 0 for none
+    /// (shader feature `DEBUG_VIEW`, specialization constant 3).
+    pub debug: u32,
 }
 
 /// `ShadingModel` as an ordered key (the GLSL specialization value).
@@ -211,7 +214,11 @@ impl FramePlan {
         let mut transparent = Vec::new();
         // Deferred lighting applies to opaque Phong surfaces; Gouraud and
         // toon keep their forward form (drawn in the same subpass).
-        let deferred = scene.output.lighting == Lighting::Deferred
+        // A debug view draws attributes, not light: forward, every surface
+        // opaque, no lights.
+        let debug = scene.output.debug_view.map_or(0, |v| v as u32);
+        let deferred = debug == 0
+            && scene.output.lighting == Lighting::Deferred
             && scene.objects.iter().any(|o| {
                 let m = &scene.materials[o.material];
                 m.opacity >= 1.0 && m.shading == ShadingModel::Phong
@@ -235,9 +242,9 @@ impl FramePlan {
                     normal_maps.len() - 1
                 })
             });
-            let blended = material.opacity < 1.0;
+            let blended = material.opacity < 1.0 && debug == 0;
             let lit_later = deferred && !blended && material.shading == ShadingModel::Phong;
-            let lights = if lit_later {
+            let lights = if lit_later || debug != 0 {
                 Vec::new()
             } else {
                 let (centre, radius) = geometry.bounds[i];
@@ -251,6 +258,7 @@ impl FramePlan {
                     normal_mapped: normal_map.is_some(),
                     blended,
                     lights: lights.len() as u32,
+                    debug,
                 },
                 texture,
                 normal_map,
@@ -299,7 +307,8 @@ impl FramePlan {
         // ambient term (accumulating in the 8-bit target rounds each partial
         // sum: measured 1/255 off on 9 % of the pixels). Otherwise the HDR
         // target stays, with a clamping tone map.
-        let direct = scene.tone_map.operator == ToneMapOperator::None
+        let direct = debug == 0
+            && scene.tone_map.operator == ToneMapOperator::None
             && scene.tone_map.exposure == 1.0
             && transparent.is_empty()
             && !keep_hdr

@@ -19,8 +19,8 @@ use glam::Vec3;
 use serde::Deserialize;
 
 use super::{
-    Camera, HdrFormat, Light, Lighting, Material, Object, Output, Scene, SceneError, ShadingModel,
-    Shape, TextureFilter, ToneMap, ToneMapOperator, Transform,
+    Camera, DebugView, HdrFormat, Light, Lighting, Material, Object, Output, Scene, SceneError,
+    ShadingModel, Shape, TextureFilter, ToneMap, ToneMapOperator, Transform,
 };
 use std::sync::Arc;
 
@@ -89,6 +89,7 @@ struct OutputFile {
     hdr_format: HdrFormat,
     texture_filter: TextureFilter,
     lighting: Lighting,
+    debug_view: Option<DebugView>,
 }
 
 impl Default for OutputFile {
@@ -99,6 +100,7 @@ impl Default for OutputFile {
             hdr_format: HdrFormat::Rgba16F,
             texture_filter: TextureFilter::Trilinear,
             lighting: Lighting::Forward,
+            debug_view: None,
         }
     }
 }
@@ -501,6 +503,7 @@ impl Check<'_> {
             hdr_format: raw.hdr_format,
             texture_filter: raw.texture_filter,
             lighting: raw.lighting,
+            debug_view: raw.debug_view,
         })
     }
 

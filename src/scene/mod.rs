@@ -64,6 +64,27 @@ pub struct Output {
     pub texture_filter: TextureFilter,
     /// Forward or deferred lighting.
     pub lighting: Lighting,
+    /// Draw one surface attribute instead of the lit image.
+    pub debug_view: Option<DebugView>,
+}
+
+/// A surface attribute drawn instead of the lit image (`[output]
+/// debug_view`, `render --debug-view`): the HDR image holds the attribute
+/// itself (world space and signed for vectors, background 0); the PNG shows
+/// 0.5 + 0.5 v.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum DebugView {
+    /// The shading normal, after normal mapping, unit length.
+    Normals = 1,
+    /// The tangent T (along increasing u), orthogonal to the normal.
+    Tangents = 2,
+    /// The bitangent B = sign * cross(N, T) (along increasing v).
+    Bitangents = 3,
+    /// Texture coordinates (u, v, 0).
+    Uv = 4,
+    /// The diffuse albedo kd times the base-colour texture.
+    Albedo = 5,
 }
 
 /// Where lights are evaluated (`[output] lighting`).
@@ -232,6 +253,7 @@ impl Scene {
                 hdr_format: HdrFormat::Rgba32F,
                 texture_filter: TextureFilter::Trilinear,
                 lighting: Lighting::Forward,
+                debug_view: None,
             },
             camera: Camera {
                 eye: Vec3::Z,

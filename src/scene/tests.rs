@@ -288,6 +288,7 @@ fn minimal_scene_gets_the_documented_defaults() {
             hdr_format: HdrFormat::Rgba16F,
             texture_filter: crate::scene::TextureFilter::Trilinear,
             lighting: crate::scene::Lighting::Forward,
+            debug_view: None,
         }
     );
     assert_eq!(scene.camera.up, Vec3::Y);

@@ -10,7 +10,7 @@
 
 use super::{FrameResources, PassSetup, RecordPass};
 use crate::mesh::Vertex;
-use crate::render::plan::{Draw, PipelineKey};
+use crate::render::plan::{Draw, PipelineKey, ShadingKey};
 use crate::render::RenderError;
 use crate::shaders;
 use crate::vk::{
@@ -74,9 +74,14 @@ impl SurfacePass {
                 if form == Form::GBuffer {
                     features.push("GBUFFER");
                 }
+                if key.debug != 0 {
+                    features.push("DEBUG_VIEW");
+                } else if key.shading == ShadingKey::Gouraud {
+                    features.push("GOURAUD");
+                }
                 let vert = ShaderModule::new(setup.ctx, shaders::OBJECT_VERT.spirv(&features))?;
                 let frag = ShaderModule::new(setup.ctx, shaders::OBJECT_FRAG.spirv(&features))?;
-                let attributes = vertex_attributes(key.textured, key.normal_mapped);
+                let attributes = vertex_attributes(key.textured, key.normal_mapped, key.debug != 0);
                 let pipeline = GraphicsPipeline::new(
                     setup.ctx,
                     resources.layout_for_images(key.textured, key.normal_mapped)?,
@@ -88,6 +93,7 @@ impl SurfacePass {
                             (0, key.shading as u32),
                             (1, key.lights),
                             (2, key.lights.max(1)),
+                            (3, key.debug),
                         ],
                         vertex_stride: std::mem::size_of::<Vertex>() as u32,
                         vertex_attributes: &attributes,
@@ -151,8 +157,9 @@ impl RecordPass for SurfacePass {
 
 /// The vertex attributes a pipeline consumes: position and normal always,
 /// UVs for textured or normal-mapped materials, tangents only for
-/// normal-mapped ones (shaders that do not read them are not fed them).
-fn vertex_attributes(textured: bool, normal_mapped: bool) -> Vec<VertexAttribute> {
+/// normal-mapped ones (shaders that do not read them are not fed them);
+/// a debug view reads both.
+fn vertex_attributes(textured: bool, normal_mapped: bool, debug: bool) -> Vec<VertexAttribute> {
     let offset = |f: usize| f as u32;
     let mut attributes = vec![
         VertexAttribute {
@@ -166,14 +173,14 @@ fn vertex_attributes(textured: bool, normal_mapped: bool) -> Vec<VertexAttribute
             offset: offset(std::mem::offset_of!(Vertex, normal)),
         },
     ];
-    if normal_mapped {
+    if normal_mapped || debug {
         attributes.push(VertexAttribute {
             location: 2,
             format: Format::R32G32B32A32_SFLOAT,
             offset: offset(std::mem::offset_of!(Vertex, tangent)),
         });
     }
-    if textured || normal_mapped {
+    if textured || normal_mapped || debug {
         attributes.push(VertexAttribute {
             location: 3,
             format: Format::R32G32_SFLOAT,

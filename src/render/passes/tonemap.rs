@@ -41,6 +41,8 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     let frag = ShaderModule::new(ctx, shaders::TONEMAP_FRAG.base())?;
     let tone_map = setup.scene.tone_map;
     let operator = match tone_map.operator {
+        // A debug view shows its attribute as 0.5 + 0.5 v.
+        _ if setup.scene.output.debug_view.is_some() => 3,
         ToneMapOperator::Reinhard => 0,
         ToneMapOperator::Aces => 1,
         ToneMapOperator::None => 2,
