@@ -3,7 +3,9 @@
 //! optionally as JSON.
 
 use aerial::mesh::inspect::inspect;
-use aerial::mesh::obj::{ModelOptions, DEFAULT_CREASE_DEGREES, DEFAULT_WELD_TOLERANCE};
+use aerial::mesh::obj::{
+    ModelOptions, TangentMethod, DEFAULT_CREASE_DEGREES, DEFAULT_WELD_TOLERANCE,
+};
 use aerial::mesh::smoothing::Smoothing;
 use anyhow::{bail, Context as _};
 use std::path::PathBuf;
@@ -23,6 +25,9 @@ pub struct MeshArgs {
     /// Weld tolerance relative to the bounding-box diagonal.
     #[arg(long, default_value_t = DEFAULT_WELD_TOLERANCE)]
     weld: f32,
+    /// Tangent frames: aerial's own, or MikkTSpace.
+    #[arg(long, value_enum, default_value = "aerial")]
+    tangents: TangentMethod,
     /// Also write the report as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -48,6 +53,7 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
             smoothing: args.smoothing,
             crease_degrees: args.crease,
             weld_tolerance: args.weld,
+            tangents: args.tangents,
         },
     )?;
     println!("model                      {}", report.file);

@@ -62,7 +62,7 @@ pub fn inspect(path: &Path, options: &ModelOptions) -> Result<MeshReport, ObjErr
     let smoothing = start.elapsed().as_secs_f64();
 
     let start = Instant::now();
-    let meshes = model_frames(&model, normals);
+    let meshes = model_frames(&model, normals, options.tangents);
     let tangents = start.elapsed().as_secs_f64();
 
     // Boundary points: weld groups holding corners of two or more parts.

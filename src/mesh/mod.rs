@@ -8,6 +8,7 @@
 
 pub mod height;
 pub mod inspect;
+pub mod mikktspace;
 pub mod obj;
 mod shapes;
 pub mod smoothing;

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
 
+use super::mikktspace::build_mesh_mikktspace;
 use super::smoothing::{smooth_normals, Smoothing, SmoothingOptions};
 use super::tangents::{build_mesh, TangentStats};
 use super::Mesh;
@@ -408,6 +409,20 @@ pub struct ModelOptions {
     pub crease_degrees: f32,
     /// Weld tolerance relative to the bounding-box diagonal.
     pub weld_tolerance: f32,
+    /// How tangent frames are made.
+    pub tangents: TangentMethod,
+}
+
+/// How tangent frames are made (`tangents` in the scene file).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum TangentMethod {
+    /// Per-triangle frames from UV deltas, averaged per vertex by corner
+    /// angle (`src/mesh/tangents.rs`).
+    #[default]
+    Aerial,
+    /// Mikkelsen's MikkTSpace, which normal maps baked by common tools
+    /// expect (`src/mesh/mikktspace.rs`).
+    Mikktspace,
 }
 
 /// Default crease angle, degrees: smooth curvature (tessellated spheres and
@@ -424,6 +439,7 @@ impl Default for ModelOptions {
             smoothing: None,
             crease_degrees: DEFAULT_CREASE_DEGREES,
             weld_tolerance: DEFAULT_WELD_TOLERANCE,
+            tangents: TangentMethod::Aerial,
         }
     }
 }
@@ -436,7 +452,7 @@ pub fn model_meshes(
     file: &str,
 ) -> Result<Vec<(Mesh, TangentStats)>, ObjError> {
     let (_, normals) = model_normals(model, options, file)?;
-    Ok(model_frames(model, normals))
+    Ok(model_frames(model, normals, options.tangents))
 }
 
 /// The smoothing stage: each part's per-corner shading normals (unit
@@ -500,11 +516,20 @@ pub fn model_normals(
 
 /// The tangent stage: each part as an indexed mesh with tangent frames,
 /// from the normals of [`model_normals`].
-pub fn model_frames(model: &ObjModel, normals: Vec<Vec<Vec3>>) -> Vec<(Mesh, TangentStats)> {
+pub fn model_frames(
+    model: &ObjModel,
+    normals: Vec<Vec<Vec3>>,
+    method: TangentMethod,
+) -> Vec<(Mesh, TangentStats)> {
     model
         .parts
         .iter()
         .zip(normals)
-        .map(|(part, normals)| build_mesh(&part.positions, &normals, part.uvs.as_deref()))
+        .map(|(part, normals)| match method {
+            TangentMethod::Aerial => build_mesh(&part.positions, &normals, part.uvs.as_deref()),
+            TangentMethod::Mikktspace => {
+                build_mesh_mikktspace(&part.positions, &normals, part.uvs.as_deref())
+            }
+        })
         .collect()
 }

@@ -52,13 +52,11 @@ pub fn build_mesh(
         let (d1, d2) = (tb - ta, tc - ta);
         let det = d1.x * d2.y - d2.x * d1.y;
         let area = e1.cross(e2).length();
-        let longest = e1
-            .length_squared()
-            .max(e2.length_squared())
-            .max((c - b).length_squared());
-        // Same test as the tessellator: only truly collapsed triangles,
-        // which have no normal of their own to shade with.
-        collapsed.push(area.is_nan() || area <= 1e-10 * longest);
+        collapsed.push(is_collapsed(
+            positions[3 * t],
+            positions[3 * t + 1],
+            positions[3 * t + 2],
+        ));
         let uv_scale = d1.length_squared().max(d2.length_squared());
         let valid = area > 0.0 && det.abs() > 1e-12 * uv_scale && det.is_finite();
         if !valid {
@@ -162,6 +160,20 @@ pub fn build_mesh(
     }
     stats.collapsed = collapsed.iter().filter(|&&c| c).count();
     (Mesh { vertices, indices }, stats)
+}
+
+/// Whether triangle (a, b, c) is collapsed to a line or a point. Same test
+/// as the tessellator: only truly collapsed triangles, which have no normal
+/// of their own to shade with, are left out of meshes.
+pub fn is_collapsed(a: Vec3, b: Vec3, c: Vec3) -> bool {
+    let [a, b, c] = [a, b, c].map(|p| p.as_dvec3());
+    let (e1, e2) = (b - a, c - a);
+    let area = e1.cross(e2).length();
+    let longest = e1
+        .length_squared()
+        .max(e2.length_squared())
+        .max((c - b).length_squared());
+    area.is_nan() || area <= 1e-10 * longest
 }
 
 /// Largest deviation from an orthonormal frame over the mesh: `| |N| - 1 |`,

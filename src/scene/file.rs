@@ -188,6 +188,7 @@ struct ObjectFile {
     smoothing: Option<SmoothingFile>,
     crease_angle: Option<f64>,
     weld_tolerance: Option<f64>,
+    tangents: Option<TangentsFile>,
     #[serde(default = "default_tessellation")]
     tessellation: [u32; 2],
     #[serde(default)]
@@ -220,6 +221,13 @@ enum ShapeKind {
 enum GreenFile {
     Up,
     Down,
+}
+
+#[derive(Clone, Copy, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum TangentsFile {
+    Aerial,
+    Mikktspace,
 }
 
 #[derive(Clone, Copy, Deserialize)]
@@ -769,6 +777,7 @@ impl Check<'_> {
             (raw.smoothing.is_some(), "smoothing"),
             (raw.crease_angle.is_some(), "crease_angle"),
             (raw.weld_tolerance.is_some(), "weld_tolerance"),
+            (raw.tangents.is_some(), "tangents"),
         ] {
             if given {
                 return Err(self.invalid(field(name), "only an obj shape takes this"));
@@ -964,6 +973,10 @@ impl Check<'_> {
             }),
             crease_degrees,
             weld_tolerance,
+            tangents: match raw.tangents {
+                None | Some(TangentsFile::Aerial) => obj::TangentMethod::Aerial,
+                Some(TangentsFile::Mikktspace) => obj::TangentMethod::Mikktspace,
+            },
         };
         let meshes = obj::model_meshes(&model, &options, &resolved.display().to_string())
             .map_err(|e| self.invalid(field("smoothing"), e.to_string()))?;
