@@ -75,6 +75,8 @@ struct SceneFile {
     materials: Vec<MaterialFile>,
     #[serde(default)]
     objects: Vec<ObjectFile>,
+    sun: Option<super::sky::SunFile>,
+    atmosphere: Option<super::sky::AtmosphereFile>,
 }
 
 #[derive(Deserialize)]
@@ -440,6 +442,8 @@ impl Check<'_> {
             .map(|(i, object)| self.object(&format!("objects[{i}]"), object, &materials, &by_name))
             .collect::<Result<Vec<_>>>()?;
 
+        let sky = super::sky::check(self.file, raw.sun, raw.atmosphere)?;
+
         Ok(Scene {
             output,
             camera,
@@ -449,6 +453,7 @@ impl Check<'_> {
             materials,
             objects,
             light_cutoff,
+            sky,
         })
     }
 
