@@ -282,7 +282,9 @@ pub(super) fn check(
     )?;
     let ground_albedo = non_negative(
         "atmosphere.ground_albedo",
-        atmosphere.ground_albedo.unwrap_or(earth.ground_albedo.to_array()),
+        atmosphere
+            .ground_albedo
+            .unwrap_or(earth.ground_albedo.to_array()),
         1.0,
     )?;
     // Scale heights below a metre make the density a step the table and
