@@ -10,9 +10,9 @@
 //! are in the table (x_μ = 1 is the horizon), so texels are spent where
 //! the optical depth changes fastest, and a direction into the planet is
 //! shadowed by an explicit test rather than an infinite value a filter
-//! would smear. Texel centres sit on x = 0 and x = 1 exactly (u = (x·(W−1)
-//! + 0.5)/W), so the ground, the top and the horizon are sampled without
-//! extrapolation. `seed` is the linear altitude × linear cosine mapping,
+//! would smear. Texel centres sit on x = 0 and x = 1 exactly
+//! (u = (x·(W−1) + 0.5)/W), so the ground, the top and the horizon are
+//! sampled without extrapolation. `seed` is the linear altitude × linear cosine mapping,
 //! for comparison (rays below the horizon are clamped to it).
 //!
 //! Sampling is manual bilinear from four texel fetches, the same
@@ -94,8 +94,8 @@ impl Frame {
         }
     }
 
-    /// Inverse of [`Frame::to_unit`]: (altitude, mu).
-    fn from_unit(&self, mapping: TableMapping, x_mu: f64, x_r: f64) -> (f64, f64) {
+    /// Inverse of `Frame::to_unit`: (altitude, mu).
+    fn unit_to_ray(&self, mapping: TableMapping, x_mu: f64, x_r: f64) -> (f64, f64) {
         match mapping {
             TableMapping::Horizon => {
                 let rho = self.h * x_r;
@@ -133,7 +133,7 @@ impl OpticalDepthTable {
                 .map(|x| {
                     let x_mu = x as f64 / (w - 1) as f64;
                     let x_r = y as f64 / (h - 1) as f64;
-                    let (alt, mu) = frame.from_unit(mapping, x_mu, x_r);
+                    let (alt, mu) = frame.unit_to_ray(mapping, x_mu, x_r);
                     let r = atmosphere.bottom_radius + alt;
                     // The seed's mapping also has directions into the
                     // ground: they hold the horizon's value (the pass

@@ -78,6 +78,10 @@ pub mod attachment {
     pub const NORMAL: &str = "gbuffer normal";
     /// G-buffer: specular colour and shininess.
     pub const MATERIAL: &str = "gbuffer material";
+    /// Float HDR colour of the surfaces, before the atmosphere pass (only
+    /// with `[atmosphere]`): a second attachment, because a subpass cannot
+    /// read its own colour target as an input attachment.
+    pub const SURFACE: &str = "surface";
 }
 
 /// One attachment of the frame.
@@ -263,8 +267,16 @@ impl FramePlan {
 
         use attachment::*;
         // LDR output without --hdr: draw straight into the sRGB output.
-        let direct = scene.tone_map.operator == ToneMapOperator::None && !keep_hdr;
-        let target = if direct { OUTPUT } else { HDR };
+        // The atmosphere pass needs HDR surfaces and writes the HDR target.
+        let sky = scene.sky.is_some();
+        let direct = scene.tone_map.operator == ToneMapOperator::None && !keep_hdr && !sky;
+        let target = if sky {
+            SURFACE
+        } else if direct {
+            OUTPUT
+        } else {
+            HDR
+        };
         let black = Some([0.0; 4]);
         let mut attachments = vec![AttachmentDecl {
             name: OUTPUT,
@@ -280,6 +292,13 @@ impl FramePlan {
         if !direct {
             attachments.push(AttachmentDecl {
                 name: HDR,
+                format: hdr_format(scene.output.hdr_format),
+                clear: black,
+            });
+        }
+        if sky {
+            attachments.push(AttachmentDecl {
+                name: SURFACE,
                 format: hdr_format(scene.output.hdr_format),
                 clear: black,
             });
@@ -335,6 +354,15 @@ impl FramePlan {
                 Some((DEPTH, DepthUse::Test)),
                 vec![],
                 passes::surface::create_transparent,
+            ));
+        }
+        if sky {
+            passes.push(PassDecl::subpass(
+                "atmosphere",
+                vec![HDR],
+                None,
+                vec![SURFACE, DEPTH],
+                passes::atmosphere::create,
             ));
         }
         if !direct {

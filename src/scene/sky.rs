@@ -309,7 +309,7 @@ pub(super) fn check(
     )?;
     let mie_g = finite("atmosphere.mie_g", atmosphere.mie_g.unwrap_or(earth.mie_g))?;
     // |g| -> 1 makes the phase function a delta; 0.999 already peaks at 1e8.
-    if !(mie_g.abs() < 0.999) {
+    if mie_g.abs() >= 0.999 {
         return Err(invalid(
             "atmosphere.mie_g",
             format!("must be between -0.999 and 0.999, got {mie_g}"),
