@@ -364,3 +364,126 @@ pub(super) fn check(
         samples,
     }))
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::scene::{Atmosphere, Scene, SceneError};
+    use std::path::Path;
+
+    const CAMERA: &str = "[camera]\neye = [0.0, 2.0, 0.0]\nlook_at = [0.0, 2.0, -1.0]\n";
+
+    fn parse(extra: &str) -> Result<Scene, SceneError> {
+        Scene::from_toml(&format!("{CAMERA}{extra}"), "sky.toml", Path::new("."))
+    }
+
+    fn field_of(extra: &str) -> String {
+        match parse(extra) {
+            Err(e) => {
+                let message = e.to_string();
+                assert!(message.starts_with("sky.toml: "), "{message}");
+                e.field().unwrap_or("").to_owned()
+            }
+            Ok(_) => panic!("accepted: {extra}"),
+        }
+    }
+
+    #[test]
+    fn a_sky_only_scene_gets_earth_defaults() {
+        let scene = parse("[sun]\ndirection = [0.0, 2.0, 0.0]\n[atmosphere]\n").unwrap();
+        assert!(scene.objects.is_empty());
+        let sky = scene.sky.unwrap();
+        assert_eq!(sky.atmosphere, Atmosphere::earth());
+        assert_eq!(sky.sun.direction, glam::DVec3::Y);
+        assert_eq!(sky.sun.irradiance, glam::DVec3::ONE);
+        assert_eq!(sky.sun.angular_radius, 0.004675);
+        assert!(sky.sun.disc);
+        assert_eq!(sky.samples, super::DEFAULT_ATMOSPHERE_SAMPLES);
+        // The centre defaults to [0, -bottom_radius, 0] for any radius.
+        let scene = parse("[sun]\ndirection = [0.0, 1.0, 0.0]\n[atmosphere]\nbottom_radius = 1000.0\ntop_radius = 1100.0\n").unwrap();
+        assert_eq!(
+            scene.sky.unwrap().atmosphere.center,
+            glam::DVec3::new(0.0, -1000.0, 0.0)
+        );
+        assert!(parse("").unwrap().sky.is_none());
+    }
+
+    #[test]
+    fn bad_sun_and_atmosphere_values_name_their_field() {
+        let sun = "[sun]\ndirection = [0.0, 1.0, 0.0]\n";
+        for (extra, field) in [
+            ("[sun]\ndirection = [0.0, 1.0, 0.0]\n", "sun"),
+            // Leading newline: not given a sun below.
+            ("\n[atmosphere]\n", "atmosphere"),
+            (
+                "[sun]\ndirection = [0.0, 0.0, 0.0]\n[atmosphere]\n",
+                "sun.direction",
+            ),
+            (
+                "[sun]\ndirection = [0.0, nan, 0.0]\n[atmosphere]\n",
+                "sun.direction",
+            ),
+            (
+                "[sun]\ndirection = [0.0, 1.0, 0.0]\nirradiance = [1.0, -1.0, 1.0]\n[atmosphere]\n",
+                "sun.irradiance",
+            ),
+            (
+                "[sun]\ndirection = [0.0, 1.0, 0.0]\nangular_radius = 0.0\n[atmosphere]\n",
+                "sun.angular_radius",
+            ),
+            (
+                "[atmosphere]\ntop_radius = 6000000.0\n",
+                "atmosphere.top_radius",
+            ),
+            (
+                "[atmosphere]\nbottom_radius = 0.0\n",
+                "atmosphere.bottom_radius",
+            ),
+            (
+                "[atmosphere]\nbottom_radius = inf\n",
+                "atmosphere.bottom_radius",
+            ),
+            ("[atmosphere]\nmie_g = 1.0\n", "atmosphere.mie_g"),
+            ("[atmosphere]\nmie_g = -1.5\n", "atmosphere.mie_g"),
+            (
+                "[atmosphere]\nrayleigh_scattering = [1e-6, -1e-6, 1e-6]\n",
+                "atmosphere.rayleigh_scattering",
+            ),
+            (
+                "[atmosphere]\nmie_extinction = [1e-6, 1e-6, 1e-6]\n",
+                "atmosphere.mie_extinction",
+            ),
+            (
+                "[atmosphere]\nmie_scale_height = 0.5\n",
+                "atmosphere.mie_scale_height",
+            ),
+            (
+                "[atmosphere]\nrayleigh_scale_height = nan\n",
+                "atmosphere.rayleigh_scale_height",
+            ),
+            (
+                "[atmosphere]\nozone_layer = [25000.0, 10000.0, 40000.0]\n",
+                "atmosphere.ozone_layer",
+            ),
+            (
+                "[atmosphere]\ncenter = [0.0, -2e9, 0.0]\n",
+                "atmosphere.center",
+            ),
+            (
+                "[atmosphere]\nground_albedo = [2.0, 0.3, 0.3]\n",
+                "atmosphere.ground_albedo",
+            ),
+            ("[atmosphere]\nsamples = 0\n", "atmosphere.samples"),
+        ] {
+            let text = if extra.starts_with("[atmosphere]") {
+                format!("{sun}{extra}")
+            } else {
+                extra.to_owned()
+            };
+            assert_eq!(field_of(&text), field, "{text}");
+        }
+        // Unknown keys are refused by the parser with a line number.
+        let e = parse("[sun]\ndirection = [0.0, 1.0, 0.0]\n[atmosphere]\nrayleigh = 1.0\n")
+            .unwrap_err();
+        assert!(e.to_string().contains("rayleigh"), "{e}");
+    }
+}
