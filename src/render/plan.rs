@@ -600,4 +600,23 @@ mod tests {
         assert_eq!(plan.lighting, Lighting::Forward);
         assert!(!plan.has_attachment(attachment::ALBEDO));
     }
+
+    #[test]
+    fn only_a_scene_with_an_atmosphere_gets_the_atmosphere_pass_and_surface_attachment() {
+        let (_, plan) = load("default.toml");
+        assert!(!plan.pass_names().contains(&"atmosphere"));
+        assert!(!plan.has_attachment(attachment::SURFACE));
+        let (mut scene, _) = load("earth_sunset.toml");
+        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene), false);
+        assert_eq!(
+            plan.pass_names(),
+            vec!["opaque", "atmosphere", "tonemap", "readback"]
+        );
+        assert!(plan.has_attachment(attachment::SURFACE));
+        // LDR output still goes through HDR: the atmosphere writes it.
+        scene.tone_map.operator = ToneMapOperator::None;
+        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene), false);
+        assert!(plan.pass_names().contains(&"atmosphere"));
+        assert!(plan.has_attachment(attachment::HDR));
+    }
 }
