@@ -263,3 +263,26 @@ fn a_scene_without_atmosphere_has_no_atmosphere_pass() {
     let run = common::render(&example("default.toml"), false);
     assert!(!run.passes.contains(&"atmosphere"), "{:?}", run.passes);
 }
+
+/// Error against the sample count (run with `--ignored --nocapture`): the
+/// figures behind the README's samples table.
+#[test]
+#[ignore]
+fn sky_error_against_sample_count() {
+    for samples in [4, 8, 16, 32, 64] {
+        for (label, mut scene) in [
+            (
+                "noon",
+                sky_scene([0.0, 2.0, 0.0], [0.0, 2.6, -1.0], 80.0, [0.3, 0.866, 0.4]),
+            ),
+            (
+                "sunset",
+                sky_scene([0.0, 2.0, 0.0], [-1.0, 2.4, 0.0], 80.0, [-1.0, 0.0175, 0.0]),
+            ),
+        ] {
+            scene.sky.as_mut().unwrap().samples = samples;
+            let hdr = common::render(&scene, true).hdr.unwrap();
+            sky_errors(&format!("{samples} samples, {label}"), &scene, &hdr);
+        }
+    }
+}
