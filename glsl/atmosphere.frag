@@ -101,17 +101,17 @@ vec3 table_densities(float h, float mu) {
         v.z);
 }
 
-// Transmittance from a point at altitude h (radius r, position p relative
-// to the centre) to the sun; 0 in the planet's shadow.
-vec3 sun_transmittance(float h, float r, vec3 p) {
+// Optical depth from a point at altitude h (radius r, position p relative
+// to the centre) to the sun; lit is false in the planet's shadow.
+vec3 sun_optical_depth(float h, float r, vec3 p, out bool lit) {
     float mu = dot(p, sky.sun_direction.xyz) / r;
     float horizon = -sqrt(max(h, 0.0) * (2.0 * sky.radii.x + max(h, 0.0))) / r;
-    if (mu < horizon) {
+    lit = mu >= horizon;
+    if (!lit) {
         return vec3(0.0);
     }
     vec3 d = table_densities(h, mu);
-    return exp(-(sky.rayleigh.xyz * d.x + sky.mie_extinction.xyz * d.y
-                 + sky.ozone_absorption.xyz * d.z));
+    return sky.rayleigh.xyz * d.x + sky.mie_extinction.xyz * d.y + sky.ozone_absorption.xyz * d.z;
 }
 
 vec3 densities(float h) {
@@ -207,10 +207,12 @@ void main() {
         tau += 0.5 * (previous_extinction + e) * (t - previous_t);
         previous_t = t;
         previous_extinction = e;
-        vec3 sun_t = sun_transmittance(h, r, o + t * d);
+        bool lit;
+        vec3 sun_tau = sun_optical_depth(h, r, o + t * d, lit);
         vec3 scattering = sky.rayleigh.xyz * (rho.x * phase_r)
             + sky.mie_scattering.xyz * (rho.y * phase_m);
-        inscatter += scattering * exp(-tau) * sun_t * dt;
+        // One exponential for both paths; no branch (lanes stay together).
+        inscatter += scattering * exp(-(tau + sun_tau)) * (lit ? dt : 0.0);
     }
     {
         float r2_minus = c_bottom + t_end * (2.0 * b + t_end);
@@ -228,9 +230,11 @@ void main() {
         vec3 p = o + t_end * d;
         vec3 normal = normalize(p);
         float cos_sun = dot(normal, sun);
-        if (cos_sun > 0.0) {
+        bool lit;
+        vec3 sun_tau = sun_optical_depth(0.0, rb, p, lit);
+        if (cos_sun > 0.0 && lit) {
             background = sky.ground_albedo.xyz / PI * cos_sun * sky.sun_irradiance.xyz
-                * sun_transmittance(0.0, rb, p);
+                * exp(-sun_tau);
         }
     } else {
         background = colour + disc;
