@@ -286,3 +286,35 @@ fn sky_error_against_sample_count() {
         }
     }
 }
+
+/// From orbit, pixels just above the planet look through the atmosphere
+/// without touching the ground: the limb glows blue, and matches the
+/// reference there.
+#[test]
+fn the_limb_glows_from_orbit() {
+    let mut scene = example("earth_orbit.toml");
+    scene.set_output_size(Some(96), Some(64)).unwrap();
+    let hdr = common::render(&scene, true).hdr.unwrap();
+    assert_finite_non_negative("orbit", &hdr);
+    let sky = scene.sky.as_ref().unwrap();
+    let origin = scene.camera.eye.as_dvec3() - sky.atmosphere.center;
+    let x = 48;
+    let mut limb = 0;
+    for y in 0..64 {
+        let d = pixel_ray(&scene, x, y);
+        if let Some((_, _, false)) = reference::atmosphere_segment(&sky.atmosphere, origin, d) {
+            let got = hdr_pixel(&hdr, x, y);
+            let exact = reference::radiance(&sky.atmosphere, &sky.sun, origin, d);
+            println!("limb row {y}: {got} against {exact}");
+            assert!(
+                (got - exact).abs().max_element() <= 1e-2 * exact.max_element() + 1e-6,
+                "row {y}: {got} against {exact}"
+            );
+            if exact.max_element() > 1e-3 {
+                assert!(got.z > got.x, "row {y}: {got} is not blue");
+                limb += 1;
+            }
+        }
+    }
+    assert!(limb >= 1, "no glowing limb pixel in column {x}");
+}
