@@ -318,3 +318,33 @@ fn the_limb_glows_from_orbit() {
     }
     assert!(limb >= 1, "no glowing limb pixel in column {x}");
 }
+
+/// Stiff and extreme atmospheres stay finite and non-negative: 1000×
+/// denser (optical depths in the thousands, transmittance underflows),
+/// near vacuum, and a 100 m Mie scale height.
+#[test]
+fn extreme_atmospheres_stay_finite() {
+    for (label, atmosphere) in [
+        (
+            "1000x denser",
+            "rayleigh_scattering = [5.802e-3, 13.558e-3, 33.1e-3]\n\
+             mie_scattering = [3.996e-3, 3.996e-3, 3.996e-3]\n\
+             mie_extinction = [4.44e-3, 4.44e-3, 4.44e-3]\n",
+        ),
+        (
+            "near vacuum",
+            "rayleigh_scattering = [1e-15, 1e-15, 1e-15]\n\
+             mie_scattering = [0.0, 0.0, 0.0]\nmie_extinction = [0.0, 0.0, 0.0]\n\
+             ozone_absorption = [0.0, 0.0, 0.0]\n",
+        ),
+        ("Mie scale height 100 m", "mie_scale_height = 100.0\n"),
+    ] {
+        let scene = common::scene(&format!(
+            "[output]\nwidth = 64\nheight = 48\nhdr_format = \"rgba32f\"\n\
+             [camera]\neye = [0.0, 1.0, 0.0]\nlook_at = [0.0, 1.1, -1.0]\nfov_y = 90.0\n\
+             [sun]\ndirection = [0.0, 0.1, -1.0]\n[atmosphere]\n{atmosphere}"
+        ));
+        let hdr = common::render(&scene, true).hdr.unwrap();
+        assert_finite_non_negative(label, &hdr);
+    }
+}
