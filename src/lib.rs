@@ -6,6 +6,7 @@
 //! submitted per frame, and read back as images and per-pass timings.
 
 pub mod app;
+pub mod atmosphere;
 pub mod bench;
 pub mod budget;
 pub mod files;

@@ -94,6 +94,10 @@ pub mod attachment {
     pub const NORMAL: &str = "gbuffer normal";
     /// G-buffer: specular colour and shininess.
     pub const MATERIAL: &str = "gbuffer material";
+    /// Float HDR colour of the surfaces, before the atmosphere pass (only
+    /// with `[atmosphere]`): a second attachment, because a subpass cannot
+    /// read its own colour target as an input attachment.
+    pub const SURFACE: &str = "surface";
 }
 
 /// One attachment of the frame.
@@ -303,17 +307,27 @@ impl FramePlan {
         // LDR output without --hdr: draw straight into the sRGB output when
         // that gives exactly clamp(exposure * HDR): exposure 1, each pixel
         // written once (no transparent object blended over a clamped
-        // colour), and no deferred lighting, which adds lights onto the
-        // ambient term (accumulating in the 8-bit target rounds each partial
-        // sum: measured 1/255 off on 9 % of the pixels). Otherwise the HDR
-        // target stays, with a clamping tone map.
+        // colour), no deferred lighting, which adds lights onto the ambient
+        // term (accumulating in the 8-bit target rounds each partial sum:
+        // measured 1/255 off on 9 % of the pixels), and no atmosphere, whose
+        // pass reads HDR surfaces and writes the HDR target. Otherwise the
+        // HDR target stays, with a clamping tone map.
+        // A debug view shows surface attributes: no atmosphere over them.
+        let sky = scene.sky.is_some() && debug == 0;
         let direct = debug == 0
             && scene.tone_map.operator == ToneMapOperator::None
             && scene.tone_map.exposure == 1.0
             && transparent.is_empty()
             && !keep_hdr
-            && !deferred;
-        let target = if direct { OUTPUT } else { HDR };
+            && !deferred
+            && !sky;
+        let target = if sky {
+            SURFACE
+        } else if direct {
+            OUTPUT
+        } else {
+            HDR
+        };
         let black = Some([0.0; 4]);
         let mut attachments = vec![AttachmentDecl {
             name: OUTPUT,
@@ -329,6 +343,13 @@ impl FramePlan {
         if !direct {
             attachments.push(AttachmentDecl {
                 name: HDR,
+                format: hdr_format(scene.output.hdr_format),
+                clear: black,
+            });
+        }
+        if sky {
+            attachments.push(AttachmentDecl {
+                name: SURFACE,
                 format: hdr_format(scene.output.hdr_format),
                 clear: black,
             });
@@ -384,6 +405,15 @@ impl FramePlan {
                 Some((DEPTH, DepthUse::Test)),
                 vec![],
                 passes::surface::create_transparent,
+            ));
+        }
+        if sky {
+            passes.push(PassDecl::subpass(
+                "atmosphere",
+                vec![HDR],
+                None,
+                vec![SURFACE, DEPTH],
+                passes::atmosphere::create,
             ));
         }
         if !direct {
@@ -626,5 +656,24 @@ mod tests {
         let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);
         assert_eq!(plan.lighting, Lighting::Forward);
         assert!(!plan.has_attachment(attachment::ALBEDO));
+    }
+
+    #[test]
+    fn only_a_scene_with_an_atmosphere_gets_the_atmosphere_pass_and_surface_attachment() {
+        let (_, plan) = load("default.toml");
+        assert!(!plan.pass_names().contains(&"atmosphere"));
+        assert!(!plan.has_attachment(attachment::SURFACE));
+        let (mut scene, _) = load("earth_sunset.toml");
+        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);
+        assert_eq!(
+            plan.pass_names(),
+            vec!["opaque", "atmosphere", "tonemap", "readback"]
+        );
+        assert!(plan.has_attachment(attachment::SURFACE));
+        // LDR output still goes through HDR: the atmosphere writes it.
+        scene.tone_map.operator = ToneMapOperator::None;
+        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);
+        assert!(plan.pass_names().contains(&"atmosphere"));
+        assert!(plan.has_attachment(attachment::HDR));
     }
 }

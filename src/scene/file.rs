@@ -79,6 +79,8 @@ struct SceneFile {
     materials: Vec<MaterialFile>,
     #[serde(default)]
     objects: Vec<ObjectFile>,
+    sun: Option<super::sky::SunFile>,
+    atmosphere: Option<super::sky::AtmosphereFile>,
 }
 
 #[derive(Deserialize)]
@@ -484,6 +486,8 @@ impl Check<'_> {
             }
         }
 
+        let sky = super::sky::check(self.file, raw.sun, raw.atmosphere)?;
+
         Ok(Scene {
             output,
             camera,
@@ -493,6 +497,7 @@ impl Check<'_> {
             materials,
             objects,
             light_cutoff,
+            sky,
         })
     }
 

@@ -245,6 +245,31 @@ pub const KNOBS: &[Knob] = &[
             .into()
         },
     },
+    Knob {
+        name: "atmosphere_samples",
+        best: Best::LastListed,
+        values: "N: ray-march samples per pixel of the atmosphere pass (1..=1024)",
+        apply: |s, v| {
+            let n: u32 = v.parse().map_err(|e| format!("{e}"))?;
+            if !(1..=super::MAX_ATMOSPHERE_SAMPLES).contains(&n) {
+                return Err(format!(
+                    "must be between 1 and {}",
+                    super::MAX_ATMOSPHERE_SAMPLES
+                ));
+            }
+            match s.sky.as_mut() {
+                Some(sky) => {
+                    sky.samples = n;
+                    Ok(())
+                }
+                None => Err("the scene has no [atmosphere]".into()),
+            }
+        },
+        read: |s| match &s.sky {
+            Some(sky) => sky.samples.to_string(),
+            None => "-".into(),
+        },
+    },
 ];
 
 impl Knob {

@@ -11,6 +11,7 @@ mod knobs;
 mod lights;
 mod material;
 mod object;
+mod sky;
 
 use std::path::Path;
 
@@ -26,6 +27,7 @@ pub use knobs::{settings as knob_settings, Best, Knob, KnobError, KNOBS};
 pub use lights::{Light, LightRange};
 pub use material::{Material, ShadingModel};
 pub use object::{Object, Shape, Transform};
+pub use sky::{Atmosphere, Sky, Sun, DEFAULT_ATMOSPHERE_SAMPLES, MAX_ATMOSPHERE_SAMPLES};
 
 use crate::mesh::{tessellate, Mesh};
 
@@ -49,6 +51,9 @@ pub struct Scene {
     /// A point light is skipped for an object when its strongest colour
     /// component, attenuated to the object's bounding sphere, is below this.
     pub light_cutoff: f32,
+    /// The sun and atmosphere (`[sun]`, `[atmosphere]`), drawn by the
+    /// atmosphere pass; `None` without them.
+    pub sky: Option<Sky>,
 }
 
 /// Render target description.
@@ -269,6 +274,7 @@ impl Scene {
             materials: Vec::new(),
             objects: Vec::new(),
             light_cutoff: DEFAULT_LIGHT_CUTOFF,
+            sky: None,
         }
     }
 

@@ -9,6 +9,7 @@
 //! neighbours. Adding a pass is a new file here and one entry in
 //! `FramePlan::new`.
 
+pub mod atmosphere;
 pub mod deferred_lighting;
 pub mod surface;
 pub mod tonemap;

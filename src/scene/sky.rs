@@ -1,0 +1,489 @@
+//! The `[sun]` and `[atmosphere]` tables of a scene file: their syntax
+//! (serde mirror types) and their validation into a [`Sky`].
+//!
+//! Every number is kept in f64: the CPU reference integrator and the
+//! optical-depth table baker work in double precision, and planet-scale
+//! radii (6.36e6 m) with kilometre-scale heights above them lose metres in
+//! f32. The GPU gets f32 values derived from these (camera-relative).
+
+use glam::DVec3;
+use serde::Deserialize;
+
+use super::SceneError;
+
+/// Default ray-march sample count of the atmosphere pass.
+pub const DEFAULT_ATMOSPHERE_SAMPLES: u32 = 32;
+/// Largest accepted `atmosphere.samples`.
+pub const MAX_ATMOSPHERE_SAMPLES: u32 = 1024;
+/// Largest accepted atmosphere radius (m): the same bound as lengths.
+const MAX_RADIUS: f64 = 1e9;
+
+/// The sun and the atmosphere around a planet.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sky {
+    pub sun: Sun,
+    pub atmosphere: Atmosphere,
+    /// Ray-march samples per pixel in the atmosphere pass.
+    pub samples: u32,
+}
+
+/// The sun: parallel light from `direction`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sun {
+    /// Unit vector towards the sun.
+    pub direction: DVec3,
+    /// Irradiance at the top of the atmosphere, per channel (>= 0).
+    pub irradiance: DVec3,
+    /// Angular radius of the disc in radians, in (0, pi/2).
+    pub angular_radius: f64,
+    /// Whether the disc is drawn.
+    pub disc: bool,
+}
+
+/// A spherical planet with a Rayleigh + Mie + ozone atmosphere. Lengths in
+/// metres, coefficients in 1/m per channel (red, green, blue).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Atmosphere {
+    pub center: DVec3,
+    pub bottom_radius: f64,
+    pub top_radius: f64,
+    pub rayleigh_scattering: DVec3,
+    pub rayleigh_scale_height: f64,
+    pub mie_scattering: DVec3,
+    pub mie_extinction: DVec3,
+    pub mie_scale_height: f64,
+    /// Cornette–Shanks asymmetry, in (-1, 1).
+    pub mie_g: f64,
+    pub ozone_absorption: DVec3,
+    /// Tent profile: altitudes where it starts, peaks and ends.
+    pub ozone_layer: [f64; 3],
+    pub ground_albedo: DVec3,
+}
+
+impl Atmosphere {
+    /// Earth, from measured constants as in Bruneton's 2017 model (680, 550
+    /// and 440 nm).
+    pub fn earth() -> Atmosphere {
+        Atmosphere {
+            center: DVec3::new(0.0, -6_360_000.0, 0.0),
+            bottom_radius: 6_360_000.0,
+            top_radius: 6_420_000.0,
+            rayleigh_scattering: DVec3::new(5.802e-6, 13.558e-6, 33.1e-6),
+            rayleigh_scale_height: 8000.0,
+            mie_scattering: DVec3::splat(3.996e-6),
+            mie_extinction: DVec3::splat(4.44e-6),
+            mie_scale_height: 1200.0,
+            mie_g: 0.8,
+            ozone_absorption: DVec3::new(0.650e-6, 1.881e-6, 0.085e-6),
+            ozone_layer: [10_000.0, 25_000.0, 40_000.0],
+            ground_albedo: DVec3::splat(0.3),
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SunFile {
+    direction: [f64; 3],
+    #[serde(default = "ones")]
+    irradiance: [f64; 3],
+    #[serde(default = "default_angular_radius")]
+    angular_radius: f64,
+    #[serde(default = "yes")]
+    disc: bool,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct AtmosphereFile {
+    center: Option<[f64; 3]>,
+    bottom_radius: Option<f64>,
+    top_radius: Option<f64>,
+    rayleigh_scattering: Option<[f64; 3]>,
+    rayleigh_scale_height: Option<f64>,
+    mie_scattering: Option<[f64; 3]>,
+    mie_extinction: Option<[f64; 3]>,
+    mie_scale_height: Option<f64>,
+    mie_g: Option<f64>,
+    ozone_absorption: Option<[f64; 3]>,
+    ozone_layer: Option<[f64; 3]>,
+    ground_albedo: Option<[f64; 3]>,
+    samples: Option<u32>,
+}
+
+fn ones() -> [f64; 3] {
+    [1.0; 3]
+}
+fn yes() -> bool {
+    true
+}
+fn default_angular_radius() -> f64 {
+    0.004675
+}
+
+/// Validates the two tables. `[atmosphere]` needs `[sun]` and the other way
+/// round: the sun only exists in this renderer as light through the
+/// atmosphere.
+pub(super) fn check(
+    file: &str,
+    sun: Option<SunFile>,
+    atmosphere: Option<AtmosphereFile>,
+) -> Result<Option<Sky>, SceneError> {
+    let invalid = |field: &str, reason: String| SceneError::Invalid {
+        file: file.to_owned(),
+        field: field.to_owned(),
+        reason,
+    };
+    let (sun, atmosphere) = match (sun, atmosphere) {
+        (None, None) => return Ok(None),
+        (Some(_), None) => {
+            return Err(invalid(
+                "sun",
+                "a sun needs an [atmosphere] table (it is drawn by the atmosphere pass)".into(),
+            ))
+        }
+        (None, Some(_)) => {
+            return Err(invalid(
+                "atmosphere",
+                "an atmosphere needs a [sun] table with a direction".into(),
+            ))
+        }
+        (Some(s), Some(a)) => (s, a),
+    };
+    let finite = |field: &str, x: f64| -> Result<f64, SceneError> {
+        if x.is_finite() {
+            Ok(x)
+        } else {
+            Err(invalid(field, format!("must be a finite number, got {x}")))
+        }
+    };
+    let vector = |field: &str, v: [f64; 3]| -> Result<DVec3, SceneError> {
+        for (i, x) in v.iter().enumerate() {
+            if !x.is_finite() {
+                return Err(invalid(
+                    field,
+                    format!("component {i} must be a finite number, got {x}"),
+                ));
+            }
+        }
+        Ok(DVec3::from(v))
+    };
+    // Coefficients and colours: >= 0 and bounded like scene colours, so
+    // products with path lengths of 1e9 m stay finite.
+    let non_negative = |field: &str, v: [f64; 3], max: f64| -> Result<DVec3, SceneError> {
+        let d = vector(field, v)?;
+        for (i, x) in v.iter().enumerate() {
+            if *x < 0.0 || *x > max {
+                return Err(invalid(
+                    field,
+                    format!("component {i} must be between 0 and {max:e}, got {x:e}"),
+                ));
+            }
+        }
+        Ok(d)
+    };
+    let length = |field: &str, x: f64| -> Result<f64, SceneError> {
+        let x = finite(field, x)?;
+        if !(x > 0.0 && x <= MAX_RADIUS) {
+            return Err(invalid(
+                field,
+                format!("must be greater than 0 and at most {MAX_RADIUS:e}, got {x:e}"),
+            ));
+        }
+        Ok(x)
+    };
+
+    let direction = vector("sun.direction", sun.direction)?;
+    let largest = direction.abs().max_element();
+    if largest == 0.0 {
+        return Err(invalid("sun.direction", "direction has zero length".into()));
+    }
+    let direction = (direction / largest).normalize();
+    let irradiance = non_negative("sun.irradiance", sun.irradiance, 1e6)?;
+    let angular_radius = finite("sun.angular_radius", sun.angular_radius)?;
+    if !(angular_radius > 0.0 && angular_radius < std::f64::consts::FRAC_PI_2) {
+        return Err(invalid(
+            "sun.angular_radius",
+            format!("must be between 0 and pi/2 radians (exclusive), got {angular_radius}"),
+        ));
+    }
+
+    let earth = Atmosphere::earth();
+    let bottom_radius = length(
+        "atmosphere.bottom_radius",
+        atmosphere.bottom_radius.unwrap_or(earth.bottom_radius),
+    )?;
+    let top_radius = length(
+        "atmosphere.top_radius",
+        atmosphere.top_radius.unwrap_or(earth.top_radius),
+    )?;
+    // A shell thinner than a millionth of the radius cannot be resolved by
+    // f32 altitudes on the GPU.
+    if top_radius <= bottom_radius * (1.0 + 1e-6) {
+        return Err(invalid(
+            "atmosphere.top_radius",
+            format!(
+                "must be above bottom_radius ({bottom_radius:e}) by more than a millionth of it, \
+                 got {top_radius:e}"
+            ),
+        ));
+    }
+    let center = match atmosphere.center {
+        Some(c) => vector("atmosphere.center", c)?,
+        None => DVec3::new(0.0, -bottom_radius, 0.0),
+    };
+    if let Some(i) = center.to_array().iter().position(|x| x.abs() > MAX_RADIUS) {
+        return Err(invalid(
+            "atmosphere.center",
+            format!(
+                "component {i} must be between -{MAX_RADIUS:e} and {MAX_RADIUS:e}, got {:e}",
+                center[i]
+            ),
+        ));
+    }
+    let coefficient = |name: &str, v: Option<[f64; 3]>, default: DVec3| {
+        non_negative(
+            &format!("atmosphere.{name}"),
+            v.unwrap_or(default.to_array()),
+            1.0,
+        )
+    };
+    let rayleigh_scattering = coefficient(
+        "rayleigh_scattering",
+        atmosphere.rayleigh_scattering,
+        earth.rayleigh_scattering,
+    )?;
+    let mie_scattering = coefficient(
+        "mie_scattering",
+        atmosphere.mie_scattering,
+        earth.mie_scattering,
+    )?;
+    let mie_extinction = coefficient(
+        "mie_extinction",
+        atmosphere.mie_extinction,
+        earth.mie_extinction,
+    )?;
+    for i in 0..3 {
+        if mie_extinction[i] < mie_scattering[i] {
+            return Err(invalid(
+                "atmosphere.mie_extinction",
+                format!(
+                    "component {i} ({:e}) must be at least mie_scattering ({:e}): \
+                     extinction is scattering plus absorption",
+                    mie_extinction[i], mie_scattering[i]
+                ),
+            ));
+        }
+    }
+    let ozone_absorption = coefficient(
+        "ozone_absorption",
+        atmosphere.ozone_absorption,
+        earth.ozone_absorption,
+    )?;
+    let ground_albedo = non_negative(
+        "atmosphere.ground_albedo",
+        atmosphere
+            .ground_albedo
+            .unwrap_or(earth.ground_albedo.to_array()),
+        1.0,
+    )?;
+    // Scale heights below a metre make the density a step the table and
+    // the march cannot resolve; above 1e9 they are meaningless.
+    let scale_height = |name: &str, x: Option<f64>, default: f64| {
+        let field = format!("atmosphere.{name}");
+        let x = length(&field, x.unwrap_or(default))?;
+        if x < 1.0 {
+            return Err(invalid(&field, format!("must be at least 1 m, got {x:e}")));
+        }
+        Ok(x)
+    };
+    let rayleigh_scale_height = scale_height(
+        "rayleigh_scale_height",
+        atmosphere.rayleigh_scale_height,
+        earth.rayleigh_scale_height,
+    )?;
+    let mie_scale_height = scale_height(
+        "mie_scale_height",
+        atmosphere.mie_scale_height,
+        earth.mie_scale_height,
+    )?;
+    let mie_g = finite("atmosphere.mie_g", atmosphere.mie_g.unwrap_or(earth.mie_g))?;
+    // |g| -> 1 makes the phase function a delta; 0.999 already peaks at 1e8.
+    if mie_g.abs() >= 0.999 {
+        return Err(invalid(
+            "atmosphere.mie_g",
+            format!("must be between -0.999 and 0.999, got {mie_g}"),
+        ));
+    }
+    let ozone_layer = atmosphere.ozone_layer.unwrap_or(earth.ozone_layer);
+    for (i, x) in ozone_layer.iter().enumerate() {
+        if !x.is_finite() || *x < 0.0 || *x > MAX_RADIUS {
+            return Err(invalid(
+                "atmosphere.ozone_layer",
+                format!("component {i} must be between 0 and {MAX_RADIUS:e}, got {x:e}"),
+            ));
+        }
+    }
+    if !(ozone_layer[0] < ozone_layer[1] && ozone_layer[1] < ozone_layer[2]) {
+        return Err(invalid(
+            "atmosphere.ozone_layer",
+            format!(
+                "must be increasing altitudes [start, peak, end], got {:?}",
+                ozone_layer
+            ),
+        ));
+    }
+    let samples = atmosphere.samples.unwrap_or(DEFAULT_ATMOSPHERE_SAMPLES);
+    if !(1..=MAX_ATMOSPHERE_SAMPLES).contains(&samples) {
+        return Err(invalid(
+            "atmosphere.samples",
+            format!("must be between 1 and {MAX_ATMOSPHERE_SAMPLES}, got {samples}"),
+        ));
+    }
+    Ok(Some(Sky {
+        sun: Sun {
+            direction,
+            irradiance,
+            angular_radius,
+            disc: sun.disc,
+        },
+        atmosphere: Atmosphere {
+            center,
+            bottom_radius,
+            top_radius,
+            rayleigh_scattering,
+            rayleigh_scale_height,
+            mie_scattering,
+            mie_extinction,
+            mie_scale_height,
+            mie_g,
+            ozone_absorption,
+            ozone_layer,
+            ground_albedo,
+        },
+        samples,
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::scene::{Atmosphere, Scene, SceneError};
+    use std::path::Path;
+
+    const CAMERA: &str = "[camera]\neye = [0.0, 2.0, 0.0]\nlook_at = [0.0, 2.0, -1.0]\n";
+
+    fn parse(extra: &str) -> Result<Scene, SceneError> {
+        Scene::from_toml(&format!("{CAMERA}{extra}"), "sky.toml", Path::new("."))
+    }
+
+    fn field_of(extra: &str) -> String {
+        match parse(extra) {
+            Err(e) => {
+                let message = e.to_string();
+                assert!(message.starts_with("sky.toml: "), "{message}");
+                e.field().unwrap_or("").to_owned()
+            }
+            Ok(_) => panic!("accepted: {extra}"),
+        }
+    }
+
+    #[test]
+    fn a_sky_only_scene_gets_earth_defaults() {
+        let scene = parse("[sun]\ndirection = [0.0, 2.0, 0.0]\n[atmosphere]\n").unwrap();
+        assert!(scene.objects.is_empty());
+        let sky = scene.sky.unwrap();
+        assert_eq!(sky.atmosphere, Atmosphere::earth());
+        assert_eq!(sky.sun.direction, glam::DVec3::Y);
+        assert_eq!(sky.sun.irradiance, glam::DVec3::ONE);
+        assert_eq!(sky.sun.angular_radius, 0.004675);
+        assert!(sky.sun.disc);
+        assert_eq!(sky.samples, super::DEFAULT_ATMOSPHERE_SAMPLES);
+        // The centre defaults to [0, -bottom_radius, 0] for any radius.
+        let scene = parse("[sun]\ndirection = [0.0, 1.0, 0.0]\n[atmosphere]\nbottom_radius = 1000.0\ntop_radius = 1100.0\n").unwrap();
+        assert_eq!(
+            scene.sky.unwrap().atmosphere.center,
+            glam::DVec3::new(0.0, -1000.0, 0.0)
+        );
+        assert!(parse("").unwrap().sky.is_none());
+    }
+
+    #[test]
+    fn bad_sun_and_atmosphere_values_name_their_field() {
+        let sun = "[sun]\ndirection = [0.0, 1.0, 0.0]\n";
+        for (extra, field) in [
+            ("[sun]\ndirection = [0.0, 1.0, 0.0]\n", "sun"),
+            // Leading newline: not given a sun below.
+            ("\n[atmosphere]\n", "atmosphere"),
+            (
+                "[sun]\ndirection = [0.0, 0.0, 0.0]\n[atmosphere]\n",
+                "sun.direction",
+            ),
+            (
+                "[sun]\ndirection = [0.0, nan, 0.0]\n[atmosphere]\n",
+                "sun.direction",
+            ),
+            (
+                "[sun]\ndirection = [0.0, 1.0, 0.0]\nirradiance = [1.0, -1.0, 1.0]\n[atmosphere]\n",
+                "sun.irradiance",
+            ),
+            (
+                "[sun]\ndirection = [0.0, 1.0, 0.0]\nangular_radius = 0.0\n[atmosphere]\n",
+                "sun.angular_radius",
+            ),
+            (
+                "[atmosphere]\ntop_radius = 6000000.0\n",
+                "atmosphere.top_radius",
+            ),
+            (
+                "[atmosphere]\nbottom_radius = 0.0\n",
+                "atmosphere.bottom_radius",
+            ),
+            (
+                "[atmosphere]\nbottom_radius = inf\n",
+                "atmosphere.bottom_radius",
+            ),
+            ("[atmosphere]\nmie_g = 1.0\n", "atmosphere.mie_g"),
+            ("[atmosphere]\nmie_g = -1.5\n", "atmosphere.mie_g"),
+            (
+                "[atmosphere]\nrayleigh_scattering = [1e-6, -1e-6, 1e-6]\n",
+                "atmosphere.rayleigh_scattering",
+            ),
+            (
+                "[atmosphere]\nmie_extinction = [1e-6, 1e-6, 1e-6]\n",
+                "atmosphere.mie_extinction",
+            ),
+            (
+                "[atmosphere]\nmie_scale_height = 0.5\n",
+                "atmosphere.mie_scale_height",
+            ),
+            (
+                "[atmosphere]\nrayleigh_scale_height = nan\n",
+                "atmosphere.rayleigh_scale_height",
+            ),
+            (
+                "[atmosphere]\nozone_layer = [25000.0, 10000.0, 40000.0]\n",
+                "atmosphere.ozone_layer",
+            ),
+            (
+                "[atmosphere]\ncenter = [0.0, -2e9, 0.0]\n",
+                "atmosphere.center",
+            ),
+            (
+                "[atmosphere]\nground_albedo = [2.0, 0.3, 0.3]\n",
+                "atmosphere.ground_albedo",
+            ),
+            ("[atmosphere]\nsamples = 0\n", "atmosphere.samples"),
+        ] {
+            let text = if extra.starts_with("[atmosphere]") {
+                format!("{sun}{extra}")
+            } else {
+                extra.to_owned()
+            };
+            assert_eq!(field_of(&text), field, "{text}");
+        }
+        // Unknown keys are refused by the parser with a line number.
+        let e = parse("[sun]\ndirection = [0.0, 1.0, 0.0]\n[atmosphere]\nrayleigh = 1.0\n")
+            .unwrap_err();
+        assert!(e.to_string().contains("rayleigh"), "{e}");
+    }
+}
