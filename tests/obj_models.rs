@@ -443,6 +443,15 @@ fn bad_models_are_clear_errors() {
     );
     let error = sphere("");
     assert!(error.contains("objects[0].material: required"), "{error}");
+    // An OBJ brings its own triangles: a tessellation is refused, not
+    // silently ignored.
+    let error = scene_with_obj(
+        dir.path(),
+        &format!("{tri}f 1 2 3\n"),
+        "tessellation = [8, 8]\n",
+    )
+    .expect_err("tessellation on an obj");
+    assert!(error.contains("objects[0].tessellation"), "{error}");
 }
 
 /// A degenerate file normal (zero length) falls back to the face normal:

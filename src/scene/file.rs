@@ -191,8 +191,9 @@ struct ObjectFile {
     crease_angle: Option<f64>,
     weld_tolerance: Option<f64>,
     tangents: Option<TangentsFile>,
-    #[serde(default = "default_tessellation")]
-    tessellation: [u32; 2],
+    // Parametric shapes only (default `DEFAULT_TESSELLATION`); an OBJ
+    // model brings its own triangles, so giving it one is an error.
+    tessellation: Option<[u32; 2]>,
     #[serde(default)]
     translate: [f64; 3],
     rotate: Option<RotateFile>,
@@ -284,9 +285,6 @@ fn default_shininess() -> f64 {
 }
 fn default_shading() -> ShadingModel {
     ShadingModel::Phong
-}
-fn default_tessellation() -> [u32; 2] {
-    DEFAULT_TESSELLATION
 }
 
 /// `x` (finite) as an f32, or why it cannot be one.
@@ -795,7 +793,8 @@ impl Check<'_> {
             by_name,
         )?;
         let shape = self.shape(&field("shape"), &raw.shape)?;
-        for (direction, segments) in ["u", "v"].into_iter().zip(raw.tessellation) {
+        let tessellation = raw.tessellation.unwrap_or(DEFAULT_TESSELLATION);
+        for (direction, segments) in ["u", "v"].into_iter().zip(tessellation) {
             if !(MIN_SEGMENTS..=MAX_SEGMENTS).contains(&segments) {
                 return Err(self.invalid(
                     field("tessellation"),
@@ -810,7 +809,7 @@ impl Check<'_> {
         Ok(Object {
             name: raw.name,
             shape,
-            tessellation: (raw.tessellation[0], raw.tessellation[1]),
+            tessellation: (tessellation[0], tessellation[1]),
             material,
             transform,
         })
@@ -930,6 +929,12 @@ impl Check<'_> {
                 format!("an obj has no {name} (it takes path)"),
             ));
         }
+        if raw.tessellation.is_some() {
+            return Err(self.invalid(
+                field("tessellation"),
+                "an obj model brings its own triangles; tessellation is for parametric shapes",
+            ));
+        }
         let model_path = shape
             .path
             .as_ref()
@@ -1040,7 +1045,8 @@ impl Check<'_> {
                 shape: Shape::Mesh {
                     mesh: Arc::new(mesh),
                 },
-                tessellation: (raw.tessellation[0], raw.tessellation[1]),
+                // Unused for a mesh; kept only because every object has one.
+                tessellation: (DEFAULT_TESSELLATION[0], DEFAULT_TESSELLATION[1]),
                 material,
                 transform,
             });
