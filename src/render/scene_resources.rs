@@ -19,6 +19,9 @@ use std::sync::Arc;
 const TEXTURE_FORMAT: Format = Format::R8G8B8A8_SRGB;
 /// Normal maps: linear 8-bit, decoded as `2 * texel - 1` in the shader.
 const NORMAL_MAP_FORMAT: Format = Format::R8G8B8A8_UNORM;
+/// Normal maps stored with 16 bits per channel keep them: an 8-bit map
+/// quantizes directions to about 0.2 degrees, a 16-bit one to 0.001.
+const NORMAL_MAP_FORMAT_16: Format = Format::R16G16B16A16_UNORM;
 
 /// One object's range inside the shared geometry buffer.
 pub struct GeometryRange {
@@ -110,7 +113,7 @@ impl SceneResources {
             .normal_maps
             .iter()
             .map(|source| match source.height_scale {
-                None => load_texture(ctx, &source.path, NORMAL_MAP_FORMAT),
+                None => load_normal_map(ctx, &source.path),
                 Some(scale) => {
                     let heights =
                         HeightMap::load(&source.path).map_err(|e| RenderError::Texture {
@@ -418,7 +421,45 @@ fn load_texture(
     upload_texture(ctx, w, h, img.as_raw(), format)
 }
 
-/// A `w`×`h` texture from RGBA8 `pixels` (top row first), with a full mip
+/// Loads a normal map (linear, not sRGB), keeping 16-bit channels where the
+/// file has them.
+fn load_normal_map(ctx: &Arc<Context>, path: &std::path::Path) -> Result<Image, RenderError> {
+    let err = |reason: String| RenderError::Texture {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let img = image::ImageReader::open(path)
+        .map_err(|e| err(e.to_string()))?
+        .with_guessed_format()
+        .map_err(|e| err(e.to_string()))?
+        .decode()
+        .map_err(|e| err(e.to_string()))?;
+    let sixteen_bit = matches!(
+        img.color(),
+        image::ColorType::L16
+            | image::ColorType::La16
+            | image::ColorType::Rgb16
+            | image::ColorType::Rgba16
+    );
+    if sixteen_bit && vk::supports_linear_filter(ctx, NORMAL_MAP_FORMAT_16) {
+        let img = img.to_rgba16();
+        let (w, h) = img.dimensions();
+        upload_texture(
+            ctx,
+            w,
+            h,
+            bytemuck::cast_slice(img.as_raw()),
+            NORMAL_MAP_FORMAT_16,
+        )
+    } else {
+        let img = img.to_rgba8();
+        let (w, h) = img.dimensions();
+        upload_texture(ctx, w, h, img.as_raw(), NORMAL_MAP_FORMAT)
+    }
+}
+
+/// A `w`×`h` texture from tightly packed `pixels` in `format` (top row
+/// first), with a full mip
 /// chain built by blits where the format supports linear blits.
 fn upload_texture(
     ctx: &Arc<Context>,
