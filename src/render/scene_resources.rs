@@ -459,8 +459,8 @@ fn load_normal_map(ctx: &Arc<Context>, path: &std::path::Path) -> Result<Image, 
 }
 
 /// A `w`×`h` texture from tightly packed `pixels` in `format` (top row
-/// first), with a full mip
-/// chain built by blits where the format supports linear blits.
+/// first), with a full mip chain built by blits where the format supports
+/// linear blits.
 fn upload_texture(
     ctx: &Arc<Context>,
     w: u32,
