@@ -608,12 +608,12 @@ fn rendered_smoothing_matches_analytic_sphere() {
              [camera]\neye = [0.7, 0.9, 3.2]\nlook_at = [0, 0, 0]\nfov_y = 45\n\
              [[lights]]\ntype = \"point\"\nposition = [2, 3, 3]\nintensity = 10\n\
              [[materials]]\nname = \"m\"\nkd = [0.8, 0.8, 0.8]\nks = [0.5, 0.5, 0.5]\n\
-             [[objects]]\nname = \"s\"\nmaterial = \"m\"\ntessellation = [48, 24]\n{shape}\n"
+             [[objects]]\nname = \"s\"\nmaterial = \"m\"\n{shape}\n"
         );
         let scene = Scene::from_toml(&toml, "t.toml", dir.path()).unwrap();
         common::render(&scene, false).output
     };
-    let exact = render("shape = { type = \"sphere\", radius = 1 }");
+    let exact = render("shape = { type = \"sphere\", radius = 1 }\ntessellation = [48, 24]");
     // Pixels differing by more than 2/255 in any channel, and the largest
     // difference.
     let compare = |mode: &str| {

@@ -521,15 +521,44 @@ pub fn model_frames(
     normals: Vec<Vec<Vec3>>,
     method: TangentMethod,
 ) -> Vec<(Mesh, TangentStats)> {
-    model
-        .parts
-        .iter()
-        .zip(normals)
-        .map(|(part, normals)| match method {
-            TangentMethod::Aerial => build_mesh(&part.positions, &normals, part.uvs.as_deref()),
-            TangentMethod::Mikktspace => {
-                build_mesh_mikktspace(&part.positions, &normals, part.uvs.as_deref())
-            }
-        })
-        .collect()
+    let build = |part: &ObjPart, normals: &[Vec3]| match method {
+        TangentMethod::Aerial => build_mesh(&part.positions, normals, part.uvs.as_deref()),
+        TangentMethod::Mikktspace => {
+            build_mesh_mikktspace(&part.positions, normals, part.uvs.as_deref())
+        }
+    };
+    // Parts are independent: spread them over the cores (in order).
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(model.parts.len());
+    if threads <= 1 {
+        return model
+            .parts
+            .iter()
+            .zip(&normals)
+            .map(|(part, normals)| build(part, normals))
+            .collect();
+    }
+    let jobs: Vec<(&ObjPart, &Vec<Vec3>)> = model.parts.iter().zip(&normals).collect();
+    let chunk = jobs.len().div_ceil(threads);
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = jobs
+            .chunks(chunk)
+            .map(|chunk| {
+                let build = &build;
+                scope.spawn(move || {
+                    chunk
+                        .iter()
+                        .map(|(part, normals)| build(part, normals))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            // A panic in a worker is a bug in the mesh code; re-raise it
+            // here rather than lose the part.
+            .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
+    })
 }
