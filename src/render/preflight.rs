@@ -43,6 +43,9 @@ pub enum TextureFormat {
 pub struct TextureInfo {
     pub width: u32,
     pub height: u32,
+    /// Bytes per RGBA texel once decoded: 8 for 16-bit files (normal maps
+    /// keep 16 bits), otherwise 4.
+    pub texel_bytes: u64,
 }
 
 /// The format of `bytes`, a file's start, from its signature.
@@ -85,18 +88,25 @@ pub fn inspect_texture(path: &Path) -> Result<TextureInfo, RenderError> {
         }
     };
     // The header alone: the size is known before anything is decoded.
-    let (width, height) = image::ImageReader::open(path)
+    let decoder = image::ImageReader::open(path)
         .map_err(|e| err(e.to_string()))?
         .with_guessed_format()
         .map_err(|e| err(e.to_string()))?
-        .into_dimensions()
+        .into_decoder()
         .map_err(|e| err(format!("not a readable {kind} file: {e}")))?;
-    Ok(TextureInfo { width, height })
+    let (width, height) = image::ImageDecoder::dimensions(&decoder);
+    let sixteen_bit = image::ImageDecoder::color_type(&decoder).bytes_per_pixel()
+        > image::ImageDecoder::color_type(&decoder).channel_count();
+    Ok(TextureInfo {
+        width,
+        height,
+        texel_bytes: if sixteen_bit { 8 } else { 4 },
+    })
 }
 
-/// Decoded RGBA8 bytes of a texture, plus its mip chain (a third more).
+/// Decoded RGBA bytes of a texture, plus its mip chain (a third more).
 fn texture_bytes(info: TextureInfo) -> (u64, u64) {
-    let base = info.width as u64 * info.height as u64 * 4;
+    let base = info.width as u64 * info.height as u64 * info.texel_bytes;
     (base, base + base / 3)
 }
 
