@@ -683,3 +683,114 @@ fn groups_relative_indices_and_polygons_load() {
         }
     }
 }
+
+/// The seed's measurement, on the renderer's output: the cut sphere drawn
+/// with `--debug-view normals` (the shading normal in the HDR image), per
+/// smoothing mode, against the exact sphere's normal where each pixel's ray
+/// (from the inverse view-projection, double precision) meets it. Pixels
+/// whose hit point lies within half a segment of a cut are "boundary".
+#[test]
+fn rendered_shading_normals_per_smoothing_mode() {
+    use aerial::scene::DebugView;
+    let dir = tempfile::tempdir().unwrap();
+    let (segments, cuts) = ((48u32, 24u32), (4u32, 3u32));
+    write(dir.path(), "cut.obj", &grid_obj(sphere, segments, cuts));
+    let size = 160u32;
+    let stats = |mode: &str| {
+        let toml = format!(
+            "[output]\nwidth = {size}\nheight = {size}\ndebug_view = \"normals\"\n\
+             [camera]\neye = [1.6, 1.9, 2.4]\nlook_at = [0, 0, 0]\nfov_y = 45\n\
+             [[objects]]\nname = \"s\"\nshape = {{ type = \"obj\", path = \"cut.obj\" }}\n\
+             smoothing = \"{mode}\"\n"
+        );
+        let scene = Scene::from_toml(&toml, "t.toml", dir.path()).unwrap();
+        assert_eq!(scene.output.debug_view, Some(DebugView::Normals));
+        let hdr = common::render(&scene, true).hdr.unwrap();
+        let inverse = scene.camera.view_projection(1.0).as_dmat4().inverse();
+        let eye = scene.camera.eye.as_dvec3();
+        let (mut boundary, mut interior) = (Vec::new(), Vec::new());
+        for y in 0..size {
+            for x in 0..size {
+                let ndc = |i: u32| (f64::from(i) + 0.5) / f64::from(size) * 2.0 - 1.0;
+                let far = inverse * glam::DVec4::new(ndc(x), ndc(y), 0.5, 1.0);
+                let d = (far.truncate() / far.w - eye).normalize();
+                let (b, c) = (eye.dot(d), eye.length_squared() - 1.0);
+                let disc = b * b - c;
+                if disc <= 0.0 {
+                    continue;
+                }
+                let p = eye + d * (-b - disc.sqrt());
+                // Keep away from the silhouette, where polygon and sphere
+                // cover different pixels.
+                if p.dot(-d) < 0.35 {
+                    continue;
+                }
+                let px = common::pixel(&hdr, x, y);
+                let n = glam::DVec3::new(px[0].into(), px[1].into(), px[2].into());
+                if n.length() < 0.5 {
+                    continue; // the polygon missed this pixel
+                }
+                let angle = n.angle_between(p).to_degrees();
+                // The hit point's parameters, as the OBJ was generated.
+                let u = (-p.z).atan2(p.x).rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU;
+                let v = (-p.y).clamp(-1.0, 1.0).acos() / std::f64::consts::PI;
+                let near = |t: f64, step: f64, n: u32| {
+                    (0..=n).any(|k| (t - f64::from(k) / f64::from(n)).abs() < step / 2.0)
+                };
+                let on_cut = near(u, 1.0 / f64::from(segments.0), cuts.0)
+                    || (v > 0.05 && v < 0.95 && near(v, 1.0 / f64::from(segments.1), cuts.1));
+                if on_cut {
+                    boundary.push(angle);
+                } else {
+                    interior.push(angle);
+                }
+            }
+        }
+        let summary = |a: &[f64]| {
+            (
+                a.iter().sum::<f64>() / a.len().max(1) as f64,
+                a.iter().copied().fold(0.0, f64::max),
+                a.len(),
+            )
+        };
+        (summary(&boundary), summary(&interior))
+    };
+    let mut table = Vec::new();
+    for mode in ["face", "object", "model"] {
+        let (b, i) = stats(mode);
+        println!(
+            "{mode:6} boundary mean {:.3} max {:.3} ({} px) | interior mean {:.3} max {:.3} ({} px)",
+            b.0, b.1, b.2, i.0, i.1, i.2
+        );
+        assert!(b.2 > 200 && i.2 > 2000, "{mode}: too few pixels");
+        table.push((b, i));
+    }
+    let [(face_b, face_i), (object_b, object_i), (model_b, model_i)] =
+        [table[0], table[1], table[2]];
+    assert!(model_b.0 <= 0.5, "model at boundaries: mean {}", model_b.0);
+    assert!(
+        model_b.0 <= model_i.0 * 1.25,
+        "model: boundary {} vs interior {}",
+        model_b.0,
+        model_i.0
+    );
+    assert!(
+        object_b.0 > 4.0 * model_b.0,
+        "object must be clearly worse at boundaries"
+    );
+    // Face is worst overall: at boundaries object is about as bad (a
+    // boundary vertex averages only its own object's half of the fan).
+    let overall = |(b, i): ((f64, f64, usize), (f64, f64, usize))| {
+        (b.0 * b.2 as f64 + i.0 * i.2 as f64) / (b.2 + i.2) as f64
+    };
+    let (face, object, model) = (
+        overall((face_b, face_i)),
+        overall((object_b, object_i)),
+        overall((model_b, model_i)),
+    );
+    assert!(face > object && object > model, "{face} {object} {model}");
+    assert!(
+        face_i.0 > 4.0 * object_i.0,
+        "face must be worst inside objects"
+    );
+}
