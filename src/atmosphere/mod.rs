@@ -7,7 +7,7 @@
 //! planet shadow, no partial disc), and a disc of the given angular radius
 //! only when seen directly.
 //!
-//! [`reference`] integrates the model adaptively (the oracle of the tests);
+//! [`reference`](mod@reference) integrates the model adaptively (the oracle of the tests);
 //! [`table`] bakes the optical-depth table the GPU pass samples.
 
 pub mod reference;
