@@ -188,3 +188,28 @@ fn height_map_fields_are_checked() {
         );
     }
 }
+
+#[test]
+fn a_height_map_that_does_not_fit_the_memory_budget_is_refused_before_decoding() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // 2048 x 2048 grey: small as a file, about 100 MB to convert.
+    image::GrayImage::new(2048, 2048)
+        .save(d.join("big.png"))
+        .unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
+        .arg("normalmap")
+        .arg(d.join("big.png"))
+        .arg("--out")
+        .arg(d.join("n.png"))
+        .env("AERIAL_MEMORY_BUDGET", "16M")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("big.png") && stderr.contains("2048x2048"),
+        "{stderr}"
+    );
+    assert!(!d.join("n.png").exists());
+}

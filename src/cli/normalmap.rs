@@ -2,8 +2,9 @@
 //! tangent-space normal map (RGBA8 PNG) with the convention the renderer
 //! reads (`src/mesh/height.rs`).
 
+use aerial::budget::MemoryBudget;
 use aerial::mesh::height::{encode_normal_map, GreenAxis, HeightEdge, HeightFilter, HeightMap};
-use aerial::render::{output, Pixels};
+use aerial::render::{output, preflight, Pixels};
 use anyhow::bail;
 use std::path::PathBuf;
 
@@ -40,6 +41,19 @@ pub fn run(args: NormalMapArgs) -> anyhow::Result<()> {
         );
     }
     aerial::files::check_destination(&args.out)?;
+    // The size from the header first: refuse what does not fit the memory
+    // budget before decoding.
+    let info = preflight::inspect_texture(&args.input)?;
+    MemoryBudget::from_env()?.check(
+        format!(
+            "height map {} ({}x{})",
+            args.input.display(),
+            info.width,
+            info.height
+        ),
+        preflight::height_conversion_bytes(info.width, info.height)
+            + u64::from(info.width) * u64::from(info.height) * info.texel_bytes,
+    )?;
     let heights = HeightMap::load(&args.input)?;
     let normals = heights.normals(args.scale, args.filter, args.edge)?;
     let pixels = Pixels {

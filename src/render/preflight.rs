@@ -104,6 +104,13 @@ pub fn inspect_texture(path: &Path) -> Result<TextureInfo, RenderError> {
     })
 }
 
+/// Working memory of turning a `w`×`h` height map into a normal map
+/// (`crate::mesh::height`): 16-bit grey, f32 heights, f32 normals and the
+/// RGBA8 result.
+pub fn height_conversion_bytes(w: u32, h: u32) -> u64 {
+    u64::from(w) * u64::from(h) * (2 + 4 + 12 + 4)
+}
+
 /// Decoded RGBA bytes of a texture, plus its mip chain (a third more).
 fn texture_bytes(info: TextureInfo) -> (u64, u64) {
     let base = info.width as u64 * info.height as u64 * info.texel_bytes;
@@ -154,12 +161,15 @@ pub fn scene_memory(
     budget.check(&size_what, attachments)?;
     total = total.saturating_add(attachments);
     let mut seen: Vec<&PathBuf> = Vec::new();
-    // Base-colour textures and normal maps cost the same.
-    let images = scene
-        .materials
-        .iter()
-        .flat_map(|m| m.texture.iter().chain(m.normal_map.iter()));
-    for path in images {
+    // Base-colour textures and normal maps cost the same, plus, for a
+    // height map, the conversion's working arrays.
+    let images = scene.materials.iter().flat_map(|m| {
+        m.texture
+            .iter()
+            .map(|p| (p, false))
+            .chain(m.normal_map.iter().map(|p| (p, m.height_scale.is_some())))
+    });
+    for (path, from_heights) in images {
         if seen.contains(&path) {
             continue;
         }
@@ -181,7 +191,10 @@ pub fn scene_memory(
         }
         // Decoded pixels (twice during conversion to RGBA), staging buffer
         // and the mipmapped image.
-        let need = 3 * base + with_mips;
+        let mut need = 3 * base + with_mips;
+        if from_heights {
+            need += height_conversion_bytes(info.width, info.height);
+        }
         budget.check(
             format!(
                 "texture {} ({}x{})",
