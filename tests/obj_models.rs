@@ -794,3 +794,34 @@ fn rendered_shading_normals_per_smoothing_mode() {
         "face must be worst inside objects"
     );
 }
+
+/// A model is loaded with the scene, so its size is checked against the
+/// memory budget first (from the file's size), naming the model.
+#[test]
+fn a_model_too_large_for_the_memory_budget_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = grid_obj(sphere, (256, 128), (1, 1));
+    assert!(text.len() > 1 << 20, "{} bytes", text.len());
+    write(dir.path(), "big.obj", &text);
+    write(
+        dir.path(),
+        "s.toml",
+        "[camera]\neye = [0, 1, 4]\nlook_at = [0, 0, 0]\n\
+         [[objects]]\nname = \"big\"\nshape = { type = \"obj\", path = \"big.obj\" }\n",
+    );
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
+        .arg("render")
+        .arg(dir.path().join("s.toml"))
+        .arg("--out")
+        .arg(dir.path().join("o.png"))
+        .env("AERIAL_MEMORY_BUDGET", "8M")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("objects[0].shape.path") && stderr.contains("big.obj"),
+        "{stderr}"
+    );
+    assert!(!dir.path().join("o.png").exists());
+}

@@ -940,6 +940,19 @@ impl Check<'_> {
             .as_ref()
             .ok_or_else(|| self.invalid(field("shape.path"), "required for an obj"))?;
         let resolved = self.base_dir.join(model_path);
+        // A model is parsed, smoothed and given frames when the scene is
+        // loaded, before the renderer's own memory estimate: refuse here,
+        // from the file's size, what cannot fit the budget.
+        if let Ok(meta) = std::fs::metadata(&resolved) {
+            let budget = crate::budget::MemoryBudget::from_env()
+                .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
+            budget
+                .check(
+                    format!("model {}", resolved.display()),
+                    meta.len().saturating_mul(obj::MEMORY_PER_FILE_BYTE),
+                )
+                .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
+        }
         let model = obj::load_obj(&resolved)
             .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
         let crease_degrees = match raw.crease_angle {
