@@ -39,6 +39,11 @@ layout(input_attachment_index = 1, set = 1, binding = 1) uniform subpassInput su
 
 layout(location = 0) out vec4 out_color;
 
+// The table's mapping (0: horizon, Bruneton-style; 1: the seed's linear
+// altitude × linear cosine) and filter (0: manual bilinear; 1: nearest).
+layout(constant_id = 0) const int TABLE_MAPPING = 0;
+layout(constant_id = 1) const int TABLE_FILTER = 0;
+
 const float PI = 3.14159265358979;
 const float INF = 1.0 / 0.0;
 
@@ -72,28 +77,40 @@ vec3 table_densities(float h, float mu) {
     float thickness = sky.radii.y - sky.radii.x;
     float big_h = sky.radii.z;
     h = clamp(h, 0.0, thickness);
-    float r = rb + h;
-    float rho = sqrt(h * (2.0 * rb + h));
-    float d_min = thickness - h;
-    float disc = d_min * (sky.radii.y + r) + r * r * mu * mu;
-    float d = max(-r * mu + sqrt(max(disc, 0.0)), 0.0);
-    float d_max = rho + big_h;
-    float x_mu = clamp((d - d_min) / max(d_max - d_min, 1e-6), 0.0, 1.0);
-    float x_r = clamp(rho / big_h, 0.0, 1.0);
+    float x_mu;
+    float x_r;
+    if (TABLE_MAPPING == 1) {
+        x_mu = clamp((1.0 - mu) * 0.5, 0.0, 1.0);
+        x_r = clamp(h / thickness, 0.0, 1.0);
+    } else {
+        float r = rb + h;
+        float rho = sqrt(h * (2.0 * rb + h));
+        float d_min = thickness - h;
+        float disc = d_min * (sky.radii.y + r) + r * r * mu * mu;
+        float d = max(-r * mu + sqrt(max(disc, 0.0)), 0.0);
+        float d_max = rho + big_h;
+        x_mu = clamp((d - d_min) / max(d_max - d_min, 1e-6), 0.0, 1.0);
+        x_r = clamp(rho / big_h, 0.0, 1.0);
+    }
     int w = int(sky.ozone_layer.z);
     int hh = int(sky.ozone_layer.w);
     float fx = x_mu * float(w - 1);
     float fy = x_r * float(hh - 1);
-    int x0 = min(int(floor(fx)), w - 2);
-    int y0 = min(int(floor(fy)), hh - 2);
-    float ax = fx - float(x0);
-    float ay = fy - float(y0);
-    // Manual bilinear from four texel fetches (32-bit floats).
-    vec3 t00 = table.texels[y0 * w + x0].xyz;
-    vec3 t10 = table.texels[y0 * w + x0 + 1].xyz;
-    vec3 t01 = table.texels[(y0 + 1) * w + x0].xyz;
-    vec3 t11 = table.texels[(y0 + 1) * w + x0 + 1].xyz;
-    vec3 v = mix(mix(t00, t10, ax), mix(t01, t11, ax), ay);
+    vec3 v;
+    if (TABLE_FILTER == 1) {
+        v = table.texels[int(round(fy)) * w + int(round(fx))].xyz;
+    } else {
+        int x0 = min(int(floor(fx)), w - 2);
+        int y0 = min(int(floor(fy)), hh - 2);
+        float ax = fx - float(x0);
+        float ay = fy - float(y0);
+        // Manual bilinear from four texel fetches (32-bit floats).
+        vec3 t00 = table.texels[y0 * w + x0].xyz;
+        vec3 t10 = table.texels[y0 * w + x0 + 1].xyz;
+        vec3 t01 = table.texels[(y0 + 1) * w + x0].xyz;
+        vec3 t11 = table.texels[(y0 + 1) * w + x0 + 1].xyz;
+        v = mix(mix(t00, t10, ax), mix(t01, t11, ax), ay);
+    }
     float offset = sky.ground_albedo.w;
     return vec3(
         max(exp(v.x - h * sky.rayleigh.w) - offset, 0.0),

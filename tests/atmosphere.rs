@@ -348,3 +348,44 @@ fn extreme_atmospheres_stay_finite() {
         assert_finite_non_negative(label, &hdr);
     }
 }
+
+/// The optical-depth table's settings against the reference, at sunset
+/// (sun near the horizon, where the table is read at grazing angles) with
+/// enough samples that the march's own error is small: the default
+/// (horizon mapping, 256×64, manual bilinear) beats the seed's linear
+/// mapping, nearest-texel reads and a much smaller table.
+#[test]
+fn table_settings_order_as_their_error_says() {
+    let base = || {
+        let mut s = example("earth_sunset.toml");
+        s.set_output_size(Some(96), Some(54)).unwrap();
+        s.output.hdr_format = aerial::scene::HdrFormat::Rgba32F;
+        s.sky.as_mut().unwrap().samples = 128;
+        s
+    };
+    let error = |label: &str, change: &dyn Fn(&mut aerial::scene::Sky)| {
+        let mut scene = base();
+        change(scene.sky.as_mut().unwrap());
+        let run = common::render(&scene, true);
+        let hdr = run.hdr.unwrap();
+        assert_finite_non_negative(label, &hdr);
+        sky_errors(label, &scene, &hdr)
+    };
+    use aerial::scene::{TableFilter, TableMapping};
+    let default = error("horizon 256x64 manual", &|_| {});
+    let seed = error("seed 256x64 manual", &|s| {
+        s.table_mapping = TableMapping::Seed
+    });
+    let nearest = error("horizon 256x64 nearest", &|s| {
+        s.table_filter = TableFilter::Nearest
+    });
+    let small = error("horizon 32x8 manual", &|s| s.table_size = (32, 8));
+    for (label, e) in [("seed", seed), ("nearest", nearest), ("32x8", small)] {
+        assert!(
+            e.1 > default.1,
+            "{label} (max {:.2e}) should be worse than the default (max {:.2e})",
+            e.1,
+            default.1
+        );
+    }
+}

@@ -23,14 +23,7 @@ use super::reference::densities_to_top;
 use super::{Atmosphere, Densities};
 use glam::DVec3;
 
-/// How (altitude, direction) maps to the table.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TableMapping {
-    /// Bruneton-style: distance to the top, horizon at the edge.
-    Horizon,
-    /// The seed's: linear altitude, linear cosine of the zenith angle.
-    Seed,
-}
+pub use crate::scene::TableMapping;
 
 /// Added to the Rayleigh and Mie density integrals (metres) before their
 /// logarithm is stored: 1 m of ground-level air is an optical depth of

@@ -206,6 +206,13 @@ pub fn scene_memory(
         )?;
         total = total.saturating_add(need);
     }
+    if let Some(sky) = &scene.sky {
+        // The optical-depth table: its texels on the CPU and in the buffer.
+        let (w, h) = sky.table_size;
+        let need = u64::from(w) * u64::from(h) * 16 * 2;
+        budget.check(format!("optical-depth table {w}x{h}"), need)?;
+        total = total.saturating_add(need);
+    }
     if total > budget.bytes {
         // Each part fits but the sum does not: name the biggest parts.
         let what = match largest {

@@ -5,7 +5,10 @@
 //! product of knob values, so adding an approximation to the renderer means
 //! adding one entry to [`KNOBS`] and nothing else.
 
-use super::{HdrFormat, Lighting, Scene, ShadingModel, TextureFilter, ToneMapOperator};
+use super::{
+    HdrFormat, Lighting, Scene, ShadingModel, TableFilter, TableMapping, TextureFilter,
+    ToneMapOperator,
+};
 
 /// One named setting.
 pub struct Knob {
@@ -257,20 +260,89 @@ pub const KNOBS: &[Knob] = &[
                     super::MAX_ATMOSPHERE_SAMPLES
                 ));
             }
-            match s.sky.as_mut() {
-                Some(sky) => {
-                    sky.samples = n;
-                    Ok(())
-                }
-                None => Err("the scene has no [atmosphere]".into()),
-            }
+            sky_mut(s)?.samples = n;
+            Ok(())
         },
         read: |s| match &s.sky {
             Some(sky) => sky.samples.to_string(),
             None => "-".into(),
         },
     },
+    Knob {
+        name: "od_table_size",
+        best: Best::LastListed,
+        values: "WIDTHxHEIGHT: optical-depth table texels, direction x altitude (2..=4096 each)",
+        apply: |s, v| {
+            let (w, h) = v.split_once('x').ok_or("expected WIDTHxHEIGHT")?;
+            let parse = |t: &str| t.trim().parse::<u32>().map_err(|e| format!("'{t}': {e}"));
+            let (w, h) = (parse(w)?, parse(h)?);
+            if ![w, h]
+                .iter()
+                .all(|n| (2..=super::MAX_TABLE_SIDE).contains(n))
+            {
+                return Err(format!(
+                    "each side must be between 2 and {}",
+                    super::MAX_TABLE_SIDE
+                ));
+            }
+            sky_mut(s)?.table_size = (w, h);
+            Ok(())
+        },
+        read: |s| match &s.sky {
+            Some(sky) => format!("{}x{}", sky.table_size.0, sky.table_size.1),
+            None => "-".into(),
+        },
+    },
+    Knob {
+        name: "od_table_mapping",
+        best: Best::Fixed("horizon"),
+        values: "horizon | seed: how altitude and direction map to the optical-depth table",
+        apply: |s, v| {
+            sky_mut(s)?.table_mapping = match v {
+                "horizon" => TableMapping::Horizon,
+                "seed" => TableMapping::Seed,
+                _ => return Err("expected horizon or seed".into()),
+            };
+            Ok(())
+        },
+        read: |s| match &s.sky {
+            Some(sky) => match sky.table_mapping {
+                TableMapping::Horizon => "horizon",
+                TableMapping::Seed => "seed",
+            }
+            .into(),
+            None => "-".into(),
+        },
+    },
+    Knob {
+        name: "od_filter",
+        best: Best::Fixed("manual"),
+        values: "manual | nearest: how the atmosphere pass reads the optical-depth table",
+        apply: |s, v| {
+            sky_mut(s)?.table_filter = match v {
+                "manual" => TableFilter::Manual,
+                "nearest" => TableFilter::Nearest,
+                _ => return Err("expected manual or nearest".into()),
+            };
+            Ok(())
+        },
+        read: |s| match &s.sky {
+            Some(sky) => match sky.table_filter {
+                TableFilter::Manual => "manual",
+                TableFilter::Nearest => "nearest",
+            }
+            .into(),
+            None => "-".into(),
+        },
+    },
 ];
+
+/// The scene's sky, for the atmosphere knobs.
+fn sky_mut(s: &mut Scene) -> Result<&mut super::Sky, String> {
+    s.sky
+        .as_mut()
+        .ok_or_else(|| "the scene has no [atmosphere]".to_string())
+}
 
 impl Knob {
     /// The knob called `name`.

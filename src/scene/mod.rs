@@ -27,7 +27,10 @@ pub use knobs::{settings as knob_settings, Best, Knob, KnobError, KNOBS};
 pub use lights::{Light, LightRange};
 pub use material::{Material, ShadingModel};
 pub use object::{Object, Shape, Transform};
-pub use sky::{Atmosphere, Sky, Sun, DEFAULT_ATMOSPHERE_SAMPLES, MAX_ATMOSPHERE_SAMPLES};
+pub use sky::{
+    Atmosphere, Sky, Sun, TableFilter, TableMapping, DEFAULT_ATMOSPHERE_SAMPLES,
+    DEFAULT_TABLE_SIZE, MAX_ATMOSPHERE_SAMPLES, MAX_TABLE_SIDE,
+};
 
 use crate::mesh::{tessellate, Mesh};
 

@@ -18,6 +18,11 @@ pub const MAX_ATMOSPHERE_SAMPLES: u32 = 1024;
 /// Largest accepted atmosphere radius (m): the same bound as lengths.
 const MAX_RADIUS: f64 = 1e9;
 
+/// Default optical-depth table size (direction × altitude texels).
+pub const DEFAULT_TABLE_SIZE: (u32, u32) = (256, 64);
+/// Largest accepted table side: 4096² texels of four f32 are 256 MiB.
+pub const MAX_TABLE_SIDE: u32 = 4096;
+
 /// The sun and the atmosphere around a planet.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sky {
@@ -25,6 +30,31 @@ pub struct Sky {
     pub atmosphere: Atmosphere,
     /// Ray-march samples per pixel in the atmosphere pass.
     pub samples: u32,
+    /// Optical-depth table texels, direction × altitude.
+    pub table_size: (u32, u32),
+    pub table_mapping: TableMapping,
+    pub table_filter: TableFilter,
+}
+
+/// How (altitude, direction) maps to the optical-depth table
+/// (`atmosphere.od_table_mapping`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TableMapping {
+    /// Bruneton-style: distance to the top, horizon at the edge.
+    Horizon,
+    /// The seed's: linear altitude, linear cosine of the zenith angle.
+    Seed,
+}
+
+/// How the atmosphere pass reads the table (`atmosphere.od_filter`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TableFilter {
+    /// Bilinear from four texel fetches, by hand (the seed's method).
+    Manual,
+    /// The nearest texel.
+    Nearest,
 }
 
 /// The sun: parallel light from `direction`.
@@ -109,6 +139,9 @@ pub(super) struct AtmosphereFile {
     ozone_layer: Option<[f64; 3]>,
     ground_albedo: Option<[f64; 3]>,
     samples: Option<u32>,
+    od_table_size: Option<[u32; 2]>,
+    od_table_mapping: Option<TableMapping>,
+    od_filter: Option<TableFilter>,
 }
 
 fn ones() -> [f64; 3] {
@@ -340,7 +373,25 @@ pub(super) fn check(
             format!("must be between 1 and {MAX_ATMOSPHERE_SAMPLES}, got {samples}"),
         ));
     }
+    let table_size = atmosphere
+        .od_table_size
+        .map_or(DEFAULT_TABLE_SIZE, |[w, h]| (w, h));
+    if ![table_size.0, table_size.1]
+        .iter()
+        .all(|n| (2..=MAX_TABLE_SIDE).contains(n))
+    {
+        return Err(invalid(
+            "atmosphere.od_table_size",
+            format!(
+                "each side must be between 2 and {MAX_TABLE_SIDE}, got [{}, {}]",
+                table_size.0, table_size.1
+            ),
+        ));
+    }
     Ok(Some(Sky {
+        table_size,
+        table_mapping: atmosphere.od_table_mapping.unwrap_or(TableMapping::Horizon),
+        table_filter: atmosphere.od_filter.unwrap_or(TableFilter::Manual),
         sun: Sun {
             direction,
             irradiance,
@@ -473,6 +524,14 @@ mod tests {
                 "atmosphere.ground_albedo",
             ),
             ("[atmosphere]\nsamples = 0\n", "atmosphere.samples"),
+            (
+                "[atmosphere]\nod_table_size = [1, 64]\n",
+                "atmosphere.od_table_size",
+            ),
+            (
+                "[atmosphere]\nod_table_size = [256, 5000]\n",
+                "atmosphere.od_table_size",
+            ),
         ] {
             let text = if extra.starts_with("[atmosphere]") {
                 format!("{sun}{extra}")
@@ -480,6 +539,12 @@ mod tests {
                 extra.to_owned()
             };
             assert_eq!(field_of(&text), field, "{text}");
+        }
+        // Named values outside their set are refused by the parser.
+        for bad in ["od_table_mapping = \"log\"", "od_filter = \"cubic\""] {
+            let text = format!("[sun]\ndirection = [0.0, 1.0, 0.0]\n[atmosphere]\n{bad}\n");
+            let e = parse(&text).unwrap_err().to_string();
+            assert!(e.contains(bad.split(' ').next().unwrap()), "{e}");
         }
         // Unknown keys are refused by the parser with a line number.
         let e = parse("[sun]\ndirection = [0.0, 1.0, 0.0]\n[atmosphere]\nrayleigh = 1.0\n")

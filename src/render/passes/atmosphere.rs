@@ -12,6 +12,7 @@ use super::{FrameResources, PassSetup, RecordPass};
 use crate::atmosphere::{OpticalDepthTable, TableMapping};
 use crate::render::plan::attachment;
 use crate::render::RenderError;
+use crate::scene::TableFilter;
 use crate::scene::{Camera, Sky};
 use crate::shaders;
 use crate::vk::{
@@ -20,9 +21,6 @@ use crate::vk::{
     PipelineLayout, ShaderModule, ShaderStageFlags, VkError,
 };
 use glam::DVec3;
-
-/// Size of the optical-depth table the pass uses (direction × altitude).
-pub const TABLE_SIZE: (u32, u32) = (256, 64);
 
 /// The uniform block of `glsl/atmosphere.frag`, std140 (vec4s only).
 #[repr(C)]
@@ -152,9 +150,9 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     })?;
     let table = OpticalDepthTable::bake(
         &sky.atmosphere,
-        TABLE_SIZE.0,
-        TABLE_SIZE.1,
-        TableMapping::Horizon,
+        sky.table_size.0,
+        sky.table_size.1,
+        sky.table_mapping,
     );
     log::info!(
         "optical-depth table {}x{} baked in {:.3} s",
@@ -234,7 +232,24 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         &GraphicsPipelineDesc {
             vertex_shader: &vert,
             fragment_shader: &frag,
-            specialization: &[],
+            // The table's mapping and filter select code paths once, at
+            // pipeline creation.
+            specialization: &[
+                (
+                    0,
+                    match sky.table_mapping {
+                        TableMapping::Horizon => 0,
+                        TableMapping::Seed => 1,
+                    },
+                ),
+                (
+                    1,
+                    match sky.table_filter {
+                        TableFilter::Manual => 0,
+                        TableFilter::Nearest => 1,
+                    },
+                ),
+            ],
             vertex_stride: 0,
             vertex_attributes: &[],
             cull_mode: CullModeFlags::NONE,
