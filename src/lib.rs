@@ -10,6 +10,7 @@ pub mod atmosphere;
 pub mod bench;
 pub mod budget;
 pub mod files;
+pub mod image_file;
 pub mod mesh;
 pub mod render;
 pub mod report;

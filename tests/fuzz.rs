@@ -319,9 +319,7 @@ fn run_all(iterations: u64, seed: u64) -> usize {
                 // decode of what is small enough.
                 if let Ok(info) = inspect_texture(&input_path) {
                     if u64::from(info.width) * u64::from(info.height) <= 1 << 20 {
-                        let _ = image::ImageReader::open(&input_path)
-                            .and_then(|r| r.with_guessed_format())
-                            .map(|r| r.decode());
+                        let _ = aerial::image_file::decode(&input_path);
                     }
                 }
                 let _ = read_png_text(&input_path);

@@ -63,12 +63,7 @@ impl HeightMap {
             path: path.display().to_string(),
             reason,
         };
-        let image = image::ImageReader::open(path)
-            .map_err(|e| err(e.to_string()))?
-            .with_guessed_format()
-            .map_err(|e| err(e.to_string()))?
-            .decode()
-            .map_err(|e| err(e.to_string()))?;
+        let image = crate::image_file::decode(path).map_err(err)?;
         let grey = image.to_luma16();
         let (width, height) = grey.dimensions();
         if width == 0 || height == 0 {

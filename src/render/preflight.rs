@@ -88,10 +88,8 @@ pub fn inspect_texture(path: &Path) -> Result<TextureInfo, RenderError> {
         }
     };
     // The header alone: the size is known before anything is decoded.
-    let decoder = image::ImageReader::open(path)
-        .map_err(|e| err(e.to_string()))?
-        .with_guessed_format()
-        .map_err(|e| err(e.to_string()))?
+    let decoder = crate::image_file::open(path)
+        .map_err(err)?
         .into_decoder()
         .map_err(|e| err(format!("not a readable {kind} file: {e}")))?;
     let (width, height) = image::ImageDecoder::dimensions(&decoder);

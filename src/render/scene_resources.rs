@@ -399,24 +399,21 @@ pub fn gpu_light(light: &Light) -> GpuLight {
     }
 }
 
-/// Loads a PNG as a `format` texture with a full mip chain. The decoder is
-/// chosen from the file's content, not its name.
+/// Decodes a texture file (PNG or JPEG, recognised by content).
+fn decode_texture(path: &std::path::Path) -> Result<image::DynamicImage, RenderError> {
+    crate::image_file::decode(path).map_err(|reason| RenderError::Texture {
+        path: path.to_path_buf(),
+        reason,
+    })
+}
+
+/// Loads a texture as `format` (8 bits per channel) with a full mip chain.
 fn load_texture(
     ctx: &Arc<Context>,
     path: &std::path::Path,
     format: Format,
 ) -> Result<Image, RenderError> {
-    let err = |reason: String| RenderError::Texture {
-        path: path.to_path_buf(),
-        reason,
-    };
-    let img = image::ImageReader::open(path)
-        .map_err(|e| err(e.to_string()))?
-        .with_guessed_format()
-        .map_err(|e| err(e.to_string()))?
-        .decode()
-        .map_err(|e| err(e.to_string()))?
-        .to_rgba8();
+    let img = decode_texture(path)?.to_rgba8();
     let (w, h) = img.dimensions();
     upload_texture(ctx, w, h, img.as_raw(), format)
 }
@@ -424,23 +421,10 @@ fn load_texture(
 /// Loads a normal map (linear, not sRGB), keeping 16-bit channels where the
 /// file has them.
 fn load_normal_map(ctx: &Arc<Context>, path: &std::path::Path) -> Result<Image, RenderError> {
-    let err = |reason: String| RenderError::Texture {
-        path: path.to_path_buf(),
-        reason,
-    };
-    let img = image::ImageReader::open(path)
-        .map_err(|e| err(e.to_string()))?
-        .with_guessed_format()
-        .map_err(|e| err(e.to_string()))?
-        .decode()
-        .map_err(|e| err(e.to_string()))?;
-    let sixteen_bit = matches!(
-        img.color(),
-        image::ColorType::L16
-            | image::ColorType::La16
-            | image::ColorType::Rgb16
-            | image::ColorType::Rgba16
-    );
+    let img = decode_texture(path)?;
+    // More than one byte per channel (the same rule as the preflight's
+    // memory estimate).
+    let sixteen_bit = img.color().bytes_per_pixel() > img.color().channel_count();
     if sixteen_bit && vk::supports_linear_filter(ctx, NORMAL_MAP_FORMAT_16) {
         let img = img.to_rgba16();
         let (w, h) = img.dimensions();
