@@ -15,9 +15,8 @@ use super::frame::TimedFrame;
 use super::{FrameTiming, Pixels, RenderError};
 use crate::shaders;
 use crate::vk::{
-    AttachmentSpec, AttachmentStart, Blend, Buffer, BufferUsage, Context, CullModeFlags, Format,
-    GraphRenderPass, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, ShaderModule,
-    SubpassSpec,
+    AttachmentSpec, AttachmentStart, Buffer, BufferUsage, Context, Format, GraphRenderPass,
+    GraphicsPipeline, PipelineLayout, SubpassSpec,
 };
 use std::sync::Arc;
 
@@ -73,25 +72,13 @@ impl EmptyPass {
             }],
         )?;
         let layout = PipelineLayout::new(ctx, &[])?;
-        let vertex = ShaderModule::new(ctx, shaders::FULLSCREEN_VERT.base())?;
-        let fragment = ShaderModule::new(ctx, shaders::CONSTANT_FRAG.base())?;
-        let pipeline = GraphicsPipeline::new(
+        let pipeline = super::passes::fullscreen_pipeline(
             ctx,
             &layout,
             &render_pass.render_pass,
-            &GraphicsPipelineDesc {
-                vertex_shader: &vertex,
-                fragment_shader: &fragment,
-                specialization: &[],
-                vertex_stride: 0,
-                vertex_attributes: &[],
-                cull_mode: CullModeFlags::NONE,
-                // There is no depth attachment.
-                depth_test: None,
-                depth_write: false,
-                blend: &[Blend::Replace],
-                subpass: 0,
-            },
+            0,
+            shaders::CONSTANT_FRAG.base(),
+            &[],
         )?;
         let readback = Buffer::new(
             ctx,

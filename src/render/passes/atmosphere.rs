@@ -8,17 +8,16 @@
 //! (four fetches). Everything planet-scale is computed here in f64 and
 //! given to the shader camera-relative.
 
-use super::{FrameResources, PassSetup, RecordPass};
+use super::{fullscreen_pipeline, FrameResources, InputAttachments, PassSetup, RecordPass};
 use crate::atmosphere::{OpticalDepthTable, TableMapping};
 use crate::render::plan::attachment;
 use crate::render::RenderError;
-use crate::scene::TableFilter;
-use crate::scene::{Camera, Sky};
+use crate::scene::{Camera, Sky, TableFilter};
 use crate::shaders;
 use crate::vk::{
-    Blend, Buffer, BufferUsage, CommandBuffer, CullModeFlags, DescriptorBinding, DescriptorPool,
-    DescriptorSet, DescriptorSetLayout, DescriptorType, GraphicsPipeline, GraphicsPipelineDesc,
-    PipelineLayout, ShaderModule, ShaderStageFlags, VkError,
+    Buffer, BufferUsage, CommandBuffer, DescriptorBinding, DescriptorPool, DescriptorSet,
+    DescriptorSetLayout, DescriptorType, GraphicsPipeline, PipelineLayout, ShaderStageFlags,
+    VkError,
 };
 use glam::DVec3;
 
@@ -130,13 +129,12 @@ pub fn uniforms(
 
 /// Fields drop in order: sets before their pool, pipeline before layouts.
 pub struct AtmospherePass {
-    sky_set: DescriptorSet,
-    inputs_set: DescriptorSet,
-    _pool: DescriptorPool,
     pipeline: GraphicsPipeline,
     layout: PipelineLayout,
+    sky_set: DescriptorSet,
+    _pool: DescriptorPool,
     _sky_layout: DescriptorSetLayout,
-    _inputs_layout: DescriptorSetLayout,
+    inputs: InputAttachments,
     _uniforms: Buffer,
     _table: Buffer,
 }
@@ -196,15 +194,8 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
             },
         ],
     )?;
-    let inputs_layout = DescriptorSetLayout::new(
-        ctx,
-        &[0, 1].map(|binding| DescriptorBinding {
-            binding,
-            kind: DescriptorType::INPUT_ATTACHMENT,
-            stages: ShaderStageFlags::FRAGMENT,
-        }),
-    )?;
-    let pool = DescriptorPool::for_layouts(ctx, &[&sky_layout, &inputs_layout])?;
+    let inputs = InputAttachments::new(setup, &[attachment::SURFACE, attachment::DEPTH])?;
+    let pool = DescriptorPool::for_layouts(ctx, &[&sky_layout])?;
     let sky_set = pool.allocate(&sky_layout)?;
     sky_set.write_buffer(
         0,
@@ -218,55 +209,32 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         &table_buffer,
         table_buffer.size(),
     );
-    let inputs_set = pool.allocate(&inputs_layout)?;
-    for (binding, name) in [attachment::SURFACE, attachment::DEPTH].iter().enumerate() {
-        inputs_set.write_input_attachment(binding as u32, setup.frame.attachments.get(name)?);
-    }
-    let layout = PipelineLayout::new(ctx, &[&sky_layout, &inputs_layout])?;
-    let vert = ShaderModule::new(ctx, shaders::FULLSCREEN_VERT.base())?;
-    let frag = ShaderModule::new(ctx, shaders::ATMOSPHERE_FRAG.base())?;
-    let pipeline = GraphicsPipeline::new(
+    let layout = PipelineLayout::new(ctx, &[&sky_layout, &inputs.layout])?;
+    // The table's mapping and filter select code paths once, at pipeline
+    // creation.
+    let mapping = match sky.table_mapping {
+        TableMapping::Horizon => 0,
+        TableMapping::Seed => 1,
+    };
+    let filter = match sky.table_filter {
+        TableFilter::Manual => 0,
+        TableFilter::Nearest => 1,
+    };
+    let pipeline = fullscreen_pipeline(
         ctx,
         &layout,
         &setup.render_pass()?.render_pass,
-        &GraphicsPipelineDesc {
-            vertex_shader: &vert,
-            fragment_shader: &frag,
-            // The table's mapping and filter select code paths once, at
-            // pipeline creation.
-            specialization: &[
-                (
-                    0,
-                    match sky.table_mapping {
-                        TableMapping::Horizon => 0,
-                        TableMapping::Seed => 1,
-                    },
-                ),
-                (
-                    1,
-                    match sky.table_filter {
-                        TableFilter::Manual => 0,
-                        TableFilter::Nearest => 1,
-                    },
-                ),
-            ],
-            vertex_stride: 0,
-            vertex_attributes: &[],
-            cull_mode: CullModeFlags::NONE,
-            depth_test: None,
-            depth_write: false,
-            blend: &[Blend::Replace],
-            subpass: setup.subpass,
-        },
+        setup.subpass,
+        shaders::ATMOSPHERE_FRAG.base(),
+        &[(0, mapping), (1, filter)],
     )?;
     Ok(Box::new(AtmospherePass {
-        sky_set,
-        inputs_set,
-        _pool: pool,
         pipeline,
         layout,
+        sky_set,
+        _pool: pool,
         _sky_layout: sky_layout,
-        _inputs_layout: inputs_layout,
+        inputs,
         _uniforms: uniforms,
         _table: table_buffer,
     }))
@@ -276,7 +244,7 @@ impl RecordPass for AtmospherePass {
     fn record(&self, cmd: &CommandBuffer, _frame: &FrameResources<'_>) -> Result<(), RenderError> {
         cmd.bind_pipeline(&self.pipeline);
         cmd.bind_descriptor_set(&self.layout, 0, &self.sky_set, &[]);
-        cmd.bind_descriptor_set(&self.layout, 1, &self.inputs_set, &[]);
+        cmd.bind_descriptor_set(&self.layout, 1, &self.inputs.set, &[]);
         cmd.draw(3);
         Ok(())
     }

@@ -9,7 +9,7 @@
 //! The tiles are drawn at the far plane with a LESS test against the
 //! stored (reversed-Z) depth, so pixels without a surface are never shaded.
 
-use super::{FrameResources, PassSetup, RecordPass};
+use super::{FrameResources, InputAttachments, PassSetup, RecordPass};
 use crate::render::gpu_types::GpuLight;
 use crate::render::plan::attachment;
 use crate::render::scene_resources::{gpu_light, pack_blocks};
@@ -31,16 +31,16 @@ struct GroupDraw {
     block_offset: u32,
 }
 
-/// Fields drop in order: sets before their pool, pipelines before layouts.
+/// Fields drop in order: pipelines before their layout, sets before their
+/// pool and layouts.
 pub struct DeferredLightingPass {
     groups: Vec<GroupDraw>,
-    lights_set: DescriptorSet,
-    inputs_set: DescriptorSet,
-    _pool: DescriptorPool,
     pipelines: BTreeMap<u32, GraphicsPipeline>,
     layout: PipelineLayout,
+    lights_set: DescriptorSet,
+    _pool: DescriptorPool,
     _lights_layout: DescriptorSetLayout,
-    _inputs_layout: DescriptorSetLayout,
+    inputs: InputAttachments,
     vertices: Buffer,
     _light_blocks: Buffer,
 }
@@ -103,21 +103,16 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
             stages: ShaderStageFlags::FRAGMENT,
         }],
     )?;
-    let input_names = [
-        attachment::ALBEDO,
-        attachment::NORMAL,
-        attachment::MATERIAL,
-        attachment::DEPTH,
-    ];
-    let input_bindings: Vec<DescriptorBinding> = (0..input_names.len() as u32)
-        .map(|binding| DescriptorBinding {
-            binding,
-            kind: DescriptorType::INPUT_ATTACHMENT,
-            stages: ShaderStageFlags::FRAGMENT,
-        })
-        .collect();
-    let inputs_layout = DescriptorSetLayout::new(ctx, &input_bindings)?;
-    let pool = DescriptorPool::for_layouts(ctx, &[&lights_layout, &inputs_layout])?;
+    let inputs = InputAttachments::new(
+        setup,
+        &[
+            attachment::ALBEDO,
+            attachment::NORMAL,
+            attachment::MATERIAL,
+            attachment::DEPTH,
+        ],
+    )?;
+    let pool = DescriptorPool::for_layouts(ctx, &[&lights_layout])?;
     let lights_set = pool.allocate(&lights_layout)?;
     lights_set.write_buffer(
         0,
@@ -125,13 +120,9 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         &light_blocks,
         block_range,
     );
-    let inputs_set = pool.allocate(&inputs_layout)?;
-    for (binding, name) in input_names.iter().enumerate() {
-        inputs_set.write_input_attachment(binding as u32, setup.frame.attachments.get(name)?);
-    }
     let layout = PipelineLayout::new(
         ctx,
-        &[&resources.frame_layout, &lights_layout, &inputs_layout],
+        &[&resources.frame_layout, &lights_layout, &inputs.layout],
     )?;
 
     let vert = ShaderModule::new(ctx, shaders::TILES_VERT.base())?;
@@ -169,13 +160,12 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     }
     Ok(Box::new(DeferredLightingPass {
         groups,
-        lights_set,
-        inputs_set,
-        _pool: pool,
         pipelines,
         layout,
+        lights_set,
+        _pool: pool,
         _lights_layout: lights_layout,
-        _inputs_layout: inputs_layout,
+        inputs,
         vertices,
         _light_blocks: light_blocks,
     }))
@@ -192,7 +182,7 @@ impl RecordPass for DeferredLightingPass {
                 cmd.bind_pipeline(&self.pipelines[&g.light_count]);
                 if bound.is_none() {
                     cmd.bind_descriptor_set(&self.layout, 0, &resources.frame_set, &[]);
-                    cmd.bind_descriptor_set(&self.layout, 2, &self.inputs_set, &[]);
+                    cmd.bind_descriptor_set(&self.layout, 2, &self.inputs.set, &[]);
                 }
                 bound = Some(g.light_count);
             }

@@ -19,7 +19,12 @@ use super::plan::{FramePlan, PassDecl};
 use super::scene_resources::SceneResources;
 use super::{Pixels, RenderError};
 use crate::scene::Scene;
-use crate::vk::{Buffer, CommandBuffer, Context, GraphRenderPass, Image};
+use crate::shaders;
+use crate::vk::{
+    Blend, Buffer, CommandBuffer, Context, CullModeFlags, DescriptorBinding, DescriptorPool,
+    DescriptorSet, DescriptorSetLayout, DescriptorType, GraphRenderPass, GraphicsPipeline,
+    GraphicsPipelineDesc, Image, PipelineLayout, RenderPass, ShaderModule, ShaderStageFlags,
+};
 use std::sync::Arc;
 
 /// Creates a pass's GPU objects.
@@ -100,4 +105,69 @@ impl PassSetup<'_> {
             )))
         })
     }
+}
+
+/// A descriptor set whose binding i is the input attachment `names[i]`,
+/// with its own layout and pool. Fields drop in order: the set before its
+/// pool, the layout last.
+pub struct InputAttachments {
+    pub set: DescriptorSet,
+    _pool: DescriptorPool,
+    pub layout: DescriptorSetLayout,
+}
+
+impl InputAttachments {
+    pub fn new(setup: &PassSetup<'_>, names: &[&str]) -> Result<InputAttachments, RenderError> {
+        let bindings: Vec<DescriptorBinding> = (0..names.len() as u32)
+            .map(|binding| DescriptorBinding {
+                binding,
+                kind: DescriptorType::INPUT_ATTACHMENT,
+                stages: ShaderStageFlags::FRAGMENT,
+            })
+            .collect();
+        let layout = DescriptorSetLayout::new(setup.ctx, &bindings)?;
+        let pool = DescriptorPool::for_layouts(setup.ctx, &[&layout])?;
+        let set = pool.allocate(&layout)?;
+        for (binding, name) in names.iter().enumerate() {
+            set.write_input_attachment(binding as u32, setup.frame.attachments.get(name)?);
+        }
+        Ok(InputAttachments {
+            set,
+            _pool: pool,
+            layout,
+        })
+    }
+}
+
+/// A pipeline that draws one triangle over the whole framebuffer
+/// (`fullscreen.vert`) with the `fragment` shader into one colour target:
+/// no vertex input, no depth, no blending. The tone map, the atmosphere
+/// and the empty pass are all this shape.
+pub(crate) fn fullscreen_pipeline(
+    ctx: &Arc<Context>,
+    layout: &PipelineLayout,
+    render_pass: &RenderPass,
+    subpass: u32,
+    fragment: &[u8],
+    specialization: &[(u32, u32)],
+) -> Result<GraphicsPipeline, RenderError> {
+    let vertex = ShaderModule::new(ctx, shaders::FULLSCREEN_VERT.base())?;
+    let fragment = ShaderModule::new(ctx, fragment)?;
+    Ok(GraphicsPipeline::new(
+        ctx,
+        layout,
+        render_pass,
+        &GraphicsPipelineDesc {
+            vertex_shader: &vertex,
+            fragment_shader: &fragment,
+            specialization,
+            vertex_stride: 0,
+            vertex_attributes: &[],
+            cull_mode: CullModeFlags::NONE,
+            depth_test: None,
+            depth_write: false,
+            blend: &[Blend::Replace],
+            subpass,
+        },
+    )?)
 }
