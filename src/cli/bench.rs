@@ -5,7 +5,6 @@ use aerial::bench::{
     self, compare, BaselineComparison, BenchReport, BenchScene, BenchSettings, PassReport, Progress,
 };
 use aerial::scene::Knob;
-use aerial::vk::validation::Validation;
 use anyhow::{bail, Context as _};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal as _;
@@ -54,22 +53,8 @@ pub struct BenchArgs {
         ]
     )]
     from_json: Option<PathBuf>,
-    /// Enable the Khronos validation layer: --validate=core, sync,
-    /// best-practices or all (plain --validate is all).
-    /// Any message fails the run (and the timings are then not
-    /// representative).
-    #[arg(
-        long,
-        value_enum,
-        value_name = "MODE",
-        num_args = 0..=1,
-        require_equals = true,
-        default_missing_value = "all"
-    )]
-    validate: Option<Validation>,
-    /// Physical device by index or name substring.
-    #[arg(long)]
-    device: Option<String>,
+    #[command(flatten)]
+    gpu: super::GpuArgs,
 }
 
 /// Exit status when the gate measured a slowdown past `--max-ratio`: 1, as
@@ -145,14 +130,14 @@ fn measure(args: &BenchArgs) -> anyhow::Result<BenchReport> {
     if cfg!(debug_assertions) {
         eprintln!("note: this is a debug build; users run release builds (cargo build --release)");
     }
-    if args.validate.is_some() {
+    if args.gpu.validate.is_some() {
         eprintln!("note: validation is on; the timings include its overhead");
     }
     let settings = BenchSettings {
         warmup: args.warmup,
         frames: args.frames,
-        validate: args.validate.unwrap_or_default(),
-        device: args.device.clone(),
+        validate: args.gpu.validate.unwrap_or_default(),
+        device: args.gpu.device.clone(),
     };
     let mut progress = Bar::new();
     let report = bench::run(&scenes, &settings, &mut progress);

@@ -6,7 +6,7 @@ use aerial::files;
 use aerial::render::output;
 use aerial::report::stats::{summarise_passes, Summary};
 use aerial::scene::Scene;
-use aerial::vk::validation::{self, Validation};
+use aerial::vk::validation;
 use anyhow::{bail, Context as _};
 use std::path::PathBuf;
 
@@ -34,21 +34,8 @@ pub struct RenderArgs {
     /// background 0), the PNG shows 0.5 + 0.5 v.
     #[arg(long, value_enum)]
     debug_view: Option<aerial::scene::DebugView>,
-    /// Enable the Khronos validation layer: --validate=core, sync,
-    /// best-practices or all (plain --validate is all).
-    /// Any message fails the run.
-    #[arg(
-        long,
-        value_enum,
-        value_name = "MODE",
-        num_args = 0..=1,
-        require_equals = true,
-        default_missing_value = "all"
-    )]
-    validate: Option<Validation>,
-    /// Physical device by index or name substring.
-    #[arg(long)]
-    device: Option<String>,
+    #[command(flatten)]
+    gpu: super::GpuArgs,
 }
 
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
@@ -78,8 +65,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let run = app::render(
         &scene,
         &RenderSettings {
-            validate: args.validate.unwrap_or_default(),
-            device: args.device.clone(),
+            validate: args.gpu.validate.unwrap_or_default(),
+            device: args.gpu.device.clone(),
             warmup: 0,
             frames: args.frames,
             keep_hdr: args.hdr.is_some(),

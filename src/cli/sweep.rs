@@ -7,7 +7,7 @@ use aerial::scene::Scene;
 use aerial::sweep::{
     self, Axis, Job, ReferenceKind, Rendered, Sweep, SweepOptions, DEFAULT_MAX_COMBINATIONS,
 };
-use aerial::vk::validation::{self, Validation};
+use aerial::vk::validation;
 use anyhow::Context as _;
 use std::path::PathBuf;
 
@@ -44,21 +44,8 @@ pub struct SweepArgs {
     /// settings, or the exact CPU image of each combination's scene.
     #[arg(long, value_enum, default_value = "gpu-best")]
     reference: Reference,
-    /// Enable the Khronos validation layer: --validate=core, sync,
-    /// best-practices or all (plain --validate is all).
-    /// Any message fails the sweep.
-    #[arg(
-        long,
-        value_enum,
-        value_name = "MODE",
-        num_args = 0..=1,
-        require_equals = true,
-        default_missing_value = "all"
-    )]
-    validate: Option<Validation>,
-    /// Physical device by index or name substring.
-    #[arg(long)]
-    device: Option<String>,
+    #[command(flatten)]
+    gpu: super::GpuArgs,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -100,8 +87,8 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     eprintln!("{total} combinations");
 
     let settings = |warmup, frames, keep_hdr| RenderSettings {
-        validate: args.validate.unwrap_or_default(),
-        device: args.device.clone(),
+        validate: args.gpu.validate.unwrap_or_default(),
+        device: args.gpu.device.clone(),
         warmup,
         frames,
         keep_hdr,

@@ -5,7 +5,7 @@
 use aerial::app::{self, FrameSource, RenderSettings};
 use aerial::render::output;
 use aerial::scene::{ToneMap, ToneMapOperator};
-use aerial::vk::validation::{self, Validation};
+use aerial::vk::validation;
 use anyhow::{bail, Context as _};
 use std::path::PathBuf;
 
@@ -22,21 +22,8 @@ pub struct ToneMapArgs {
     /// Linear scale applied before the operator.
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,
-    /// Enable the Khronos validation layer: --validate=core, sync,
-    /// best-practices or all (plain --validate is all).
-    /// Any message fails the run.
-    #[arg(
-        long,
-        value_enum,
-        value_name = "MODE",
-        num_args = 0..=1,
-        require_equals = true,
-        default_missing_value = "all"
-    )]
-    validate: Option<Validation>,
-    /// Physical device by index or name substring.
-    #[arg(long)]
-    device: Option<String>,
+    #[command(flatten)]
+    gpu: super::GpuArgs,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -61,8 +48,8 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
     let run = app::run(
         FrameSource::HdrImage(&image, tone_map),
         &RenderSettings {
-            validate: args.validate.unwrap_or_default(),
-            device: args.device,
+            validate: args.gpu.validate.unwrap_or_default(),
+            device: args.gpu.device,
             warmup: 0,
             frames: 1,
             keep_hdr: false,
