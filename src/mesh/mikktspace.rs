@@ -5,7 +5,7 @@
 //! tangent, so corners that MikkTSpace gives different frames stay apart.
 
 use super::smoothing::FastMap;
-use super::tangents::{is_collapsed, TangentStats};
+use super::tangents::{corner_bits, is_collapsed, TangentStats};
 use super::{Mesh, Vertex};
 use bevy_mikktspace::{generate_tangents, Geometry, TangentSpace};
 use glam::{Vec2, Vec3};
@@ -94,21 +94,9 @@ pub fn build_mesh_mikktspace(
                     let v = n.any_orthonormal_vector();
                     [v.x, v.y, v.z, 1.0]
                 });
-            let bits = |x: f32| (x + 0.0).to_bits();
-            let key = [
-                bits(p.x),
-                bits(p.y),
-                bits(p.z),
-                bits(n.x),
-                bits(n.y),
-                bits(n.z),
-                bits(u.x),
-                bits(u.y),
-                bits(tangent[0]),
-                bits(tangent[1]),
-                bits(tangent[2]),
-                bits(tangent[3]),
-            ];
+            let mut key = [0; 12];
+            key[..8].copy_from_slice(&corner_bits(p, n, u));
+            key[8..].copy_from_slice(&tangent.map(|x| (x + 0.0).to_bits()));
             let index = *index_of.entry(key).or_insert_with(|| {
                 vertices.push(Vertex {
                     position: p.to_array(),

@@ -88,21 +88,15 @@ pub fn build_mesh(
             continue;
         }
         let (t, b, sign) = triangle[c / 3];
-        let p = positions[c] + Vec3::ZERO;
-        let n = normals[c] + Vec3::ZERO;
-        let u = uv(c) + Vec2::ZERO;
-        let bits = |x: f32| x.to_bits();
-        let key = [
-            bits(p.x),
-            bits(p.y),
-            bits(p.z),
-            bits(n.x),
-            bits(n.y),
-            bits(n.z),
-            bits(u.x),
-            bits(u.y),
-            (sign < 0.0) as u32,
-        ];
+        // + 0: -0.0 is stored (and keyed) as 0.0.
+        let (p, n, u) = (
+            positions[c] + Vec3::ZERO,
+            normals[c] + Vec3::ZERO,
+            uv(c) + Vec2::ZERO,
+        );
+        let mut key = [0; 9];
+        key[..8].copy_from_slice(&corner_bits(p, n, u));
+        key[8] = (sign < 0.0) as u32;
         let index = *index_of.entry(key).or_insert_with(|| {
             vertices.push(Vertex {
                 position: p.to_array(),
@@ -160,6 +154,12 @@ pub fn build_mesh(
     }
     stats.collapsed = collapsed.iter().filter(|&&c| c).count();
     (Mesh { vertices, indices }, stats)
+}
+
+/// The exact bits of a corner's position, normal and UV, the part of the
+/// key that decides which corners become one vertex (-0.0 counts as 0.0).
+pub(crate) fn corner_bits(p: Vec3, n: Vec3, u: Vec2) -> [u32; 8] {
+    [p.x, p.y, p.z, n.x, n.y, n.z, u.x, u.y].map(|x| (x + 0.0).to_bits())
 }
 
 /// Whether triangle (a, b, c) is collapsed to a line or a point. Same test

@@ -259,6 +259,23 @@ struct ShapeFile {
     path: Option<PathBuf>,
 }
 
+impl ShapeFile {
+    /// Every size field by its file name, given or not.
+    fn sizes(&self) -> [(&'static str, Option<f64>); 9] {
+        [
+            ("radius", self.radius),
+            ("major_radius", self.major_radius),
+            ("minor_radius", self.minor_radius),
+            ("width", self.width),
+            ("depth", self.depth),
+            ("height", self.height),
+            ("amplitude", self.amplitude),
+            ("frequency", self.frequency),
+            ("phase", self.phase),
+        ]
+    }
+}
+
 fn default_light_cutoff() -> f64 {
     DEFAULT_LIGHT_CUTOFF as f64
 }
@@ -912,18 +929,7 @@ impl Check<'_> {
             return Err(self.invalid(field("name"), "must not be empty"));
         }
         let shape = &raw.shape;
-        let given = [
-            ("radius", shape.radius),
-            ("major_radius", shape.major_radius),
-            ("minor_radius", shape.minor_radius),
-            ("width", shape.width),
-            ("depth", shape.depth),
-            ("height", shape.height),
-            ("amplitude", shape.amplitude),
-            ("frequency", shape.frequency),
-            ("phase", shape.phase),
-        ];
-        if let Some((name, _)) = given.iter().find(|(_, v)| v.is_some()) {
+        if let Some((name, _)) = shape.sizes().iter().find(|(_, v)| v.is_some()) {
             return Err(self.invalid(
                 field(&format!("shape.{name}")),
                 format!("an obj has no {name} (it takes path)"),
@@ -1138,17 +1144,7 @@ impl Check<'_> {
                 &["phase"],
             ),
         };
-        let given = [
-            ("radius", raw.radius),
-            ("major_radius", raw.major_radius),
-            ("minor_radius", raw.minor_radius),
-            ("width", raw.width),
-            ("depth", raw.depth),
-            ("height", raw.height),
-            ("amplitude", raw.amplitude),
-            ("frequency", raw.frequency),
-            ("phase", raw.phase),
-        ];
+        let given = raw.sizes();
         for (name, value) in given {
             if value.is_some() && !required.contains(&name) && !optional.contains(&name) {
                 let takes: Vec<_> = required.iter().chain(optional).copied().collect();
