@@ -7,11 +7,10 @@
 //!   run (geometry, attachments, readback, textures) against the
 //!   [`MemoryBudget`];
 //! - [`scene_on_device`]: textures (format detected from the content, size
-//!   within the device's limits) and the lights each object's uniform
-//!   block must hold. Meshes are checked where they are built, once
-//!   (`SceneGeometry::new`).
+//!   within the device's limits). Meshes are checked where they are built,
+//!   once (`SceneGeometry::new`), and the lights each object's uniform
+//!   block must hold where the blocks are laid out (`scene_resources`).
 
-use super::gpu_types::{GpuLight, ObjectHeader};
 use super::RenderError;
 use crate::budget::{Bytes, MemoryBudget};
 use crate::scene::{HdrFormat, Scene};
@@ -273,26 +272,6 @@ pub fn scene_on_device(scene: &Scene, ctx: &Context) -> Result<(), RenderError> 
         }
     }
 
-    // Each object's uniform block holds a header and the lights reaching it.
-    let header = std::mem::size_of::<ObjectHeader>() as u64;
-    let light = std::mem::size_of::<GpuLight>() as u64;
-    let range = ctx.max_uniform_range();
-    if header + scene.lights.len() as u64 * light > range {
-        let max = range.saturating_sub(header) / light;
-        for (i, object) in scene.objects.iter().enumerate() {
-            let lights = scene.lights_reaching(i).len();
-            if lights as u64 > max {
-                return Err(RenderError::Object {
-                    object: format!("objects[{i}] \"{}\"", object.name),
-                    reason: format!(
-                        "it is reached by {lights} lights, but this device's uniform blocks \
-                         hold at most {max} (raise light_cutoff to leave out faint ones, or \
-                         move lights away)"
-                    ),
-                });
-            }
-        }
-    }
     Ok(())
 }
 

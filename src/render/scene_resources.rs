@@ -84,7 +84,7 @@ impl SceneResources {
             .collect();
         let (object_bytes, block_offsets, block_range) =
             pack_blocks(ctx, &blocks, std::mem::size_of::<ObjectHeader>(), |i| {
-                format!("object '{}'", scene.objects[i].name)
+                format!("objects[{i}] \"{}\"", scene.objects[i].name)
             })?;
         let object_buffer = Buffer::with_data(ctx, "objects", &object_bytes, BufferUsage::Uniform)?;
 
