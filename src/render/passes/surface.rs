@@ -63,6 +63,9 @@ impl SurfacePass {
             let mut keys: Vec<PipelineKey> = draws.iter().map(|d| d.pipeline).collect();
             keys.sort();
             keys.dedup();
+            // Keys that differ only in specialization constants (light
+            // count, shading model) share their shader modules.
+            let mut modules: BTreeMap<Vec<&str>, (ShaderModule, ShaderModule)> = BTreeMap::new();
             for key in keys {
                 let mut features = Vec::new();
                 if key.textured {
@@ -79,16 +82,20 @@ impl SurfacePass {
                 } else if key.shading == ShadingKey::Gouraud {
                     features.push("GOURAUD");
                 }
-                let vert = ShaderModule::new(setup.ctx, shaders::OBJECT_VERT.spirv(&features))?;
-                let frag = ShaderModule::new(setup.ctx, shaders::OBJECT_FRAG.spirv(&features))?;
+                if !modules.contains_key(&features) {
+                    let vert = ShaderModule::new(setup.ctx, shaders::OBJECT_VERT.spirv(&features))?;
+                    let frag = ShaderModule::new(setup.ctx, shaders::OBJECT_FRAG.spirv(&features))?;
+                    modules.insert(features.clone(), (vert, frag));
+                }
+                let (vert, frag) = &modules[&features];
                 let attributes = vertex_attributes(key.textured, key.normal_mapped, key.debug != 0);
                 let pipeline = GraphicsPipeline::new(
                     setup.ctx,
                     resources.layout_for_images(key.textured, key.normal_mapped)?,
                     &render_pass.render_pass,
                     &GraphicsPipelineDesc {
-                        vertex_shader: &vert,
-                        fragment_shader: &frag,
+                        vertex_shader: vert,
+                        fragment_shader: frag,
                         specialization: &[
                             (0, key.shading as u32),
                             (1, key.lights),
