@@ -27,34 +27,15 @@ fn tilt_scale() -> f32 {
     (WIDTH - 1) as f32 * TILT_DEGREES.to_radians().tan()
 }
 
+const PLANE: &str = "{ type = \"plane\", width = 2, depth = 2 }";
+
 fn scene(dir: &Path, lighting: &str, material: &str, rotate_z: f32) -> Scene {
-    let toml = format!(
-        "ambient = [0.05, 0.05, 0.05]\n\
-         [output]\nwidth = 48\nheight = 48\nlighting = \"{lighting}\"\n\
-         [camera]\neye = [0, 4, 0]\nlook_at = [0, 0, 0]\nup = [0, 0, -1]\nfov_y = 30\n\
-         [tone_map]\noperator = \"none\"\n\
-         [[lights]]\ntype = \"directional\"\ndirection = [-0.6, -1, 0.3]\nintensity = 0.8\n\
-         [[materials]]\nname = \"m\"\nkd = [0.8, 0.8, 0.8]\n{material}\n\
-         [[objects]]\nname = \"o\"\nmaterial = \"m\"\n\
-         shape = {{ type = \"plane\", width = 2, depth = 2 }}\n\
-         rotate = {{ axis = [0, 0, 1], degrees = {rotate_z} }}\n"
-    );
-    Scene::from_toml(&toml, "height_maps test", dir).unwrap_or_else(|e| panic!("{e}"))
+    common::tilt_scene(dir, lighting, material, PLANE, rotate_z)
 }
 
 /// Mean RGB over the centre 8x8 pixels.
 fn centre(scene: &Scene) -> [f32; 3] {
-    let p = common::render(scene, false).output;
-    let mut sum = [0.0; 3];
-    for y in 20..28 {
-        for x in 20..28 {
-            let px = common::pixel(&p, x, y);
-            for c in 0..3 {
-                sum[c] += f32::from(px[c]) / 64.0;
-            }
-        }
-    }
-    sum
+    common::centre_rgb(&common::render(scene, false).output)
 }
 
 fn assert_close(a: [f32; 3], b: [f32; 3], what: &str) {

@@ -10,7 +10,6 @@ mod common;
 
 use std::path::Path;
 
-use aerial::render::Pixels;
 use aerial::scene::Scene;
 
 const TILT_DEGREES: f32 = 30.0;
@@ -37,33 +36,7 @@ fn write_quad(path: &Path, mirrored: bool) {
     std::fs::write(path, text).unwrap();
 }
 
-fn scene(dir: &Path, lighting: &str, material: &str, shape: &str, rotate_z: f32) -> Scene {
-    let toml = format!(
-        "ambient = [0.05, 0.05, 0.05]\n\
-         [output]\nwidth = 48\nheight = 48\nlighting = \"{lighting}\"\n\
-         [camera]\neye = [0, 4, 0]\nlook_at = [0, 0, 0]\nup = [0, 0, -1]\nfov_y = 30\n\
-         [tone_map]\noperator = \"none\"\n\
-         [[lights]]\ntype = \"directional\"\ndirection = [-0.6, -1, 0.3]\nintensity = 0.8\n\
-         [[materials]]\nname = \"m\"\nkd = [0.8, 0.8, 0.8]\n{material}\n\
-         [[objects]]\nname = \"o\"\nmaterial = \"m\"\nshape = {shape}\n\
-         rotate = {{ axis = [0, 0, 1], degrees = {rotate_z} }}\n"
-    );
-    Scene::from_toml(&toml, "normal_maps test", dir).unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// Mean RGB over the centre 8x8 pixels.
-fn centre(p: &Pixels<u8>) -> [f32; 3] {
-    let mut sum = [0.0; 3];
-    for y in 20..28 {
-        for x in 20..28 {
-            let px = common::pixel(p, x, y);
-            for c in 0..3 {
-                sum[c] += f32::from(px[c]) / 64.0;
-            }
-        }
-    }
-    sum
-}
+use common::tilt_scene as scene;
 
 fn assert_close(a: [f32; 3], b: [f32; 3], what: &str) {
     for c in 0..3 {
@@ -86,7 +59,7 @@ fn mapped_tilt_matches_rotated_geometry() {
     let quad = "{ type = \"obj\", path = \"quad.obj\" }";
     let mirrored = "{ type = \"obj\", path = \"mirrored.obj\" }";
     let map = |file: &str| format!("normal_map = \"{file}\"");
-    let render = |s: &Scene| centre(&common::render(s, false).output);
+    let render = |s: &Scene| common::centre_rgb(&common::render(s, false).output);
 
     for lighting in ["forward", "deferred"] {
         let flat = render(&scene(d, lighting, "", plane, 0.0));
@@ -153,7 +126,7 @@ fn flat_map_is_identity_and_textured_maps_render_clean() {
     let d = dir.path();
     write_map(&d.join("flat.png"), [0.0, 0.0, 1.0]);
     let plane = "{ type = \"plane\", width = 2, depth = 2 }";
-    let render = |s: &Scene| centre(&common::render(s, false).output);
+    let render = |s: &Scene| common::centre_rgb(&common::render(s, false).output);
     let without = render(&scene(d, "forward", "", plane, 10.0));
     let with = render(&scene(
         d,

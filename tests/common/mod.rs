@@ -73,3 +73,35 @@ pub fn assert_not_blank(p: &Pixels<u8>, min_fraction: f64) {
         colours.len()
     );
 }
+
+/// The scene the normal- and height-map tests compare against geometry: a
+/// diffuse `shape` under one directional light, seen from straight above
+/// (48x48, LDR output), with `material` lines added to its material and the
+/// object turned by `rotate_z` degrees about +Z.
+pub fn tilt_scene(dir: &Path, lighting: &str, material: &str, shape: &str, rotate_z: f32) -> Scene {
+    let toml = format!(
+        "ambient = [0.05, 0.05, 0.05]\n\
+         [output]\nwidth = 48\nheight = 48\nlighting = \"{lighting}\"\n\
+         [camera]\neye = [0, 4, 0]\nlook_at = [0, 0, 0]\nup = [0, 0, -1]\nfov_y = 30\n\
+         [tone_map]\noperator = \"none\"\n\
+         [[lights]]\ntype = \"directional\"\ndirection = [-0.6, -1, 0.3]\nintensity = 0.8\n\
+         [[materials]]\nname = \"m\"\nkd = [0.8, 0.8, 0.8]\n{material}\n\
+         [[objects]]\nname = \"o\"\nmaterial = \"m\"\nshape = {shape}\n\
+         rotate = {{ axis = [0, 0, 1], degrees = {rotate_z} }}\n"
+    );
+    Scene::from_toml(&toml, "tilt test scene", dir).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Mean RGB over the centre 8x8 pixels of a 48x48 image.
+pub fn centre_rgb(p: &Pixels<u8>) -> [f32; 3] {
+    let mut sum = [0.0; 3];
+    for y in 20..28 {
+        for x in 20..28 {
+            let px = pixel(p, x, y);
+            for c in 0..3 {
+                sum[c] += f32::from(px[c]) / 64.0;
+            }
+        }
+    }
+    sum
+}
