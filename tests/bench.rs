@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn aerial() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_aerial"))
+    common::aerial()
 }
 
 fn temp_dir(name: &str) -> PathBuf {

@@ -8,11 +8,8 @@ mod common;
 
 use aerial::render::Pixels;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn aerial() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_aerial"))
-}
+use common::aerial;
 
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!(

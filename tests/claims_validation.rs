@@ -9,7 +9,7 @@ use aerial::app::{self, FrameSource, Misuse, RenderSettings};
 use aerial::vk::validation::{self, Validation, ValidationMessage, ALLOWED_MESSAGES};
 use aerial::vk::{Context, ContextOptions};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 fn settings(validate: Validation) -> RenderSettings {
     RenderSettings {
@@ -204,9 +204,7 @@ fn every_scene_is_clean_under_every_mode() {
 const VENDOR_CHECKS: &str = "VK_VALIDATION_FEATURE_ENABLE_BEST_PRACTICES_EXT:\
                              VALIDATION_CHECK_ENABLE_VENDOR_SPECIFIC_ALL";
 
-fn aerial() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_aerial"))
-}
+use common::aerial;
 
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!(

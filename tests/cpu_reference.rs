@@ -5,7 +5,6 @@ mod common;
 
 use aerial::render::render_reference;
 use std::path::Path;
-use std::process::Command;
 
 const SPHERE: &str = r#"
 ambient = [0.1, 0.1, 0.1]
@@ -93,7 +92,7 @@ fn unsupported_features_are_named() {
 fn sweep_error_against_the_cpu_reference_falls_with_tessellation() {
     let out = std::env::temp_dir().join(format!("aerial-cpuref-sweep-{}", std::process::id()));
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/sweep/spheres.toml");
-    let status = Command::new(env!("CARGO_BIN_EXE_aerial"))
+    let status = common::aerial()
         .arg("sweep")
         .arg(&scene)
         .args([

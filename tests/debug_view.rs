@@ -147,7 +147,7 @@ fn tangent_frames_are_orthonormal_and_follow_u() {
 fn the_cli_takes_debug_view() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("n.png");
-    let result = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
+    let result = common::aerial()
         .args([
             "render",
             "--validate",
@@ -174,7 +174,7 @@ fn the_cli_takes_debug_view() {
         ground[1] >= 254 && ground[0].abs_diff(128) <= 1 && ground[2].abs_diff(128) <= 1,
         "{ground:?}"
     );
-    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
+    let bad = common::aerial()
         .args(["render", "--debug-view", "colours"])
         .arg("--out")
         .arg(dir.path().join("x.png"))

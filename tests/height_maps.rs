@@ -70,7 +70,7 @@ fn the_normalmap_command_writes_the_map_the_renderer_makes() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     write_ramp(&d.join("ramp.png"));
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
+    let out = common::aerial()
         .arg("normalmap")
         .arg(d.join("ramp.png"))
         .arg("--out")
@@ -109,7 +109,7 @@ fn the_normalmap_command_writes_the_map_the_renderer_makes() {
         (vec!["--scale", "0"], "--scale"),
         (vec!["--scale", "nan"], "--scale"),
     ] {
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
+        let out = common::aerial()
             .arg("normalmap")
             .arg(d.join("ramp.png"))
             .arg("--out")
@@ -122,7 +122,7 @@ fn the_normalmap_command_writes_the_map_the_renderer_makes() {
         assert!(!d.join("bad.png").exists());
     }
     std::fs::write(d.join("junk.png"), b"not a png").unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
+    let out = common::aerial()
         .args(["normalmap"])
         .arg(d.join("junk.png"))
         .arg("--out")
@@ -178,7 +178,7 @@ fn a_height_map_that_does_not_fit_the_memory_budget_is_refused_before_decoding()
     image::GrayImage::new(2048, 2048)
         .save(d.join("big.png"))
         .unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
+    let out = common::aerial()
         .arg("normalmap")
         .arg(d.join("big.png"))
         .arg("--out")

@@ -52,7 +52,7 @@ impl Drop for TempDir {
 }
 
 fn aerial(args: &[&str], env: &[(&str, &str)]) -> Output {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_aerial"));
+    let mut cmd = common::aerial();
     cmd.args(args);
     for (k, v) in env {
         cmd.env(k, v);

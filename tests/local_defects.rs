@@ -13,7 +13,7 @@ use aerial::render::{output, Pixels};
 use aerial::report::{compare_files, ImageDiff, Metric, FLIP_DEFAULT_THRESHOLDS};
 use aerial::scene::Scene;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 /// The default scene's camera, ground, red ball and lights, plus (when
 /// `speck` is true) a small gold sphere in front: 0.12 units in radius,
@@ -164,7 +164,7 @@ fn hdr(scene: &Scene) -> Pixels<f32> {
 }
 
 fn compare(reference: &Path, test: &Path, options: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_aerial"))
+    common::aerial()
         .arg("compare")
         .arg(reference)
         .arg(test)

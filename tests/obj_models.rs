@@ -809,7 +809,7 @@ fn a_model_too_large_for_the_memory_budget_is_refused() {
         "[camera]\neye = [0, 1, 4]\nlook_at = [0, 0, 0]\n\
          [[objects]]\nname = \"big\"\nshape = { type = \"obj\", path = \"big.obj\" }\n",
     );
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
+    let out = common::aerial()
         .arg("render")
         .arg(dir.path().join("s.toml"))
         .arg("--out")

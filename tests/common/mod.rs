@@ -105,3 +105,8 @@ pub fn centre_rgb(p: &Pixels<u8>) -> [f32; 3] {
     }
     sum
 }
+
+/// The `aerial` binary built for these tests, ready for arguments.
+pub fn aerial() -> std::process::Command {
+    std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
+}
