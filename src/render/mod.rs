@@ -40,6 +40,11 @@ pub enum RenderError {
         lights: usize,
         max: usize,
     },
+    /// The plan and its passes disagree (a pass reads an attachment the
+    /// plan does not declare, and the like): a defect, reported rather
+    /// than a panic.
+    #[error("frame description: {0}")]
+    Frame(String),
     #[error("invalid HDR input image: {0}")]
     InvalidImage(String),
     #[error(transparent)]

@@ -228,9 +228,9 @@ fn build_render_pass(
             .iter()
             .position(|a| a.name == name)
             .ok_or_else(|| {
-                RenderError::Vulkan(crate::vk::VkError::Graph(format!(
+                RenderError::Frame(format!(
                     "a pass uses attachment '{name}', which the plan does not declare"
-                )))
+                ))
             })
     };
     let Some(first_subpass) = plan.passes.iter().position(|p| p.is_subpass()) else {

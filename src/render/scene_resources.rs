@@ -248,9 +248,7 @@ impl SceneResources {
     ) -> Result<&PipelineLayout, RenderError> {
         if textured && normal_mapped {
             self.textured_normal_layout.as_ref().ok_or_else(|| {
-                RenderError::Vulkan(vk::VkError::Graph(
-                    "a textured, normal-mapped draw without its layout".into(),
-                ))
+                RenderError::Frame("a textured, normal-mapped draw without its layout".into())
             })
         } else {
             self.layout_for(textured || normal_mapped)
@@ -260,9 +258,7 @@ impl SceneResources {
     pub fn layout_for(&self, textured: bool) -> Result<&PipelineLayout, RenderError> {
         if textured {
             self.textured_layout.as_ref().ok_or_else(|| {
-                RenderError::Vulkan(vk::VkError::Graph(
-                    "a textured draw without a texture layout".into(),
-                ))
+                RenderError::Frame("a textured draw without a texture layout".into())
             })
         } else {
             Ok(&self.plain_layout)

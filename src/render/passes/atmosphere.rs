@@ -17,7 +17,6 @@ use crate::shaders;
 use crate::vk::{
     Buffer, BufferUsage, CommandBuffer, DescriptorBinding, DescriptorPool, DescriptorSet,
     DescriptorSetLayout, DescriptorType, GraphicsPipeline, PipelineLayout, ShaderStageFlags,
-    VkError,
 };
 use glam::DVec3;
 
@@ -142,9 +141,7 @@ pub struct AtmospherePass {
 pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     let ctx = setup.ctx;
     let sky = setup.scene.sky.as_ref().ok_or_else(|| {
-        RenderError::Vulkan(VkError::Graph(
-            "the atmosphere pass needs a scene with [atmosphere]".into(),
-        ))
+        RenderError::Frame("the atmosphere pass needs a scene with [atmosphere]".into())
     })?;
     let table = OpticalDepthTable::bake(
         &sky.atmosphere,

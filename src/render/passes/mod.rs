@@ -55,9 +55,7 @@ impl Attachments<'_> {
             .position(|n| *n == name)
             .map(|i| &self.images[i])
             .ok_or_else(|| {
-                RenderError::Vulkan(crate::vk::VkError::Graph(format!(
-                    "no attachment called '{name}' in this frame"
-                )))
+                RenderError::Frame(format!("no attachment called '{name}' in this frame"))
             })
     }
 }
@@ -89,20 +87,17 @@ impl PassSetup<'_> {
     /// The render pass, for subpasses.
     pub fn render_pass(&self) -> Result<&GraphRenderPass, RenderError> {
         self.render_pass.ok_or_else(|| {
-            RenderError::Vulkan(crate::vk::VkError::Graph(format!(
-                "pass '{}' is not a subpass",
-                self.decl.name
-            )))
+            RenderError::Frame(format!("pass '{}' is not a subpass", self.decl.name))
         })
     }
 
     /// The shared scene resources, for passes that draw objects.
     pub fn scene_resources(&self) -> Result<&SceneResources, RenderError> {
         self.frame.scene.ok_or_else(|| {
-            RenderError::Vulkan(crate::vk::VkError::Graph(format!(
+            RenderError::Frame(format!(
                 "pass '{}' draws objects but the frame has no scene resources",
                 self.decl.name
-            )))
+            ))
         })
     }
 }

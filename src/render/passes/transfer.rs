@@ -17,10 +17,10 @@ pub struct TransferPass {
 
 pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     let PassIo::Transfer { reads, writes } = &setup.decl.io else {
-        return Err(RenderError::Vulkan(crate::vk::VkError::Graph(format!(
+        return Err(RenderError::Frame(format!(
             "pass '{}' is not a transfer",
             setup.decl.name
-        ))));
+        )));
     };
     let mut uploads = Vec::new();
     for &name in writes {
