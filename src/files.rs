@@ -198,30 +198,70 @@ impl PendingFile {
 
     /// Flushes the data to disk and renames the file into place. The
     /// destination is checked again, since it may have changed meanwhile.
-    pub fn commit(mut self) -> Result<PathBuf, FileError> {
+    pub fn commit(self) -> Result<PathBuf, FileError> {
+        let ready = self.prepare()?;
+        ready.persist(&mut pending())
+    }
+
+    /// Everything before the rename: data flushed to disk (so a crash
+    /// cannot leave a complete name pointing at incomplete data), the
+    /// destination checked again, its permissions kept.
+    fn prepare(mut self) -> Result<Ready, FileError> {
         let tmp = self.tmp.take().expect("present until commit");
         let io = |error| FileError::Io {
             path: self.path.clone(),
             error,
         };
-        // Flushed before the rename so a crash cannot leave a complete name
-        // pointing at incomplete data.
         tmp.as_file().sync_all().map_err(io)?;
         let dest = check_destination(&self.path)?;
         if let Ok(meta) = std::fs::metadata(&dest) {
             // Replacing a file keeps its permissions.
             let _ = tmp.as_file().set_permissions(meta.permissions());
         }
-        let mut guard = pending();
+        Ok(Ready {
+            path: self.path.clone(),
+            dest,
+            tmp: Some(tmp),
+        })
+    }
+}
+
+/// A [`PendingFile`] ready to be renamed into place.
+struct Ready {
+    path: PathBuf,
+    dest: PathBuf,
+    tmp: Option<tempfile::NamedTempFile>,
+}
+
+impl Ready {
+    /// Renames the file into place; `pending` is the locked set of
+    /// temporary files, so an interrupt cannot run in the middle.
+    fn persist(mut self, pending: &mut Option<HashSet<PathBuf>>) -> Result<PathBuf, FileError> {
+        let tmp = self.tmp.take().expect("present until persisted");
         let tmp_path = tmp.path().to_path_buf();
-        let result = tmp.persist(&dest);
-        if let Some(set) = guard.as_mut() {
+        let result = tmp.persist(&self.dest);
+        if let Some(set) = pending.as_mut() {
             set.remove(&tmp_path);
         }
-        drop(guard);
         // On failure `PersistError` hands the file back; dropping it removes it.
-        result.map_err(|e| io(e.error))?;
+        result.map_err(|e| FileError::Io {
+            path: self.path.clone(),
+            error: e.error,
+        })?;
         Ok(self.path.clone())
+    }
+}
+
+impl Drop for Ready {
+    fn drop(&mut self) {
+        if let Some(tmp) = self.tmp.take() {
+            let mut guard = pending();
+            if let Some(set) = guard.as_mut() {
+                set.remove(tmp.path());
+            }
+            // NamedTempFile's own drop removes the file.
+            drop(tmp);
+        }
     }
 }
 
@@ -242,16 +282,28 @@ impl Drop for PendingFile {
 /// Commits every file, in order. If one fails, the ones already renamed
 /// into place are removed again, so a failed run leaves none of its
 /// outputs (a file they replaced is gone too: the run said it would
-/// replace it). Returns the paths written.
+/// replace it). All the renames happen under the lock the interrupt
+/// handler takes, so an interrupt leaves either none of the files or all
+/// of them, never some. Returns the paths written.
 pub fn commit_all(files: Vec<PendingFile>) -> Result<Vec<PathBuf>, FileError> {
-    let mut done = Vec::with_capacity(files.len());
-    for file in files {
-        match file.commit() {
+    // The slow part (flushing to disk) before taking the lock.
+    let ready = files
+        .into_iter()
+        .map(PendingFile::prepare)
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut done = Vec::with_capacity(ready.len());
+    let mut ready = ready.into_iter();
+    let mut guard = pending();
+    for file in ready.by_ref() {
+        match file.persist(&mut guard) {
             Ok(path) => done.push(path),
             Err(e) => {
                 for path in &done {
                     let _ = std::fs::remove_file(path);
                 }
+                // Unlock before the files not yet renamed are dropped:
+                // dropping one takes the lock to unregister it.
+                drop(guard);
                 return Err(e);
             }
         }
