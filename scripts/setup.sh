@@ -16,6 +16,14 @@ packages=(
   pkg-config
   g++                   # nv-flip builds NVIDIA FLIP from C++ source
   assimp-testmodels     # real OBJ models (multi-group, JPEG textures, odd files) for tests/real_models.rs
+  libx11-6              # `aerial view`: winit opens X11 windows through these, loaded at run time
+  libx11-xcb1
+  libxcursor1
+  libxrandr2
+  libxi6
+  libxkbcommon-x11-0
+  xvfb                  # a virtual X server: tests/viewer.rs runs the viewer in it
+  xauth
 )
 
 missing=()

@@ -42,20 +42,25 @@ pub struct RenderRun {
 impl RenderRun {
     /// Metadata stored in every PNG: which device and driver made it.
     pub fn png_metadata(&self) -> Vec<(&'static str, String)> {
-        vec![
-            ("Software", format!("aerial {}", env!("CARGO_PKG_VERSION"))),
-            ("aerial:device", self.device.name.clone()),
-            (
-                "aerial:driver",
-                format!(
-                    "{} {} (driverVersion {:#x})",
-                    self.device.driver_name, self.device.driver_info, self.device.driver_version
-                ),
-            ),
-            ("aerial:vulkan", self.device.api_version.clone()),
-            ("aerial:host_cpu", host_cpu()),
-        ]
+        png_metadata(&self.device)
     }
+}
+
+/// Metadata stored in every PNG: which device and driver made it.
+pub fn png_metadata(device: &DeviceInfo) -> Vec<(&'static str, String)> {
+    vec![
+        ("Software", format!("aerial {}", env!("CARGO_PKG_VERSION"))),
+        ("aerial:device", device.name.clone()),
+        (
+            "aerial:driver",
+            format!(
+                "{} {} (driverVersion {:#x})",
+                device.driver_name, device.driver_info, device.driver_version
+            ),
+        ),
+        ("aerial:vulkan", device.api_version.clone()),
+        ("aerial:host_cpu", host_cpu()),
+    ]
 }
 
 /// A run that failed, with what the validation layer said before and
@@ -293,6 +298,7 @@ fn context(settings: &RenderSettings) -> Result<std::sync::Arc<Context>, RenderE
     Ok(Context::new(&ContextOptions {
         validate: settings.validate,
         device: settings.device.clone(),
+        display: None,
     })?)
 }
 

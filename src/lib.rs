@@ -16,6 +16,7 @@ pub mod render;
 pub mod report;
 pub mod scene;
 pub mod sweep;
+pub mod viewer;
 pub mod vk;
 
 /// SPIR-V of every shader in `glsl/`, compiled by `build.rs`: one

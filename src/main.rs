@@ -35,6 +35,9 @@ enum Command {
     Mesh(cli::mesh::MeshArgs),
     /// Convert a height map (PNG) into a tangent-space normal map.
     Normalmap(cli::normalmap::NormalMapArgs),
+    /// Show a scene in a window: fly with WASD and the mouse, cycle knobs,
+    /// watch per-pass GPU times, take screenshots (F12).
+    View(cli::view::ViewArgs),
 }
 
 /// Exit status for errors (bad input, failed render). 2 rather than 1 so
@@ -72,5 +75,6 @@ fn run(cli: Cli) -> anyhow::Result<std::process::ExitCode> {
         Command::Normalmap(args) => {
             cli::normalmap::run(args).map(|()| std::process::ExitCode::SUCCESS)
         }
+        Command::View(args) => cli::view::run(args).map(|()| std::process::ExitCode::SUCCESS),
     }
 }

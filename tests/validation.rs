@@ -7,6 +7,7 @@ fn validated() -> std::sync::Arc<Context> {
     Context::new(&ContextOptions {
         validate: aerial::vk::validation::Validation::All,
         device: None,
+        display: None,
     })
     .expect("a Vulkan device with the validation layer")
 }

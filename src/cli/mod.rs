@@ -7,6 +7,7 @@ pub mod normalmap;
 pub mod render;
 pub mod sweep;
 pub mod tonemap;
+pub mod view;
 
 use aerial::vk::validation::Validation;
 

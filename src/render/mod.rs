@@ -24,7 +24,7 @@ pub use empty_pass::EmptyPass;
 pub use geometry::SceneGeometry;
 pub use plan::{FramePlan, SUBPASS_TIMING_NOTE};
 pub use reference::{render_reference, ReferenceError};
-pub use renderer::{FrameTiming, Pixels, Renderer};
+pub use renderer::{FrameTiming, Pixels, Renderer, ViewChange};
 
 use std::path::PathBuf;
 

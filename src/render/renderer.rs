@@ -13,7 +13,9 @@ use super::plan::{attachment, FramePlan, PassIo};
 use super::scene_resources::SceneResources;
 use super::RenderError;
 use crate::scene::{HdrFormat, Scene, ToneMap};
-use crate::vk::{AttachmentSpec, AttachmentStart, Context, GraphRenderPass, SubpassSpec};
+use crate::vk::{
+    AttachmentSpec, AttachmentStart, Context, GraphRenderPass, Image, SubpassSpec,
+};
 use std::sync::Arc;
 
 /// Timing of one submitted frame.
@@ -34,15 +36,32 @@ pub struct Pixels<T> {
     pub data: Vec<T>,
 }
 
+/// What [`Renderer::set_view`] had to do for the new view.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewChange {
+    /// The frame plan stayed the same: only the view-dependent uniforms
+    /// (camera, sun) were rewritten; the recorded frame is replayed as is.
+    Updated,
+    /// The plan changed with the view (draw order, transparent sorting,
+    /// deferred light tiles or size): the frame was built and recorded
+    /// again from the scene's geometry.
+    Rebuilt,
+}
+
 /// Everything on the GPU for one scene. Fields drop in declaration order:
 /// the command buffer first, then the passes, the resources they use, the
 /// attachments, and the context (inside each wrapper) last.
 pub struct Renderer {
     frame: TimedFrame,
     passes: Vec<Box<dyn RecordPass>>,
-    _scene_resources: Option<SceneResources>,
-    _render_pass: Option<GraphRenderPass>,
+    scene_resources: Option<SceneResources>,
+    render_pass: Option<GraphRenderPass>,
     plan: FramePlan,
+    /// The scene's meshes, kept so that a new view can be planned (and,
+    /// when the plan changes, built) without tessellating again; `None`
+    /// for a renderer that only tone-maps an image.
+    geometry: Option<Arc<SceneGeometry>>,
+    keep_hdr: bool,
     ctx: Arc<Context>,
 }
 
@@ -50,9 +69,19 @@ impl Renderer {
     /// The renderer for `scene`; `keep_hdr` reads back the linear HDR
     /// image as well as the tone-mapped output.
     pub fn new(ctx: &Arc<Context>, scene: &Scene, keep_hdr: bool) -> Result<Renderer, RenderError> {
-        let geometry = SceneGeometry::new(scene)?;
+        Renderer::with_geometry(ctx, scene, Arc::new(SceneGeometry::new(scene)?), keep_hdr)
+    }
+
+    /// [`Renderer::new`] with the scene's meshes already built (they must
+    /// be `SceneGeometry::new(scene)`), for callers that use them too.
+    pub fn with_geometry(
+        ctx: &Arc<Context>,
+        scene: &Scene,
+        geometry: Arc<SceneGeometry>,
+        keep_hdr: bool,
+    ) -> Result<Renderer, RenderError> {
         let plan = FramePlan::new(scene, &geometry, keep_hdr);
-        Renderer::build(ctx, scene, &geometry, plan, None)
+        Renderer::build(ctx, scene, Some(geometry), plan, None, keep_hdr)
     }
 
     /// A renderer that tone-maps `image` (linear RGBA, any values,
@@ -73,18 +102,22 @@ impl Renderer {
         }
         let plan = FramePlan::for_hdr_image(image.width, image.height, true);
         let scene = Scene::empty(tone_map, image.width, image.height);
-        Renderer::build(ctx, &scene, &SceneGeometry::default(), plan, Some(image))
+        Renderer::build(ctx, &scene, None, plan, Some(image), true)
     }
 
     fn build(
         ctx: &Arc<Context>,
         scene: &Scene,
-        geometry: &SceneGeometry,
+        geometry: Option<Arc<SceneGeometry>>,
         plan: FramePlan,
         hdr_input: Option<&Pixels<f32>>,
+        keep_hdr: bool,
     ) -> Result<Renderer, RenderError> {
         let render_pass = build_render_pass(ctx, &plan)?;
         let scene_resources = if plan.draws().next().is_some() {
+            let geometry = geometry.as_deref().ok_or_else(|| {
+                RenderError::Frame("the plan draws objects but there is no geometry".into())
+            })?;
             Some(SceneResources::new(ctx, scene, geometry, &plan)?)
         } else {
             None
@@ -146,11 +179,57 @@ impl Renderer {
         Ok(Renderer {
             frame,
             passes,
-            _scene_resources: scene_resources,
-            _render_pass: render_pass,
+            scene_resources,
+            render_pass,
             plan,
+            geometry,
+            keep_hdr,
             ctx: ctx.clone(),
         })
+    }
+
+    /// Moves the view to `scene`'s camera and sun, between frames
+    /// ([`render_frame`](Self::render_frame) waits for its frame, so nothing
+    /// reads the uniforms while they change). `scene` must be the scene
+    /// this renderer was built from in everything but the camera, the sun
+    /// and the output size: objects, materials, lights and knobs are not
+    /// looked at again (build a new renderer for those).
+    ///
+    /// The frame is planned again for the new view. When the plan is the
+    /// same (the usual case: the camera moved a little), only the uniforms
+    /// the passes derive from the view are rewritten, by the same code that
+    /// wrote them at creation, so the image is the one a new renderer would
+    /// give. Otherwise the frame is built again from the kept geometry.
+    pub fn set_view(&mut self, scene: &Scene) -> Result<ViewChange, RenderError> {
+        let geometry = self.geometry.clone().ok_or_else(|| {
+            RenderError::Frame("a renderer of an HDR image has no view to move".into())
+        })?;
+        let plan = FramePlan::new(scene, &geometry, self.keep_hdr);
+        if same_frame(&self.plan, &plan) {
+            if let Some(resources) = &mut self.scene_resources {
+                resources.set_view(scene, plan.width, plan.height);
+            }
+            for pass in &mut self.passes {
+                pass.set_view(scene, &plan)?;
+            }
+            return Ok(ViewChange::Updated);
+        }
+        let rebuilt = Renderer::build(&self.ctx, scene, Some(geometry), plan, None, self.keep_hdr)?;
+        *self = rebuilt;
+        Ok(ViewChange::Rebuilt)
+    }
+
+    /// The attachment holding the tone-mapped sRGB output
+    /// ([`OUTPUT_FORMAT`](super::plan::OUTPUT_FORMAT)); after each frame it
+    /// is left in `TRANSFER_SRC_OPTIMAL` by the readback, ready to be copied
+    /// to a window.
+    pub fn output_image(&self) -> Option<&Image> {
+        let index = self
+            .plan
+            .attachments
+            .iter()
+            .position(|a| a.name == attachment::OUTPUT)?;
+        self.render_pass.as_ref()?.images.get(index)
     }
 
     pub fn plan(&self) -> &FramePlan {
@@ -212,6 +291,19 @@ impl Drop for Renderer {
         // waits, but a frame interrupted by an error might not have.
         let _ = self.ctx.wait_idle();
     }
+}
+
+/// Whether two plans record the same commands: the same attachments,
+/// passes, draws in the same order and deferred light tiles. The uniforms
+/// may still differ.
+fn same_frame(a: &FramePlan, b: &FramePlan) -> bool {
+    a.width == b.width
+        && a.height == b.height
+        && a.attachments == b.attachments
+        && a.pass_names() == b.pass_names()
+        && a.opaque == b.opaque
+        && a.transparent == b.transparent
+        && a.tile_groups == b.tile_groups
 }
 
 /// The render pass the plan's subpasses form, with its attachments: what

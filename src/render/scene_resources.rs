@@ -57,7 +57,7 @@ pub struct SceneResources {
     pub ranges: Vec<GeometryRange>,
     /// Dynamic offset of each object's block.
     pub block_offsets: Vec<u32>,
-    _frame_buffer: Buffer,
+    frame_buffer: Buffer,
     _object_buffer: Buffer,
 }
 
@@ -233,12 +233,18 @@ impl SceneResources {
             geometry: geometry_buffer,
             ranges,
             block_offsets,
-            _frame_buffer: frame_buffer,
+            frame_buffer,
             _object_buffer: object_buffer,
         })
     }
 
-    /// The pipeline layout of a draw.
+    /// Rewrites the per-frame uniforms (camera) for `scene` on a
+    /// `width`×`height` target, between frames.
+    pub fn set_view(&mut self, scene: &Scene, width: u32, height: u32) {
+        let frame = FrameUniforms::new(scene, width, height);
+        self.frame_buffer.write(0, bytemuck::bytes_of(&frame));
+    }
+
     /// The pipeline layout for a draw with these image sets: a normal map
     /// alone takes set 2 (the textured layout), after a base colour set 3.
     pub fn layout_for_images(

@@ -24,6 +24,11 @@ pub struct ContextOptions {
     /// Pick a physical device by index or by a case-insensitive substring of
     /// its name; `None` takes the first device.
     pub device: Option<String>,
+    /// Present to windows of this display: the instance enables the
+    /// surface extensions the display needs and the device
+    /// `VK_KHR_swapchain` (see [`super::Surface`]). `None` for headless
+    /// runs, which enable neither.
+    pub display: Option<raw_window_handle::RawDisplayHandle>,
 }
 
 /// What identifies the device an output came from; recorded with every
@@ -87,7 +92,7 @@ impl Context {
         } else {
             vec![]
         };
-        let extension_names: Vec<*const c_char> = if validate {
+        let mut extension_names: Vec<*const c_char> = if validate {
             vec![
                 ash::ext::debug_utils::NAME.as_ptr(),
                 ash::ext::validation_features::NAME.as_ptr(),
@@ -95,6 +100,13 @@ impl Context {
         } else {
             vec![]
         };
+        if let Some(display) = options.display {
+            // Static C strings of ash-window: VK_KHR_surface and the one
+            // for this window system.
+            let needed = ash_window::enumerate_required_extensions(display)
+                .map_err(|e| VkError::Surface(format!("this window system: {e}")))?;
+            extension_names.extend_from_slice(needed);
+        }
         let mut validation_features = vk::ValidationFeaturesEXT::default()
             .enabled_validation_features(options.validate.enabled_features());
         let user_data = validation_log.as_ref().map_or(std::ptr::null_mut(), |l| {
@@ -236,8 +248,14 @@ impl PartialInstance {
         // SAFETY: valid physical device of this instance.
         let _supported = unsafe { instance.get_physical_device_features(physical_device) };
         let features = vk::PhysicalDeviceFeatures::default();
+        let device_extensions: Vec<*const c_char> = if options.display.is_some() {
+            vec![ash::khr::swapchain::NAME.as_ptr()]
+        } else {
+            vec![]
+        };
         let device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)
+            .enabled_extension_names(&device_extensions)
             .enabled_features(&features);
         // SAFETY: physical_device comes from this instance; create info
         // points at locals.

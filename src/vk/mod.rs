@@ -13,6 +13,7 @@ mod image;
 mod pipeline;
 mod query;
 mod render_graph;
+mod swapchain;
 pub mod validation;
 
 pub use ash::vk::{
@@ -28,6 +29,7 @@ pub use pipeline::{
     Blend, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, ShaderModule, VertexAttribute,
 };
 pub use query::TimestampQueries;
+pub use swapchain::{PresentMode, Presented, Surface, Swapchain, WindowHandles};
 pub use render_graph::{
     AttachmentSpec, AttachmentStart, DepthUse, Framebuffer, GraphRenderPass, RenderPass,
     SubpassSpec,
@@ -71,6 +73,8 @@ pub enum VkError {
     Graph(String),
     #[error("invalid SPIR-V: {0}")]
     Spirv(String),
+    #[error("window surface: {0}")]
+    Surface(String),
 }
 
 pub use image::supports_linear_filter;

@@ -10,9 +10,9 @@
 
 use super::{fullscreen_pipeline, FrameResources, InputAttachments, PassSetup, RecordPass};
 use crate::atmosphere::{OpticalDepthTable, TableMapping};
-use crate::render::plan::attachment;
+use crate::render::plan::{attachment, FramePlan};
 use crate::render::RenderError;
-use crate::scene::{Camera, Sky, TableFilter};
+use crate::scene::{Camera, Scene, Sky, TableFilter};
 use crate::shaders;
 use crate::vk::{
     Buffer, BufferUsage, CommandBuffer, DescriptorBinding, DescriptorPool, DescriptorSet,
@@ -134,7 +134,9 @@ pub struct AtmospherePass {
     _pool: DescriptorPool,
     _sky_layout: DescriptorSetLayout,
     inputs: InputAttachments,
-    _uniforms: Buffer,
+    uniforms: Buffer,
+    /// The optical-depth table's size, which the uniforms carry.
+    table_size: (u32, u32),
     _table: Buffer,
 }
 
@@ -232,7 +234,8 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         _pool: pool,
         _sky_layout: sky_layout,
         inputs,
-        _uniforms: uniforms,
+        uniforms,
+        table_size: (table.width, table.height),
         _table: table_buffer,
     }))
 }
@@ -243,6 +246,21 @@ impl RecordPass for AtmospherePass {
         cmd.bind_descriptor_set(&self.layout, 0, &self.sky_set, &[]);
         cmd.bind_descriptor_set(&self.layout, 1, &self.inputs.set, &[]);
         cmd.draw(3);
+        Ok(())
+    }
+
+    fn set_view(&mut self, scene: &Scene, plan: &FramePlan) -> Result<(), RenderError> {
+        let sky = scene.sky.as_ref().ok_or_else(|| {
+            RenderError::Frame("the atmosphere pass needs a scene with [atmosphere]".into())
+        })?;
+        let block = uniforms(
+            sky,
+            &scene.camera,
+            plan.width,
+            plan.height,
+            self.table_size,
+        );
+        self.uniforms.write(0, bytemuck::bytes_of(&block));
         Ok(())
     }
 }

@@ -40,6 +40,14 @@ pub trait RecordPass {
     fn readback(&self, _attachment: &str) -> Option<&Buffer> {
         None
     }
+
+    /// Rewrites what the pass derived from the view (camera, sun) when it
+    /// was created, for `scene` whose `plan` records the same commands
+    /// (see `Renderer::set_view`). Called between frames. Most passes keep
+    /// nothing of the view; the per-frame camera uniforms are shared.
+    fn set_view(&mut self, _scene: &Scene, _plan: &FramePlan) -> Result<(), RenderError> {
+        Ok(())
+    }
 }
 
 /// The frame's attachments by name.

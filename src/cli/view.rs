@@ -1,0 +1,62 @@
+//! `aerial view`: the scene in a window, with keyboard and mouse
+//! navigation, live knobs and per-pass GPU times (see `aerial::viewer`).
+
+use aerial::scene::Scene;
+use aerial::viewer::{self, Script, ViewOptions};
+use aerial::vk::{validation, PresentMode};
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct ViewArgs {
+    /// Scene file (TOML); omit for the embedded default scene.
+    pub scene: Option<PathBuf>,
+    /// Initial window width (default: the scene's output width).
+    #[arg(long)]
+    width: Option<u32>,
+    /// Initial window height (default: the scene's output height).
+    #[arg(long)]
+    height: Option<u32>,
+    /// How frames are queued for the display.
+    #[arg(long, value_enum, default_value = "fifo")]
+    present_mode: PresentMode,
+    /// Replay input from a file: lines `FRAME ACTION [ARG]` with actions
+    /// press KEY, release KEY, mouse DX DY, resize W H, screenshot PATH,
+    /// quit; frames advance time by a fixed 1/60 s while it runs.
+    #[arg(long)]
+    script: Option<PathBuf>,
+    #[command(flatten)]
+    gpu: super::GpuArgs,
+}
+
+pub fn run(args: ViewArgs) -> anyhow::Result<()> {
+    let mut scene = match &args.scene {
+        Some(path) => Scene::load(path)?,
+        None => Scene::default_scene(),
+    };
+    scene.set_output_size(args.width, args.height)?;
+    let script = args.script.as_deref().map(Script::load).transpose()?;
+    let scene_name = match &args.scene {
+        Some(path) => path.display().to_string(),
+        None => "the default scene".to_string(),
+    };
+    let outcome = viewer::run(ViewOptions {
+        scene,
+        scene_name: scene_name.clone(),
+        validate: args.gpu.validate.unwrap_or_default(),
+        device: args.gpu.device.clone(),
+        present_mode: args.present_mode,
+        script,
+    });
+    if outcome.frames > 0 {
+        println!("{} frames; {}", outcome.frames, outcome.timings);
+    }
+    // A layer message fails the run even when the viewer itself stopped
+    // cleanly; both are shown when both happened.
+    let context = format!("viewing {scene_name} failed");
+    match (outcome.error, validation::check(&outcome.validation)) {
+        (None, Ok(())) => Ok(()),
+        (None, Err(v)) => Err(anyhow::Error::new(v)),
+        (Some(e), Ok(())) => Err(anyhow::Error::new(e).context(context)),
+        (Some(e), Err(v)) => Err(anyhow::Error::new(e).context(format!("{context}; {v}"))),
+    }
+}

@@ -1,0 +1,155 @@
+//! The knobs the viewer cycles with the number keys: the scene's quality
+//! and cost settings from [`crate::scene::KNOBS`] that apply to the scene,
+//! each with the values a key steps through.
+
+use crate::scene::{Knob, KnobError, Scene};
+
+/// A knob and the values its key cycles through.
+#[derive(Debug)]
+pub struct Cycle {
+    pub name: &'static str,
+    pub values: &'static [&'static str],
+    /// Whether it changes anything in this scene.
+    applies: fn(&Scene) -> bool,
+}
+
+fn has_objects(s: &Scene) -> bool {
+    !s.objects.is_empty()
+}
+
+fn has_textures(s: &Scene) -> bool {
+    s.materials
+        .iter()
+        .any(|m| m.texture.is_some() || m.normal_map.is_some())
+}
+
+fn has_sky(s: &Scene) -> bool {
+    s.sky.is_some()
+}
+
+/// Every knob the viewer can cycle, in key order before filtering.
+const CYCLES: &[Cycle] = &[
+    Cycle {
+        name: "shading",
+        values: &["phong", "gouraud", "toon"],
+        applies: has_objects,
+    },
+    Cycle {
+        name: "lighting",
+        values: &["forward", "deferred"],
+        applies: has_objects,
+    },
+    Cycle {
+        name: "texture_filter",
+        values: &["trilinear", "bilinear", "nearest"],
+        applies: has_textures,
+    },
+    Cycle {
+        name: "hdr_format",
+        values: &["rgba16f", "rgba32f"],
+        applies: |_| true,
+    },
+    Cycle {
+        name: "tone_map",
+        values: &["reinhard", "aces", "none"],
+        applies: |_| true,
+    },
+    Cycle {
+        name: "atmosphere_samples",
+        values: &["4", "8", "16", "32", "64"],
+        applies: has_sky,
+    },
+    Cycle {
+        name: "od_filter",
+        values: &["manual", "nearest"],
+        applies: has_sky,
+    },
+    Cycle {
+        name: "od_table_mapping",
+        values: &["horizon", "seed"],
+        applies: has_sky,
+    },
+    Cycle {
+        name: "od_table_size",
+        values: &["32x8", "64x16", "256x64", "1024x256"],
+        applies: has_sky,
+    },
+];
+
+/// The knobs that apply to `scene`; key N cycles entry N-1.
+pub fn applicable(scene: &Scene) -> Vec<&'static Cycle> {
+    CYCLES.iter().filter(|c| (c.applies)(scene)).collect()
+}
+
+impl Cycle {
+    /// The knob's current value in `scene`.
+    pub fn current(&self, scene: &Scene) -> Result<String, KnobError> {
+        Ok((Knob::find(self.name)?.read)(scene))
+    }
+
+    /// Sets the value after the current one (the first when the current
+    /// one is not in the list, e.g. mixed shading models) and returns it.
+    pub fn advance(&self, scene: &mut Scene) -> Result<&'static str, KnobError> {
+        let knob = Knob::find(self.name)?;
+        let current = (knob.read)(scene);
+        let next = match self.values.iter().position(|v| *v == current) {
+            Some(i) => self.values[(i + 1) % self.values.len()],
+            None => self.values[0],
+        };
+        knob.set(scene, next)?;
+        Ok(next)
+    }
+}
+
+/// One line per applicable knob: `N name=value`.
+pub fn listing(scene: &Scene) -> String {
+    applicable(scene)
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let value = c.current(scene).unwrap_or_else(|e| e.to_string());
+            format!("  {} {}={value} ({})", i + 1, c.name, c.values.join("|"))
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_cycle_names_a_knob_and_its_values_apply() {
+        let mut scene = Scene::default_scene();
+        for c in CYCLES.iter().filter(|c| (c.applies)(&scene)) {
+            for _ in 0..c.values.len() {
+                c.advance(&mut scene).unwrap();
+            }
+            // A full cycle comes back to where it started (the first value
+            // when the scene's own was not listed).
+            let v = c.current(&scene).unwrap();
+            assert!(c.values.contains(&v.as_str()), "{}: {v}", c.name);
+        }
+    }
+
+    #[test]
+    fn atmosphere_knobs_only_for_scenes_with_a_sky() {
+        let scene = Scene::default_scene();
+        let names: Vec<_> = applicable(&scene).iter().map(|c| c.name).collect();
+        assert!(names.contains(&"shading") && !names.contains(&"atmosphere_samples"));
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("assets/scenes/earth_orbit.toml");
+        let mut earth = Scene::load(&path).unwrap();
+        let names: Vec<_> = applicable(&earth).iter().map(|c| c.name).collect();
+        assert!(names.contains(&"atmosphere_samples") && !names.contains(&"shading"));
+        let samples = applicable(&earth)
+            .into_iter()
+            .find(|c| c.name == "atmosphere_samples")
+            .unwrap();
+        let before = samples.current(&earth).unwrap();
+        let after = samples.advance(&mut earth).unwrap();
+        assert_ne!(before, after);
+        assert_eq!(samples.current(&earth).unwrap(), after);
+        assert!(applicable(&earth).len() <= 9, "one digit key each");
+    }
+}
