@@ -1,0 +1,318 @@
+//! `aerial view` in a virtual X server (Xvfb, installed by
+//! `scripts/setup.sh`), driven by scripts, every run under the validation
+//! layer (swapchain and presentation included):
+//! - the first frame, before any input, is bit-identical to `aerial render`
+//!   of the same scene at the same size (PNG and EXR): the viewer draws
+//!   with the same renderer and plan, and the camera is the scene's own
+//!   until something moves it;
+//! - W held for 30 frames moves the camera forward by 30 fixed steps at the
+//!   height-proportional speed, the image changes, and the `[camera]` the
+//!   screenshot records renders the same image with `aerial render`;
+//! - resizing mid-script keeps drawing, at the new size, what `render`
+//!   draws at that size;
+//! - bad scripts are refused with file, line and reason.
+
+mod common;
+
+use aerial::render::output::{read_exr, read_png_text};
+use aerial::render::Pixels;
+use aerial::scene::Scene;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+/// A virtual X server on a free display, stopped when dropped.
+struct Xvfb {
+    child: Child,
+    display: String,
+}
+
+impl Xvfb {
+    fn start() -> Xvfb {
+        // Tests run in parallel and other X servers may be up: try display
+        // numbers until one starts.
+        let first = 200 + std::process::id() % 300;
+        for n in first..first + 100 {
+            if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()
+                || Path::new(&format!("/tmp/.X{n}-lock")).exists()
+            {
+                continue;
+            }
+            let mut child = Command::new("Xvfb")
+                .args([&format!(":{n}"), "-screen", "0", "1024x768x24", "-nolisten", "tcp"])
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .expect("Xvfb runs (install it with scripts/setup.sh)");
+            let deadline = Instant::now() + Duration::from_secs(10);
+            while Instant::now() < deadline {
+                if let Ok(Some(_)) = child.try_wait() {
+                    break; // lost the race for this display
+                }
+                if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() {
+                    return Xvfb {
+                        child,
+                        display: format!(":{n}"),
+                    };
+                }
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+        panic!("no free X display to start Xvfb on");
+    }
+
+    /// Runs `aerial view ARGS` on this display, with validation, and
+    /// returns its output.
+    fn view(&self, args: &[&str]) -> Output {
+        common::aerial()
+            .arg("view")
+            .args(args)
+            .args(["--validate", "--present-mode", "immediate"])
+            .env("DISPLAY", &self.display)
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .unwrap()
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// A ground plane with a sphere and a box on it; the camera 2 m above the
+/// ground looks level along -Z, so the nearest surface while flying
+/// forward is the ground, 2 m below.
+const SCENE: &str = r#"
+ambient = [0.05, 0.05, 0.05]
+[output]
+width = 160
+height = 90
+[[lights]]
+type = "directional"
+direction = [-0.5, -1.0, -0.3]
+[[lights]]
+type = "point"
+position = [2.0, 4.0, -6.0]
+intensity = 8.0
+[[materials]]
+name = "ground"
+kd = [0.6, 0.6, 0.55]
+[[materials]]
+name = "red"
+kd = [0.8, 0.1, 0.1]
+ks = [0.4, 0.4, 0.4]
+[[objects]]
+name = "ground"
+material = "ground"
+shape = { type = "plane", width = 200.0, depth = 200.0 }
+[[objects]]
+name = "ball"
+material = "red"
+shape = { type = "sphere", radius = 1.0 }
+translate = [0.5, 1.0, -12.0]
+[[objects]]
+name = "ring"
+material = "red"
+shape = { type = "torus", major_radius = 1.0, minor_radius = 0.3 }
+translate = [-2.5, 0.3, -9.0]
+"#;
+
+const CAMERA: &str = "[camera]\neye = [0, 2, 0]\nlook_at = [0, 2, -10]\nup = [0, 1, 0]\n";
+
+fn write_scene(dir: &Path) -> PathBuf {
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, format!("{SCENE}{CAMERA}")).unwrap();
+    path
+}
+
+fn read_png(path: &Path) -> Pixels<u8> {
+    let img = image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgba8();
+    Pixels {
+        width: img.width(),
+        height: img.height(),
+        data: img.into_raw(),
+    }
+}
+
+fn text(output: &Output) -> String {
+    format!(
+        "exit {:?}\nstdout:\n{}\nstderr:\n{}",
+        output.status.code(),
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    )
+}
+
+/// Runs `aerial render` on `scene` at `w`x`h` with validation and returns
+/// the PNG and EXR paths.
+fn render(scene: &Path, w: u32, h: u32, dir: &Path, name: &str) -> (PathBuf, PathBuf) {
+    let png = dir.join(format!("{name}.png"));
+    let exr = dir.join(format!("{name}.exr"));
+    let out = common::aerial()
+        .arg("render")
+        .arg(scene)
+        .args(["--width", &w.to_string(), "--height", &h.to_string(), "--validate"])
+        .arg("--out")
+        .arg(&png)
+        .arg("--hdr")
+        .arg(&exr)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out));
+    (png, exr)
+}
+
+fn metadata(path: &Path, key: &str) -> String {
+    read_png_text(path)
+        .unwrap()
+        .into_iter()
+        .find(|(k, _)| k == key)
+        .unwrap_or_else(|| panic!("{} has no {key}", path.display()))
+        .1
+}
+
+fn differing_pixels(a: &Pixels<u8>, b: &Pixels<u8>) -> usize {
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    a.data
+        .chunks_exact(4)
+        .zip(b.data.chunks_exact(4))
+        .filter(|(p, q)| p != q)
+        .count()
+}
+
+#[test]
+fn first_frame_equals_render_and_w_moves_the_camera_forward() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path());
+    let first = dir.path().join("first.png");
+    let moved = dir.path().join("moved.png");
+    // Frame 0 is drawn before any input; W is held while frames 1..=30 are
+    // drawn, so the camera makes 30 steps of 1/60 s.
+    let script = dir.path().join("fly.txt");
+    std::fs::write(
+        &script,
+        format!(
+            "0 screenshot {}\n1 press W\n31 release W\n31 screenshot {}\n32 quit\n",
+            first.display(),
+            moved.display()
+        ),
+    )
+    .unwrap();
+    let x = Xvfb::start();
+    let out = x.view(&[scene.to_str().unwrap(), "--script", script.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(
+        !String::from_utf8_lossy(&out.stderr).contains("validation"),
+        "{}",
+        text(&out)
+    );
+
+    // Before any input: bit-identical to `aerial render`, PNG and EXR. The
+    // same renderer, plan and camera give the same commands on the same
+    // driver, so nothing may differ.
+    let (render_png, render_exr) = render(&scene, 160, 90, dir.path(), "render");
+    let shot = read_png(&first);
+    let reference = read_png(&render_png);
+    common::assert_not_blank(&reference, 0.3);
+    assert_eq!(differing_pixels(&shot, &reference), 0, "PNG differs from render");
+    let shot_hdr = read_exr(&first.with_extension("exr")).unwrap();
+    let reference_hdr = read_exr(&render_exr).unwrap();
+    assert_eq!(shot_hdr.data.len(), reference_hdr.data.len());
+    assert!(
+        shot_hdr
+            .data
+            .iter()
+            .zip(&reference_hdr.data)
+            .all(|(a, b)| a.to_bits() == b.to_bits()),
+        "EXR differs from render"
+    );
+
+    // W: forward (-Z) by 30 steps of 1/60 s at 2 m/s (the height above the
+    // ground), i.e. 1 m; nothing else about the camera changed.
+    let camera_toml = metadata(&moved, "aerial:camera");
+    let with_camera = format!("{SCENE}{camera_toml}");
+    let moved_scene = Scene::from_toml(&with_camera, "moved", dir.path()).unwrap();
+    let c = moved_scene.camera;
+    let expected = glam::Vec3::new(0.0, 2.0, -1.0);
+    assert!(
+        c.eye.distance(expected) < 1e-5,
+        "eye {} after 30 frames of W, expected {expected}",
+        c.eye
+    );
+    let direction = (c.look_at - c.eye).normalize();
+    assert!(direction.distance(glam::Vec3::NEG_Z) < 1e-6, "{direction}");
+    assert_eq!((c.up, c.fov_y_degrees), (glam::Vec3::Y, 45.0));
+
+    // The image changed: the objects came closer.
+    let after = read_png(&moved);
+    let changed = differing_pixels(&after, &shot);
+    assert!(
+        changed > (160 * 90) / 20,
+        "only {changed} pixels changed after moving 1 m"
+    );
+    // And the recorded camera reproduces it with `aerial render`.
+    let moved_path = dir.path().join("moved.toml");
+    std::fs::write(&moved_path, &with_camera).unwrap();
+    let (again, _) = render(&moved_path, 160, 90, dir.path(), "again");
+    assert_eq!(differing_pixels(&after, &read_png(&again)), 0);
+}
+
+#[test]
+fn resizing_mid_script_keeps_rendering_at_the_new_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path());
+    let big = dir.path().join("big.png");
+    let small = dir.path().join("small.png");
+    let script = dir.path().join("resize.txt");
+    std::fs::write(
+        &script,
+        format!(
+            "2 resize 240 135\n3 screenshot {}\n4 resize 96 64\n6 screenshot {}\n7 quit\n",
+            big.display(),
+            small.display()
+        ),
+    )
+    .unwrap();
+    let x = Xvfb::start();
+    let out = x.view(&[scene.to_str().unwrap(), "--script", script.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out));
+    for (path, w, h) in [(&big, 240, 135), (&small, 96, 64)] {
+        let shot = read_png(path);
+        assert_eq!((shot.width, shot.height), (w, h), "{}", path.display());
+        let (reference, _) = render(&scene, w, h, dir.path(), &format!("render{w}"));
+        assert_eq!(
+            differing_pixels(&shot, &read_png(&reference)),
+            0,
+            "{} differs from render at {w}x{h}",
+            path.display()
+        );
+    }
+}
+
+#[test]
+fn a_bad_script_is_refused_with_file_line_and_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let script = dir.path().join("bad.txt");
+    std::fs::write(&script, "0 press W\n# fine\n12 hover 3\n").unwrap();
+    // Refused before a window is opened, so no X server is needed.
+    let out = common::aerial()
+        .args(["view", "--script"])
+        .arg(&script)
+        .env_remove("DISPLAY")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(&format!("{}:3: unknown action 'hover'", script.display())),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
