@@ -39,7 +39,14 @@ impl Xvfb {
                 continue;
             }
             let mut child = Command::new("Xvfb")
-                .args([&format!(":{n}"), "-screen", "0", "1024x768x24", "-nolisten", "tcp"])
+                .args([
+                    &format!(":{n}"),
+                    "-screen",
+                    "0",
+                    "1024x768x24",
+                    "-nolisten",
+                    "tcp",
+                ])
                 .stdout(Stdio::null())
                 .stderr(Stdio::null())
                 .spawn()
@@ -158,7 +165,13 @@ fn render(scene: &Path, w: u32, h: u32, dir: &Path, name: &str) -> (PathBuf, Pat
     let out = common::aerial()
         .arg("render")
         .arg(scene)
-        .args(["--width", &w.to_string(), "--height", &h.to_string(), "--validate"])
+        .args([
+            "--width",
+            &w.to_string(),
+            "--height",
+            &h.to_string(),
+            "--validate",
+        ])
         .arg("--out")
         .arg(&png)
         .arg("--hdr")
@@ -206,7 +219,11 @@ fn first_frame_equals_render_and_w_moves_the_camera_forward() {
     )
     .unwrap();
     let x = Xvfb::start();
-    let out = x.view(&[scene.to_str().unwrap(), "--script", script.to_str().unwrap()]);
+    let out = x.view(&[
+        scene.to_str().unwrap(),
+        "--script",
+        script.to_str().unwrap(),
+    ]);
     assert!(out.status.success(), "{}", text(&out));
     assert!(
         !String::from_utf8_lossy(&out.stderr).contains("validation"),
@@ -221,7 +238,11 @@ fn first_frame_equals_render_and_w_moves_the_camera_forward() {
     let shot = read_png(&first);
     let reference = read_png(&render_png);
     common::assert_not_blank(&reference, 0.3);
-    assert_eq!(differing_pixels(&shot, &reference), 0, "PNG differs from render");
+    assert_eq!(
+        differing_pixels(&shot, &reference),
+        0,
+        "PNG differs from render"
+    );
     let shot_hdr = read_exr(&first.with_extension("exr")).unwrap();
     let reference_hdr = read_exr(&render_exr).unwrap();
     assert_eq!(shot_hdr.data.len(), reference_hdr.data.len());
@@ -281,7 +302,11 @@ fn resizing_mid_script_keeps_rendering_at_the_new_size() {
     )
     .unwrap();
     let x = Xvfb::start();
-    let out = x.view(&[scene.to_str().unwrap(), "--script", script.to_str().unwrap()]);
+    let out = x.view(&[
+        scene.to_str().unwrap(),
+        "--script",
+        script.to_str().unwrap(),
+    ]);
     assert!(out.status.success(), "{}", text(&out));
     for (path, w, h) in [(&big, 240, 135), (&small, 96, 64)] {
         let shot = read_png(path);
@@ -315,4 +340,86 @@ fn a_bad_script_is_refused_with_file_line_and_reason() {
         "{stderr}"
     );
     assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+/// The viewer moves the view of a live renderer instead of building a new
+/// one each frame; what it then draws must be what a new renderer for the
+/// moved view draws, bit for bit, whether only the uniforms were rewritten
+/// (camera, sky) or the frame had to be built again (draw order, deferred
+/// light tiles). Headless: no window needed.
+#[test]
+fn moving_the_view_draws_what_a_new_renderer_draws() {
+    use aerial::render::{Renderer, ViewChange};
+    use aerial::scene::Knob;
+    use aerial::vk::{validation::Validation, Context, ContextOptions};
+
+    let ctx = Context::new(&ContextOptions {
+        validate: Validation::All,
+        device: None,
+        display: None,
+    })
+    .expect("a Vulkan device with the validation layer");
+    let log = ctx.validation_log().expect("validation on");
+    let mut changes = Vec::new();
+    for (file, knob) in [
+        ("default.toml", None),
+        ("earth_sunset.toml", None),
+        ("transparency.toml", None),
+        ("many_lights.toml", Some(("lighting", "deferred"))),
+    ] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("assets/scenes")
+            .join(file);
+        let mut scene = Scene::load(&path).unwrap();
+        scene.set_output_size(Some(64), Some(36)).unwrap();
+        if let Some((name, value)) = knob {
+            Knob::find(name).unwrap().set(&mut scene, value).unwrap();
+        }
+        let mut moved = scene.clone();
+        let step = glam::Vec3::new(0.3, 0.2, -0.4);
+        moved.camera.eye += step;
+        moved.camera.look_at += step + glam::Vec3::new(0.2, 0.0, 0.0);
+        if let Some(sky) = &mut moved.sky {
+            sky.sun.direction = (sky.sun.direction + glam::DVec3::new(0.0, 0.05, 0.02)).normalize();
+        }
+
+        let mut live = Renderer::new(&ctx, &scene, true).unwrap();
+        live.render_frame().unwrap();
+        let before = live.output();
+        let change = live.set_view(&moved).unwrap();
+        live.render_frame().unwrap();
+        let (after, after_hdr) = (live.output(), live.hdr().unwrap());
+        drop(live);
+        let mut fresh = Renderer::new(&ctx, &moved, true).unwrap();
+        fresh.render_frame().unwrap();
+        let (expected, expected_hdr) = (fresh.output(), fresh.hdr().unwrap());
+        drop(fresh);
+
+        assert!(
+            differing_pixels(&before, &after) > 0,
+            "{file}: the view did not change"
+        );
+        assert_eq!(
+            differing_pixels(&after, &expected),
+            0,
+            "{file} ({change:?})"
+        );
+        assert!(
+            after_hdr
+                .data
+                .iter()
+                .zip(&expected_hdr.data)
+                .all(|(a, b)| a.to_bits() == b.to_bits()),
+            "{file} ({change:?}): HDR differs"
+        );
+        changes.push((file, change));
+    }
+    // Small moves keep every resource: the sky's uniforms are rewritten,
+    // and where the move reorders the draws the frame is recorded again.
+    assert_eq!(changes[0], ("default.toml", ViewChange::Recorded));
+    assert_eq!(changes[1], ("earth_sunset.toml", ViewChange::Updated));
+    drop(ctx);
+    let messages = log.messages();
+    assert!(messages.is_empty(), "{messages:?}");
+    println!("{changes:?}");
 }

@@ -13,9 +13,7 @@ use super::plan::{attachment, FramePlan, PassIo};
 use super::scene_resources::SceneResources;
 use super::RenderError;
 use crate::scene::{HdrFormat, Scene, ToneMap};
-use crate::vk::{
-    AttachmentSpec, AttachmentStart, Context, GraphRenderPass, Image, SubpassSpec,
-};
+use crate::vk::{AttachmentSpec, AttachmentStart, Context, GraphRenderPass, Image, SubpassSpec};
 use std::sync::Arc;
 
 /// Timing of one submitted frame.
@@ -42,9 +40,12 @@ pub enum ViewChange {
     /// The frame plan stayed the same: only the view-dependent uniforms
     /// (camera, sun) were rewritten; the recorded frame is replayed as is.
     Updated,
-    /// The plan changed with the view (draw order, transparent sorting,
-    /// deferred light tiles or size): the frame was built and recorded
-    /// again from the scene's geometry.
+    /// The draw order changed with the view (front-to-back opaque draws,
+    /// back-to-front transparent ones): the uniforms were rewritten and the
+    /// frame recorded again with the same pipelines and resources.
+    Recorded,
+    /// The plan changed with the view (deferred light tiles, size): the
+    /// frame was built and recorded again from the scene's geometry.
     Rebuilt,
 }
 
@@ -150,30 +151,7 @@ impl Renderer {
             }
         }
 
-        // Record the frame once; every submission replays it. The render
-        // pass begins before the first subpass and ends right after the
-        // last, before that pass's closing timestamp.
-        let frame = TimedFrame::begin(ctx, plan.passes.len() as u32)?;
-        let cmd = frame.cmd();
-        let mut in_render_pass = false;
-        for (i, (decl, pass)) in plan.passes.iter().zip(&passes).enumerate() {
-            if let (true, Some(rp)) = (decl.is_subpass(), &render_pass) {
-                if in_render_pass {
-                    cmd.next_subpass();
-                } else {
-                    cmd.begin_render_pass(rp);
-                    in_render_pass = true;
-                }
-            }
-            pass.record(cmd, &frame_resources)?;
-            let next_is_subpass = plan.passes.get(i + 1).is_some_and(|d| d.is_subpass());
-            if let (true, false, Some(rp)) = (in_render_pass, next_is_subpass, &render_pass) {
-                cmd.end_render_pass(rp);
-                in_render_pass = false;
-            }
-            frame.stamp();
-        }
-        let frame = frame.finish()?;
+        let frame = record(ctx, &plan, &passes, render_pass.as_ref(), &frame_resources)?;
         drop(frame_resources);
 
         Ok(Renderer {
@@ -199,20 +177,50 @@ impl Renderer {
     /// same (the usual case: the camera moved a little), only the uniforms
     /// the passes derive from the view are rewritten, by the same code that
     /// wrote them at creation, so the image is the one a new renderer would
-    /// give. Otherwise the frame is built again from the kept geometry.
+    /// give; when only the draw order differs, the frame is also recorded
+    /// again. Otherwise it is built again from the kept geometry.
     pub fn set_view(&mut self, scene: &Scene) -> Result<ViewChange, RenderError> {
         let geometry = self.geometry.clone().ok_or_else(|| {
             RenderError::Frame("a renderer of an HDR image has no view to move".into())
         })?;
         let plan = FramePlan::new(scene, &geometry, self.keep_hdr);
-        if same_frame(&self.plan, &plan) {
+        if same_resources(&self.plan, &plan) {
             if let Some(resources) = &mut self.scene_resources {
                 resources.set_view(scene, plan.width, plan.height);
             }
             for pass in &mut self.passes {
                 pass.set_view(scene, &plan)?;
             }
-            return Ok(ViewChange::Updated);
+            let change = if same_frame(&self.plan, &plan) {
+                ViewChange::Updated
+            } else {
+                // Only the draw order changed: record the frame again with
+                // the same pipelines, buffers and attachments.
+                let frame_resources = FrameResources {
+                    attachments: Attachments {
+                        names: plan.attachments.iter().map(|a| a.name).collect(),
+                        images: self
+                            .render_pass
+                            .as_ref()
+                            .map_or(&[], |p| p.images.as_slice()),
+                    },
+                    scene: self.scene_resources.as_ref(),
+                };
+                let frame = record(
+                    &self.ctx,
+                    &plan,
+                    &self.passes,
+                    self.render_pass.as_ref(),
+                    &frame_resources,
+                )?;
+                drop(frame_resources);
+                // The old command buffer is not pending: render_frame
+                // waited for it.
+                self.frame = frame;
+                ViewChange::Recorded
+            };
+            self.plan = plan;
+            return Ok(change);
         }
         let rebuilt = Renderer::build(&self.ctx, scene, Some(geometry), plan, None, self.keep_hdr)?;
         *self = rebuilt;
@@ -291,6 +299,58 @@ impl Drop for Renderer {
         // waits, but a frame interrupted by an error might not have.
         let _ = self.ctx.wait_idle();
     }
+}
+
+/// Records the frame once; every submission replays it. The render pass
+/// begins before the first subpass and ends right after the last, before
+/// that pass's closing timestamp.
+fn record(
+    ctx: &Arc<Context>,
+    plan: &FramePlan,
+    passes: &[Box<dyn RecordPass>],
+    render_pass: Option<&GraphRenderPass>,
+    frame_resources: &FrameResources<'_>,
+) -> Result<TimedFrame, RenderError> {
+    let frame = TimedFrame::begin(ctx, plan.passes.len() as u32)?;
+    let cmd = frame.cmd();
+    let mut in_render_pass = false;
+    for (i, (decl, pass)) in plan.passes.iter().zip(passes).enumerate() {
+        if let (true, Some(rp)) = (decl.is_subpass(), render_pass) {
+            if in_render_pass {
+                cmd.next_subpass();
+            } else {
+                cmd.begin_render_pass(rp);
+                in_render_pass = true;
+            }
+        }
+        pass.record(cmd, frame_resources)?;
+        let next_is_subpass = plan.passes.get(i + 1).is_some_and(|d| d.is_subpass());
+        if let (true, false, Some(rp)) = (in_render_pass, next_is_subpass, render_pass) {
+            cmd.end_render_pass(rp);
+            in_render_pass = false;
+        }
+        frame.stamp();
+    }
+    frame.finish()
+}
+
+/// Whether a new view's plan `b` can reuse everything created for `a`:
+/// the same attachments and passes at the same size, the same draws (in
+/// any order: the order of opaque and transparent draws follows the
+/// camera) and the same deferred light tiles. The uniforms may differ.
+fn same_resources(a: &FramePlan, b: &FramePlan) -> bool {
+    let by_object = |draws: &[super::plan::Draw]| {
+        let mut d = draws.to_vec();
+        d.sort_by_key(|d| d.object);
+        d
+    };
+    a.width == b.width
+        && a.height == b.height
+        && a.attachments == b.attachments
+        && a.pass_names() == b.pass_names()
+        && by_object(&a.opaque) == by_object(&b.opaque)
+        && by_object(&a.transparent) == by_object(&b.transparent)
+        && a.tile_groups == b.tile_groups
 }
 
 /// Whether two plans record the same commands: the same attachments,

@@ -188,16 +188,18 @@ impl FlyCamera {
     ) {
         let vertical = surroundings.vertical(self.eye).unwrap_or(self.up);
         let right_axis = self.forward.cross(self.up).normalize_or_zero();
-        let direction = (self.forward * forward + right_axis * right + vertical * up)
-            .normalize_or_zero();
+        let direction =
+            (self.forward * forward + right_axis * right + vertical * up).normalize_or_zero();
         if direction == DVec3::ZERO || distance <= 0.0 {
             return;
         }
         let before = self.eye;
         self.eye = (self.eye + direction * distance)
             .clamp(DVec3::splat(-MAX_COORDINATE), DVec3::splat(MAX_COORDINATE));
-        if let (Some(a), Some(b)) = (surroundings.vertical(before), surroundings.vertical(self.eye))
-        {
+        if let (Some(a), Some(b)) = (
+            surroundings.vertical(before),
+            surroundings.vertical(self.eye),
+        ) {
             let turn = DQuat::from_rotation_arc(a, b);
             self.forward = (turn * self.forward).normalize();
             self.up = (turn * self.up).normalize();
@@ -217,7 +219,8 @@ impl FlyCamera {
         let right = forward.cross(self.up).normalize();
         // Pitch, kept away from straight up and down.
         let angle = forward.angle_between(self.up);
-        let pitched = (angle + dy * scale).clamp(MIN_POLE_ANGLE, std::f64::consts::PI - MIN_POLE_ANGLE);
+        let pitched =
+            (angle + dy * scale).clamp(MIN_POLE_ANGLE, std::f64::consts::PI - MIN_POLE_ANGLE);
         forward = DQuat::from_axis_angle(right, angle - pitched) * forward;
         self.forward = forward.normalize();
         self.moved = true;
@@ -342,7 +345,10 @@ mod tests {
         let mut c = FlyCamera::new(home());
         c.look(100.0, 0.0);
         let f = c.forward();
-        assert!(f.x > 0.0 && f.y.abs() < 1e-12, "dragging right turns right: {f}");
+        assert!(
+            f.x > 0.0 && f.y.abs() < 1e-12,
+            "dragging right turns right: {f}"
+        );
         c.look(0.0, 1e6);
         let angle = c.forward().angle_between(DVec3::Y).to_degrees();
         assert!((angle - 179.0).abs() < 1e-9, "{angle}");
@@ -365,7 +371,13 @@ mod tests {
         // A quarter of the way round, in steps.
         for _ in 0..1000 {
             let h = planet.height(c.eye()).unwrap();
-            c.translate(1.0, 0.0, 0.0, (radius + h) * std::f64::consts::FRAC_PI_2 / 1000.0, &planet);
+            c.translate(
+                1.0,
+                0.0,
+                0.0,
+                (radius + h) * std::f64::consts::FRAC_PI_2 / 1000.0,
+                &planet,
+            );
         }
         let vertical = planet.vertical(c.eye()).unwrap();
         assert!(c.forward().dot(vertical).abs() < 0.01, "{}", c.forward());
@@ -377,10 +389,7 @@ mod tests {
         c.translate(1.0, 0.3, 0.0, 0.123_456_7, &ground());
         c.look(17.0, -3.0);
         c.zoom(1.0);
-        let text = format!(
-            "{}[[materials]]\nname = \"m\"\nkd = [1, 1, 1]\n",
-            c.toml()
-        );
+        let text = format!("{}[[materials]]\nname = \"m\"\nkd = [1, 1, 1]\n", c.toml());
         let scene = Scene::from_toml(&text, "printed", std::path::Path::new(".")).unwrap();
         assert_eq!(scene.camera, c.camera());
     }

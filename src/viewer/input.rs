@@ -191,7 +191,10 @@ mod tests {
         assert_eq!(Key::parse("ArrowUp"), Ok(Key::Named(NamedKey::ArrowUp)));
         assert_eq!(Key::parse("F12"), Ok(Key::Named(NamedKey::F12)));
         let err = Key::parse("Arrowup").unwrap_err();
-        assert!(err.contains("unknown key 'Arrowup'") && err.contains("ArrowUp"), "{err}");
+        assert!(
+            err.contains("unknown key 'Arrowup'") && err.contains("ArrowUp"),
+            "{err}"
+        );
         assert!(Key::parse("").is_err());
         assert!(Key::parse("é").is_err());
     }
@@ -206,7 +209,10 @@ mod tests {
                 up: 0
             })
         );
-        assert_eq!(Key::Named(NamedKey::ArrowDown).action(), Key::Char('S').action());
+        assert_eq!(
+            Key::Named(NamedKey::ArrowDown).action(),
+            Key::Char('S').action()
+        );
         assert_eq!(Key::Char('5').action(), Some(Action::CycleKnob(5)));
         assert_eq!(Key::Char('0').action(), None);
     }

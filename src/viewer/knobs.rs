@@ -137,8 +137,8 @@ mod tests {
         let scene = Scene::default_scene();
         let names: Vec<_> = applicable(&scene).iter().map(|c| c.name).collect();
         assert!(names.contains(&"shading") && !names.contains(&"atmosphere_samples"));
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("assets/scenes/earth_orbit.toml");
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/earth_orbit.toml");
         let mut earth = Scene::load(&path).unwrap();
         let names: Vec<_> = applicable(&earth).iter().map(|c| c.name).collect();
         assert!(names.contains(&"atmosphere_samples") && !names.contains(&"shading"));

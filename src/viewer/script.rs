@@ -175,11 +175,9 @@ fn parse_line(line: &str) -> Result<(u64, ScriptAction), String> {
             count(0, "no argument")?;
             ScriptAction::Quit
         }
-        other => {
-            return Err(format!(
-                "unknown action '{other}' (expected press, release, mouse, resize, screenshot or quit)"
-            ))
-        }
+        other => return Err(format!(
+            "unknown action '{other}' (expected press, release, mouse, resize, screenshot or quit)"
+        )),
     };
     Ok((frame, action))
 }
@@ -215,7 +213,10 @@ mod tests {
                 (1, ScriptAction::Release(Key::Char('W'))),
                 (2, ScriptAction::Resize(320, 180)),
                 (3, ScriptAction::Mouse(-12.5, 4.0)),
-                (4, ScriptAction::Screenshot(PathBuf::from("out dir/a b.png"))),
+                (
+                    4,
+                    ScriptAction::Screenshot(PathBuf::from("out dir/a b.png"))
+                ),
                 (5, ScriptAction::Quit),
             ]
         );
@@ -236,7 +237,11 @@ mod tests {
             ("0 mouse 1", 1, "'mouse' takes DX DY"),
             ("0 mouse 1 nan", 1, "DY 'nan' is not a finite number"),
             ("0 resize 0 10", 1, "WIDTH '0' is not a whole number"),
-            ("0 resize 10 99999", 1, "HEIGHT '99999' is not a whole number"),
+            (
+                "0 resize 10 99999",
+                1,
+                "HEIGHT '99999' is not a whole number",
+            ),
             ("0 screenshot", 1, "'screenshot' takes a PATH"),
             ("0 quit now", 1, "'quit' takes no argument"),
         ] {

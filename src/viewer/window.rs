@@ -162,18 +162,16 @@ impl ApplicationHandler for App {
                 }
                 Ok(())
             }
-            WindowEvent::KeyboardInput { event, .. } => {
-                match Key::from_winit(&event.logical_key) {
-                    Some(key) if event.state == ElementState::Pressed && !event.repeat => {
-                        live.key_down(key, event_loop, &self.options)
-                    }
-                    Some(key) if event.state == ElementState::Released => {
-                        live.held.remove(&key);
-                        Ok(())
-                    }
-                    _ => Ok(()),
+            WindowEvent::KeyboardInput { event, .. } => match Key::from_winit(&event.logical_key) {
+                Some(key) if event.state == ElementState::Pressed && !event.repeat => {
+                    live.key_down(key, event_loop, &self.options)
                 }
-            }
+                Some(key) if event.state == ElementState::Released => {
+                    live.held.remove(&key);
+                    Ok(())
+                }
+                _ => Ok(()),
+            },
             WindowEvent::MouseInput {
                 state,
                 button: MouseButton::Left,
@@ -268,9 +266,9 @@ impl App {
         )?;
         let mut scene = scene;
         let (sw, sh) = swapchain.extent();
-        scene.set_output_size(Some(sw), Some(sh)).map_err(|e| {
-            ViewerError::Render(RenderError::Frame(format!("window size: {e}")))
-        })?;
+        scene
+            .set_output_size(Some(sw), Some(sh))
+            .map_err(|e| ViewerError::Render(RenderError::Frame(format!("window size: {e}"))))?;
         let geometry = Arc::new(SceneGeometry::new(&scene)?);
         let renderer = Renderer::with_geometry(&ctx, &scene, geometry.clone(), false)?;
         let mut timings = TimingWindow::default();
@@ -435,7 +433,10 @@ impl Live {
         // Simulation step.
         let dt = match (scripted, self.last_frame_start) {
             (true, _) => SCRIPT_STEP_SECONDS,
-            (false, Some(last)) => start.duration_since(last).as_secs_f64().min(MAX_STEP_SECONDS),
+            (false, Some(last)) => start
+                .duration_since(last)
+                .as_secs_f64()
+                .min(MAX_STEP_SECONDS),
             (false, None) => 0.0,
         };
         if let Some(last) = self.last_frame_start {
@@ -560,8 +561,8 @@ impl Live {
             let eye = self.camera.eye();
             let vertical = self.surroundings.vertical(eye).unwrap_or(DVec3::Y);
             if let Some(sky) = self.scene.sky.as_mut() {
-                let angle = (SUN_DEGREES_PER_SECOND * boost * dt * f64::from(sun.signum()))
-                    .to_radians();
+                let angle =
+                    (SUN_DEGREES_PER_SECOND * boost * dt * f64::from(sun.signum())).to_radians();
                 sky.sun.direction = turn_sun(sky.sun.direction, vertical, angle);
                 self.view_dirty = true;
             }
@@ -576,7 +577,10 @@ impl Live {
             path: path.display().to_string(),
             reason,
         };
-        if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
+        if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+        {
             return Err(shot_err(
                 "names the PNG; the EXR is written next to it with the extension .exr".into(),
             ));

@@ -29,11 +29,11 @@ pub use pipeline::{
     Blend, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, ShaderModule, VertexAttribute,
 };
 pub use query::TimestampQueries;
-pub use swapchain::{PresentMode, Presented, Surface, Swapchain, WindowHandles};
 pub use render_graph::{
     AttachmentSpec, AttachmentStart, DepthUse, Framebuffer, GraphRenderPass, RenderPass,
     SubpassSpec,
 };
+pub use swapchain::{PresentMode, Presented, Surface, Swapchain, WindowHandles};
 
 /// Errors from the Vulkan layer.
 #[derive(Debug, thiserror::Error)]

@@ -253,13 +253,7 @@ impl RecordPass for AtmospherePass {
         let sky = scene.sky.as_ref().ok_or_else(|| {
             RenderError::Frame("the atmosphere pass needs a scene with [atmosphere]".into())
         })?;
-        let block = uniforms(
-            sky,
-            &scene.camera,
-            plan.width,
-            plan.height,
-            self.table_size,
-        );
+        let block = uniforms(sky, &scene.camera, plan.width, plan.height, self.table_size);
         self.uniforms.write(0, bytemuck::bytes_of(&block));
         Ok(())
     }

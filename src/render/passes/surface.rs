@@ -10,8 +10,9 @@
 
 use super::{FrameResources, PassSetup, RecordPass};
 use crate::mesh::Vertex;
-use crate::render::plan::{Draw, PipelineKey, ShadingKey};
+use crate::render::plan::{Draw, FramePlan, PipelineKey, ShadingKey};
 use crate::render::RenderError;
+use crate::scene::Scene;
 use crate::shaders;
 use crate::vk::{
     Blend, CommandBuffer, CullModeFlags, Format, GraphicsPipeline, GraphicsPipelineDesc,
@@ -29,6 +30,7 @@ enum Form {
 }
 
 pub struct SurfacePass {
+    form: Form,
     draws: Vec<Draw>,
     pipelines: BTreeMap<PipelineKey, GraphicsPipeline>,
 }
@@ -117,7 +119,11 @@ impl SurfacePass {
                 pipelines.insert(key, pipeline);
             }
         }
-        Ok(Box::new(SurfacePass { draws, pipelines }))
+        Ok(Box::new(SurfacePass {
+            form,
+            draws,
+            pipelines,
+        }))
     }
 }
 
@@ -158,6 +164,26 @@ impl RecordPass for SurfacePass {
             cmd.bind_geometry(&resources.geometry, range.vertex_offset, range.index_offset);
             cmd.draw_indexed(range.index_count);
         }
+        Ok(())
+    }
+
+    /// Takes the new view's draw order (the same draws, sorted from the
+    /// new camera).
+    fn set_view(&mut self, _scene: &Scene, plan: &FramePlan) -> Result<(), RenderError> {
+        let draws = match self.form {
+            Form::Transparent => &plan.transparent,
+            Form::Opaque | Form::GBuffer => &plan.opaque,
+        };
+        if let Some(d) = draws
+            .iter()
+            .find(|d| !self.pipelines.contains_key(&d.pipeline))
+        {
+            return Err(RenderError::Frame(format!(
+                "object {} needs a pipeline the '{:?}' pass did not create",
+                d.object, self.form
+            )));
+        }
+        self.draws = draws.clone();
         Ok(())
     }
 }
