@@ -121,7 +121,7 @@ mod tests {
     #[test]
     fn every_cycle_names_a_knob_and_its_values_apply() {
         let mut scene = Scene::default_scene();
-        for c in CYCLES.iter().filter(|c| (c.applies)(&scene)) {
+        for c in applicable(&scene.clone()) {
             for _ in 0..c.values.len() {
                 c.advance(&mut scene).unwrap();
             }
