@@ -423,3 +423,107 @@ fn moving_the_view_draws_what_a_new_renderer_draws() {
     assert!(messages.is_empty(), "{messages:?}");
     println!("{changes:?}");
 }
+
+/// Number keys cycle the knobs that apply (listed in this order for a
+/// scene with objects and no textures: 1 shading, 2 lighting, 3
+/// hdr_format, 4 tone_map); the frame after a change is what `render`
+/// draws with those knob settings, and the screenshot records them.
+#[test]
+fn number_keys_cycle_knobs_and_rebuild_the_frame() {
+    use aerial::scene::Knob;
+    let dir = tempfile::tempdir().unwrap();
+    let scene_path = write_scene(dir.path());
+    let shot = dir.path().join("knobs.png");
+    let script = dir.path().join("knobs.txt");
+    std::fs::write(
+        &script,
+        format!(
+            "0 press 2\n0 press 4\n0 screenshot {}\n1 quit\n",
+            shot.display()
+        ),
+    )
+    .unwrap();
+    let x = Xvfb::start();
+    let out = x.view(&[
+        scene_path.to_str().unwrap(),
+        "--script",
+        script.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("lighting=deferred") && stdout.contains("tone_map=aces"),
+        "{stdout}"
+    );
+    let knobs = metadata(&shot, "aerial:knobs");
+    assert!(
+        knobs.contains("lighting=deferred") && knobs.contains("tone_map=aces"),
+        "{knobs}"
+    );
+    let mut scene = Scene::load(&scene_path).unwrap();
+    Knob::find("lighting")
+        .unwrap()
+        .set(&mut scene, "deferred")
+        .unwrap();
+    Knob::find("tone_map")
+        .unwrap()
+        .set(&mut scene, "aces")
+        .unwrap();
+    let expected = common::render(&scene, false).output;
+    let plain = common::render(&Scene::load(&scene_path).unwrap(), false).output;
+    let got = read_png(&shot);
+    assert_eq!(differing_pixels(&got, &expected), 0);
+    assert!(
+        differing_pixels(&got, &plain) > 0,
+        "the knobs changed nothing"
+    );
+}
+
+/// L held for 30 frames lowers the sun by 30 steps of 1/60 s at 10°/s:
+/// 5°, along its arc over the local vertical; the screenshot records the
+/// new direction, and `render` with it draws the same sky.
+#[test]
+fn the_sun_key_turns_the_sun_by_the_expected_angle() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/earth_noon.toml");
+    let shot = dir.path().join("sun.png");
+    let script = dir.path().join("sun.txt");
+    std::fs::write(
+        &script,
+        format!(
+            "0 press L\n30 release L\n30 screenshot {}\n31 quit\n",
+            shot.display()
+        ),
+    )
+    .unwrap();
+    let x = Xvfb::start();
+    let out = x.view(&[
+        scene_path.to_str().unwrap(),
+        "--width",
+        "64",
+        "--height",
+        "36",
+        "--script",
+        script.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out));
+    let mut scene = Scene::load(&scene_path).unwrap();
+    scene.set_output_size(Some(64), Some(36)).unwrap();
+    let before = scene.sky.as_ref().unwrap().sun.direction;
+    let recorded = metadata(&shot, "aerial:sun_direction");
+    let v: Vec<f64> = recorded
+        .trim_matches(|c| c == '[' || c == ']')
+        .split(',')
+        .map(|t| t.trim().parse().unwrap())
+        .collect();
+    let after = glam::DVec3::new(v[0], v[1], v[2]);
+    let angle = before.angle_between(after).to_degrees();
+    assert!((angle - 5.0).abs() < 1e-6, "turned {angle}°");
+    assert!(after.y < before.y, "L lowers the sun");
+    // Along its arc: the azimuth stays.
+    let azimuth = |d: glam::DVec3| d.z.atan2(d.x);
+    assert!((azimuth(after) - azimuth(before)).abs() < 1e-9);
+    scene.sky.as_mut().unwrap().sun.direction = after;
+    let expected = common::render(&scene, false).output;
+    assert_eq!(differing_pixels(&read_png(&shot), &expected), 0);
+}

@@ -175,9 +175,11 @@ fn parse_line(line: &str) -> Result<(u64, ScriptAction), String> {
             count(0, "no argument")?;
             ScriptAction::Quit
         }
-        other => return Err(format!(
+        other => {
+            return Err(format!(
             "unknown action '{other}' (expected press, release, mouse, resize, screenshot or quit)"
-        )),
+        ))
+        }
     };
     Ok((frame, action))
 }
