@@ -527,3 +527,75 @@ fn the_sun_key_turns_the_sun_by_the_expected_angle() {
     let expected = common::render(&scene, false).output;
     assert_eq!(differing_pixels(&read_png(&shot), &expected), 0);
 }
+
+/// Closing the window (the WM_DELETE_WINDOW message a window manager
+/// sends for the close button) ends the viewer with status 0 and a clean
+/// validation log, after it has drawn and presented frames.
+#[test]
+fn closing_the_window_exits_0() {
+    use x11rb::connection::Connection as _;
+    use x11rb::protocol::xproto::{AtomEnum, ClientMessageEvent, ConnectionExt as _, EventMask};
+
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path());
+    let shot = dir.path().join("alive.png");
+    // No quit: the viewer runs until the window is closed.
+    let script = dir.path().join("stay.txt");
+    std::fs::write(&script, format!("3 screenshot {}\n", shot.display())).unwrap();
+    let x = Xvfb::start();
+    let mut viewer = common::aerial()
+        .arg("view")
+        .arg(&scene)
+        .args(["--script", script.to_str().unwrap()])
+        .args(["--validate", "--present-mode", "immediate"])
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while !shot.exists() {
+        assert!(Instant::now() < deadline, "the viewer drew no frame");
+        if let Ok(Some(status)) = viewer.try_wait() {
+            panic!("the viewer ended early: {status}");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+
+    let (conn, screen) = x11rb::connect(Some(&x.display)).unwrap();
+    let root = conn.setup().roots[screen].root;
+    let atom = |name: &[u8]| conn.intern_atom(false, name).unwrap().reply().unwrap().atom;
+    let (protocols, delete) = (atom(b"WM_PROTOCOLS"), atom(b"WM_DELETE_WINDOW"));
+    let mut closed = 0;
+    for window in conn.query_tree(root).unwrap().reply().unwrap().children {
+        let asks = conn
+            .get_property(false, window, protocols, AtomEnum::ATOM, 0, 64)
+            .unwrap()
+            .reply()
+            .unwrap();
+        if asks.value32().is_some_and(|mut v| v.any(|a| a == delete)) {
+            let message = ClientMessageEvent::new(32, window, protocols, [delete, 0, 0, 0, 0]);
+            conn.send_event(false, window, EventMask::NO_EVENT, message)
+                .unwrap();
+            closed += 1;
+        }
+    }
+    conn.flush().unwrap();
+    assert!(closed > 0, "no window takes WM_DELETE_WINDOW");
+
+    while viewer.try_wait().unwrap().is_none() {
+        if Instant::now() > deadline {
+            let _ = viewer.kill();
+            panic!("the viewer did not end after its window was closed");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let out = viewer.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    assert!(
+        !String::from_utf8_lossy(&out.stderr).contains("validation"),
+        "{}",
+        text(&out)
+    );
+}
