@@ -25,6 +25,8 @@ use std::time::{Duration, Instant};
 struct Xvfb {
     child: Child,
     display: String,
+    /// Where the server keeps its screen as an XWD file (`-fbdir`).
+    fbdir: tempfile::TempDir,
 }
 
 impl Xvfb {
@@ -38,6 +40,7 @@ impl Xvfb {
             {
                 continue;
             }
+            let fbdir = tempfile::tempdir().unwrap();
             let mut child = Command::new("Xvfb")
                 .args([
                     &format!(":{n}"),
@@ -47,6 +50,8 @@ impl Xvfb {
                     "-nolisten",
                     "tcp",
                 ])
+                .arg("-fbdir")
+                .arg(fbdir.path())
                 .stdout(Stdio::null())
                 .stderr(Stdio::null())
                 .spawn()
@@ -60,6 +65,7 @@ impl Xvfb {
                     return Xvfb {
                         child,
                         display: format!(":{n}"),
+                        fbdir,
                     };
                 }
                 std::thread::sleep(Duration::from_millis(20));
@@ -82,6 +88,69 @@ impl Xvfb {
             .output()
             .unwrap()
     }
+}
+
+impl Xvfb {
+    /// The screen as the X server holds it now: RGBA, top row first.
+    fn screen(&self) -> Pixels<u8> {
+        // XWD: a header of big-endian u32 fields, the window name, the
+        // colour map (12 bytes an entry), then the pixels.
+        let bytes = std::fs::read(self.fbdir.path().join("Xvfb_screen0")).unwrap();
+        let field = |i: usize| u32::from_be_bytes(bytes[i * 4..i * 4 + 4].try_into().unwrap());
+        let (header, width, height) = (field(0) as usize, field(4), field(5));
+        let (byte_order, bits_per_pixel, bytes_per_line) =
+            (field(7), field(11), field(12) as usize);
+        let (red_mask, green_mask, blue_mask) = (field(14), field(15), field(16));
+        let colours = field(19) as usize;
+        assert_eq!(bits_per_pixel, 32, "a 24-bit screen keeps 32-bit pixels");
+        let start = header + colours * 12;
+        let mut data = Vec::with_capacity((width * height * 4) as usize);
+        for y in 0..height as usize {
+            for x in 0..width as usize {
+                let p = &bytes[start + y * bytes_per_line + x * 4..][..4];
+                let v = if byte_order == 0 {
+                    u32::from_le_bytes(p.try_into().unwrap())
+                } else {
+                    u32::from_be_bytes(p.try_into().unwrap())
+                };
+                let channel = |mask: u32| ((v & mask) >> mask.trailing_zeros()) as u8;
+                data.extend_from_slice(&[
+                    channel(red_mask),
+                    channel(green_mask),
+                    channel(blue_mask),
+                    255,
+                ]);
+            }
+        }
+        Pixels {
+            width,
+            height,
+            data,
+        }
+    }
+}
+
+/// The part of `screen` at (x0, y0) of `image`'s size, compared with
+/// `image` (RGB): the number of differing pixels and the largest channel
+/// difference.
+fn compare_on_screen(screen: &Pixels<u8>, image: &Pixels<u8>, x0: u32, y0: u32) -> (usize, u8) {
+    let mut differing = 0;
+    let mut worst = 0;
+    for y in 0..image.height {
+        for x in 0..image.width {
+            let i = ((y * image.width + x) * 4) as usize;
+            let j = (((y0 + y) * screen.width + x0 + x) * 4) as usize;
+            let d = (0..3)
+                .map(|c| image.data[i + c].abs_diff(screen.data[j + c]))
+                .max()
+                .unwrap();
+            if d > 0 {
+                differing += 1;
+                worst = worst.max(d);
+            }
+        }
+    }
+    (differing, worst)
 }
 
 impl Drop for Xvfb {
@@ -528,11 +597,11 @@ fn the_sun_key_turns_the_sun_by_the_expected_angle() {
     assert_eq!(differing_pixels(&read_png(&shot), &expected), 0);
 }
 
-/// Closing the window (the WM_DELETE_WINDOW message a window manager
-/// sends for the close button) ends the viewer with status 0 and a clean
-/// validation log, after it has drawn and presented frames.
+/// The window shows the rendered image exactly, and closing it (the
+/// WM_DELETE_WINDOW message a window manager sends for the close button)
+/// ends the viewer with status 0 and a clean validation log.
 #[test]
-fn closing_the_window_exits_0() {
+fn the_window_shows_the_image_and_closing_it_exits_0() {
     use x11rb::connection::Connection as _;
     use x11rb::protocol::xproto::{AtomEnum, ClientMessageEvent, ConnectionExt as _, EventMask};
 
@@ -567,22 +636,48 @@ fn closing_the_window_exits_0() {
     let root = conn.setup().roots[screen].root;
     let atom = |name: &[u8]| conn.intern_atom(false, name).unwrap().reply().unwrap().atom;
     let (protocols, delete) = (atom(b"WM_PROTOCOLS"), atom(b"WM_DELETE_WINDOW"));
-    let mut closed = 0;
-    for window in conn.query_tree(root).unwrap().reply().unwrap().children {
-        let asks = conn
-            .get_property(false, window, protocols, AtomEnum::ATOM, 0, 64)
+    let windows: Vec<_> = conn
+        .query_tree(root)
+        .unwrap()
+        .reply()
+        .unwrap()
+        .children
+        .into_iter()
+        .filter(|&w| {
+            let asks = conn
+                .get_property(false, w, protocols, AtomEnum::ATOM, 0, 64)
+                .unwrap()
+                .reply()
+                .unwrap();
+            asks.value32().is_some_and(|mut v| v.any(|a| a == delete))
+        })
+        .collect();
+    assert!(!windows.is_empty(), "no window takes WM_DELETE_WINDOW");
+
+    // The window shows the frame the screenshot saved (nothing moves, so
+    // every frame is the same), pixel for pixel: the copy to the swapchain
+    // (a blit where the window's channel order differs) changes nothing.
+    let saved = read_png(&shot);
+    let screen_now = x.screen();
+    let shown = windows.iter().any(|&w| {
+        let at = conn
+            .translate_coordinates(w, root, 0, 0)
             .unwrap()
             .reply()
             .unwrap();
-        if asks.value32().is_some_and(|mut v| v.any(|a| a == delete)) {
-            let message = ClientMessageEvent::new(32, window, protocols, [delete, 0, 0, 0, 0]);
-            conn.send_event(false, window, EventMask::NO_EVENT, message)
-                .unwrap();
-            closed += 1;
-        }
+        let (x0, y0) = (at.dst_x as u32, at.dst_y as u32);
+        let (differing, worst) = compare_on_screen(&screen_now, &saved, x0, y0);
+        eprintln!("window at ({x0}, {y0}): {differing} pixels differ, by up to {worst}");
+        differing == 0
+    });
+    assert!(shown, "the window does not show the screenshot's pixels");
+
+    for &window in &windows {
+        let message = ClientMessageEvent::new(32, window, protocols, [delete, 0, 0, 0, 0]);
+        conn.send_event(false, window, EventMask::NO_EVENT, message)
+            .unwrap();
     }
     conn.flush().unwrap();
-    assert!(closed > 0, "no window takes WM_DELETE_WINDOW");
 
     while viewer.try_wait().unwrap().is_none() {
         if Instant::now() > deadline {
