@@ -172,6 +172,14 @@ impl ApplicationHandler for App {
                 }
                 _ => Ok(()),
             },
+            WindowEvent::Focused(false) if !live.scripted() => {
+                // Keys released elsewhere send no release here: stop
+                // moving rather than fly on (a script's keys stay held:
+                // its images must not depend on the window focus).
+                live.held.clear();
+                live.dragging = false;
+                Ok(())
+            }
             WindowEvent::MouseInput {
                 state,
                 button: MouseButton::Left,
@@ -302,6 +310,14 @@ impl App {
 }
 
 impl Live {
+    /// Whether a script is running: it has actions at this frame or later.
+    fn scripted(&self) -> bool {
+        self.script
+            .as_ref()
+            .and_then(|s| s.last_frame())
+            .is_some_and(|last| self.frame <= last)
+    }
+
     /// A key went down: held keys are remembered, one-shot actions run.
     fn key_down(
         &mut self,
@@ -375,11 +391,7 @@ impl Live {
         options: &ViewOptions,
     ) -> Result<(), ViewerError> {
         let start = Instant::now();
-        let scripted = self
-            .script
-            .as_ref()
-            .and_then(|s| s.last_frame())
-            .is_some_and(|last| self.frame <= last);
+        let scripted = self.scripted();
 
         // This frame's scripted input, once.
         if let (Some(script), true) = (&self.script, self.script_input_done != Some(self.frame)) {
