@@ -155,6 +155,18 @@ fn compare_on_screen(screen: &Pixels<u8>, image: &Pixels<u8>, x0: u32, y0: u32) 
 
 impl Drop for Xvfb {
     fn drop(&mut self) {
+        // SIGTERM lets the server remove its socket and lock file (SIGKILL
+        // would leave them, and later runs would skip that display).
+        // SAFETY: kill(2) on our own child's pid, which it still is: the
+        // child has not been waited for.
+        unsafe { libc::kill(self.child.id() as libc::pid_t, libc::SIGTERM) };
+        let deadline = Instant::now() + Duration::from_secs(5);
+        while Instant::now() < deadline {
+            if let Ok(Some(_)) = self.child.try_wait() {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
