@@ -121,6 +121,10 @@ pub enum PassIo {
         /// Input attachments, in `input_attachment_index` order.
         inputs: Vec<&'static str>,
     },
+    /// A compute dispatch outside the render pass, before it; it touches
+    /// no attachment (what it writes, later passes read from buffers it
+    /// shares with them).
+    Compute,
     /// Copies outside the render pass.
     Transfer {
         /// Attachments copied out after the render pass.
@@ -361,6 +365,15 @@ impl FramePlan {
             clear: Some([0.0; 4]),
         });
         let mut passes = Vec::new();
+        if sky && scene.sky.as_ref().is_some_and(|s| s.sky_view.is_some()) {
+            // Marched for a grid of directions before the render pass;
+            // the atmosphere subpass reads it for pixels without a surface.
+            passes.push(PassDecl {
+                name: "sky view",
+                io: PassIo::Compute,
+                create: passes::sky_view::create,
+            });
+        }
         if deferred {
             for (name, format) in [
                 (ALBEDO, ALBEDO_FORMAT),
@@ -411,7 +424,7 @@ impl FramePlan {
             passes.push(PassDecl::subpass(
                 "atmosphere",
                 vec![HDR],
-                None,
+                Some((DEPTH, DepthUse::Test)),
                 vec![SURFACE, DEPTH],
                 passes::atmosphere::create,
             ));
@@ -517,6 +530,11 @@ impl FramePlan {
     /// The pass names, in order.
     pub fn pass_names(&self) -> Vec<&'static str> {
         self.passes.iter().map(|p| p.name).collect()
+    }
+
+    /// Whether a pass of this name is in the frame.
+    pub fn has_pass(&self, name: &str) -> bool {
+        self.passes.iter().any(|p| p.name == name)
     }
 
     /// Whether an attachment of this name exists.

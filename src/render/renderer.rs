@@ -11,6 +11,7 @@ use super::geometry::SceneGeometry;
 use super::passes::{Attachments, FrameResources, PassSetup, RecordPass};
 use super::plan::{attachment, FramePlan, PassIo};
 use super::scene_resources::SceneResources;
+use super::sky_resources::SkyResources;
 use super::RenderError;
 use crate::scene::{HdrFormat, Scene, ToneMap};
 use crate::vk::{AttachmentSpec, AttachmentStart, Context, GraphRenderPass, SubpassSpec};
@@ -41,6 +42,7 @@ pub struct Renderer {
     frame: TimedFrame,
     passes: Vec<Box<dyn RecordPass>>,
     _scene_resources: Option<SceneResources>,
+    _sky_resources: Option<SkyResources>,
     _render_pass: Option<GraphRenderPass>,
     plan: FramePlan,
     ctx: Arc<Context>,
@@ -89,12 +91,19 @@ impl Renderer {
         } else {
             None
         };
+        let sky_resources = match &scene.sky {
+            Some(sky) if plan.has_pass("atmosphere") => {
+                Some(SkyResources::new(ctx, sky, &scene.camera, &plan)?)
+            }
+            _ => None,
+        };
         let frame_resources = FrameResources {
             attachments: Attachments {
                 names: plan.attachments.iter().map(|a| a.name).collect(),
                 images: render_pass.as_ref().map_or(&[], |p| p.images.as_slice()),
             },
             scene: scene_resources.as_ref(),
+            sky: sky_resources.as_ref(),
         };
 
         // Create every pass, numbering the subpasses in plan order.
@@ -147,6 +156,7 @@ impl Renderer {
             frame,
             passes,
             _scene_resources: scene_resources,
+            _sky_resources: sky_resources,
             _render_pass: render_pass,
             plan,
             ctx: ctx.clone(),
@@ -264,11 +274,11 @@ fn build_render_pass(
     };
     let loaded = transfers(true, |io| match io {
         PassIo::Transfer { writes, .. } => writes,
-        PassIo::Subpass { .. } => &[],
+        PassIo::Subpass { .. } | PassIo::Compute => &[],
     });
     let read_after = transfers(false, |io| match io {
         PassIo::Transfer { reads, .. } => reads,
-        PassIo::Subpass { .. } => &[],
+        PassIo::Subpass { .. } | PassIo::Compute => &[],
     });
     let specs: Vec<AttachmentSpec> = plan
         .attachments

@@ -23,6 +23,25 @@ pub const DEFAULT_TABLE_SIZE: (u32, u32) = (256, 64);
 /// Largest accepted table side: 4096² texels of four f32 are 256 MiB.
 pub const MAX_TABLE_SIDE: u32 = 4096;
 
+/// Default sky-view table size (azimuth × nadir-angle directions).
+pub const DEFAULT_SKY_VIEW: Option<(u32, u32)> = Some((128, 128));
+/// Largest accepted sky-view table side.
+pub const MAX_SKY_VIEW_SIDE: u32 = 2048;
+
+/// Checks a sky-view table size: at least two columns, and an even number
+/// of at least four rows (two per half, so each half interpolates).
+pub fn check_sky_view(w: u32, h: u32) -> Result<(), String> {
+    if !(2..=MAX_SKY_VIEW_SIDE).contains(&w)
+        || !(4..=MAX_SKY_VIEW_SIDE).contains(&h)
+        || !h.is_multiple_of(2)
+    {
+        return Err(format!(
+            "width must be 2..={MAX_SKY_VIEW_SIDE} and height an even 4..={MAX_SKY_VIEW_SIDE}, got [{w}, {h}]"
+        ));
+    }
+    Ok(())
+}
+
 /// The sun and the atmosphere around a planet.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sky {
@@ -34,6 +53,10 @@ pub struct Sky {
     pub table_size: (u32, u32),
     pub table_mapping: TableMapping,
     pub table_filter: TableFilter,
+    /// Directions of the sky-view table (azimuth × nadir angle) that
+    /// pixels showing sky or ground read instead of marching; `None`
+    /// marches every pixel.
+    pub sky_view: Option<(u32, u32)>,
 }
 
 /// How (altitude, direction) maps to the optical-depth table
@@ -142,6 +165,15 @@ pub(super) struct AtmosphereFile {
     od_table_size: Option<[u32; 2]>,
     od_table_mapping: Option<TableMapping>,
     od_filter: Option<TableFilter>,
+    sky_view: Option<SkyViewField>,
+}
+
+/// `atmosphere.sky_view`: `[width, height]` or `"off"`.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum SkyViewField {
+    Size([u32; 2]),
+    Word(String),
 }
 
 fn ones() -> [f64; 3] {
@@ -388,7 +420,22 @@ pub(super) fn check(
             ),
         ));
     }
+    let sky_view = match atmosphere.sky_view {
+        None => DEFAULT_SKY_VIEW,
+        Some(SkyViewField::Word(w)) if w == "off" => None,
+        Some(SkyViewField::Word(w)) => {
+            return Err(invalid(
+                "atmosphere.sky_view",
+                format!("expected [width, height] or \"off\", got \"{w}\""),
+            ))
+        }
+        Some(SkyViewField::Size([w, h])) => {
+            check_sky_view(w, h).map_err(|e| invalid("atmosphere.sky_view", e))?;
+            Some((w, h))
+        }
+    };
     Ok(Some(Sky {
+        sky_view,
         table_size,
         table_mapping: atmosphere.od_table_mapping.unwrap_or(TableMapping::Horizon),
         table_filter: atmosphere.od_filter.unwrap_or(TableFilter::Manual),
