@@ -35,11 +35,12 @@ layout(std140, set = 0, binding = 0) uniform Sky {
 } sky;
 
 // The optical-depth table, one RGBA32F texel per (direction, altitude),
-// read with texelFetch (the sampler is never used to filter it).
+// read with texelFetch, or filtered by the sampler (TABLE_FILTER 2).
 layout(set = 0, binding = 1) uniform sampler2D od_table;
 
 // The table's mapping (0: horizon, Bruneton-style; 1: the seed's linear
-// altitude × linear cosine) and filter (0: manual bilinear; 1: nearest).
+// altitude × linear cosine) and filter (0: manual bilinear; 1: nearest;
+// 2: the sampler's bilinear filter).
 layout(constant_id = 0) const int TABLE_MAPPING = 0;
 layout(constant_id = 1) const int TABLE_FILTER = 0;
 
@@ -98,6 +99,9 @@ vec3 table_densities(float h, float mu) {
     vec3 v;
     if (TABLE_FILTER == 1) {
         v = texelFetch(od_table, ivec2(round(fx), round(fy)), 0).xyz;
+    } else if (TABLE_FILTER == 2) {
+        // Texel centres sit on x = 0 and x = 1 (see the table's mapping).
+        v = textureLod(od_table, (vec2(fx, fy) + 0.5) / vec2(w, hh), 0.0).xyz;
     } else {
         int x0 = min(int(floor(fx)), w - 2);
         int y0 = min(int(floor(fy)), hh - 2);

@@ -14,7 +14,7 @@
 use super::plan::FramePlan;
 use super::RenderError;
 use crate::atmosphere::OpticalDepthTable;
-use crate::scene::{Camera, Sky};
+use crate::scene::{Camera, Sky, TableFilter};
 use crate::vk::{
     Buffer, BufferUsage, CommandBuffer, Context, DescriptorBinding, DescriptorPool, DescriptorSet,
     DescriptorSetLayout, DescriptorType, Format, Image, ImageAspectFlags, ImageDesc,
@@ -248,9 +248,21 @@ impl SkyResources {
                 )
             })
             .transpose()?;
-        // Tables are read with texelFetch and filtered by hand: the
-        // sampler never filters.
-        let sampler = Sampler::clamped(ctx, SamplerFilter::Nearest)?;
+        // Tables are read with texelFetch and filtered by hand, except the
+        // optical-depth table with od_filter = hardware: then the sampler
+        // filters it (texel centres: the shader adds half a texel).
+        let filter = if sky.table_filter == TableFilter::Hardware {
+            if !crate::vk::supports_linear_filter(ctx, TABLE_FORMAT) {
+                return Err(RenderError::Frame(format!(
+                    "atmosphere.od_filter = \"hardware\": this device cannot filter {TABLE_FORMAT:?} \
+                     images linearly; use \"manual\""
+                )));
+            }
+            SamplerFilter::Bilinear
+        } else {
+            SamplerFilter::Nearest
+        };
+        let sampler = Sampler::clamped(ctx, filter)?;
         let both = ShaderStageFlags::FRAGMENT | ShaderStageFlags::COMPUTE;
         let mut bindings = vec![
             DescriptorBinding {

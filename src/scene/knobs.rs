@@ -342,12 +342,13 @@ pub const KNOBS: &[Knob] = &[
     Knob {
         name: "od_filter",
         best: Best::Fixed("manual"),
-        values: "manual | nearest: how the atmosphere pass reads the optical-depth table",
+        values: "manual | nearest | hardware: how the atmosphere pass reads the optical-depth table",
         apply: |s, v| {
             sky_mut(s)?.table_filter = match v {
                 "manual" => TableFilter::Manual,
                 "nearest" => TableFilter::Nearest,
-                _ => return Err("expected manual or nearest".into()),
+                "hardware" => TableFilter::Hardware,
+                _ => return Err("expected manual, nearest or hardware".into()),
             };
             Ok(())
         },
@@ -355,6 +356,7 @@ pub const KNOBS: &[Knob] = &[
             Some(sky) => match sky.table_filter {
                 TableFilter::Manual => "manual",
                 TableFilter::Nearest => "nearest",
+                TableFilter::Hardware => "hardware",
             }
             .into(),
             None => "-".into(),

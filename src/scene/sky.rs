@@ -24,7 +24,7 @@ pub const DEFAULT_TABLE_SIZE: (u32, u32) = (256, 64);
 pub const MAX_TABLE_SIDE: u32 = 4096;
 
 /// Default sky-view table size (azimuth × nadir-angle directions).
-pub const DEFAULT_SKY_VIEW: Option<(u32, u32)> = Some((128, 128));
+pub const DEFAULT_SKY_VIEW: Option<(u32, u32)> = Some((128, 256));
 /// Largest accepted sky-view table side.
 pub const MAX_SKY_VIEW_SIDE: u32 = 2048;
 
@@ -78,6 +78,9 @@ pub enum TableFilter {
     Manual,
     /// The nearest texel.
     Nearest,
+    /// The sampler's linear filter (needs SAMPLED_IMAGE_FILTER_LINEAR for
+    /// RGBA32F; its weights' precision is the device's).
+    Hardware,
 }
 
 /// The sun: parallel light from `direction`.

@@ -41,6 +41,7 @@ pub(super) fn table_constants(sky: &crate::scene::Sky) -> [(u32, u32); 2] {
     let filter = match sky.table_filter {
         TableFilter::Manual => 0,
         TableFilter::Nearest => 1,
+        TableFilter::Hardware => 2,
     };
     [(0, mapping), (1, filter)]
 }
