@@ -160,6 +160,56 @@ pub fn radiance(atmosphere: &Atmosphere, sun: &Sun, origin: DVec3, direction: DV
     let Some((start, end, ground)) = atmosphere_segment(atmosphere, origin, direction) else {
         return DVec3::ZERO;
     };
+    let (mut radiance, view) = scattering(atmosphere, sun, origin, direction, start, end);
+    if ground {
+        let p = origin + end * direction;
+        let normal = p.normalize();
+        let cos = normal.dot(sun.direction);
+        if cos > 0.0 {
+            let to_sun =
+                densities_to_top(atmosphere, p * (1.0 + 1e-12), sun.direction).unwrap_or_default();
+            radiance += atmosphere.ground_albedo / std::f64::consts::PI
+                * cos
+                * sun.irradiance
+                * atmosphere.transmittance(to_sun)
+                * view;
+        }
+    }
+    radiance
+}
+
+/// Aerial perspective in front of a surface `distance` along the ray from
+/// `origin` (relative to the planet centre; `direction` unit): the
+/// single-scattered radiance in-scattered between the two, and the
+/// transmittance of that path, so the surface's radiance L reaches the
+/// viewer as L·transmittance + in-scattered. Only the stretch inside the
+/// atmosphere counts; a surface in front of it gets (0, 1).
+pub fn aerial_perspective(
+    atmosphere: &Atmosphere,
+    sun: &Sun,
+    origin: DVec3,
+    direction: DVec3,
+    distance: f64,
+) -> (DVec3, DVec3) {
+    match atmosphere_segment(atmosphere, origin, direction) {
+        Some((start, end, _)) if distance > start => {
+            scattering(atmosphere, sun, origin, direction, start, end.min(distance))
+        }
+        _ => (DVec3::ZERO, DVec3::ONE),
+    }
+}
+
+/// Single scattering along `origin + t·direction` for t in [start, end]
+/// (inside the atmosphere): the in-scattered radiance reaching the point at
+/// `start`, and the transmittance from `start` to `end`.
+fn scattering(
+    atmosphere: &Atmosphere,
+    sun: &Sun,
+    origin: DVec3,
+    direction: DVec3,
+    start: f64,
+    end: f64,
+) -> (DVec3, DVec3) {
     let mu = direction.dot(sun.direction);
     let phase_r = rayleigh_phase(mu);
     let phase_m = cornette_shanks_phase(mu, atmosphere.mie_g);
@@ -177,21 +227,43 @@ pub fn radiance(atmosphere: &Atmosphere, sun: &Sun, origin: DVec3, direction: DV
         (scattering * transmittance * sun.irradiance).to_array()
     };
     let [r, g, b] = adaptive(&mut { integrand }, start, end, REL_TOL * 10.0);
-    let mut radiance = DVec3::new(r, g, b);
-    if ground {
-        let p = origin + end * direction;
-        let normal = p.normalize();
-        let cos = normal.dot(sun.direction);
-        if cos > 0.0 {
-            let to_sun =
-                densities_to_top(atmosphere, p * (1.0 + 1e-12), sun.direction).unwrap_or_default();
-            let view = densities_between(atmosphere, entry, p);
-            radiance += atmosphere.ground_albedo / std::f64::consts::PI
-                * cos
-                * sun.irradiance
-                * atmosphere.transmittance(to_sun)
-                * atmosphere.transmittance(view);
-        }
+    let view = atmosphere.transmittance(densities_between(
+        atmosphere,
+        entry,
+        origin + end * direction,
+    ));
+    (DVec3::new(r, g, b), view)
+}
+
+/// Transmittance per channel of sunlight reaching `point` (relative to the
+/// planet centre) from the sun along `sun_direction` (unit): through the
+/// atmosphere to its top, zero when the planet is in the way (the point
+/// sun's hard shadow, as everywhere in this model), one when the ray never
+/// enters the atmosphere. Works inside the atmosphere and from space. A
+/// point below the ground is taken at the ground straight above it: a
+/// surface half-buried in the planet is lit as if it stood on it.
+pub fn sun_transmittance(atmosphere: &Atmosphere, point: DVec3, sun_direction: DVec3) -> DVec3 {
+    let r = point.length();
+    let p = if r < atmosphere.bottom_radius && r > 0.0 {
+        point * (atmosphere.bottom_radius / r)
+    } else {
+        point
+    };
+    if hits_ground(atmosphere, p, sun_direction) {
+        return DVec3::ZERO;
     }
-    radiance
+    if p.length() <= atmosphere.top_radius {
+        // From inside only the top sphere's exit matters (the ground was
+        // tested above); no ground root near t = 0 to misjudge at r = R.
+        return densities_to_top(atmosphere, p, sun_direction)
+            .map_or(DVec3::ZERO, |d| atmosphere.transmittance(d));
+    }
+    match ray_sphere(p, sun_direction, atmosphere.top_radius) {
+        Some((entry, exit)) if exit > 0.0 => atmosphere.transmittance(densities_between(
+            atmosphere,
+            p + entry.max(0.0) * sun_direction,
+            p + exit * sun_direction,
+        )),
+        _ => DVec3::ONE,
+    }
 }

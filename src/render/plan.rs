@@ -70,6 +70,13 @@ pub struct Draw {
     /// Indices into `Scene::lights` evaluated while drawing the object
     /// (empty for surfaces lit later by the deferred lighting pass).
     pub lights: Vec<usize>,
+    /// With `[sun]` and `[atmosphere]`: the sun's colour on this object
+    /// (irradiance times the transmittance to the top of the atmosphere at
+    /// its bounding sphere's centre, [`crate::atmosphere::sun_light_at`]),
+    /// evaluated after `lights` while drawing it, also for surfaces lit
+    /// later: one directional light per object, it gains nothing from tile
+    /// culling, and the G-buffer has no room for a per-object colour.
+    pub sun: Option<[f32; 3]>,
 }
 
 /// Where a normal map comes from: a normal-map file, or a height map
@@ -254,6 +261,17 @@ impl FramePlan {
                 let (centre, radius) = geometry.bounds[i];
                 scene.lights_reaching_sphere(centre, radius)
             };
+            let sun = match &scene.sky {
+                Some(sky) if debug == 0 => {
+                    let centre = geometry.bounds[i].0.as_dvec3();
+                    Some(
+                        crate::atmosphere::sun_light_at(sky, centre)
+                            .as_vec3()
+                            .to_array(),
+                    )
+                }
+                _ => None,
+            };
             let draw = Draw {
                 object: i,
                 pipeline: PipelineKey {
@@ -261,12 +279,13 @@ impl FramePlan {
                     textured: texture.is_some(),
                     normal_mapped: normal_map.is_some(),
                     blended,
-                    lights: lights.len() as u32,
+                    lights: (lights.len() + usize::from(sun.is_some())) as u32,
                     debug,
                 },
                 texture,
                 normal_map,
                 lights,
+                sun,
             };
             if blended {
                 transparent.push(draw);

@@ -341,6 +341,19 @@ impl ReferenceScene {
                         color: color.as_dvec3(),
                     },
                 })
+                .chain(scene.sky.as_ref().map(|sky| {
+                    // The sun, last, with the colour the GPU gets: the same
+                    // f64 function at the same bounding-sphere centre.
+                    let centre = scene
+                        .object_bounds(index)
+                        .map_or(DVec3::ZERO, |(c, _)| c.as_dvec3());
+                    ReferenceLight::Directional {
+                        to_light: sky.sun.direction,
+                        color: crate::atmosphere::sun_light_at(sky, centre)
+                            .as_vec3()
+                            .as_dvec3(),
+                    }
+                }))
                 .collect();
             objects.push(ReferenceObject {
                 surface,
