@@ -8,8 +8,11 @@
 //! only when seen directly.
 //!
 //! [`reference`](mod@reference) integrates the model adaptively (the oracle of the tests);
-//! [`table`] bakes the optical-depth table the GPU pass samples.
+//! [`table`] bakes the optical-depth table the GPU pass samples;
+//! [`coefficients`] derives scattering coefficients from physical
+//! quantities (the seed's optional Rayleigh and Mie formulas).
 
+pub mod coefficients;
 pub mod reference;
 pub mod table;
 
