@@ -10,7 +10,7 @@
 mod common;
 
 use aerial::atmosphere::{reference, sun_light_at};
-use aerial::render::Pixels;
+use aerial::render::{render_reference, Pixels};
 use aerial::scene::Scene;
 use glam::{DMat4, DQuat, DVec3, DVec4};
 
@@ -111,24 +111,30 @@ fn check_panel(label: &str, sun: [f64; 3], lighting: &str) -> DVec3 {
         assert!(run.passes.contains(&"lighting"), "{:?}", run.passes);
     }
     let hdr = run.hdr.unwrap();
+    // The CPU reference renderer draws the same thing in f64.
+    let cpu = render_reference(&scene).unwrap();
     let mut worst = 0.0f64;
     for (x, y) in PROBES {
         let want = expected(&scene, normal, x, y);
-        let got = hdr_pixel(&hdr, x, y);
-        for c in 0..3 {
-            // Relative to the channel itself where it is lit; the night
-            // panel holds only the faint in-scattered light of 3 m of air,
-            // compared against the brightest channel.
-            let scale = want[c].max(want.max_element() * 1e-3).max(1e-9);
-            let e = (got[c] - want[c]).abs() / scale;
-            worst = worst.max(e);
-            // f32 shading of an f64 colour; the object's one transmittance
-            // (at its centre) against the exact one at each pixel's point
-            // on the 1 m panel: measured at most 3e-4 (blue, sunset).
-            assert!(
+        for (got, renderer) in [
+            (hdr_pixel(&hdr, x, y), "GPU"),
+            (hdr_pixel(&cpu, x, y), "CPU"),
+        ] {
+            for c in 0..3 {
+                // Relative to the channel itself where it is lit; the night
+                // panel holds only the faint in-scattered light of 3 m of air,
+                // compared against the brightest channel.
+                let scale = want[c].max(want.max_element() * 1e-3).max(1e-9);
+                let e = (got[c] - want[c]).abs() / scale;
+                worst = worst.max(e);
+                // f32 shading of an f64 colour; the object's one transmittance
+                // (at its centre) against the exact one at each pixel's point
+                // on the 1 m panel: measured at most 3e-4 (blue, sunset).
+                assert!(
                 e <= 2e-3,
-                "{label} ({lighting}), pixel ({x}, {y}) channel {c}: {got} against {want}"
+                "{label} ({lighting}, {renderer}), pixel ({x}, {y}) channel {c}: {got} against {want}"
             );
+            }
         }
     }
     println!("{label} ({lighting}): worst relative error {worst:.2e}");
@@ -199,18 +205,19 @@ fn sun_light_varies_little_across_a_small_object() {
     }
 }
 
-/// The shipped scene with objects: every sphere lit warm by the low sun on
-/// its sunward side, and the far ones faded towards the sky's colour.
+/// The shipped scene with objects, against the CPU reference renderer
+/// (analytic spheres, the sun's light and the air from the f64 reference):
+/// every sphere lit warm by the low sun, and the image within the sky's
+/// error budget except where tessellated and exact silhouettes cover
+/// different pixels.
 #[test]
-fn earth_objects_shows_sunlit_objects_in_aerial_perspective() {
+fn earth_objects_matches_the_cpu_reference() {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/earth_objects.toml");
     let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
-    scene.set_output_size(Some(160), Some(90)).unwrap();
+    scene.set_output_size(Some(48), Some(27)).unwrap();
     let sky = scene.sky.clone().unwrap();
-    let run = common::render(&scene, true);
-    let hdr = run.hdr.unwrap();
-    // Each sphere's sun colour is warm (red > green > blue).
+    // Each sphere's sun colour is warm (red > green > blue), not black.
     for i in 0..scene.objects.len() {
         let (centre, _) = scene.object_bounds(i).unwrap();
         let sun = sun_light_at(&sky, centre.as_dvec3());
@@ -220,6 +227,100 @@ fn earth_objects_shows_sunlit_objects_in_aerial_perspective() {
             scene.objects[i].name
         );
     }
+    let hdr = common::render(&scene, true).hdr.unwrap();
+    let started = std::time::Instant::now();
+    let cpu = render_reference(&scene).unwrap();
+    println!(
+        "CPU reference 48x27: {:.2} s",
+        started.elapsed().as_secs_f64()
+    );
+    let mut errors: Vec<f64> = hdr
+        .data
+        .chunks_exact(4)
+        .zip(cpu.data.chunks_exact(4))
+        .map(|(g, c)| {
+            let scale = c[..3].iter().fold(1e-6f32, |m, v| m.max(*v));
+            (0..3)
+                .map(|i| f64::from((g[i] - c[i]).abs() / scale))
+                .fold(0.0, f64::max)
+        })
+        .collect();
     assert!(hdr.data.iter().all(|v| v.is_finite() && *v >= 0.0));
-    let _ = hdr;
+    errors.sort_by(f64::total_cmp);
+    let at = |q: f64| errors[((errors.len() - 1) as f64 * q) as usize];
+    println!(
+        "earth_objects against the CPU reference: median {:.2e}, 95th percentile {:.2e}, max {:.2e}",
+        at(0.5),
+        at(0.95),
+        at(1.0)
+    );
+    assert!(at(0.5) <= 1e-3, "median {:e}", at(0.5));
+    assert!(at(0.95) <= 1e-2, "95th percentile {:e}", at(0.95));
+}
+
+/// The CPU reference renderer integrates at [`reference::IMAGE`] precision
+/// (16 initial panels, 1e-6), not the tests' [`reference::PRECISE`] (64
+/// panels, 1e-7): on the views that stress the quadrature (along the
+/// ground, grazing the horizon at sunset, the limb from orbit, the ground
+/// from 1e8 m, a 100 m Mie scale height) the two agree within 1e-5 of the
+/// brightest channel.
+#[test]
+fn image_precision_agrees_with_the_oracle() {
+    let (scene, _) = panel_scene(SUNSET, "forward");
+    let sky = scene.sky.unwrap();
+    let r = sky.atmosphere.bottom_radius;
+    let mut thin_mie = sky.atmosphere.clone();
+    thin_mie.mie_scale_height = 100.0;
+    let low_sun = DVec3::new(-1.0, 0.0175, 0.0).normalize();
+    let high_sun = DVec3::new(0.3, 0.866, 0.4).normalize();
+    let views = [
+        (
+            "horizon at sunset",
+            &sky.atmosphere,
+            low_sun,
+            2.0,
+            DVec3::new(-1.0, 0.001, 0.0),
+        ),
+        (
+            "away from the low sun",
+            &sky.atmosphere,
+            low_sun,
+            2.0,
+            DVec3::new(1.0, 0.05, 0.3),
+        ),
+        ("zenith at noon", &sky.atmosphere, high_sun, 2.0, DVec3::Y),
+        (
+            "down to the ground",
+            &sky.atmosphere,
+            high_sun,
+            10_000.0,
+            DVec3::new(0.0, -0.5, -1.0),
+        ),
+        (
+            "limb from 400 km",
+            &sky.atmosphere,
+            high_sun,
+            400_000.0,
+            DVec3::new(0.0, -0.3375, -1.0),
+        ),
+        (
+            "Mie 100 m, horizon",
+            &thin_mie,
+            low_sun,
+            2.0,
+            DVec3::new(-1.0, 0.01, 0.2),
+        ),
+    ];
+    for (label, atmosphere, sun_direction, altitude, direction) in views {
+        let mut sun = sky.sun.clone();
+        sun.direction = sun_direction;
+        let origin = DVec3::new(0.0, r + altitude, 0.0);
+        let d = direction.normalize();
+        let exact = reference::radiance(atmosphere, &sun, origin, d);
+        let image = reference::radiance_with(atmosphere, &sun, origin, d, reference::IMAGE);
+        let e = (image - exact).abs().max_element() / exact.max_element();
+        println!("{label}: {exact} (image precision off by {e:.1e})");
+        assert!(exact.max_element() > 0.0, "{label}: black");
+        assert!(e <= 1e-5, "{label}: {image} against {exact}");
+    }
 }

@@ -20,6 +20,30 @@ use glam::DVec3;
 pub const REL_TOL: f64 = 1e-7;
 /// Panels of the initial grid of every integral.
 pub const INITIAL_PANELS: usize = 64;
+/// How finely an integral starts and how far it refines: relative
+/// tolerance (of every nested integral; the radiance integral gets ten
+/// times it) and initial panels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Precision {
+    pub rel_tol: f64,
+    pub panels: usize,
+}
+
+/// The oracle of the tests: [`REL_TOL`] on [`INITIAL_PANELS`] panels.
+pub const PRECISE: Precision = Precision {
+    rel_tol: REL_TOL,
+    panels: INITIAL_PANELS,
+};
+
+/// For whole images (the CPU reference renderer): 16 initial panels and a
+/// 1e-6 tolerance, about 15 times cheaper than [`PRECISE`] (the nested
+/// integrals cost panels² evaluations a pixel); its radiance is within
+/// 1e-5 of [`PRECISE`]'s on the views tested in `tests.rs`.
+pub const IMAGE: Precision = Precision {
+    rel_tol: 1e-6,
+    panels: 16,
+};
+
 /// Deepest bisection.
 pub const MAX_DEPTH: u32 = 24;
 
@@ -29,8 +53,9 @@ fn adaptive<const N: usize>(
     f: &mut dyn FnMut(f64) -> [f64; N],
     a: f64,
     b: f64,
-    rel: f64,
+    precision: Precision,
 ) -> [f64; N] {
+    let (rel, panels) = (precision.rel_tol, precision.panels.max(1));
     fn simpson<const N: usize>(fa: &[f64; N], fm: &[f64; N], fb: &[f64; N], h: f64) -> [f64; N] {
         std::array::from_fn(|i| h / 6.0 * (fa[i] + 4.0 * fm[i] + fb[i]))
     }
@@ -65,23 +90,20 @@ fn adaptive<const N: usize>(
     if b <= a {
         return [0.0; N];
     }
-    let h = (b - a) / INITIAL_PANELS as f64;
-    let points: Vec<f64> = (0..=2 * INITIAL_PANELS)
-        .map(|i| a + 0.5 * h * i as f64)
-        .collect();
+    let h = (b - a) / panels as f64;
+    let points: Vec<f64> = (0..=2 * panels).map(|i| a + 0.5 * h * i as f64).collect();
     let values: Vec<[f64; N]> = points.iter().map(|&t| f(t)).collect();
     // The coarse pass sets the absolute tolerance from the integral's size.
     let mut coarse = [0.0; N];
-    for k in 0..INITIAL_PANELS {
+    for k in 0..panels {
         let s = simpson(&values[2 * k], &values[2 * k + 1], &values[2 * k + 2], h);
         for i in 0..N {
             coarse[i] += s[i].abs();
         }
     }
-    let tol: [f64; N] =
-        std::array::from_fn(|i| (coarse[i] * rel / INITIAL_PANELS as f64).max(1e-300));
+    let tol: [f64; N] = std::array::from_fn(|i| (coarse[i] * rel / panels as f64).max(1e-300));
     let mut total = [0.0; N];
-    for k in 0..INITIAL_PANELS {
+    for k in 0..panels {
         let (fa, fm, fb) = (values[2 * k], values[2 * k + 1], values[2 * k + 2]);
         let whole = simpson(&fa, &fm, &fb, h);
         let (a0, b0) = (points[2 * k], points[2 * k + 2]);
@@ -96,6 +118,16 @@ fn adaptive<const N: usize>(
 /// Density integrals (metres) along the segment from `a` to `b`, both
 /// relative to the planet centre.
 pub fn densities_between(atmosphere: &Atmosphere, a: DVec3, b: DVec3) -> Densities {
+    densities_between_with(atmosphere, a, b, PRECISE)
+}
+
+/// [`densities_between`] at `precision`.
+pub fn densities_between_with(
+    atmosphere: &Atmosphere,
+    a: DVec3,
+    b: DVec3,
+    precision: Precision,
+) -> Densities {
     let length = a.distance(b);
     if length == 0.0 {
         return Densities::default();
@@ -108,7 +140,7 @@ pub fn densities_between(atmosphere: &Atmosphere, a: DVec3, b: DVec3) -> Densiti
         },
         0.0,
         length,
-        REL_TOL,
+        precision,
     );
     Densities {
         rayleigh,
@@ -121,14 +153,25 @@ pub fn densities_between(atmosphere: &Atmosphere, a: DVec3, b: DVec3) -> Densiti
 /// atmosphere) along `direction` to the top of the atmosphere, or `None`
 /// when the ray hits the ground first.
 pub fn densities_to_top(atmosphere: &Atmosphere, p: DVec3, direction: DVec3) -> Option<Densities> {
+    densities_to_top_with(atmosphere, p, direction, PRECISE)
+}
+
+/// [`densities_to_top`] at `precision`.
+pub fn densities_to_top_with(
+    atmosphere: &Atmosphere,
+    p: DVec3,
+    direction: DVec3,
+    precision: Precision,
+) -> Option<Densities> {
     if hits_ground(atmosphere, p, direction) {
         return None;
     }
     let (_, exit) = ray_sphere(p, direction, atmosphere.top_radius)?;
-    Some(densities_between(
+    Some(densities_between_with(
         atmosphere,
         p,
         p + exit.max(0.0) * direction,
+        precision,
     ))
 }
 
@@ -157,17 +200,30 @@ pub fn atmosphere_segment(
 /// `ground_albedo`/π, lit by the transmitted sun only). The sun disc is not
 /// included.
 pub fn radiance(atmosphere: &Atmosphere, sun: &Sun, origin: DVec3, direction: DVec3) -> DVec3 {
+    radiance_with(atmosphere, sun, origin, direction, PRECISE)
+}
+
+/// [`radiance`] at `precision`.
+pub fn radiance_with(
+    atmosphere: &Atmosphere,
+    sun: &Sun,
+    origin: DVec3,
+    direction: DVec3,
+    precision: Precision,
+) -> DVec3 {
     let Some((start, end, ground)) = atmosphere_segment(atmosphere, origin, direction) else {
         return DVec3::ZERO;
     };
-    let (mut radiance, view) = scattering(atmosphere, sun, origin, direction, start, end);
+    let (mut radiance, view) =
+        scattering(atmosphere, sun, origin, direction, start, end, precision);
     if ground {
         let p = origin + end * direction;
         let normal = p.normalize();
         let cos = normal.dot(sun.direction);
         if cos > 0.0 {
             let to_sun =
-                densities_to_top(atmosphere, p * (1.0 + 1e-12), sun.direction).unwrap_or_default();
+                densities_to_top_with(atmosphere, p * (1.0 + 1e-12), sun.direction, precision)
+                    .unwrap_or_default();
             radiance += atmosphere.ground_albedo / std::f64::consts::PI
                 * cos
                 * sun.irradiance
@@ -191,10 +247,28 @@ pub fn aerial_perspective(
     direction: DVec3,
     distance: f64,
 ) -> (DVec3, DVec3) {
+    aerial_perspective_with(atmosphere, sun, origin, direction, distance, PRECISE)
+}
+
+/// [`aerial_perspective`] at `precision`.
+pub fn aerial_perspective_with(
+    atmosphere: &Atmosphere,
+    sun: &Sun,
+    origin: DVec3,
+    direction: DVec3,
+    distance: f64,
+    precision: Precision,
+) -> (DVec3, DVec3) {
     match atmosphere_segment(atmosphere, origin, direction) {
-        Some((start, end, _)) if distance > start => {
-            scattering(atmosphere, sun, origin, direction, start, end.min(distance))
-        }
+        Some((start, end, _)) if distance > start => scattering(
+            atmosphere,
+            sun,
+            origin,
+            direction,
+            start,
+            end.min(distance),
+            precision,
+        ),
         _ => (DVec3::ZERO, DVec3::ONE),
     }
 }
@@ -209,6 +283,7 @@ fn scattering(
     direction: DVec3,
     start: f64,
     end: f64,
+    precision: Precision,
 ) -> (DVec3, DVec3) {
     let mu = direction.dot(sun.direction);
     let phase_r = rayleigh_phase(mu);
@@ -216,21 +291,26 @@ fn scattering(
     let entry = origin + start * direction;
     let integrand = |t: f64| -> [f64; 3] {
         let p = origin + t * direction;
-        let Some(to_sun) = densities_to_top(atmosphere, p, sun.direction) else {
+        let Some(to_sun) = densities_to_top_with(atmosphere, p, sun.direction, precision) else {
             return [0.0; 3];
         };
-        let view = densities_between(atmosphere, entry, p);
+        let view = densities_between_with(atmosphere, entry, p, precision);
         let transmittance = atmosphere.transmittance(to_sun.plus(view));
         let d = atmosphere.densities(atmosphere.altitude(p));
         let scattering = atmosphere.rayleigh_scattering * (d.rayleigh * phase_r)
             + atmosphere.mie_scattering * (d.mie * phase_m);
         (scattering * transmittance * sun.irradiance).to_array()
     };
-    let [r, g, b] = adaptive(&mut { integrand }, start, end, REL_TOL * 10.0);
-    let view = atmosphere.transmittance(densities_between(
+    let outer = Precision {
+        rel_tol: precision.rel_tol * 10.0,
+        ..precision
+    };
+    let [r, g, b] = adaptive(&mut { integrand }, start, end, outer);
+    let view = atmosphere.transmittance(densities_between_with(
         atmosphere,
         entry,
         origin + end * direction,
+        precision,
     ));
     (DVec3::new(r, g, b), view)
 }
