@@ -8,6 +8,16 @@
 //! GPU. `aerial sweep --reference cpu` measures every combination against
 //! this image instead of against the best GPU setting.
 //!
+//! With `[atmosphere]` the sun is one more directional light on every
+//! object, with the GPU's per-object colour
+//! ([`crate::atmosphere::sun_light_at`]), and every pixel then goes through
+//! the air as the atmosphere pass draws it, but from the f64 reference
+//! ([`crate::atmosphere::reference`], at its image precision): the sky or
+//! the lit ground sphere where no object is hit, plus the attenuated sun
+//! disc; aerial perspective (transmittance and in-scattering over the
+//! distance to the surface) where one is. Rows are shared between the
+//! machine's cores.
+//!
 //! It lives in `render/` because it is a second renderer (scene in, linear
 //! RGBA out, like [`crate::app::RenderRun::hdr`]); `report/` only compares
 //! images and stays free of any way of making them.
