@@ -631,6 +631,30 @@ mod tests {
     }
 
     #[test]
+    fn with_a_sun_every_draw_carries_its_own_sun_light_forward_and_deferred() {
+        let (mut scene, plan) = load("earth_objects.toml");
+        let sky = scene.sky.clone().unwrap();
+        for d in plan.draws() {
+            let (centre, _) = scene.object_bounds(d.object).unwrap();
+            let want = crate::atmosphere::sun_light_at(&sky, centre.as_dvec3()).as_vec3();
+            assert_eq!(d.sun, Some(want.to_array()));
+            assert_eq!(d.pipeline.lights as usize, d.lights.len() + 1);
+        }
+        // Deferred: the scene's lights move to the lighting pass, the sun
+        // stays with the object.
+        scene.output.lighting = Lighting::Deferred;
+        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);
+        assert_eq!(plan.lighting, Lighting::Deferred);
+        assert!(plan
+            .opaque
+            .iter()
+            .all(|d| d.lights.is_empty() && d.sun.is_some() && d.pipeline.lights == 1));
+        // No sun, no extra light.
+        let (_, plan) = load("default.toml");
+        assert!(plan.draws().all(|d| d.sun.is_none()));
+    }
+
+    #[test]
     fn ldr_output_has_no_hdr_attachment_and_no_tone_map() {
         let (mut scene, _) = load("default.toml");
         scene.tone_map.operator = ToneMapOperator::None;
