@@ -4,8 +4,11 @@
 //! expected radiance at each probe pixel is computed here from the
 //! reference alone (`sun_transmittance` at the pixel's own surface point,
 //! not the object's centre, and `aerial_perspective` along the pixel's
-//! ray, which comes from the inverted view-projection in f64). Every
-//! render runs under validation.
+//! ray, which comes from the inverted view-projection in f64). Also: how
+//! much one sun colour per object costs across a sphere, the shipped
+//! `earth_objects` scene against the CPU reference renderer, and the CPU
+//! reference's image precision against the oracle's. Every render runs
+//! under validation.
 
 mod common;
 
