@@ -70,6 +70,13 @@ pub struct Draw {
     /// Indices into `Scene::lights` evaluated while drawing the object
     /// (empty for surfaces lit later by the deferred lighting pass).
     pub lights: Vec<usize>,
+    /// With `[sun]` and `[atmosphere]`: the sun's colour on this object
+    /// (irradiance times the transmittance to the top of the atmosphere at
+    /// its bounding sphere's centre, [`crate::atmosphere::sun_light_at`]),
+    /// evaluated after `lights` while drawing it, also for surfaces lit
+    /// later: one directional light per object, it gains nothing from tile
+    /// culling, and the G-buffer has no room for a per-object colour.
+    pub sun: Option<[f32; 3]>,
 }
 
 /// Where a normal map comes from: a normal-map file, or a height map
@@ -258,6 +265,17 @@ impl FramePlan {
                 let (centre, radius) = geometry.bounds[i];
                 scene.lights_reaching_sphere(centre, radius)
             };
+            let sun = match &scene.sky {
+                Some(sky) if debug == 0 => {
+                    let centre = geometry.bounds[i].0.as_dvec3();
+                    Some(
+                        crate::atmosphere::sun_light_at(sky, centre)
+                            .as_vec3()
+                            .to_array(),
+                    )
+                }
+                _ => None,
+            };
             let draw = Draw {
                 object: i,
                 pipeline: PipelineKey {
@@ -265,12 +283,13 @@ impl FramePlan {
                     textured: texture.is_some(),
                     normal_mapped: normal_map.is_some(),
                     blended,
-                    lights: lights.len() as u32,
+                    lights: (lights.len() + usize::from(sun.is_some())) as u32,
                     debug,
                 },
                 texture,
                 normal_map,
                 lights,
+                sun,
             };
             if blended {
                 transparent.push(draw);
@@ -627,6 +646,30 @@ mod tests {
             plan.draws().any(|d| d.lights.len() < scene.lights.len()),
             "no light was culled"
         );
+    }
+
+    #[test]
+    fn with_a_sun_every_draw_carries_its_own_sun_light_forward_and_deferred() {
+        let (mut scene, plan) = load("earth_objects.toml");
+        let sky = scene.sky.clone().unwrap();
+        for d in plan.draws() {
+            let (centre, _) = scene.object_bounds(d.object).unwrap();
+            let want = crate::atmosphere::sun_light_at(&sky, centre.as_dvec3()).as_vec3();
+            assert_eq!(d.sun, Some(want.to_array()));
+            assert_eq!(d.pipeline.lights as usize, d.lights.len() + 1);
+        }
+        // Deferred: the scene's lights move to the lighting pass, the sun
+        // stays with the object.
+        scene.output.lighting = Lighting::Deferred;
+        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);
+        assert_eq!(plan.lighting, Lighting::Deferred);
+        assert!(plan
+            .opaque
+            .iter()
+            .all(|d| d.lights.is_empty() && d.sun.is_some() && d.pipeline.lights == 1));
+        // No sun, no extra light.
+        let (_, plan) = load("default.toml");
+        assert!(plan.draws().all(|d| d.sun.is_none()));
     }
 
     #[test]

@@ -350,9 +350,15 @@ fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
     let normal = glam::Mat4::from_mat3(object.transform.normal_matrix());
     let lights: Vec<GpuLight> = draw
         .map(|d| {
+            let sun = scene.sky.as_ref().zip(d.sun).map(|(sky, color)| GpuLight {
+                position: sky.sun.direction.as_vec3().extend(0.0).to_array(),
+                color: [color[0], color[1], color[2], 0.0],
+                attenuation: [1.0, 0.0, 0.0, 0.0],
+            });
             d.lights
                 .iter()
                 .map(|&l| gpu_light(&scene.lights[l]))
+                .chain(sun)
                 .collect()
         })
         .unwrap_or_default();
