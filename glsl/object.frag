@@ -1,8 +1,10 @@
 #version 450
 // Shades object fragments. Forward: the lit colour into the colour target.
 // With GBUFFER (deferred lighting), Phong surfaces write their ambient term
-// to the colour target and their material and normal to the G-buffer, and
-// the lighting pass adds the lights; the other shading models are still
+// (plus the lights of their own block: only the sun of a scene with an
+// atmosphere, whose colour is per object) to the colour target and their
+// material and normal to the G-buffer, and the lighting pass adds the
+// scene's lights; the other shading models are still
 // shaded here and write a zero material, so the lighting pass adds nothing
 // to them.
 // With NORMAL_MAP, the shading normal comes from a tangent-space normal
@@ -118,9 +120,13 @@ void main() {
                : kd;
     out_color = vec4(value, 1.0);
 #else
+    vec3 v = normalize(frame.camera_position.xyz - in_world_position);
 #ifdef GBUFFER
     if (SHADING_MODEL == SHADING_PHONG) {
-        out_color = vec4(ka * frame.ambient.rgb, alpha);
+        // Ambient plus the lights in the object's own block: only the sun
+        // (a colour per object, from the atmosphere), if the scene has one;
+        // the lighting pass adds the scene's lights.
+        out_color = vec4(blinn_phong(in_world_position, n, v, kd, ka), alpha);
         out_albedo = vec4(kd, 1.0);
         out_normal = octahedral_encode(n);
         out_material = object.ks;
@@ -130,7 +136,6 @@ void main() {
     out_normal = vec2(0.0);
     out_material = vec4(0.0);
 #endif
-    vec3 v = normalize(frame.camera_position.xyz - in_world_position);
     if (SHADING_MODEL == SHADING_TOON) {
         vec3 c = abs(dot(n, v)) < TOON_SILHOUETTE ? vec3(0.0) : toon(in_world_position, n, v, kd, ka);
         out_color = vec4(c, alpha);

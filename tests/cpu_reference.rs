@@ -132,3 +132,59 @@ fn sweep_error_against_the_cpu_reference_falls_with_tessellation() {
         "{rmse:?}"
     );
 }
+
+/// With `[atmosphere]` the CPU reference draws the sky from the f64
+/// atmosphere reference, so the error of the atmosphere pass against it
+/// falls with the march's sample count (against a reference without the
+/// sky it would stay at the sky's own level).
+#[test]
+fn sweep_error_against_the_cpu_reference_falls_with_atmosphere_samples() {
+    let out = std::env::temp_dir().join(format!("aerial-cpuref-sky-{}", std::process::id()));
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/earth_sunset.toml");
+    let status = common::aerial()
+        .arg("sweep")
+        .arg(&scene)
+        .args([
+            "--reference",
+            "cpu",
+            "--validate",
+            "--frames",
+            "1",
+            "--warmup",
+            "0",
+        ])
+        .args([
+            "--knob",
+            "size=32x18",
+            "--knob",
+            "atmosphere_samples=2,8,32",
+        ])
+        .arg("--out-dir")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    std::fs::remove_dir_all(&out).ok();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rmse: Vec<f64> = lines
+        .map(|l| {
+            l.split(',').collect::<Vec<_>>()[col("rmse")]
+                .parse()
+                .unwrap()
+        })
+        .collect();
+    assert_eq!(rmse.len(), 3);
+    // Second order in the sample count: each fourfold step should cut the
+    // error by far more than 4.
+    assert!(
+        rmse[0] > 4.0 * rmse[1] && rmse[1] > 4.0 * rmse[2] && rmse[2] > 0.0,
+        "{rmse:?}"
+    );
+}

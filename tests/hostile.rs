@@ -199,6 +199,42 @@ fn the_memory_budget_refuses_large_outputs_and_meshes_by_name() {
     assert_eq!(dir.entries(), ["out.png"]);
 }
 
+/// The seed's 4096² optical-depth table is 256 MiB, held twice while it is
+/// uploaded (the baked texels and the mapped buffer): refused by name
+/// under a budget below that, before the (minutes long) bake starts.
+#[test]
+fn the_memory_budget_refuses_the_seeds_table_by_name() {
+    let dir = TempDir::new("table");
+    let scene = dir.path("seed.toml");
+    std::fs::write(
+        &scene,
+        "[camera]\neye = [0.0, 2.0, 0.0]\nlook_at = [0.0, 2.0, -1.0]\n\
+         [sun]\ndirection = [0.0, 1.0, 0.0]\n\
+         [atmosphere]\nod_table_size = [4096, 4096]\nod_table_mapping = \"seed\"\n",
+    )
+    .unwrap();
+    let out = dir.path("out.png");
+    let started = std::time::Instant::now();
+    let refused = aerial(
+        &["render", s(&scene), "--out", s(&out)],
+        &[("AERIAL_MEMORY_BUDGET", "400M")],
+    );
+    assert_fails(
+        &refused,
+        2,
+        &[
+            "optical-depth table 4096x4096",
+            "512.0 MiB",
+            "memory budget",
+        ],
+    );
+    assert!(
+        started.elapsed().as_secs() < 60,
+        "refused only after baking"
+    );
+    assert_eq!(dir.entries(), ["seed.toml"]);
+}
+
 #[test]
 fn textures_beyond_the_device_limits_are_refused_with_the_limit() {
     let dir = TempDir::new("texlimit");

@@ -79,6 +79,7 @@ impl EmptyPass {
             0,
             shaders::CONSTANT_FRAG.base(),
             &[],
+            None,
         )?;
         let readback = Buffer::new(
             ctx,

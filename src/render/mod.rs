@@ -18,6 +18,7 @@ pub mod preflight;
 pub mod reference;
 mod renderer;
 mod scene_resources;
+pub mod sky_resources;
 pub mod tiles;
 
 pub use empty_pass::EmptyPass;

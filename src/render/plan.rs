@@ -70,6 +70,13 @@ pub struct Draw {
     /// Indices into `Scene::lights` evaluated while drawing the object
     /// (empty for surfaces lit later by the deferred lighting pass).
     pub lights: Vec<usize>,
+    /// With `[sun]` and `[atmosphere]`: the sun's colour on this object
+    /// (irradiance times the transmittance to the top of the atmosphere at
+    /// its bounding sphere's centre, [`crate::atmosphere::sun_light_at`]),
+    /// evaluated after `lights` while drawing it, also for surfaces lit
+    /// later: one directional light per object, it gains nothing from tile
+    /// culling, and the G-buffer has no room for a per-object colour.
+    pub sun: Option<[f32; 3]>,
 }
 
 /// Where a normal map comes from: a normal-map file, or a height map
@@ -121,6 +128,10 @@ pub enum PassIo {
         /// Input attachments, in `input_attachment_index` order.
         inputs: Vec<&'static str>,
     },
+    /// A compute dispatch outside the render pass, before it; it touches
+    /// no attachment (what it writes, later passes read from buffers it
+    /// shares with them).
+    Compute,
     /// Copies outside the render pass.
     Transfer {
         /// Attachments copied out after the render pass.
@@ -254,6 +265,17 @@ impl FramePlan {
                 let (centre, radius) = geometry.bounds[i];
                 scene.lights_reaching_sphere(centre, radius)
             };
+            let sun = match &scene.sky {
+                Some(sky) if debug == 0 => {
+                    let centre = geometry.bounds[i].0.as_dvec3();
+                    Some(
+                        crate::atmosphere::sun_light_at(sky, centre)
+                            .as_vec3()
+                            .to_array(),
+                    )
+                }
+                _ => None,
+            };
             let draw = Draw {
                 object: i,
                 pipeline: PipelineKey {
@@ -261,12 +283,13 @@ impl FramePlan {
                     textured: texture.is_some(),
                     normal_mapped: normal_map.is_some(),
                     blended,
-                    lights: lights.len() as u32,
+                    lights: (lights.len() + usize::from(sun.is_some())) as u32,
                     debug,
                 },
                 texture,
                 normal_map,
                 lights,
+                sun,
             };
             if blended {
                 transparent.push(draw);
@@ -361,6 +384,15 @@ impl FramePlan {
             clear: Some([0.0; 4]),
         });
         let mut passes = Vec::new();
+        if sky && scene.sky.as_ref().is_some_and(|s| s.sky_view.is_some()) {
+            // Marched for a grid of directions before the render pass;
+            // the atmosphere subpass reads it for pixels without a surface.
+            passes.push(PassDecl {
+                name: "sky view",
+                io: PassIo::Compute,
+                create: passes::sky_view::create,
+            });
+        }
         if deferred {
             for (name, format) in [
                 (ALBEDO, ALBEDO_FORMAT),
@@ -411,7 +443,7 @@ impl FramePlan {
             passes.push(PassDecl::subpass(
                 "atmosphere",
                 vec![HDR],
-                None,
+                Some((DEPTH, DepthUse::Test)),
                 vec![SURFACE, DEPTH],
                 passes::atmosphere::create,
             ));
@@ -519,6 +551,11 @@ impl FramePlan {
         self.passes.iter().map(|p| p.name).collect()
     }
 
+    /// Whether a pass of this name is in the frame.
+    pub fn has_pass(&self, name: &str) -> bool {
+        self.passes.iter().any(|p| p.name == name)
+    }
+
     /// Whether an attachment of this name exists.
     pub fn has_attachment(&self, name: &str) -> bool {
         self.attachments.iter().any(|a| a.name == name)
@@ -609,6 +646,30 @@ mod tests {
             plan.draws().any(|d| d.lights.len() < scene.lights.len()),
             "no light was culled"
         );
+    }
+
+    #[test]
+    fn with_a_sun_every_draw_carries_its_own_sun_light_forward_and_deferred() {
+        let (mut scene, plan) = load("earth_objects.toml");
+        let sky = scene.sky.clone().unwrap();
+        for d in plan.draws() {
+            let (centre, _) = scene.object_bounds(d.object).unwrap();
+            let want = crate::atmosphere::sun_light_at(&sky, centre.as_dvec3()).as_vec3();
+            assert_eq!(d.sun, Some(want.to_array()));
+            assert_eq!(d.pipeline.lights as usize, d.lights.len() + 1);
+        }
+        // Deferred: the scene's lights move to the lighting pass, the sun
+        // stays with the object.
+        scene.output.lighting = Lighting::Deferred;
+        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);
+        assert_eq!(plan.lighting, Lighting::Deferred);
+        assert!(plan
+            .opaque
+            .iter()
+            .all(|d| d.lights.is_empty() && d.sun.is_some() && d.pipeline.lights == 1));
+        // No sun, no extra light.
+        let (_, plan) = load("default.toml");
+        assert!(plan.draws().all(|d| d.sun.is_none()));
     }
 
     #[test]

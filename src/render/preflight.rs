@@ -153,7 +153,17 @@ pub fn scene_memory(
     }
     total = total.saturating_add(largest_transient);
     let (w, h) = (scene.output.width as u64, scene.output.height as u64);
-    let attachments = attachment_bytes(w, h, scene.output.hdr_format, keep_hdr);
+    let mut attachments = attachment_bytes(w, h, scene.output.hdr_format, keep_hdr);
+    if scene.sky.is_some() {
+        // The atmosphere pass reads the surfaces from a second HDR
+        // attachment, `surface`.
+        attachments += w
+            * h
+            * match scene.output.hdr_format {
+                HdrFormat::Rgba16F => 8,
+                HdrFormat::Rgba32F => 16,
+            };
+    }
     let size_what = format!("output size {w}x{h}");
     budget.check(&size_what, attachments)?;
     total = total.saturating_add(attachments);

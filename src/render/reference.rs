@@ -8,6 +8,16 @@
 //! GPU. `aerial sweep --reference cpu` measures every combination against
 //! this image instead of against the best GPU setting.
 //!
+//! With `[atmosphere]` the sun is one more directional light on every
+//! object, with the GPU's per-object colour
+//! ([`crate::atmosphere::sun_light_at`]), and every pixel then goes through
+//! the air as the atmosphere pass draws it, but from the f64 reference
+//! ([`crate::atmosphere::reference`], at its image precision): the sky or
+//! the lit ground sphere where no object is hit, plus the attenuated sun
+//! disc; aerial perspective (transmittance and in-scattering over the
+//! distance to the surface) where one is. Rows are shared between the
+//! machine's cores.
+//!
 //! It lives in `render/` because it is a second renderer (scene in, linear
 //! RGBA out, like [`crate::app::RenderRun::hdr`]); `report/` only compares
 //! images and stays free of any way of making them.
@@ -36,6 +46,7 @@
 use glam::{DMat3, DMat4, DQuat, DVec3};
 
 use super::Pixels;
+use crate::atmosphere::{reference as atmosphere_reference, Atmosphere, Sun};
 use crate::scene::{Light, Scene, ShadingModel, Shape, Transform, MAX_OUTPUT_SIZE};
 
 /// Why a scene has no CPU reference.
@@ -90,6 +101,10 @@ pub struct ReferenceScene {
     far: Option<f64>,
     ambient: DVec3,
     objects: Vec<ReferenceObject>,
+    /// With `[atmosphere]`: the sun and the atmosphere, only (the pass's
+    /// quality settings do not change the exact image, so sweeping them
+    /// reuses one reference).
+    sky: Option<(Sun, Atmosphere)>,
 }
 
 /// One object, ready for ray casting.
@@ -341,6 +356,19 @@ impl ReferenceScene {
                         color: color.as_dvec3(),
                     },
                 })
+                .chain(scene.sky.as_ref().map(|sky| {
+                    // The sun, last, with the colour the GPU gets: the same
+                    // f64 function at the same bounding-sphere centre.
+                    let centre = scene
+                        .object_bounds(index)
+                        .map_or(DVec3::ZERO, |(c, _)| c.as_dvec3());
+                    ReferenceLight::Directional {
+                        to_light: sky.sun.direction,
+                        color: crate::atmosphere::sun_light_at(sky, centre)
+                            .as_vec3()
+                            .as_dvec3(),
+                    }
+                }))
                 .collect();
             objects.push(ReferenceObject {
                 surface,
@@ -373,6 +401,10 @@ impl ReferenceScene {
             far: camera.far.map(f64::from),
             ambient: scene.ambient.as_dvec3(),
             objects,
+            sky: scene
+                .sky
+                .as_ref()
+                .map(|sky| (sky.sun.clone(), sky.atmosphere.clone())),
         })
     }
 
@@ -389,18 +421,31 @@ impl ReferenceScene {
         (self.right * sx + self.up * sy + self.forward).normalize()
     }
 
-    /// The whole image.
+    /// The whole image, rows split between the machine's cores (the
+    /// atmosphere's nested quadrature costs milliseconds a pixel).
     pub fn render(&self) -> Pixels<f32> {
-        let mut data = Vec::with_capacity(self.width as usize * self.height as usize * 4);
-        for y in 0..self.height {
-            for x in 0..self.width {
-                let pixel = match self.shade(self.ray(x, y)) {
-                    Some(c) => [c.x as f32, c.y as f32, c.z as f32, 1.0],
-                    None => [0.0; 4],
-                };
-                data.extend_from_slice(&pixel);
-            }
+        let (w, h) = (self.width as usize, self.height as usize);
+        let mut data = vec![0f32; w * h * 4];
+        let threads = std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .clamp(1, h.max(1));
+        // Interleaved rows: the sky's cost varies with the view direction,
+        // so each thread gets rows from the whole image.
+        let mut rows: Vec<Vec<(usize, &mut [f32])>> = (0..threads).map(|_| Vec::new()).collect();
+        for (y, row) in data.chunks_mut(w * 4).enumerate() {
+            rows[y % threads].push((y, row));
         }
+        std::thread::scope(|s| {
+            for part in rows {
+                s.spawn(move || {
+                    for (y, row) in part {
+                        for (x, pixel) in row.chunks_exact_mut(4).enumerate() {
+                            pixel.copy_from_slice(&self.pixel(x as u32, y as u32));
+                        }
+                    }
+                });
+            }
+        });
         Pixels {
             width: self.width,
             height: self.height,
@@ -408,12 +453,30 @@ impl ReferenceScene {
         }
     }
 
-    /// The radiance along the unit ray `dir` from the eye, or `None` when
-    /// it hits nothing.
-    fn shade(&self, dir: DVec3) -> Option<DVec3> {
+    /// RGBA of pixel (x, y): alpha 1 where a surface is hit and, with an
+    /// atmosphere, everywhere (the atmosphere pass writes every pixel).
+    fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
+        let dir = self.ray(x, y);
+        let surface = self.shade(dir);
+        let colour = match &self.sky {
+            None => surface.map(|(_, c)| c),
+            Some((sun, atmosphere)) => Some(air(sun, atmosphere, self.eye, dir, surface)),
+        };
+        match colour {
+            Some(c) => [c.x as f32, c.y as f32, c.z as f32, 1.0],
+            None => [0.0; 4],
+        }
+    }
+
+    /// The distance to and the radiance of the surface along the unit ray
+    /// `dir` from the eye, or `None` when it hits nothing.
+    fn shade(&self, dir: DVec3) -> Option<(f64, DVec3)> {
         let hit = self.trace(dir)?;
         let object = &self.objects[hit.object];
-        Some(object.blinn_phong(hit.point, hit.normal, -dir, self.ambient))
+        Some((
+            hit.t,
+            object.blinn_phong(hit.point, hit.normal, -dir, self.ambient),
+        ))
     }
 
     /// The nearest visible surface along the unit ray `dir` from the eye.
@@ -445,6 +508,63 @@ impl ReferenceScene {
             normal: (self.objects[object].normal_matrix * normal).normalize(),
         })
     }
+}
+
+/// What the atmosphere pass draws along the unit ray `dir` from `eye`
+/// (world space), from the f64 reference
+/// ([`crate::atmosphere::reference`]): a surface at distance t with
+/// radiance L is seen as L·T + in-scattered light over the t metres in
+/// front of it, unless the ground sphere is nearer; otherwise the sky or
+/// the lit ground, plus the sun's disc (attenuated) where the ray misses
+/// the ground.
+fn air(
+    sun: &Sun,
+    atmosphere: &Atmosphere,
+    eye: DVec3,
+    dir: DVec3,
+    surface: Option<(f64, DVec3)>,
+) -> DVec3 {
+    let origin = eye - atmosphere.center;
+    let segment = atmosphere_reference::atmosphere_segment(atmosphere, origin, dir);
+    let ground = match segment {
+        Some((_, end, true)) => Some(end),
+        _ => None,
+    };
+    if let Some((t, radiance)) = surface {
+        if ground.is_none_or(|g| t < g) {
+            let (inscattered, view) = atmosphere_reference::aerial_perspective_with(
+                atmosphere,
+                sun,
+                origin,
+                dir,
+                t,
+                atmosphere_reference::IMAGE,
+            );
+            return radiance * view + inscattered;
+        }
+    }
+    let mut colour = atmosphere_reference::radiance_with(
+        atmosphere,
+        sun,
+        origin,
+        dir,
+        atmosphere_reference::IMAGE,
+    );
+    if sun.disc && ground.is_none() && dir.dot(sun.direction) >= sun.angular_radius.cos() {
+        let view = match segment {
+            Some((start, end, _)) => {
+                atmosphere.transmittance(atmosphere_reference::densities_between(
+                    atmosphere,
+                    origin + start * dir,
+                    origin + end * dir,
+                ))
+            }
+            None => DVec3::ONE,
+        };
+        let disc = 1.0 / (std::f64::consts::PI * sun.angular_radius * sun.angular_radius);
+        colour += sun.irradiance * disc * view;
+    }
+    colour
 }
 
 impl ReferenceObject {

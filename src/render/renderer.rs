@@ -11,6 +11,7 @@ use super::geometry::SceneGeometry;
 use super::passes::{Attachments, FrameResources, PassSetup, RecordPass};
 use super::plan::{attachment, FramePlan, PassIo};
 use super::scene_resources::SceneResources;
+use super::sky_resources::SkyResources;
 use super::RenderError;
 use crate::scene::{HdrFormat, Scene, ToneMap};
 use crate::vk::{AttachmentSpec, AttachmentStart, Context, GraphRenderPass, Image, SubpassSpec};
@@ -56,6 +57,7 @@ pub struct Renderer {
     frame: TimedFrame,
     passes: Vec<Box<dyn RecordPass>>,
     scene_resources: Option<SceneResources>,
+    sky_resources: Option<SkyResources>,
     render_pass: Option<GraphRenderPass>,
     plan: FramePlan,
     /// The scene's meshes, kept so that a new view can be planned (and,
@@ -123,12 +125,19 @@ impl Renderer {
         } else {
             None
         };
+        let sky_resources = match &scene.sky {
+            Some(sky) if plan.has_pass("atmosphere") => {
+                Some(SkyResources::new(ctx, sky, &scene.camera, &plan)?)
+            }
+            _ => None,
+        };
         let frame_resources = FrameResources {
             attachments: Attachments {
                 names: plan.attachments.iter().map(|a| a.name).collect(),
                 images: render_pass.as_ref().map_or(&[], |p| p.images.as_slice()),
             },
             scene: scene_resources.as_ref(),
+            sky: sky_resources.as_ref(),
         };
 
         // Create every pass, numbering the subpasses in plan order.
@@ -158,6 +167,7 @@ impl Renderer {
             frame,
             passes,
             scene_resources,
+            sky_resources,
             render_pass,
             plan,
             geometry,
@@ -186,7 +196,10 @@ impl Renderer {
         let plan = FramePlan::new(scene, &geometry, self.keep_hdr);
         if same_resources(&self.plan, &plan) {
             if let Some(resources) = &mut self.scene_resources {
-                resources.set_view(scene, plan.width, plan.height);
+                resources.set_view(scene, &plan);
+            }
+            if let (Some(resources), Some(sky)) = (&mut self.sky_resources, &scene.sky) {
+                resources.set_view(sky, &scene.camera, &plan);
             }
             for pass in &mut self.passes {
                 pass.set_view(scene, &plan)?;
@@ -205,6 +218,7 @@ impl Renderer {
                             .map_or(&[], |p| p.images.as_slice()),
                     },
                     scene: self.scene_resources.as_ref(),
+                    sky: self.sky_resources.as_ref(),
                 };
                 let frame = record(
                     &self.ctx,
@@ -334,13 +348,24 @@ fn record(
     frame.finish()
 }
 
+/// What of a draw the recorded commands depend on: everything but the
+/// sun's colour on the object, which follows the sun and lives in the
+/// object's uniform block (only whether the object has it counts).
+fn as_recorded(draws: &[super::plan::Draw]) -> Vec<super::plan::Draw> {
+    let mut d = draws.to_vec();
+    for draw in &mut d {
+        draw.sun = draw.sun.map(|_| [0.0; 3]);
+    }
+    d
+}
+
 /// Whether a new view's plan `b` can reuse everything created for `a`:
 /// the same attachments and passes at the same size, the same draws (in
 /// any order: the order of opaque and transparent draws follows the
 /// camera) and the same deferred light tiles. The uniforms may differ.
 fn same_resources(a: &FramePlan, b: &FramePlan) -> bool {
     let by_object = |draws: &[super::plan::Draw]| {
-        let mut d = draws.to_vec();
+        let mut d = as_recorded(draws);
         d.sort_by_key(|d| d.object);
         d
     };
@@ -353,17 +378,12 @@ fn same_resources(a: &FramePlan, b: &FramePlan) -> bool {
         && a.tile_groups == b.tile_groups
 }
 
-/// Whether two plans record the same commands: the same attachments,
-/// passes, draws in the same order and deferred light tiles. The uniforms
-/// may still differ.
+/// Whether two plans record the same commands: the same resources, and the
+/// draws in the same order. The uniforms may still differ.
 fn same_frame(a: &FramePlan, b: &FramePlan) -> bool {
-    a.width == b.width
-        && a.height == b.height
-        && a.attachments == b.attachments
-        && a.pass_names() == b.pass_names()
-        && a.opaque == b.opaque
-        && a.transparent == b.transparent
-        && a.tile_groups == b.tile_groups
+    same_resources(a, b)
+        && as_recorded(&a.opaque) == as_recorded(&b.opaque)
+        && as_recorded(&a.transparent) == as_recorded(&b.transparent)
 }
 
 /// The render pass the plan's subpasses form, with its attachments: what
@@ -416,11 +436,11 @@ fn build_render_pass(
     };
     let loaded = transfers(true, |io| match io {
         PassIo::Transfer { writes, .. } => writes,
-        PassIo::Subpass { .. } => &[],
+        PassIo::Subpass { .. } | PassIo::Compute => &[],
     });
     let read_after = transfers(false, |io| match io {
         PassIo::Transfer { reads, .. } => reads,
-        PassIo::Subpass { .. } => &[],
+        PassIo::Subpass { .. } | PassIo::Compute => &[],
     });
     let specs: Vec<AttachmentSpec> = plan
         .attachments

@@ -58,7 +58,7 @@ pub struct SceneResources {
     /// Dynamic offset of each object's block.
     pub block_offsets: Vec<u32>,
     frame_buffer: Buffer,
-    _object_buffer: Buffer,
+    object_buffer: Buffer,
 }
 
 impl SceneResources {
@@ -234,15 +234,22 @@ impl SceneResources {
             ranges,
             block_offsets,
             frame_buffer,
-            _object_buffer: object_buffer,
+            object_buffer,
         })
     }
 
-    /// Rewrites the per-frame uniforms (camera) for `scene` on a
-    /// `width`×`height` target, between frames.
-    pub fn set_view(&mut self, scene: &Scene, width: u32, height: u32) {
-        let frame = FrameUniforms::new(scene, width, height);
+    /// Rewrites what follows the view, between frames: the per-frame
+    /// uniforms (camera) and the object blocks (the sun's colour on each
+    /// object), for `scene` planned as `plan`, whose draws carry the same
+    /// lights as those this was created with (so every block keeps its
+    /// size and offset).
+    pub fn set_view(&mut self, scene: &Scene, plan: &FramePlan) {
+        let frame = FrameUniforms::new(scene, plan.width, plan.height);
         self.frame_buffer.write(0, bytemuck::bytes_of(&frame));
+        for (i, &offset) in self.block_offsets.iter().enumerate() {
+            let block = object_block(scene, i, plan.draws().find(|d| d.object == i));
+            self.object_buffer.write(offset as usize, &block);
+        }
     }
 
     /// The pipeline layout for a draw with these image sets: a normal map
@@ -356,9 +363,15 @@ fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
     let normal = glam::Mat4::from_mat3(object.transform.normal_matrix());
     let lights: Vec<GpuLight> = draw
         .map(|d| {
+            let sun = scene.sky.as_ref().zip(d.sun).map(|(sky, color)| GpuLight {
+                position: sky.sun.direction.as_vec3().extend(0.0).to_array(),
+                color: [color[0], color[1], color[2], 0.0],
+                attenuation: [1.0, 0.0, 0.0, 0.0],
+            });
             d.lights
                 .iter()
                 .map(|&l| gpu_light(&scene.lights[l]))
+                .chain(sun)
                 .collect()
         })
         .unwrap_or_default();

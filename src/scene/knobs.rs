@@ -315,14 +315,40 @@ pub const KNOBS: &[Knob] = &[
         },
     },
     Knob {
+        name: "sky_view",
+        best: Best::LastListed,
+        values: "off | WIDTHxHEIGHT: directions of the sky-view table that sky and ground pixels read instead of marching",
+        apply: |s, v| {
+            let size = if v == "off" {
+                None
+            } else {
+                let (w, h) = v.split_once('x').ok_or("expected off or WIDTHxHEIGHT")?;
+                let parse = |t: &str| t.trim().parse::<u32>().map_err(|e| format!("'{t}': {e}"));
+                let (w, h) = (parse(w)?, parse(h)?);
+                super::sky::check_sky_view(w, h)?;
+                Some((w, h))
+            };
+            sky_mut(s)?.sky_view = size;
+            Ok(())
+        },
+        read: |s| match &s.sky {
+            Some(sky) => match sky.sky_view {
+                Some((w, h)) => format!("{w}x{h}"),
+                None => "off".into(),
+            },
+            None => "-".into(),
+        },
+    },
+    Knob {
         name: "od_filter",
         best: Best::Fixed("manual"),
-        values: "manual | nearest: how the atmosphere pass reads the optical-depth table",
+        values: "manual | nearest | hardware: how the atmosphere pass reads the optical-depth table",
         apply: |s, v| {
             sky_mut(s)?.table_filter = match v {
                 "manual" => TableFilter::Manual,
                 "nearest" => TableFilter::Nearest,
-                _ => return Err("expected manual or nearest".into()),
+                "hardware" => TableFilter::Hardware,
+                _ => return Err("expected manual, nearest or hardware".into()),
             };
             Ok(())
         },
@@ -330,6 +356,7 @@ pub const KNOBS: &[Knob] = &[
             Some(sky) => match sky.table_filter {
                 TableFilter::Manual => "manual",
                 TableFilter::Nearest => "nearest",
+                TableFilter::Hardware => "hardware",
             }
             .into(),
             None => "-".into(),

@@ -10,6 +10,7 @@ use glam::DVec3;
 use serde::Deserialize;
 
 use super::SceneError;
+use crate::atmosphere::coefficients;
 
 /// Default ray-march sample count of the atmosphere pass.
 pub const DEFAULT_ATMOSPHERE_SAMPLES: u32 = 32;
@@ -23,6 +24,25 @@ pub const DEFAULT_TABLE_SIZE: (u32, u32) = (256, 64);
 /// Largest accepted table side: 4096² texels of four f32 are 256 MiB.
 pub const MAX_TABLE_SIDE: u32 = 4096;
 
+/// Default sky-view table size (azimuth × nadir-angle directions).
+pub const DEFAULT_SKY_VIEW: Option<(u32, u32)> = Some((128, 256));
+/// Largest accepted sky-view table side.
+pub const MAX_SKY_VIEW_SIDE: u32 = 2048;
+
+/// Checks a sky-view table size: at least two columns, and an even number
+/// of at least four rows (two per half, so each half interpolates).
+pub fn check_sky_view(w: u32, h: u32) -> Result<(), String> {
+    if !(2..=MAX_SKY_VIEW_SIDE).contains(&w)
+        || !(4..=MAX_SKY_VIEW_SIDE).contains(&h)
+        || !h.is_multiple_of(2)
+    {
+        return Err(format!(
+            "width must be 2..={MAX_SKY_VIEW_SIDE} and height an even 4..={MAX_SKY_VIEW_SIDE}, got [{w}, {h}]"
+        ));
+    }
+    Ok(())
+}
+
 /// The sun and the atmosphere around a planet.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sky {
@@ -34,6 +54,10 @@ pub struct Sky {
     pub table_size: (u32, u32),
     pub table_mapping: TableMapping,
     pub table_filter: TableFilter,
+    /// Directions of the sky-view table (azimuth × nadir angle) that
+    /// pixels showing sky or ground read instead of marching; `None`
+    /// marches every pixel.
+    pub sky_view: Option<(u32, u32)>,
 }
 
 /// How (altitude, direction) maps to the optical-depth table
@@ -55,6 +79,9 @@ pub enum TableFilter {
     Manual,
     /// The nearest texel.
     Nearest,
+    /// The sampler's linear filter (needs SAMPLED_IMAGE_FILTER_LINEAR for
+    /// RGBA32F; its weights' precision is the device's).
+    Hardware,
 }
 
 /// The sun: parallel light from `direction`.
@@ -138,10 +165,42 @@ pub(super) struct AtmosphereFile {
     ozone_absorption: Option<[f64; 3]>,
     ozone_layer: Option<[f64; 3]>,
     ground_albedo: Option<[f64; 3]>,
+    rayleigh_from: Option<RayleighFromFile>,
+    mie_from: Option<MieFromFile>,
+    wavelengths: Option<[f64; 3]>,
     samples: Option<u32>,
     od_table_size: Option<[u32; 2]>,
     od_table_mapping: Option<TableMapping>,
     od_filter: Option<TableFilter>,
+    sky_view: Option<SkyViewField>,
+}
+
+/// `atmosphere.sky_view`: `[width, height]` or `"off"`.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum SkyViewField {
+    Size([u32; 2]),
+    Word(String),
+}
+
+/// `atmosphere.rayleigh_from`: Rayleigh scattering from the gas (the
+/// seed's constants by default), instead of `rayleigh_scattering`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RayleighFromFile {
+    refractive_index: Option<f64>,
+    number_density: Option<f64>,
+    depolarization: Option<f64>,
+}
+
+/// `atmosphere.mie_from`: Mie scattering from the turbidity (Preetham's
+/// formula), instead of `mie_scattering` and `mie_extinction`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct MieFromFile {
+    turbidity: f64,
+    k: Option<[f64; 3]>,
+    albedo: Option<f64>,
 }
 
 fn ones() -> [f64; 3] {
@@ -281,21 +340,139 @@ pub(super) fn check(
             1.0,
         )
     };
+    // The derived coefficients (the seed's formulas) replace the explicit
+    // ones; giving both is refused rather than one silently winning.
+    if atmosphere.rayleigh_from.is_some() && atmosphere.rayleigh_scattering.is_some() {
+        return Err(invalid(
+            "atmosphere.rayleigh_from",
+            "give either rayleigh_scattering or rayleigh_from, not both".into(),
+        ));
+    }
+    if atmosphere.mie_from.is_some()
+        && (atmosphere.mie_scattering.is_some() || atmosphere.mie_extinction.is_some())
+    {
+        return Err(invalid(
+            "atmosphere.mie_from",
+            "give either mie_scattering and mie_extinction or mie_from, not both".into(),
+        ));
+    }
+    let wavelengths = match atmosphere.wavelengths {
+        Some(_) if atmosphere.rayleigh_from.is_none() && atmosphere.mie_from.is_none() => {
+            return Err(invalid(
+                "atmosphere.wavelengths",
+                "only used by rayleigh_from and mie_from; give one of them".into(),
+            ))
+        }
+        Some(w) => {
+            let w = vector("atmosphere.wavelengths", w)?;
+            if let Some(i) = (0..3).find(|&i| !(100.0..=100_000.0).contains(&w[i])) {
+                return Err(invalid(
+                    "atmosphere.wavelengths",
+                    format!(
+                        "component {i} must be between 100 and 100000 nm, got {}",
+                        w[i]
+                    ),
+                ));
+            }
+            w
+        }
+        None => DVec3::from(coefficients::WAVELENGTHS_NM),
+    };
+    let derived = |field: &str, v: DVec3| -> Result<[f64; 3], SceneError> {
+        if let Some(i) = (0..3).find(|&i| !(v[i].is_finite() && v[i] <= 1.0)) {
+            return Err(invalid(
+                field,
+                format!(
+                    "gives a coefficient of {:e} 1/m in channel {i}; at most 1 is accepted",
+                    v[i]
+                ),
+            ));
+        }
+        Ok(v.to_array())
+    };
+    let rayleigh_given = match &atmosphere.rayleigh_from {
+        None => atmosphere.rayleigh_scattering,
+        Some(from) => {
+            let n = finite(
+                "atmosphere.rayleigh_from.refractive_index",
+                from.refractive_index
+                    .unwrap_or(coefficients::AIR_REFRACTIVE_INDEX),
+            )?;
+            if !(n > 1.0 && n <= 2.0) {
+                return Err(invalid(
+                    "atmosphere.rayleigh_from.refractive_index",
+                    format!("must be above 1 and at most 2, got {n}"),
+                ));
+            }
+            let number_density = finite(
+                "atmosphere.rayleigh_from.number_density",
+                from.number_density
+                    .unwrap_or(coefficients::AIR_NUMBER_DENSITY),
+            )?;
+            if !(1e10..=1e35).contains(&number_density) {
+                return Err(invalid(
+                    "atmosphere.rayleigh_from.number_density",
+                    format!("must be between 1e10 and 1e35 per m^3, got {number_density:e}"),
+                ));
+            }
+            let p = finite(
+                "atmosphere.rayleigh_from.depolarization",
+                from.depolarization
+                    .unwrap_or(coefficients::AIR_DEPOLARIZATION),
+            )?;
+            // (6 + 3p)/(6 - 7p): physical factors are 0..0.5.
+            if !(0.0..=0.5).contains(&p) {
+                return Err(invalid(
+                    "atmosphere.rayleigh_from.depolarization",
+                    format!("must be between 0 and 0.5, got {p}"),
+                ));
+            }
+            let beta = DVec3::from_array(std::array::from_fn(|i| {
+                coefficients::rayleigh_scattering(n, number_density, p, wavelengths[i] * 1e-9)
+            }));
+            Some(derived("atmosphere.rayleigh_from", beta)?)
+        }
+    };
+    let (mie_scattering_given, mie_extinction_given) = match &atmosphere.mie_from {
+        None => (atmosphere.mie_scattering, atmosphere.mie_extinction),
+        Some(from) => {
+            let t = finite("atmosphere.mie_from.turbidity", from.turbidity)?;
+            if !(t > coefficients::MIN_TURBIDITY && t <= 1000.0) {
+                return Err(invalid(
+                    "atmosphere.mie_from.turbidity",
+                    format!(
+                        "must be above {:.4} (where the formula's aerosol concentration                          0.6544 T - 0.6510 turns positive) and at most 1000, got {t}",
+                        coefficients::MIN_TURBIDITY
+                    ),
+                ));
+            }
+            let k = non_negative(
+                "atmosphere.mie_from.k",
+                from.k.unwrap_or([coefficients::MIE_K; 3]),
+                10.0,
+            )?;
+            let albedo = finite("atmosphere.mie_from.albedo", from.albedo.unwrap_or(0.9))?;
+            if !(albedo > 0.0 && albedo <= 1.0) {
+                return Err(invalid(
+                    "atmosphere.mie_from.albedo",
+                    format!("must be above 0 and at most 1, got {albedo}"),
+                ));
+            }
+            let beta = DVec3::from_array(std::array::from_fn(|i| {
+                coefficients::mie_scattering(t, k[i], wavelengths[i] * 1e-9)
+            }));
+            let scattering = derived("atmosphere.mie_from.turbidity", beta)?;
+            let extinction = derived("atmosphere.mie_from", beta / albedo)?;
+            (Some(scattering), Some(extinction))
+        }
+    };
     let rayleigh_scattering = coefficient(
         "rayleigh_scattering",
-        atmosphere.rayleigh_scattering,
+        rayleigh_given,
         earth.rayleigh_scattering,
     )?;
-    let mie_scattering = coefficient(
-        "mie_scattering",
-        atmosphere.mie_scattering,
-        earth.mie_scattering,
-    )?;
-    let mie_extinction = coefficient(
-        "mie_extinction",
-        atmosphere.mie_extinction,
-        earth.mie_extinction,
-    )?;
+    let mie_scattering = coefficient("mie_scattering", mie_scattering_given, earth.mie_scattering)?;
+    let mie_extinction = coefficient("mie_extinction", mie_extinction_given, earth.mie_extinction)?;
     for i in 0..3 {
         if mie_extinction[i] < mie_scattering[i] {
             return Err(invalid(
@@ -388,7 +565,22 @@ pub(super) fn check(
             ),
         ));
     }
+    let sky_view = match atmosphere.sky_view {
+        None => DEFAULT_SKY_VIEW,
+        Some(SkyViewField::Word(w)) if w == "off" => None,
+        Some(SkyViewField::Word(w)) => {
+            return Err(invalid(
+                "atmosphere.sky_view",
+                format!("expected [width, height] or \"off\", got \"{w}\""),
+            ))
+        }
+        Some(SkyViewField::Size([w, h])) => {
+            check_sky_view(w, h).map_err(|e| invalid("atmosphere.sky_view", e))?;
+            Some((w, h))
+        }
+    };
     Ok(Some(Sky {
+        sky_view,
         table_size,
         table_mapping: atmosphere.od_table_mapping.unwrap_or(TableMapping::Horizon),
         table_filter: atmosphere.od_filter.unwrap_or(TableFilter::Manual),
@@ -550,5 +742,116 @@ mod tests {
         let e = parse("[sun]\ndirection = [0.0, 1.0, 0.0]\n[atmosphere]\nrayleigh = 1.0\n")
             .unwrap_err();
         assert!(e.to_string().contains("rayleigh"), "{e}");
+    }
+
+    #[test]
+    fn rayleigh_and_mie_can_come_from_the_seeds_formulas() {
+        use crate::atmosphere::coefficients as k;
+        let sun = "[sun]\ndirection = [0.0, 1.0, 0.0]\n";
+        let sky = |extra: &str| {
+            parse(&format!("{sun}[atmosphere]\n{extra}"))
+                .unwrap_or_else(|e| panic!("{e}"))
+                .sky
+                .unwrap()
+                .atmosphere
+        };
+        // The seed's air at the default wavelengths is Earth's default.
+        let a = sky("rayleigh_from = {}\n");
+        let earth = Atmosphere::earth();
+        for c in 0..3 {
+            let rel = (a.rayleigh_scattering[c] / earth.rayleigh_scattering[c] - 1.0).abs();
+            assert!(rel < 1e-3, "channel {c}: {}", a.rayleigh_scattering);
+        }
+        assert_eq!(a.mie_scattering, earth.mie_scattering);
+        // Other air and wavelengths go through the formula.
+        let a = sky(
+            "rayleigh_from = { refractive_index = 1.0006, number_density = 5e25, depolarization = 0.0 }\n\
+             wavelengths = [700.0, 500.0, 400.0]\n",
+        );
+        // (Wavelengths are given in nm: 400 * 1e-9 is not 400e-9 to the last bit.)
+        let close = |a: f64, b: f64| ((a - b) / b).abs() < 1e-12;
+        assert!(close(
+            a.rayleigh_scattering.z,
+            k::rayleigh_scattering(1.0006, 5e25, 0.0, 400e-9)
+        ));
+        // Turbidity: extinction is scattering over the albedo (0.9 unless given).
+        let a = sky("mie_from = { turbidity = 1.0 }\n");
+        assert!(close(
+            a.mie_scattering.y,
+            k::mie_scattering(1.0, k::MIE_K, 550e-9)
+        ));
+        assert!((a.mie_extinction.y - a.mie_scattering.y / 0.9).abs() < 1e-20);
+        let a = sky("mie_from = { turbidity = 1.0, k = [0.686, 0.678, 0.666], albedo = 1.0 }\n");
+        assert_eq!(a.mie_extinction, a.mie_scattering);
+        assert!(close(
+            a.mie_scattering.x,
+            k::mie_scattering(1.0, 0.686, 680e-9)
+        ));
+
+        for (extra, field) in [
+            (
+                "rayleigh_from = {}\nrayleigh_scattering = [1e-6, 1e-6, 1e-6]\n",
+                "atmosphere.rayleigh_from",
+            ),
+            (
+                "mie_from = { turbidity = 2.0 }\nmie_extinction = [1e-6, 1e-6, 1e-6]\n",
+                "atmosphere.mie_from",
+            ),
+            (
+                "wavelengths = [680.0, 550.0, 440.0]\n",
+                "atmosphere.wavelengths",
+            ),
+            (
+                "rayleigh_from = {}\nwavelengths = [680.0, 0.0, 440.0]\n",
+                "atmosphere.wavelengths",
+            ),
+            (
+                "rayleigh_from = { refractive_index = 0.9 }\n",
+                "atmosphere.rayleigh_from.refractive_index",
+            ),
+            (
+                "rayleigh_from = { number_density = -1.0 }\n",
+                "atmosphere.rayleigh_from.number_density",
+            ),
+            (
+                "rayleigh_from = { depolarization = 0.9 }\n",
+                "atmosphere.rayleigh_from.depolarization",
+            ),
+            // Below 0.9948 the formula's concentration is negative.
+            (
+                "mie_from = { turbidity = 0.9 }\n",
+                "atmosphere.mie_from.turbidity",
+            ),
+            (
+                "mie_from = { turbidity = nan }\n",
+                "atmosphere.mie_from.turbidity",
+            ),
+            // T = 500 gives 2 1/m at 440 nm: past the coefficient bound.
+            (
+                "mie_from = { turbidity = 500.0 }\n",
+                "atmosphere.mie_from.turbidity",
+            ),
+            (
+                "mie_from = { turbidity = 2.0, albedo = 0.0 }\n",
+                "atmosphere.mie_from.albedo",
+            ),
+            (
+                "mie_from = { turbidity = 2.0, k = [0.6, -0.6, 0.6] }\n",
+                "atmosphere.mie_from.k",
+            ),
+        ] {
+            assert_eq!(
+                field_of(&format!("{sun}[atmosphere]\n{extra}")),
+                field,
+                "{extra}"
+            );
+        }
+        // The turbidity is required, and unknown keys are refused.
+        for bad in ["mie_from = {}", "rayleigh_from = { n = 1.0003 }"] {
+            let e = parse(&format!("{sun}[atmosphere]\n{bad}\n"))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("sky.toml"), "{e}");
+        }
     }
 }

@@ -130,7 +130,8 @@ pub enum Action {
     ResetCamera,
     /// Pressed: back to the scene's sun.
     ResetSun,
-    /// Pressed: the next value of knob N (1-based, as listed by `F1`).
+    /// Pressed: the next value of knob N (1-based, as listed by `F1`; key
+    /// 0 is knob 10).
     CycleKnob(usize),
     /// Pressed: print the per-pass times.
     PrintTimings,
@@ -162,6 +163,7 @@ impl Key {
             Key::Named(N::Home) => Some(Action::ResetCamera),
             Key::Named(N::End) => Some(Action::ResetSun),
             Key::Char(c @ '1'..='9') => Some(Action::CycleKnob(c as usize - '0' as usize)),
+            Key::Char('0') => Some(Action::CycleKnob(10)),
             Key::Char('T') => Some(Action::PrintTimings),
             Key::Named(N::F12) => Some(Action::Screenshot),
             Key::Named(N::F1) | Key::Char('H') => Some(Action::Help),
@@ -176,7 +178,7 @@ pub const HELP: &str = "\
 keys: W/S or Up/Down forward/back, A/D or Left/Right sideways, E/Q up/down, Shift x10 speed;
       drag with the left mouse button to look around; wheel or +/- field of view;
       L/K (PageUp/PageDown) sun later/earlier, End the scene's sun; Home the scene's camera;
-      1-9 cycle the knob listed with that number; T print per-pass GPU times;
+      1-9, 0 cycle the knob listed with that number; T print per-pass GPU times;
       F12 screenshot (PNG + EXR) and the [camera] that reproduces it; F1/H this help; Esc quit";
 
 #[cfg(test)]
@@ -214,6 +216,6 @@ mod tests {
             Key::Char('S').action()
         );
         assert_eq!(Key::Char('5').action(), Some(Action::CycleKnob(5)));
-        assert_eq!(Key::Char('0').action(), None);
+        assert_eq!(Key::Char('0').action(), Some(Action::CycleKnob(10)));
     }
 }

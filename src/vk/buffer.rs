@@ -13,8 +13,6 @@ pub enum BufferUsage {
     Geometry,
     /// Uniform data written from the CPU.
     Uniform,
-    /// Shader storage data written once from the CPU (tables).
-    Storage,
     /// Staging for uploads to images.
     Upload,
     /// Destination of image copies, read back on the CPU.
@@ -28,7 +26,6 @@ impl BufferUsage {
                 vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::INDEX_BUFFER
             }
             BufferUsage::Uniform => vk::BufferUsageFlags::UNIFORM_BUFFER,
-            BufferUsage::Storage => vk::BufferUsageFlags::STORAGE_BUFFER,
             BufferUsage::Upload => vk::BufferUsageFlags::TRANSFER_SRC,
             BufferUsage::Readback => vk::BufferUsageFlags::TRANSFER_DST,
         }

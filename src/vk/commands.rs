@@ -6,8 +6,8 @@
 use super::descriptors::DescriptorSet;
 use super::image::ImageState;
 use super::{
-    Buffer, Context, GraphRenderPass, GraphicsPipeline, Image, PipelineLayout, TimestampQueries,
-    VkError,
+    Buffer, ComputePipeline, Context, GraphRenderPass, GraphicsPipeline, Image, PipelineLayout,
+    TimestampQueries, VkError,
 };
 use ash::vk;
 use std::sync::Arc;
@@ -76,6 +76,10 @@ pub enum ImageUse {
     TransferDst,
     /// Sampled by fragment shaders.
     FragmentSampled,
+    /// Sampled by fragment and compute shaders (tables both read).
+    ShaderSampled,
+    /// Written as a storage image by compute shaders.
+    ComputeWrite,
     /// Written as a colour attachment (e.g. loaded by a render pass).
     ColourAttachment,
     /// Read as an input attachment (loaded by a render pass whose first
@@ -101,6 +105,16 @@ impl ImageUse {
                 vk::PipelineStageFlags::FRAGMENT_SHADER,
                 vk::AccessFlags::SHADER_READ,
             ),
+            ImageUse::ShaderSampled => (
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                vk::PipelineStageFlags::FRAGMENT_SHADER | vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::AccessFlags::SHADER_READ,
+            ),
+            ImageUse::ComputeWrite => (
+                vk::ImageLayout::GENERAL,
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::AccessFlags::SHADER_WRITE,
+            ),
             ImageUse::ColourAttachment => (
                 vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
                 vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
@@ -115,7 +129,10 @@ impl ImageUse {
     }
 
     fn writes(self) -> bool {
-        matches!(self, ImageUse::TransferDst | ImageUse::ColourAttachment)
+        matches!(
+            self,
+            ImageUse::TransferDst | ImageUse::ColourAttachment | ImageUse::ComputeWrite
+        )
     }
 }
 
@@ -256,7 +273,10 @@ impl CommandBuffer {
             layout,
             stage,
             pending_writes: if now.writes() {
-                access & (vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
+                access
+                    & (vk::AccessFlags::TRANSFER_WRITE
+                        | vk::AccessFlags::COLOR_ATTACHMENT_WRITE
+                        | vk::AccessFlags::SHADER_WRITE)
             } else {
                 vk::AccessFlags::empty()
             },
@@ -531,16 +551,64 @@ impl CommandBuffer {
         set: &DescriptorSet,
         dynamic_offsets: &[u32],
     ) {
+        self.bind_set(
+            vk::PipelineBindPoint::GRAPHICS,
+            layout,
+            index,
+            set,
+            dynamic_offsets,
+        );
+    }
+
+    pub fn bind_compute_pipeline(&self, pipeline: &ComputePipeline) {
+        // SAFETY: recording; the pipeline lives until the submission ends.
+        unsafe {
+            self.ctx.device.cmd_bind_pipeline(
+                self.handle,
+                vk::PipelineBindPoint::COMPUTE,
+                pipeline.handle,
+            )
+        };
+    }
+
+    pub fn bind_compute_descriptor_set(
+        &self,
+        layout: &PipelineLayout,
+        index: u32,
+        set: &DescriptorSet,
+    ) {
+        self.bind_set(vk::PipelineBindPoint::COMPUTE, layout, index, set, &[]);
+    }
+
+    fn bind_set(
+        &self,
+        point: vk::PipelineBindPoint,
+        layout: &PipelineLayout,
+        index: u32,
+        set: &DescriptorSet,
+        dynamic_offsets: &[u32],
+    ) {
         // SAFETY: recording; the set matches the layout at `index`.
         unsafe {
             self.ctx.device.cmd_bind_descriptor_sets(
                 self.handle,
-                vk::PipelineBindPoint::GRAPHICS,
+                point,
                 layout.handle,
                 index,
                 &[set.handle],
                 dynamic_offsets,
             )
+        };
+    }
+
+    /// Runs the bound compute pipeline over `groups` workgroups.
+    pub fn dispatch(&self, groups: [u32; 3]) {
+        // SAFETY: recording outside a render pass with a compute pipeline
+        // and its descriptor sets bound.
+        unsafe {
+            self.ctx
+                .device
+                .cmd_dispatch(self.handle, groups[0], groups[1], groups[2])
         };
     }
 

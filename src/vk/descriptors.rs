@@ -155,6 +155,22 @@ impl DescriptorSet {
         unsafe { self.ctx.device.update_descriptor_sets(&[write], &[]) };
     }
 
+    /// Points `binding` at a storage image, written in GENERAL layout.
+    pub fn write_storage_image(&self, binding: u32, image: &Image) {
+        let infos = [vk::DescriptorImageInfo {
+            sampler: vk::Sampler::null(),
+            image_view: image.view,
+            image_layout: vk::ImageLayout::GENERAL,
+        }];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(self.handle)
+            .dst_binding(binding)
+            .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
+            .image_info(&infos);
+        // SAFETY: the set is not in use by a pending command buffer.
+        unsafe { self.ctx.device.update_descriptor_sets(&[write], &[]) };
+    }
+
     /// Points `binding` at an input attachment read in a later subpass (in
     /// the read-only layout the render graph gives input attachments).
     pub fn write_input_attachment(&self, binding: u32, image: &Image) {

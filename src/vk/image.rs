@@ -187,6 +187,11 @@ fn check_format(
             "sampling",
         ),
         (
+            vk::ImageUsageFlags::STORAGE,
+            vk::FormatFeatureFlags::STORAGE_IMAGE,
+            "storage",
+        ),
+        (
             vk::ImageUsageFlags::TRANSFER_SRC,
             vk::FormatFeatureFlags::TRANSFER_SRC,
             "transfer source",
@@ -261,6 +266,21 @@ impl Sampler {
         filtering: SamplerFilter,
         mip_levels: u32,
     ) -> Result<Sampler, VkError> {
+        Sampler::with_addressing(ctx, filtering, mip_levels, vk::SamplerAddressMode::REPEAT)
+    }
+
+    /// A sampler of one mip level that clamps coordinates to the edge
+    /// texels (tables: nothing wraps around).
+    pub fn clamped(ctx: &Arc<Context>, filtering: SamplerFilter) -> Result<Sampler, VkError> {
+        Sampler::with_addressing(ctx, filtering, 1, vk::SamplerAddressMode::CLAMP_TO_EDGE)
+    }
+
+    fn with_addressing(
+        ctx: &Arc<Context>,
+        filtering: SamplerFilter,
+        mip_levels: u32,
+        addressing: vk::SamplerAddressMode,
+    ) -> Result<Sampler, VkError> {
         let (filter, mip) = match filtering {
             SamplerFilter::Nearest => (vk::Filter::NEAREST, vk::SamplerMipmapMode::NEAREST),
             SamplerFilter::Bilinear => (vk::Filter::LINEAR, vk::SamplerMipmapMode::NEAREST),
@@ -270,9 +290,9 @@ impl Sampler {
             .mag_filter(filter)
             .min_filter(filter)
             .mipmap_mode(mip)
-            .address_mode_u(vk::SamplerAddressMode::REPEAT)
-            .address_mode_v(vk::SamplerAddressMode::REPEAT)
-            .address_mode_w(vk::SamplerAddressMode::REPEAT)
+            .address_mode_u(addressing)
+            .address_mode_v(addressing)
+            .address_mode_w(addressing)
             .min_lod(0.0)
             .max_lod(mip_levels as f32);
         // SAFETY: valid device; anisotropy stays disabled (feature not enabled).

@@ -26,7 +26,8 @@ pub use context::{Context, ContextOptions, DeviceInfo};
 pub use descriptors::{DescriptorBinding, DescriptorPool, DescriptorSet, DescriptorSetLayout};
 pub use image::{Image, ImageDesc, Sampler, SamplerFilter};
 pub use pipeline::{
-    Blend, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, ShaderModule, VertexAttribute,
+    Blend, ComputePipeline, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, ShaderModule,
+    VertexAttribute,
 };
 pub use query::TimestampQueries;
 pub use render_graph::{

@@ -1,4 +1,4 @@
-//! Shader modules, pipeline layouts and graphics pipelines.
+//! Shader modules, pipeline layouts, graphics and compute pipelines.
 
 use super::{Context, DescriptorSetLayout, RenderPass, VkError};
 use ash::vk;
@@ -109,21 +109,7 @@ impl GraphicsPipeline {
         pass: &RenderPass,
         desc: &GraphicsPipelineDesc<'_>,
     ) -> Result<GraphicsPipeline, VkError> {
-        let entries: Vec<vk::SpecializationMapEntry> = desc
-            .specialization
-            .iter()
-            .enumerate()
-            .map(|(i, (id, _))| vk::SpecializationMapEntry {
-                constant_id: *id,
-                offset: (i * 4) as u32,
-                size: 4,
-            })
-            .collect();
-        let data: Vec<u8> = desc
-            .specialization
-            .iter()
-            .flat_map(|(_, v)| v.to_ne_bytes())
-            .collect();
+        let (entries, data) = specialization_data(desc.specialization);
         let spec = vk::SpecializationInfo::default()
             .map_entries(&entries)
             .data(&data);
@@ -238,6 +224,72 @@ impl GraphicsPipeline {
 }
 
 impl Drop for GraphicsPipeline {
+    fn drop(&mut self) {
+        // SAFETY: no pending command buffer uses it.
+        unsafe { self.ctx.device.destroy_pipeline(self.handle, None) };
+    }
+}
+
+/// Map entries and data for specialization constants `(id, value)`, each
+/// a 32-bit value at its index's offset.
+fn specialization_data(constants: &[(u32, u32)]) -> (Vec<vk::SpecializationMapEntry>, Vec<u8>) {
+    let entries = constants
+        .iter()
+        .enumerate()
+        .map(|(i, (id, _))| vk::SpecializationMapEntry {
+            constant_id: *id,
+            offset: (i * 4) as u32,
+            size: 4,
+        })
+        .collect();
+    let data = constants
+        .iter()
+        .flat_map(|(_, v)| v.to_ne_bytes())
+        .collect();
+    (entries, data)
+}
+
+pub struct ComputePipeline {
+    ctx: Arc<Context>,
+    pub(crate) handle: vk::Pipeline,
+}
+
+impl ComputePipeline {
+    /// The compute pipeline of `shader` (entry point `main`) with
+    /// specialization constants `(id, value)`.
+    pub fn new(
+        ctx: &Arc<Context>,
+        layout: &PipelineLayout,
+        shader: &ShaderModule,
+        specialization: &[(u32, u32)],
+    ) -> Result<ComputePipeline, VkError> {
+        let (entries, data) = specialization_data(specialization);
+        let spec = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(&data);
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(shader.handle)
+            .name(c"main")
+            .specialization_info(&spec);
+        let info = vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(layout.handle);
+        // SAFETY: the stage and specialization structs are locals alive
+        // for the call; shader and layout are valid objects of this device.
+        let handle = unsafe {
+            ctx.device
+                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+        }
+        .map_err(|(_, e)| VkError::Api(e))?[0];
+        Ok(ComputePipeline {
+            ctx: ctx.clone(),
+            handle,
+        })
+    }
+}
+
+impl Drop for ComputePipeline {
     fn drop(&mut self) {
         // SAFETY: no pending command buffer uses it.
         unsafe { self.ctx.device.destroy_pipeline(self.handle, None) };

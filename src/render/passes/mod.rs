@@ -11,12 +11,14 @@
 
 pub mod atmosphere;
 pub mod deferred_lighting;
+pub mod sky_view;
 pub mod surface;
 pub mod tonemap;
 pub mod transfer;
 
 use super::plan::{FramePlan, PassDecl};
 use super::scene_resources::SceneResources;
+use super::sky_resources::SkyResources;
 use super::{Pixels, RenderError};
 use crate::scene::Scene;
 use crate::shaders;
@@ -74,6 +76,16 @@ pub struct FrameResources<'a> {
     /// Geometry, per-frame and per-object uniforms and textures; present
     /// when the plan draws objects.
     pub scene: Option<&'a SceneResources>,
+    /// The atmosphere's uniforms and tables; present when the plan
+    /// draws the atmosphere.
+    pub sky: Option<&'a SkyResources>,
+}
+
+impl FrameResources<'_> {
+    pub fn sky(&self) -> Result<&SkyResources, RenderError> {
+        self.sky
+            .ok_or_else(|| RenderError::Frame("the frame has no atmosphere resources".into()))
+    }
 }
 
 /// What a pass is created from.
@@ -97,6 +109,11 @@ impl PassSetup<'_> {
         self.render_pass.ok_or_else(|| {
             RenderError::Frame(format!("pass '{}' is not a subpass", self.decl.name))
         })
+    }
+
+    /// The atmosphere's resources, for passes that march it.
+    pub fn sky_resources(&self) -> Result<&SkyResources, RenderError> {
+        self.frame.sky()
     }
 
     /// The shared scene resources, for passes that draw objects.
@@ -143,8 +160,11 @@ impl InputAttachments {
 }
 
 /// A pipeline that draws one triangle over the whole framebuffer
-/// (`fullscreen.vert`) with the `fragment` shader into one colour target:
-/// no vertex input, no depth, no blending. The tone map, the atmosphere
+/// (`fullscreen.vert`, at depth 0: the far plane of reversed Z) with the
+/// `fragment` shader into one colour target: no vertex input, no depth
+/// writes, no blending. `depth_test` compares against the subpass's
+/// read-only depth, so a pass can shade only the pixels where nothing was
+/// drawn (EQUAL) or only the others (LESS). The tone map, the atmosphere
 /// and the empty pass are all this shape.
 pub(crate) fn fullscreen_pipeline(
     ctx: &Arc<Context>,
@@ -153,6 +173,7 @@ pub(crate) fn fullscreen_pipeline(
     subpass: u32,
     fragment: &[u8],
     specialization: &[(u32, u32)],
+    depth_test: Option<ash::vk::CompareOp>,
 ) -> Result<GraphicsPipeline, RenderError> {
     let vertex = ShaderModule::new(ctx, shaders::FULLSCREEN_VERT.base())?;
     let fragment = ShaderModule::new(ctx, fragment)?;
@@ -167,7 +188,7 @@ pub(crate) fn fullscreen_pipeline(
             vertex_stride: 0,
             vertex_attributes: &[],
             cull_mode: CullModeFlags::NONE,
-            depth_test: None,
+            depth_test,
             depth_write: false,
             blend: &[Blend::Replace],
             subpass,

@@ -35,6 +35,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         setup.subpass,
         shaders::TONEMAP_FRAG.base(),
         &[(0, operator), (1, tone_map.exposure.to_bits())],
+        None,
     )?;
     Ok(Box::new(ToneMapPass {
         pipeline,

@@ -1,0 +1,345 @@
+// Single scattering through a spherical atmosphere, shared by the
+// atmosphere subpass (glsl/atmosphere.frag) and the sky-view table
+// (glsl/sky_view.comp): the uniform block, the optical-depth table, the
+// cancellation-free ray-sphere test, the ray march, and the sky-view
+// table's layout, so both shaders march and map directions identically.
+//
+// Positions are camera-relative: the CPU gives the camera's offset from
+// the planet centre and the exact c = |o|^2 - R^2 of both spheres (from
+// doubles), so no planet-scale coordinate is squared in float32. Sun
+// transmittance at each sample comes from the optical-depth table (manual
+// bilinear of four texels); the view path's optical depth is accumulated
+// on the same samples (trapezoid between samples, while the scattering
+// uses each sample as a midpoint: two different rules, as the seed asks,
+// so both sums do not share one bias).
+
+layout(std140, set = 0, binding = 0) uniform Sky {
+    vec4 forward;          // xyz: camera forward (unit)
+    vec4 right;            // xyz: camera right * aspect / f
+    vec4 up;               // xyz: camera up / f
+    vec4 origin;           // xyz: camera - planet centre; w: its length
+    vec4 terms;            // x: |o|^2 - Rb^2, y: |o|^2 - Rt^2 (exact), z, w: depth = z + w / view_depth
+    vec4 radii;            // x: Rb, y: Rt, z: sqrt(Rt^2 - Rb^2), w: sample count
+    vec4 rayleigh;         // xyz: scattering; w: 1 / scale height
+    vec4 mie_scattering;   // xyz; w: 1 / scale height
+    vec4 mie_extinction;   // xyz; w: g
+    vec4 ozone_absorption; // xyz; w: layer start
+    vec4 ozone_layer;      // x: peak, y: end; z, w: table width, height
+    vec4 sun_direction;    // xyz: towards the sun; w: cos(angular radius)
+    vec4 sun_irradiance;   // xyz; w: disc radiance per unit irradiance (0: no disc)
+    vec4 ground_albedo;    // xyz; w: the table's log offset
+    vec4 viewport;         // width, height, 1/width, 1/height
+    vec4 zenith;           // xyz: the camera's up (from the planet centre); w: nadir angle of the ground's horizon
+    vec4 azimuth_zero;     // xyz: unit, perpendicular to zenith, towards the sun; w: nadir angle of the atmosphere's edge (pi inside)
+    vec4 sky_view;         // x, y: sky-view table width, height (directions)
+} sky;
+
+// The optical-depth table, one RGBA32F texel per (direction, altitude),
+// read with texelFetch, or filtered by the sampler (TABLE_FILTER 2).
+layout(set = 0, binding = 1) uniform sampler2D od_table;
+
+// The table's mapping (0: horizon, Bruneton-style; 1: the seed's linear
+// altitude × linear cosine) and filter (0: manual bilinear; 1: nearest;
+// 2: the sampler's bilinear filter).
+layout(constant_id = 0) const int TABLE_MAPPING = 0;
+layout(constant_id = 1) const int TABLE_FILTER = 0;
+
+const float PI = 3.14159265358979;
+const float INF = 1.0 / 0.0;
+
+// Roots of |o + t d| = R, nearest first; c = |o|^2 - R^2 given exactly.
+// The discriminant is R^2 - p^2 from the distance p of the line to the
+// centre, as (R - p)(R + p); the smaller root is c / q (no cancellation).
+bool sphere(vec3 o, vec3 d, float c, float radius, out float t0, out float t1) {
+    float b = dot(o, d);
+    float p = length(o - b * d);
+    float disc = (radius - p) * (radius + p);
+    if (disc < 0.0) {
+        return false;
+    }
+    float q = -b - (b >= 0.0 ? 1.0 : -1.0) * sqrt(disc);
+    if (q == 0.0) {
+        t0 = 0.0;
+        t1 = 0.0;
+        return true;
+    }
+    float a = q;
+    float e = c / q;
+    t0 = min(a, e);
+    t1 = max(a, e);
+    return true;
+}
+
+// Density integrals to the top (Rayleigh, Mie, ozone) from altitude h
+// along cosine mu, directions into the ground excluded by the caller.
+vec3 table_densities(float h, float mu) {
+    float rb = sky.radii.x;
+    float thickness = sky.radii.y - sky.radii.x;
+    float big_h = sky.radii.z;
+    h = clamp(h, 0.0, thickness);
+    float x_mu;
+    float x_r;
+    if (TABLE_MAPPING == 1) {
+        x_mu = clamp((1.0 - mu) * 0.5, 0.0, 1.0);
+        x_r = clamp(h / thickness, 0.0, 1.0);
+    } else {
+        float r = rb + h;
+        float rho = sqrt(h * (2.0 * rb + h));
+        float d_min = thickness - h;
+        float disc = d_min * (sky.radii.y + r) + r * r * mu * mu;
+        float d = max(-r * mu + sqrt(max(disc, 0.0)), 0.0);
+        float d_max = rho + big_h;
+        x_mu = clamp((d - d_min) / max(d_max - d_min, 1e-6), 0.0, 1.0);
+        x_r = clamp(rho / big_h, 0.0, 1.0);
+    }
+    int w = int(sky.ozone_layer.z);
+    int hh = int(sky.ozone_layer.w);
+    float fx = x_mu * float(w - 1);
+    float fy = x_r * float(hh - 1);
+    vec3 v;
+    if (TABLE_FILTER == 1) {
+        v = texelFetch(od_table, ivec2(round(fx), round(fy)), 0).xyz;
+    } else if (TABLE_FILTER == 2) {
+        // Texel centres sit on x = 0 and x = 1 (see the table's mapping).
+        v = textureLod(od_table, (vec2(fx, fy) + 0.5) / vec2(w, hh), 0.0).xyz;
+    } else {
+        int x0 = min(int(floor(fx)), w - 2);
+        int y0 = min(int(floor(fy)), hh - 2);
+        float ax = fx - float(x0);
+        float ay = fy - float(y0);
+        // Manual bilinear from four texel fetches (32-bit floats).
+        vec3 t00 = texelFetch(od_table, ivec2(x0, y0), 0).xyz;
+        vec3 t10 = texelFetch(od_table, ivec2(x0 + 1, y0), 0).xyz;
+        vec3 t01 = texelFetch(od_table, ivec2(x0, y0 + 1), 0).xyz;
+        vec3 t11 = texelFetch(od_table, ivec2(x0 + 1, y0 + 1), 0).xyz;
+        v = mix(mix(t00, t10, ax), mix(t01, t11, ax), ay);
+    }
+    float offset = sky.ground_albedo.w;
+    return vec3(
+        max(exp(v.x - h * sky.rayleigh.w) - offset, 0.0),
+        max(exp(v.y - h * sky.mie_scattering.w) - offset, 0.0),
+        v.z);
+}
+
+// Optical depth from a point at altitude h (radius r, position p relative
+// to the centre) to the sun; lit is false in the planet's shadow.
+vec3 sun_optical_depth(float h, float r, vec3 p, out bool lit) {
+    float mu = dot(p, sky.sun_direction.xyz) / r;
+    float horizon = -sqrt(max(h, 0.0) * (2.0 * sky.radii.x + max(h, 0.0))) / r;
+    lit = mu >= horizon;
+    if (!lit) {
+        return vec3(0.0);
+    }
+    vec3 d = table_densities(h, mu);
+    return sky.rayleigh.xyz * d.x + sky.mie_extinction.xyz * d.y + sky.ozone_absorption.xyz * d.z;
+}
+
+vec3 densities(float h) {
+    float ozone = 0.0;
+    float start = sky.ozone_absorption.w;
+    float peak = sky.ozone_layer.x;
+    float end = sky.ozone_layer.y;
+    if (h > start && h < end) {
+        ozone = h <= peak ? (h - start) / (peak - start) : (end - h) / (end - peak);
+    }
+    return vec3(exp(-h * sky.rayleigh.w), exp(-h * sky.mie_scattering.w), ozone);
+}
+
+vec3 extinction(vec3 rho) {
+    return sky.rayleigh.xyz * rho.x + sky.mie_extinction.xyz * rho.y
+        + sky.ozone_absorption.xyz * rho.z;
+}
+
+// Altitude at distance t along a ray with b = dot(o, d) and
+// c = |o|^2 - Rb^2: r^2 - Rb^2 = c + t (2b + t), so the altitude needs no
+// planet-scale difference.
+float altitude(float c, float b, float t, out float r) {
+    float r2_minus = c + t * (2.0 * b + t);
+    float rb = sky.radii.x;
+    r = sqrt(max(rb * rb + r2_minus, 0.0));
+    return r2_minus / (r + rb);
+}
+
+// Where a view ray ends.
+const int END_SPACE = 0;   // it misses the atmosphere
+const int END_SKY = 1;     // it leaves through the top
+const int END_GROUND = 2;  // it hits the planet
+const int END_SURFACE = 3; // it hits something the surface pass drew
+
+// Single scattering along a view ray, per unit solar irradiance, with the
+// phase functions left out: they depend only on the angle to the sun,
+// constant along the ray, so the radiance is
+// irradiance * (phase_r * rayleigh + phase_m * mie). The sky-view table
+// stores exactly these, and every pixel applies its own phase.
+struct Path {
+    vec3 rayleigh;
+    vec3 mie;
+    vec3 transmittance; // from the camera to the ray's end
+    int end;
+    float t_end;        // distance from the camera to the end
+};
+
+// Marches the ray from the camera along d (unit) up to a surface at
+// t_surface (INF: none). ground: 0 decides by the sphere test; 1 ignores
+// the ground; 2 ends at the ground, or where the ray grazes it (the rows
+// either side of the horizon in the sky-view table).
+Path march(vec3 d, float t_surface, int ground_rule) {
+    Path path;
+    path.rayleigh = vec3(0.0);
+    path.mie = vec3(0.0);
+    path.transmittance = vec3(1.0);
+    path.end = END_SPACE;
+    path.t_end = INF;
+
+    vec3 o = sky.origin.xyz;
+    float rb = sky.radii.x;
+    float rt = sky.radii.y;
+    float t0, t1;
+    if (!sphere(o, d, sky.terms.y, rt, t0, t1) || t1 <= 0.0) {
+        return path;
+    }
+    // From outside, start at the entry point, where |o|^2 - Rb^2 is
+    // exactly Rt^2 - Rb^2: altitudes along the ray stay precise.
+    float c_bottom = sky.terms.x;
+    float shift = 0.0;
+    bool inside = t0 <= 0.0;
+    if (!inside) {
+        o = o + t0 * d;
+        c_bottom = sky.radii.z * sky.radii.z;
+        shift = t0;
+    }
+    float b = dot(o, d);
+    float t_end = t1 - shift;
+    path.end = END_SKY;
+    if (ground_rule != 1) {
+        float g0, g1;
+        if (sphere(o, d, c_bottom, rb, g0, g1) && g0 > 0.0) {
+            t_end = g0;
+            path.end = END_GROUND;
+        } else if (ground_rule == 2) {
+            // Grazing: the point of closest approach.
+            t_end = max(-b, 0.0);
+            path.end = END_GROUND;
+        }
+    }
+    if (t_surface - shift < t_end) {
+        t_end = max(t_surface - shift, 0.0);
+        path.end = END_SURFACE;
+    }
+    path.t_end = t_end + shift;
+
+    int n = int(sky.radii.w);
+    vec3 tau = vec3(0.0);
+    float previous_t = 0.0;
+    float h_start = c_bottom / (sqrt(rb * rb + c_bottom) + rb);
+    vec3 previous_extinction = extinction(densities(h_start));
+    for (int i = 0; i < n; ++i) {
+        float u = (float(i) + 0.5) / float(n);
+        // Inside the atmosphere samples crowd near the camera (t = L u^2),
+        // where the density is highest; from space they are uniform.
+        float t = inside ? t_end * u * u : t_end * u;
+        float dt = inside ? t_end * 2.0 * u / float(n) : t_end / float(n);
+        float r;
+        float h = altitude(c_bottom, b, t, r);
+        vec3 rho = densities(h);
+        vec3 e = extinction(rho);
+        tau += 0.5 * (previous_extinction + e) * (t - previous_t);
+        previous_t = t;
+        previous_extinction = e;
+        bool lit;
+        vec3 sun_tau = sun_optical_depth(h, r, o + t * d, lit);
+        // One exponential for both paths; no branch (lanes stay together).
+        vec3 weight = exp(-(tau + sun_tau)) * (lit ? dt : 0.0);
+        path.rayleigh += sky.rayleigh.xyz * (rho.x * weight);
+        path.mie += sky.mie_scattering.xyz * (rho.y * weight);
+    }
+    {
+        float r;
+        float h = altitude(c_bottom, b, t_end, r);
+        tau += 0.5 * (previous_extinction + extinction(densities(h))) * (t_end - previous_t);
+    }
+    path.transmittance = exp(-tau);
+    return path;
+}
+
+// The Rayleigh phase and the Cornette-Shanks Mie phase at cosine mu
+// between the view ray and the sun, both normalised over the sphere.
+vec2 phases(float mu) {
+    float g = sky.mie_extinction.w;
+    float phase_r = 3.0 / (16.0 * PI) * (1.0 + mu * mu);
+    float phase_m = 3.0 / (8.0 * PI) * (1.0 - g * g) * (1.0 + mu * mu)
+        / ((2.0 + g * g) * pow(1.0 + g * g - 2.0 * g * mu, 1.5));
+    return vec2(phase_r, phase_m);
+}
+
+// The sunlit ground at p (relative to the centre, on the planet): the
+// Lambertian albedo under the transmitted sun, no skylight.
+vec3 ground_radiance(vec3 p) {
+    vec3 normal = normalize(p);
+    vec3 sun = sky.sun_direction.xyz;
+    float cos_sun = dot(normal, sun);
+    bool lit;
+    vec3 sun_tau = sun_optical_depth(0.0, sky.radii.x, p, lit);
+    if (cos_sun > 0.0 && lit) {
+        return sky.ground_albedo.xyz / PI * cos_sun * sky.sun_irradiance.xyz * exp(-sun_tau);
+    }
+    return vec3(0.0);
+}
+
+// The sky-view table: the Path sums for directions around the camera, by
+// nadir angle (the angle from straight down) × azimuth from the sun's
+// side (0..pi: the sky is symmetric about the plane of the zenith and the
+// sun). Rows 0..H/2-1 are directions that miss the ground, from the
+// horizon (row 0) to the zenith or, from space, the atmosphere's edge;
+// rows H/2..H-1 hit the ground, from the horizon (row H/2) to the nadir.
+// Both halves put a texel centre on the horizon and square their row
+// coordinate, so texels crowd where the sky changes fastest and no filter
+// mixes ground and sky. The table is an RGBA32F image three times as
+// wide: the Rayleigh sums in columns 0..W-1, the Mie sums in W..2W-1, the
+// transmittance in 2W..3W-1.
+
+// The direction of the texel at column x, row y.
+vec3 sky_view_direction(int x, int y) {
+    int w = int(sky.sky_view.x);
+    int half_h = int(sky.sky_view.y) / 2;
+    float s;
+    float nadir;
+    float horizon = sky.zenith.w;
+    if (y < half_h) {
+        s = float(y) / float(half_h - 1);
+        nadir = horizon + (sky.azimuth_zero.w - horizon) * s * s;
+    } else {
+        s = float(y - half_h) / float(half_h - 1);
+        nadir = horizon - horizon * s * s;
+    }
+    float azimuth = PI * float(x) / float(w - 1);
+    vec3 z = sky.zenith.xyz;
+    vec3 ax = sky.azimuth_zero.xyz;
+    vec3 ay = cross(z, ax);
+    return -z * cos(nadir) + (ax * cos(azimuth) + ay * sin(azimuth)) * sin(nadir);
+}
+
+// Continuous texel coordinates (column, row) of direction d, and whether
+// it is in the ground half. Angles from atan of a cross and a dot
+// product stay precise near the horizon and the nadir, where acos of a
+// dot product would not.
+vec2 sky_view_coords(vec3 d, out bool below) {
+    vec3 z = sky.zenith.xyz;
+    float nadir = atan(length(cross(d, z)), -dot(d, z));
+    vec3 ax = sky.azimuth_zero.xyz;
+    float cx = dot(d, ax);
+    float cy = abs(dot(d, cross(z, ax)));
+    float azimuth = (cx == 0.0 && cy == 0.0) ? 0.0 : atan(cy, cx);
+    int w = int(sky.sky_view.x);
+    int half_h = int(sky.sky_view.y) / 2;
+    float horizon = sky.zenith.w;
+    below = nadir < horizon;
+    float s;
+    if (below) {
+        s = sqrt(clamp((horizon - nadir) / horizon, 0.0, 1.0));
+    } else {
+        float span = sky.azimuth_zero.w - horizon;
+        s = sqrt(clamp((nadir - horizon) / max(span, 1e-30), 0.0, 1.0));
+    }
+    return vec2(azimuth / PI * float(w - 1), s * float(half_h - 1));
+}

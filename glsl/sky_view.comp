@@ -1,0 +1,27 @@
+#version 450
+// The sky-view table: the atmosphere's single-scattering sums (without the
+// phase functions) for a grid of directions around the camera, marched
+// exactly as the atmosphere subpass marches a pixel (include/atmosphere.glsl
+// has the march and the table's layout). One invocation per direction.
+
+#include "atmosphere.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = 2, rgba32f) uniform writeonly image2D sky_view_table;
+
+void main() {
+    int w = int(sky.sky_view.x);
+    int h = int(sky.sky_view.y);
+    int x = int(gl_GlobalInvocationID.x);
+    int y = int(gl_GlobalInvocationID.y);
+    if (x >= w || y >= h) {
+        return;
+    }
+    // Rows below the first half hit the ground; the first half's rows
+    // never do, even the horizon row, which grazes it.
+    Path path = march(sky_view_direction(x, y), INF, y < h / 2 ? 1 : 2);
+    imageStore(sky_view_table, ivec2(x, y), vec4(path.rayleigh, 0.0));
+    imageStore(sky_view_table, ivec2(x + w, y), vec4(path.mie, 0.0));
+    imageStore(sky_view_table, ivec2(x + 2 * w, y), vec4(path.transmittance, 0.0));
+}

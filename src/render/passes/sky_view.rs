@@ -1,0 +1,66 @@
+//! The sky-view table: before the render pass, a compute dispatch marches
+//! the atmosphere for a grid of directions around the camera (azimuth from
+//! the sun's side × nadir angle, `glsl/sky_view.comp`), so the atmosphere
+//! subpass reads the sky and the ground from it instead of marching every
+//! pixel. Without a surface in front, a pixel's sums depend only on its
+//! direction; the phase functions (the only fast-varying part near the
+//! sun), the ground's lighting and the sun disc stay per pixel.
+//!
+//! The idea is Hillaire's (2020) sky-view table; here it stores the
+//! phase-free Rayleigh and Mie sums and the transmittance, and splits the
+//! ground and the sky at the horizon so no filter mixes them.
+
+use super::atmosphere::table_constants;
+use super::{FrameResources, PassSetup, RecordPass};
+use crate::render::RenderError;
+use crate::shaders;
+use crate::vk::{CommandBuffer, ComputePipeline, ImageUse, PipelineLayout, ShaderModule};
+
+/// Invocations per workgroup side (`local_size` in the shader).
+const GROUP: u32 = 8;
+
+/// Fields drop in order: the pipeline before its layout.
+pub struct SkyViewPass {
+    pipeline: ComputePipeline,
+    layout: PipelineLayout,
+    size: (u32, u32),
+}
+
+pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+    let resources = setup.sky_resources()?;
+    let (sky, size) = match (&setup.scene.sky, resources.sky_view) {
+        (Some(sky), Some(size)) => (sky, size),
+        _ => {
+            return Err(RenderError::Frame(
+                "the sky-view pass needs a scene with [atmosphere] and a sky-view table".into(),
+            ))
+        }
+    };
+    let layout = PipelineLayout::new(setup.ctx, &[&resources.layout])?;
+    let shader = ShaderModule::new(setup.ctx, shaders::SKY_VIEW_COMP.base())?;
+    let pipeline = ComputePipeline::new(setup.ctx, &layout, &shader, &table_constants(sky))?;
+    Ok(Box::new(SkyViewPass {
+        pipeline,
+        layout,
+        size,
+    }))
+}
+
+impl RecordPass for SkyViewPass {
+    fn record(&self, cmd: &CommandBuffer, frame: &FrameResources<'_>) -> Result<(), RenderError> {
+        let sky = frame.sky()?;
+        let image = sky
+            .sky_view_image
+            .as_ref()
+            .ok_or_else(|| RenderError::Frame("the sky-view pass has no sky-view table".into()))?;
+        // Every texel is rewritten: the previous submission's reads must
+        // finish, its contents are not needed.
+        cmd.transition_discarding(image, ImageUse::ComputeWrite);
+        cmd.bind_compute_pipeline(&self.pipeline);
+        cmd.bind_compute_descriptor_set(&self.layout, 0, &sky.set);
+        cmd.dispatch([self.size.0.div_ceil(GROUP), self.size.1.div_ceil(GROUP), 1]);
+        // The atmosphere subpass samples what this wrote.
+        cmd.transition(image, ImageUse::FragmentSampled);
+        Ok(())
+    }
+}

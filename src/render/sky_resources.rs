@@ -1,0 +1,327 @@
+//! GPU resources of the atmosphere, shared by the passes that march it
+//! (the sky-view table's compute pass and the atmosphere subpass): the
+//! uniform block, the [`OpticalDepthTable`] baked on the CPU and uploaded
+//! as an RGBA32F image (read texel by texel and filtered by hand in the
+//! shaders), and the sky-view table's image, written on the device.
+//!
+//! Tables are images, not storage buffers: lavapipe turns a storage-buffer
+//! read at a per-pixel index into a bounds-checked loop over the SIMD
+//! lanes, while a texel fetch is one gather; on the sky-view lookup
+//! (twelve reads a pixel) that measured about five times the cost.
+//! Everything planet-scale is computed here in f64 and given to the
+//! shaders camera-relative.
+
+use super::plan::FramePlan;
+use super::RenderError;
+use crate::atmosphere::OpticalDepthTable;
+use crate::scene::{Camera, Sky, TableFilter};
+use crate::vk::{
+    Buffer, BufferUsage, CommandBuffer, Context, DescriptorBinding, DescriptorPool, DescriptorSet,
+    DescriptorSetLayout, DescriptorType, Format, Image, ImageAspectFlags, ImageDesc,
+    ImageUsageFlags, Sampler, SamplerFilter, ShaderStageFlags,
+};
+use glam::DVec3;
+use std::sync::Arc;
+
+/// The uniform block of `glsl/include/atmosphere.glsl`, std140 (vec4s only).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SkyUniforms {
+    pub forward: [f32; 4],
+    pub right: [f32; 4],
+    pub up: [f32; 4],
+    pub origin: [f32; 4],
+    pub terms: [f32; 4],
+    pub radii: [f32; 4],
+    pub rayleigh: [f32; 4],
+    pub mie_scattering: [f32; 4],
+    pub mie_extinction: [f32; 4],
+    pub ozone_absorption: [f32; 4],
+    pub ozone_layer: [f32; 4],
+    pub sun_direction: [f32; 4],
+    pub sun_irradiance: [f32; 4],
+    pub ground_albedo: [f32; 4],
+    pub viewport: [f32; 4],
+    pub zenith: [f32; 4],
+    pub azimuth_zero: [f32; 4],
+    pub sky_view: [f32; 4],
+}
+
+fn v4(v: DVec3, w: f64) -> [f32; 4] {
+    [v.x as f32, v.y as f32, v.z as f32, w as f32]
+}
+
+/// The pixel ray basis of `camera` at `aspect`: forward, and the right and
+/// up vectors scaled so that forward + right·x_ndc − up·y_ndc is the ray
+/// through NDC (x, y) at unit view depth. In f64, as the view matrix.
+pub fn ray_basis(camera: &Camera, aspect: f64) -> (DVec3, DVec3, DVec3) {
+    let eye = camera.eye.as_dvec3();
+    let forward = (camera.look_at.as_dvec3() - eye).normalize();
+    let right = forward.cross(camera.up.as_dvec3()).normalize();
+    let up = right.cross(forward);
+    let tan = (f64::from(camera.fov_y_degrees).to_radians() * 0.5).tan();
+    (forward, right * (tan * aspect), up * tan)
+}
+
+/// The uniform block for `sky` seen by `camera` on a `width`×`height`
+/// target, with a table of `table_size`.
+pub fn uniforms(
+    sky: &Sky,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    table_size: (u32, u32),
+) -> SkyUniforms {
+    let a = &sky.atmosphere;
+    let s = &sky.sun;
+    let (forward, right, up) = ray_basis(camera, f64::from(width) / f64::from(height));
+    let origin = camera.eye.as_dvec3() - a.center;
+    let length = origin.length();
+    let c = |radius: f64| (length - radius) * (length + radius);
+    // Reversed-Z depth = A + B / view depth (see Camera::projection).
+    let near = f64::from(camera.near);
+    let (depth_a, depth_b) = match camera.far {
+        Some(far) => {
+            let far = f64::from(far);
+            (-near / (far - near), near * far / (far - near))
+        }
+        None => (0.0, near),
+    };
+    let big_h = ((a.top_radius - a.bottom_radius) * (a.top_radius + a.bottom_radius)).sqrt();
+    // The sky-view table's frame: the camera's zenith, the azimuth origin
+    // towards the sun, and the nadir angles of the ground's horizon and
+    // of the atmosphere's edge, as atan2 of a tangent and a radius, which
+    // stays precise a metre above the ground and at the Moon's distance.
+    let zenith = origin / length;
+    let towards_sun = s.direction - zenith * zenith.dot(s.direction);
+    let azimuth_zero = if towards_sun.length() > 1e-9 {
+        towards_sun.normalize()
+    } else {
+        zenith.any_orthonormal_vector()
+    };
+    let tangent_nadir = |radius: f64| {
+        let tangent = (length - radius).max(0.0) * (length + radius);
+        radius.atan2(tangent.sqrt())
+    };
+    let edge = if length >= a.top_radius {
+        tangent_nadir(a.top_radius)
+    } else {
+        std::f64::consts::PI
+    };
+    let (view_w, view_h) = sky.sky_view.unwrap_or((0, 0));
+    let disc = if s.disc {
+        1.0 / (std::f64::consts::PI * s.angular_radius * s.angular_radius)
+    } else {
+        0.0
+    };
+    SkyUniforms {
+        forward: v4(forward, 0.0),
+        right: v4(right, 0.0),
+        up: v4(up, 0.0),
+        origin: v4(origin, length),
+        terms: [
+            c(a.bottom_radius) as f32,
+            c(a.top_radius) as f32,
+            depth_a as f32,
+            depth_b as f32,
+        ],
+        radii: [
+            a.bottom_radius as f32,
+            a.top_radius as f32,
+            big_h as f32,
+            sky.samples as f32,
+        ],
+        rayleigh: v4(a.rayleigh_scattering, 1.0 / a.rayleigh_scale_height),
+        mie_scattering: v4(a.mie_scattering, 1.0 / a.mie_scale_height),
+        mie_extinction: v4(a.mie_extinction, a.mie_g),
+        ozone_absorption: v4(a.ozone_absorption, a.ozone_layer[0]),
+        ozone_layer: [
+            a.ozone_layer[1] as f32,
+            a.ozone_layer[2] as f32,
+            table_size.0 as f32,
+            table_size.1 as f32,
+        ],
+        sun_direction: v4(s.direction, s.angular_radius.cos()),
+        sun_irradiance: v4(s.irradiance, disc),
+        ground_albedo: v4(a.ground_albedo, crate::atmosphere::table::LOG_OFFSET),
+        viewport: [
+            width as f32,
+            height as f32,
+            1.0 / width as f32,
+            1.0 / height as f32,
+        ],
+        zenith: v4(zenith, tangent_nadir(a.bottom_radius)),
+        azimuth_zero: v4(azimuth_zero, edge),
+        sky_view: [view_w as f32, view_h as f32, 0.0, 0.0],
+    }
+}
+
+/// Both tables hold four 32-bit floats a texel.
+const TABLE_FORMAT: Format = Format::R32G32B32A32_SFLOAT;
+
+/// Fields drop in order: the set before its pool, the layout after the
+/// pipelines that use it (owned by the passes, dropped first).
+pub struct SkyResources {
+    /// Binding 0: uniforms; 1: optical-depth table; 2: the sky-view table
+    /// written (compute); 3: the sky-view table read (fragment).
+    pub set: DescriptorSet,
+    _pool: DescriptorPool,
+    pub layout: DescriptorSetLayout,
+    uniforms: Buffer,
+    /// The optical-depth table's size, which the uniforms carry.
+    table_size: (u32, u32),
+    _table: Image,
+    /// The sky-view table, when the scene has one: three panels of
+    /// width × height (Rayleigh, Mie, transmittance) side by side.
+    pub sky_view_image: Option<Image>,
+    _sampler: Sampler,
+    /// The sky-view table's size (directions), when there is one.
+    pub sky_view: Option<(u32, u32)>,
+}
+
+impl SkyResources {
+    /// Rewrites the uniforms for `sky` (its sun) seen by `camera`, between
+    /// frames; the tables do not depend on either (the sky-view table is
+    /// computed from the uniforms in every frame).
+    pub fn set_view(&mut self, sky: &Sky, camera: &Camera, plan: &FramePlan) {
+        let block = uniforms(sky, camera, plan.width, plan.height, self.table_size);
+        self.uniforms.write(0, bytemuck::bytes_of(&block));
+    }
+
+    pub fn new(
+        ctx: &Arc<Context>,
+        sky: &Sky,
+        camera: &Camera,
+        plan: &FramePlan,
+    ) -> Result<SkyResources, RenderError> {
+        let table = OpticalDepthTable::bake(
+            &sky.atmosphere,
+            sky.table_size.0,
+            sky.table_size.1,
+            sky.table_mapping,
+        );
+        log::info!(
+            "optical-depth table {}x{} baked in {:.3} s",
+            table.width,
+            table.height,
+            table.bake_seconds
+        );
+        let block = uniforms(
+            sky,
+            camera,
+            plan.width,
+            plan.height,
+            (table.width, table.height),
+        );
+        let uniforms = Buffer::with_data(
+            ctx,
+            "atmosphere",
+            bytemuck::bytes_of(&block),
+            BufferUsage::Uniform,
+        )?;
+        let table_image = Image::new(
+            ctx,
+            "optical-depth table",
+            ImageDesc {
+                width: table.width,
+                height: table.height,
+                format: TABLE_FORMAT,
+                usage: ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_DST,
+                mip_levels: 1,
+                aspect: ImageAspectFlags::COLOR,
+            },
+        )?;
+        let staging = Buffer::with_data(
+            ctx,
+            "optical-depth table staging",
+            bytemuck::cast_slice(&table.texels),
+            BufferUsage::Upload,
+        )?;
+        CommandBuffer::run_once(ctx, |cmd| {
+            cmd.copy_buffer_to_image(&staging, &table_image);
+            cmd.transition(&table_image, crate::vk::ImageUse::ShaderSampled);
+        })?;
+        let sky_view_image = sky
+            .sky_view
+            .map(|(w, h)| {
+                Image::new(
+                    ctx,
+                    "sky-view table",
+                    ImageDesc {
+                        width: 3 * w,
+                        height: h,
+                        format: TABLE_FORMAT,
+                        usage: ImageUsageFlags::STORAGE | ImageUsageFlags::SAMPLED,
+                        mip_levels: 1,
+                        aspect: ImageAspectFlags::COLOR,
+                    },
+                )
+            })
+            .transpose()?;
+        // Tables are read with texelFetch and filtered by hand, except the
+        // optical-depth table with od_filter = hardware: then the sampler
+        // filters it (texel centres: the shader adds half a texel).
+        let filter = if sky.table_filter == TableFilter::Hardware {
+            if !crate::vk::supports_linear_filter(ctx, TABLE_FORMAT) {
+                return Err(RenderError::Frame(format!(
+                    "atmosphere.od_filter = \"hardware\": this device cannot filter {TABLE_FORMAT:?} \
+                     images linearly; use \"manual\""
+                )));
+            }
+            SamplerFilter::Bilinear
+        } else {
+            SamplerFilter::Nearest
+        };
+        let sampler = Sampler::clamped(ctx, filter)?;
+        let both = ShaderStageFlags::FRAGMENT | ShaderStageFlags::COMPUTE;
+        let mut bindings = vec![
+            DescriptorBinding {
+                binding: 0,
+                kind: DescriptorType::UNIFORM_BUFFER,
+                stages: both,
+            },
+            DescriptorBinding {
+                binding: 1,
+                kind: DescriptorType::COMBINED_IMAGE_SAMPLER,
+                stages: both,
+            },
+        ];
+        if sky_view_image.is_some() {
+            bindings.push(DescriptorBinding {
+                binding: 2,
+                kind: DescriptorType::STORAGE_IMAGE,
+                stages: ShaderStageFlags::COMPUTE,
+            });
+            bindings.push(DescriptorBinding {
+                binding: 3,
+                kind: DescriptorType::COMBINED_IMAGE_SAMPLER,
+                stages: ShaderStageFlags::FRAGMENT,
+            });
+        }
+        let layout = DescriptorSetLayout::new(ctx, &bindings)?;
+        let pool = DescriptorPool::for_layouts(ctx, &[&layout])?;
+        let set = pool.allocate(&layout)?;
+        set.write_buffer(
+            0,
+            DescriptorType::UNIFORM_BUFFER,
+            &uniforms,
+            uniforms.size(),
+        );
+        set.write_sampled_image(1, &table_image, &sampler);
+        if let Some(image) = &sky_view_image {
+            set.write_storage_image(2, image);
+            set.write_sampled_image(3, image, &sampler);
+        }
+        Ok(SkyResources {
+            set,
+            _pool: pool,
+            layout,
+            uniforms,
+            table_size: (table.width, table.height),
+            _table: table_image,
+            sky_view_image,
+            _sampler: sampler,
+            sky_view: sky.sky_view,
+        })
+    }
+}
