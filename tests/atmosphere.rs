@@ -10,7 +10,7 @@ mod common;
 use aerial::atmosphere::reference;
 use aerial::render::Pixels;
 use aerial::scene::Scene;
-use glam::{DMat4, DVec3, DVec4};
+use glam::DVec3;
 use std::path::Path;
 
 fn example(name: &str) -> Scene {
@@ -28,29 +28,6 @@ fn sky_scene(eye: [f64; 3], look_at: [f64; 3], fov: f64, sun: [f64; 3]) -> Scene
          [camera]\neye = {eye:?}\nlook_at = {look_at:?}\nfov_y = {fov}\n\
          [sun]\ndirection = {sun:?}\n[atmosphere]\n"
     ))
-}
-
-/// The world-space ray through the centre of pixel (x, y): two points of
-/// the pixel unprojected with the inverse view-projection in f64.
-fn pixel_ray(scene: &Scene, x: u32, y: u32) -> DVec3 {
-    let (w, h) = (scene.output.width, scene.output.height);
-    let vp = scene
-        .camera
-        .view_projection(scene.output.aspect())
-        .as_dmat4();
-    let inverse: DMat4 = vp.inverse();
-    let ndc_x = (f64::from(x) + 0.5) / f64::from(w) * 2.0 - 1.0;
-    let ndc_y = (f64::from(y) + 0.5) / f64::from(h) * 2.0 - 1.0;
-    let unproject = |depth: f64| {
-        let p = inverse * DVec4::new(ndc_x, ndc_y, depth, 1.0);
-        p.truncate() / p.w
-    };
-    (unproject(0.5) - unproject(1.0)).normalize()
-}
-
-fn hdr_pixel(p: &Pixels<f32>, x: u32, y: u32) -> DVec3 {
-    let c = common::pixel(p, x, y);
-    DVec3::new(c[0].into(), c[1].into(), c[2].into())
 }
 
 fn assert_finite_non_negative(label: &str, hdr: &Pixels<f32>) {
@@ -76,7 +53,7 @@ fn sky_errors(label: &str, scene: &Scene, hdr: &Pixels<f32>) -> (f64, f64) {
     for j in 0..6 {
         for i in 0..8 {
             let (x, y) = (w * (2 * i + 1) / 16, h * (2 * j + 1) / 12);
-            let d = pixel_ray(scene, x, y);
+            let d = common::pixel_ray(scene, x, y);
             if d.dot(sky.sun.direction) > 5f64.to_radians().cos() {
                 continue;
             }
@@ -85,7 +62,7 @@ fn sky_errors(label: &str, scene: &Scene, hdr: &Pixels<f32>) -> (f64, f64) {
                 _ => continue,
             }
             let exact = reference::radiance(&sky.atmosphere, &sky.sun, origin, d);
-            let got = hdr_pixel(hdr, x, y);
+            let got = common::hdr_pixel(hdr, x, y);
             for c in 0..3 {
                 // Relative to the pixel's brightest channel, so a channel
                 // that is nearly black (blue at sunset) is not divided by ~0.
@@ -175,7 +152,7 @@ fn the_rendered_sky_is_blue_at_noon_and_redder_towards_the_setting_sun() {
     let noon = example("earth_noon.toml");
     let run = common::render(&noon, true);
     let hdr = run.hdr.unwrap();
-    let up = hdr_pixel(&hdr, noon.output.width / 2, noon.output.height / 8);
+    let up = common::hdr_pixel(&hdr, noon.output.width / 2, noon.output.height / 8);
     assert!(up.z > up.y && up.y > up.x, "noon sky {up}");
 
     let sunset = example("earth_sunset.toml");
@@ -189,15 +166,15 @@ fn the_rendered_sky_is_blue_at_noon_and_redder_towards_the_setting_sun() {
     let mut best = (0, 0, -1.0);
     for y in 0..h {
         for x in (0..w).step_by(4) {
-            let c = pixel_ray(&sunset, x, y).dot(sky.sun.direction);
+            let c = common::pixel_ray(&sunset, x, y).dot(sky.sun.direction);
             if c > best.2 {
                 best = (x, y, c);
             }
         }
     }
     // 3° above the sun, so the disc itself is not the probe.
-    let near_sun = hdr_pixel(&hdr, best.0, best.1.saturating_sub(h * 3 / 70));
-    let top = hdr_pixel(&hdr, best.0, 0);
+    let near_sun = common::hdr_pixel(&hdr, best.0, best.1.saturating_sub(h * 3 / 70));
+    let top = common::hdr_pixel(&hdr, best.0, 0);
     let red_over_blue = |c: DVec3| c.x / c.z.max(1e-12);
     assert!(
         red_over_blue(near_sun) > 3.0 * red_over_blue(top) && red_over_blue(near_sun) > 1.0,
@@ -259,13 +236,13 @@ fn the_hdr_image_stays_finite_from_the_ground_to_space_and_at_night() {
     );
     let run = common::render(&scene, true);
     let hdr = run.hdr.unwrap();
-    let centre = hdr_pixel(&hdr, 48, 32);
+    let centre = common::hdr_pixel(&hdr, 48, 32);
     let sky = scene.sky.as_ref().unwrap();
     let exact = reference::radiance(
         &sky.atmosphere,
         &sky.sun,
         scene.camera.eye.as_dvec3() - sky.atmosphere.center,
-        pixel_ray(&scene, 48, 32),
+        common::pixel_ray(&scene, 48, 32),
     );
     println!("1e8 m, centre: {centre} against {exact}");
     assert!(
@@ -273,7 +250,7 @@ fn the_hdr_image_stays_finite_from_the_ground_to_space_and_at_night() {
         "from 1e8 m: {centre} against {exact}"
     );
     // A corner misses the planet and the atmosphere: black.
-    assert_eq!(hdr_pixel(&hdr, 0, 0), DVec3::ZERO);
+    assert_eq!(common::hdr_pixel(&hdr, 0, 0), DVec3::ZERO);
 }
 
 #[test]
@@ -349,9 +326,9 @@ fn the_limb_glows_from_orbit() {
     let x = 48;
     let mut limb = 0;
     for y in 0..64 {
-        let d = pixel_ray(&scene, x, y);
+        let d = common::pixel_ray(&scene, x, y);
         if let Some((_, _, false)) = reference::atmosphere_segment(&sky.atmosphere, origin, d) {
-            let got = hdr_pixel(&hdr, x, y);
+            let got = common::hdr_pixel(&hdr, x, y);
             let exact = reference::radiance(&sky.atmosphere, &sky.sun, origin, d);
             println!("limb row {y}: {got} against {exact}");
             assert!(

@@ -13,9 +13,9 @@
 mod common;
 
 use aerial::atmosphere::{reference, sun_light_at};
-use aerial::render::{render_reference, Pixels};
+use aerial::render::render_reference;
 use aerial::scene::Scene;
-use glam::{DMat4, DQuat, DVec3, DVec4};
+use glam::{DQuat, DVec3};
 
 /// Sun directions (towards the sun), each in the XY plane.
 const NOON: [f64; 3] = [0.0, 1.0, 0.0];
@@ -61,29 +61,6 @@ fn panel_scene(sun: [f64; 3], lighting: &str) -> (Scene, DVec3) {
     (scene, normal)
 }
 
-/// The world-space ray through the centre of pixel (x, y), from the
-/// inverse view-projection in f64.
-fn pixel_ray(scene: &Scene, x: u32, y: u32) -> DVec3 {
-    let (w, h) = (scene.output.width, scene.output.height);
-    let inverse: DMat4 = scene
-        .camera
-        .view_projection(scene.output.aspect())
-        .as_dmat4()
-        .inverse();
-    let ndc_x = (f64::from(x) + 0.5) / f64::from(w) * 2.0 - 1.0;
-    let ndc_y = (f64::from(y) + 0.5) / f64::from(h) * 2.0 - 1.0;
-    let unproject = |depth: f64| {
-        let p = inverse * DVec4::new(ndc_x, ndc_y, depth, 1.0);
-        p.truncate() / p.w
-    };
-    (unproject(0.5) - unproject(1.0)).normalize()
-}
-
-fn hdr_pixel(p: &Pixels<f32>, x: u32, y: u32) -> DVec3 {
-    let c = common::pixel(p, x, y);
-    DVec3::new(c[0].into(), c[1].into(), c[2].into())
-}
-
 /// Probe pixels on the panel: the centre and four around it.
 const PROBES: [(u32, u32); 5] = [(16, 16), (10, 10), (22, 10), (10, 22), (22, 22)];
 
@@ -93,7 +70,7 @@ fn expected(scene: &Scene, normal: DVec3, x: u32, y: u32) -> DVec3 {
     let sky = scene.sky.as_ref().unwrap();
     let a = &sky.atmosphere;
     let eye = scene.camera.eye.as_dvec3();
-    let d = pixel_ray(scene, x, y);
+    let d = common::pixel_ray(scene, x, y);
     let t = (DVec3::from(CENTRE) - eye).dot(normal) / d.dot(normal);
     let point = eye + t * d;
     let cos = normal.dot(sky.sun.direction).max(0.0);
@@ -120,8 +97,8 @@ fn check_panel(label: &str, sun: [f64; 3], lighting: &str) -> DVec3 {
     for (x, y) in PROBES {
         let want = expected(&scene, normal, x, y);
         for (got, renderer) in [
-            (hdr_pixel(&hdr, x, y), "GPU"),
-            (hdr_pixel(&cpu, x, y), "CPU"),
+            (common::hdr_pixel(&hdr, x, y), "GPU"),
+            (common::hdr_pixel(&cpu, x, y), "CPU"),
         ] {
             for c in 0..3 {
                 // Relative to the channel itself where it is lit; the night
@@ -141,7 +118,7 @@ fn check_panel(label: &str, sun: [f64; 3], lighting: &str) -> DVec3 {
         }
     }
     println!("{label} ({lighting}): worst relative error {worst:.2e}");
-    hdr_pixel(&hdr, 16, 16)
+    common::hdr_pixel(&hdr, 16, 16)
 }
 
 #[test]

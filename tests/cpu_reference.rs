@@ -88,27 +88,25 @@ fn unsupported_features_are_named() {
     assert!(err.contains("ellipsoid") && err.contains("torus"), "{err}");
 }
 
-#[test]
-fn sweep_error_against_the_cpu_reference_falls_with_tessellation() {
-    let out = std::env::temp_dir().join(format!("aerial-cpuref-sweep-{}", std::process::id()));
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/sweep/spheres.toml");
-    let status = common::aerial()
-        .arg("sweep")
-        .arg(&scene)
-        .args([
-            "--reference",
-            "cpu",
-            "--validate",
-            "--frames",
-            "1",
-            "--warmup",
-            "0",
-        ])
-        .args(["--knob", "size=96x54", "--knob", "tessellation=0.125,0.5,2"])
-        .arg("--out-dir")
-        .arg(&out)
-        .output()
-        .unwrap();
+/// The RMSE column of `aerial sweep SCENE --reference cpu` over `knobs`
+/// (one timed frame per combination, under validation), in row order.
+fn sweep_rmse_against_cpu(tag: &str, scene: &str, knobs: &[&str]) -> Vec<f64> {
+    let out = std::env::temp_dir().join(format!("aerial-cpuref-{tag}-{}", std::process::id()));
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join(scene);
+    let mut command = common::aerial();
+    command.arg("sweep").arg(&scene).args([
+        "--reference",
+        "cpu",
+        "--validate",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+    ]);
+    for knob in knobs {
+        command.args(["--knob", knob]);
+    }
+    let status = command.arg("--out-dir").arg(&out).output().unwrap();
     assert!(
         status.status.success(),
         "{}",
@@ -118,14 +116,19 @@ fn sweep_error_against_the_cpu_reference_falls_with_tessellation() {
     std::fs::remove_dir_all(&out).ok();
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
-    let rmse: Vec<f64> = lines
-        .map(|l| {
-            l.split(',').collect::<Vec<_>>()[col("rmse")]
-                .parse()
-                .unwrap()
-        })
-        .collect();
+    let col = header.iter().position(|h| *h == "rmse").unwrap();
+    lines
+        .map(|l| l.split(',').collect::<Vec<_>>()[col].parse().unwrap())
+        .collect()
+}
+
+#[test]
+fn sweep_error_against_the_cpu_reference_falls_with_tessellation() {
+    let rmse = sweep_rmse_against_cpu(
+        "sweep",
+        "assets/sweep/spheres.toml",
+        &["size=96x54", "tessellation=0.125,0.5,2"],
+    );
     assert_eq!(rmse.len(), 3);
     assert!(
         rmse[0] > rmse[1] && rmse[1] > rmse[2] && rmse[2] > 0.0,
@@ -139,47 +142,11 @@ fn sweep_error_against_the_cpu_reference_falls_with_tessellation() {
 /// sky it would stay at the sky's own level).
 #[test]
 fn sweep_error_against_the_cpu_reference_falls_with_atmosphere_samples() {
-    let out = std::env::temp_dir().join(format!("aerial-cpuref-sky-{}", std::process::id()));
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/earth_sunset.toml");
-    let status = common::aerial()
-        .arg("sweep")
-        .arg(&scene)
-        .args([
-            "--reference",
-            "cpu",
-            "--validate",
-            "--frames",
-            "1",
-            "--warmup",
-            "0",
-        ])
-        .args([
-            "--knob",
-            "size=32x18",
-            "--knob",
-            "atmosphere_samples=2,8,32",
-        ])
-        .arg("--out-dir")
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        status.status.success(),
-        "{}",
-        String::from_utf8_lossy(&status.stderr)
+    let rmse = sweep_rmse_against_cpu(
+        "sky",
+        "assets/scenes/earth_sunset.toml",
+        &["size=32x18", "atmosphere_samples=2,8,32"],
     );
-    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
-    std::fs::remove_dir_all(&out).ok();
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
-    let rmse: Vec<f64> = lines
-        .map(|l| {
-            l.split(',').collect::<Vec<_>>()[col("rmse")]
-                .parse()
-                .unwrap()
-        })
-        .collect();
     assert_eq!(rmse.len(), 3);
     // Second order in the sample count: each fourfold step should cut the
     // error by far more than 4.

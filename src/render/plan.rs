@@ -728,9 +728,17 @@ mod tests {
         let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);
         assert_eq!(
             plan.pass_names(),
-            vec!["opaque", "atmosphere", "tonemap", "readback"]
+            vec!["sky view", "opaque", "atmosphere", "tonemap", "readback"]
         );
         assert!(plan.has_attachment(attachment::SURFACE));
+        // Without the sky-view table, no compute pass before the render pass.
+        let mut marched = scene.clone();
+        marched.sky.as_mut().unwrap().sky_view = None;
+        let plan = FramePlan::new(&marched, &SceneGeometry::new(&marched).unwrap(), false);
+        assert_eq!(
+            plan.pass_names(),
+            vec!["opaque", "atmosphere", "tonemap", "readback"]
+        );
         // LDR output still goes through HDR: the atmosphere writes it.
         scene.tone_map.operator = ToneMapOperator::None;
         let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);

@@ -214,11 +214,18 @@ pub fn scene_memory(
         total = total.saturating_add(need);
     }
     if let Some(sky) = &scene.sky {
-        // The optical-depth table: its texels on the CPU and in the buffer.
+        // The optical-depth table: its texels on the CPU, in the staging
+        // buffer and in the image.
         let (w, h) = sky.table_size;
-        let need = u64::from(w) * u64::from(h) * 16 * 2;
+        let need = u64::from(w) * u64::from(h) * 16 * 3;
         budget.check(format!("optical-depth table {w}x{h}"), need)?;
         total = total.saturating_add(need);
+        // The sky-view table: three RGBA32F panels of w x h.
+        if let Some((w, h)) = sky.sky_view {
+            let need = u64::from(w) * u64::from(h) * 16 * 3;
+            budget.check(format!("sky-view table {w}x{h}"), need)?;
+            total = total.saturating_add(need);
+        }
     }
     if total > budget.bytes {
         // Each part fits but the sum does not: name the biggest parts.

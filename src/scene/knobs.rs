@@ -316,7 +316,7 @@ pub const KNOBS: &[Knob] = &[
     },
     Knob {
         name: "sky_view",
-        best: Best::LastListed,
+        best: Best::Fixed("off"),
         values: "off | WIDTHxHEIGHT: directions of the sky-view table that sky and ground pixels read instead of marching",
         apply: |s, v| {
             let size = if v == "off" {

@@ -724,6 +724,13 @@ mod tests {
                 "[atmosphere]\nod_table_size = [256, 5000]\n",
                 "atmosphere.od_table_size",
             ),
+            (
+                "[atmosphere]\nsky_view = [128, 255]\n",
+                "atmosphere.sky_view",
+            ),
+            ("[atmosphere]\nsky_view = [1, 256]\n", "atmosphere.sky_view"),
+            ("[atmosphere]\nsky_view = [128, 2]\n", "atmosphere.sky_view"),
+            ("[atmosphere]\nsky_view = \"on\"\n", "atmosphere.sky_view"),
         ] {
             let text = if extra.starts_with("[atmosphere]") {
                 format!("{sun}{extra}")

@@ -6,6 +6,7 @@
 use aerial::app::{self, RenderRun, RenderSettings};
 use aerial::render::Pixels;
 use aerial::scene::Scene;
+use glam::{DMat4, DVec3, DVec4};
 use std::path::Path;
 
 /// Parses a scene written inline in a test.
@@ -109,4 +110,28 @@ pub fn centre_rgb(p: &Pixels<u8>) -> [f32; 3] {
 /// The `aerial` binary built for these tests, ready for arguments.
 pub fn aerial() -> std::process::Command {
     std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
+}
+
+/// The world-space ray through the centre of pixel (x, y): two points of
+/// the pixel unprojected with the inverse view-projection in f64.
+pub fn pixel_ray(scene: &Scene, x: u32, y: u32) -> DVec3 {
+    let (w, h) = (scene.output.width, scene.output.height);
+    let vp = scene
+        .camera
+        .view_projection(scene.output.aspect())
+        .as_dmat4();
+    let inverse: DMat4 = vp.inverse();
+    let ndc_x = (f64::from(x) + 0.5) / f64::from(w) * 2.0 - 1.0;
+    let ndc_y = (f64::from(y) + 0.5) / f64::from(h) * 2.0 - 1.0;
+    let unproject = |depth: f64| {
+        let p = inverse * DVec4::new(ndc_x, ndc_y, depth, 1.0);
+        p.truncate() / p.w
+    };
+    (unproject(0.5) - unproject(1.0)).normalize()
+}
+
+/// Pixel (x, y) of an HDR image as f64 RGB.
+pub fn hdr_pixel(p: &Pixels<f32>, x: u32, y: u32) -> DVec3 {
+    let c = pixel(p, x, y);
+    DVec3::new(c[0].into(), c[1].into(), c[2].into())
 }
