@@ -93,18 +93,20 @@ void main() {
 
     vec2 phase = phases(dot(d, sun));
     vec3 inscatter = sky.sun_irradiance.xyz * (phase.x * path.rayleigh + phase.y * path.mie);
-    vec3 background = vec3(0.0);
+    // What lies behind the air, times the view transmittance.
+    vec3 seen;
     if (path.end == END_SURFACE) {
-        background = colour;
+        seen = colour * path.transmittance;
     } else if (path.end == END_GROUND) {
-        // The ground point from this pixel's own ray (or, grazing, its
-        // closest approach), not from the table's.
-        float g0, g1;
-        float t = sphere(o, d, sky.terms.x, sky.radii.x, g0, g1) && g0 > 0.0
-            ? g0 : max(-dot(o, d), 0.0);
-        background = ground_radiance(o + t * d);
+#ifdef SKY_VIEW
+        // The table's ground rows hold the lit ground already seen
+        // through the air.
+        seen = path.transmittance;
+#else
+        seen = ground_radiance(o + path.t_end * d) * path.transmittance;
+#endif
     } else {
-        background = colour + disc;
+        seen = (colour + disc) * path.transmittance;
     }
-    out_color = vec4(max(background * path.transmittance + inscatter, vec3(0.0)), 1.0);
+    out_color = vec4(max(seen + inscatter, vec3(0.0)), 1.0);
 }

@@ -20,8 +20,17 @@ void main() {
     }
     // Rows below the first half hit the ground; the first half's rows
     // never do, even the horizon row, which grazes it.
-    Path path = march(sky_view_direction(x, y), INF, y < h / 2 ? 1 : 2);
+    vec3 d = sky_view_direction(x, y);
+    bool ground = y >= h / 2;
+    Path path = march(d, INF, ground ? 2 : 1);
+    // Ground rows store the lit ground as seen through the air (its
+    // radiance times the view transmittance): what a pixel would multiply
+    // them into, smooth in the direction like the sums.
+    vec3 third = path.transmittance;
+    if (ground && path.end == END_GROUND) {
+        third *= ground_radiance(sky.origin.xyz + path.t_end * d);
+    }
     imageStore(sky_view_table, ivec2(x, y), vec4(path.rayleigh, 0.0));
     imageStore(sky_view_table, ivec2(x + w, y), vec4(path.mie, 0.0));
-    imageStore(sky_view_table, ivec2(x + 2 * w, y), vec4(path.transmittance, 0.0));
+    imageStore(sky_view_table, ivec2(x + 2 * w, y), vec4(third, 0.0));
 }
