@@ -282,19 +282,22 @@ fn sky_error_against_sample_count() {
     }
 }
 
-/// Sky error against the sky-view table's size (noon and sunset from
-/// 2 m, default samples): the figures behind the README's sky-view table.
+/// Sky error against the sky-view table's size and the sample count (noon
+/// and sunset from 2 m): the figures behind the README's sky-view tables.
 #[test]
 #[ignore]
 fn sky_error_against_sky_view_size() {
-    for size in [
-        None,
-        Some((8, 64)),
-        Some((16, 128)),
-        Some((32, 256)),
-        Some((32, 512)),
-        Some((64, 1024)),
-    ] {
+    let settings = [
+        (32, None),
+        (32, Some((8, 64))),
+        (32, Some((16, 128))),
+        (32, Some((32, 256))),
+        (32, Some((32, 512))),
+        (32, Some((64, 1024))),
+        (16, Some((16, 128))),
+        (8, Some((16, 128))),
+    ];
+    for (samples, size) in settings {
         for (label, mut scene) in [
             (
                 "noon",
@@ -305,9 +308,15 @@ fn sky_error_against_sky_view_size() {
                 sky_scene([0.0, 2.0, 0.0], [-1.0, 2.4, 0.0], 80.0, [-1.0, 0.0175, 0.0]),
             ),
         ] {
-            scene.sky.as_mut().unwrap().sky_view = size;
+            let sky = scene.sky.as_mut().unwrap();
+            sky.sky_view = size;
+            sky.samples = samples;
             let hdr = common::render(&scene, true).hdr.unwrap();
-            sky_errors(&format!("sky view {size:?}, {label}"), &scene, &hdr);
+            sky_errors(
+                &format!("{samples} samples, sky view {size:?}, {label}"),
+                &scene,
+                &hdr,
+            );
         }
     }
 }
