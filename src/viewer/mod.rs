@@ -23,7 +23,7 @@ mod window;
 
 use crate::render::RenderError;
 use crate::scene::{KnobError, Scene};
-use crate::vk::validation::{Validation, ValidationMessage};
+use crate::vk::validation::{Validation, ValidationFailed, ValidationMessage};
 use crate::vk::{PresentMode, VkError};
 pub use script::{Script, ScriptAction, ScriptError};
 
@@ -57,16 +57,8 @@ pub enum ViewerError {
     Knob(#[from] KnobError),
     #[error("screenshot {path}: {reason}")]
     Screenshot { path: String, reason: String },
-    #[error("the validation layer reported messages; no screenshot written:\n{}", list(.0))]
-    Validation(Vec<ValidationMessage>),
-}
-
-fn list(messages: &[ValidationMessage]) -> String {
-    messages
-        .iter()
-        .map(|m| format!("  {m}"))
-        .collect::<Vec<_>>()
-        .join("\n")
+    #[error("no screenshot written: {0}")]
+    Validation(#[from] ValidationFailed),
 }
 
 /// How a viewer session ended.

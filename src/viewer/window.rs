@@ -599,10 +599,7 @@ impl Live {
         }
         // As every command: output is only written from a clean run.
         if let Some(log) = self.ctx.validation_log() {
-            let messages = log.messages();
-            if !messages.is_empty() {
-                return Err(ViewerError::Validation(messages));
-            }
+            crate::vk::validation::check(&log.messages())?;
         }
         let exr_path = path.with_extension("exr");
         files::check_destination(path).map_err(|e| shot_err(e.to_string()))?;
