@@ -78,6 +78,19 @@ impl Xvfb {
 
     /// Runs `aerial view ARGS` on this display, with validation, and
     /// returns its output.
+    /// Runs the viewer on `scene` with `extra` arguments and `script` (written
+    /// into `dir`), and checks it exited 0.
+    fn run_script(&self, dir: &Path, scene: &Path, extra: &[&str], script: &str) -> Output {
+        let path = dir.join("script.txt");
+        std::fs::write(&path, script).unwrap();
+        let mut args = vec![scene.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        args.extend(["--script", path.to_str().unwrap()]);
+        let out = self.view(&args);
+        assert!(out.status.success(), "{}", text(&out));
+        out
+    }
+
     fn view(&self, args: &[&str]) -> Output {
         common::aerial()
             .arg("view")
@@ -289,23 +302,17 @@ fn first_frame_equals_render_and_w_moves_the_camera_forward() {
     let moved = dir.path().join("moved.png");
     // Frame 0 is drawn before any input; W is held while frames 1..=30 are
     // drawn, so the camera makes 30 steps of 1/60 s.
-    let script = dir.path().join("fly.txt");
-    std::fs::write(
-        &script,
-        format!(
+    let x = Xvfb::start();
+    let out = x.run_script(
+        dir.path(),
+        &scene,
+        &[],
+        &format!(
             "0 screenshot {}\n1 press W\n31 release W\n31 screenshot {}\n32 quit\n",
             first.display(),
             moved.display()
         ),
-    )
-    .unwrap();
-    let x = Xvfb::start();
-    let out = x.view(&[
-        scene.to_str().unwrap(),
-        "--script",
-        script.to_str().unwrap(),
-    ]);
-    assert!(out.status.success(), "{}", text(&out));
+    );
     assert!(
         !String::from_utf8_lossy(&out.stderr).contains("validation"),
         "{}",
@@ -372,23 +379,17 @@ fn resizing_mid_script_keeps_rendering_at_the_new_size() {
     let scene = write_scene(dir.path());
     let big = dir.path().join("big.png");
     let small = dir.path().join("small.png");
-    let script = dir.path().join("resize.txt");
-    std::fs::write(
-        &script,
-        format!(
+    let x = Xvfb::start();
+    x.run_script(
+        dir.path(),
+        &scene,
+        &[],
+        &format!(
             "2 resize 240 135\n3 screenshot {}\n4 resize 96 64\n6 screenshot {}\n7 quit\n",
             big.display(),
             small.display()
         ),
-    )
-    .unwrap();
-    let x = Xvfb::start();
-    let out = x.view(&[
-        scene.to_str().unwrap(),
-        "--script",
-        script.to_str().unwrap(),
-    ]);
-    assert!(out.status.success(), "{}", text(&out));
+    );
     for (path, w, h) in [(&big, 240, 135), (&small, 96, 64)] {
         let shot = read_png(path);
         assert_eq!((shot.width, shot.height), (w, h), "{}", path.display());
@@ -515,22 +516,16 @@ fn number_keys_cycle_knobs_and_rebuild_the_frame() {
     let dir = tempfile::tempdir().unwrap();
     let scene_path = write_scene(dir.path());
     let shot = dir.path().join("knobs.png");
-    let script = dir.path().join("knobs.txt");
-    std::fs::write(
-        &script,
-        format!(
+    let x = Xvfb::start();
+    let out = x.run_script(
+        dir.path(),
+        &scene_path,
+        &[],
+        &format!(
             "0 press 2\n0 press 4\n0 screenshot {}\n1 quit\n",
             shot.display()
         ),
-    )
-    .unwrap();
-    let x = Xvfb::start();
-    let out = x.view(&[
-        scene_path.to_str().unwrap(),
-        "--script",
-        script.to_str().unwrap(),
-    ]);
-    assert!(out.status.success(), "{}", text(&out));
+    );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         stdout.contains("lighting=deferred") && stdout.contains("tone_map=aces"),
@@ -568,26 +563,16 @@ fn the_sun_key_turns_the_sun_by_the_expected_angle() {
     let dir = tempfile::tempdir().unwrap();
     let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/earth_noon.toml");
     let shot = dir.path().join("sun.png");
-    let script = dir.path().join("sun.txt");
-    std::fs::write(
-        &script,
-        format!(
+    let x = Xvfb::start();
+    x.run_script(
+        dir.path(),
+        &scene_path,
+        &["--width", "64", "--height", "36"],
+        &format!(
             "0 press L\n30 release L\n30 screenshot {}\n31 quit\n",
             shot.display()
         ),
-    )
-    .unwrap();
-    let x = Xvfb::start();
-    let out = x.view(&[
-        scene_path.to_str().unwrap(),
-        "--width",
-        "64",
-        "--height",
-        "36",
-        "--script",
-        script.to_str().unwrap(),
-    ]);
-    assert!(out.status.success(), "{}", text(&out));
+    );
     let mut scene = Scene::load(&scene_path).unwrap();
     scene.set_output_size(Some(64), Some(36)).unwrap();
     let before = scene.sky.as_ref().unwrap().sun.direction;
