@@ -86,17 +86,28 @@ fn sky_errors(label: &str, scene: &Scene, hdr: &Pixels<f32>) -> (f64, f64) {
     (median, max)
 }
 
-#[test]
-fn sky_radiance_matches_the_reference_at_noon_and_at_sunset() {
-    for (label, scene) in [
+/// The two views the error tables use: from 2 m at noon (sun 60° up,
+/// looking away from it) and at sunset (sun on the horizon, looking
+/// towards its side of the sky).
+fn noon_and_sunset_from_2m() -> [(&'static str, Scene); 2] {
+    [
         (
-            "noon, 2 m",
+            "noon",
             sky_scene([0.0, 2.0, 0.0], [0.0, 2.6, -1.0], 80.0, [0.3, 0.866, 0.4]),
         ),
         (
-            "sunset, 2 m",
+            "sunset",
             sky_scene([0.0, 2.0, 0.0], [-1.0, 2.4, 0.0], 80.0, [-1.0, 0.0175, 0.0]),
         ),
+    ]
+}
+
+#[test]
+fn sky_radiance_matches_the_reference_at_noon_and_at_sunset() {
+    let [(_, noon), (_, sunset)] = noon_and_sunset_from_2m();
+    for (label, scene) in [
+        ("noon, 2 m", noon),
+        ("sunset, 2 m", sunset),
         (
             "10 km, sun 30° up",
             sky_scene(
@@ -265,16 +276,7 @@ fn a_scene_without_atmosphere_has_no_atmosphere_pass() {
 #[ignore]
 fn sky_error_against_sample_count() {
     for samples in [4, 8, 16, 32, 64] {
-        for (label, mut scene) in [
-            (
-                "noon",
-                sky_scene([0.0, 2.0, 0.0], [0.0, 2.6, -1.0], 80.0, [0.3, 0.866, 0.4]),
-            ),
-            (
-                "sunset",
-                sky_scene([0.0, 2.0, 0.0], [-1.0, 2.4, 0.0], 80.0, [-1.0, 0.0175, 0.0]),
-            ),
-        ] {
+        for (label, mut scene) in noon_and_sunset_from_2m() {
             scene.sky.as_mut().unwrap().samples = samples;
             let hdr = common::render(&scene, true).hdr.unwrap();
             sky_errors(&format!("{samples} samples, {label}"), &scene, &hdr);
@@ -298,16 +300,7 @@ fn sky_error_against_sky_view_size() {
         (8, Some((16, 128))),
     ];
     for (samples, size) in settings {
-        for (label, mut scene) in [
-            (
-                "noon",
-                sky_scene([0.0, 2.0, 0.0], [0.0, 2.6, -1.0], 80.0, [0.3, 0.866, 0.4]),
-            ),
-            (
-                "sunset",
-                sky_scene([0.0, 2.0, 0.0], [-1.0, 2.4, 0.0], 80.0, [-1.0, 0.0175, 0.0]),
-            ),
-        ] {
+        for (label, mut scene) in noon_and_sunset_from_2m() {
             let sky = scene.sky.as_mut().unwrap();
             sky.sky_view = size;
             sky.samples = samples;

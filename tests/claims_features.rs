@@ -367,19 +367,14 @@ fn render_with_cli(dir: &Path, name: &str) -> (PathBuf, PathBuf) {
         dir.join(format!("{name}.exr")),
     );
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/transparency.toml");
-    let out = aerial()
-        .arg("render")
-        .arg(&scene)
-        .args(["--validate", "--width", "160", "--height", "90", "--out"])
-        .arg(&png)
-        .arg("--hdr")
-        .arg(&exr)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    common::succeed(
+        aerial()
+            .arg("render")
+            .arg(&scene)
+            .args(["--validate", "--width", "160", "--height", "90", "--out"])
+            .arg(&png)
+            .arg("--hdr")
+            .arg(&exr),
     );
     (png, exr)
 }
@@ -450,28 +445,23 @@ fn the_bench_gate_fails_when_no_pass_matched() {
     let dir = temp_dir("gate");
     let current = dir.join("current.json");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bench/triangle.toml");
-    let out = aerial()
-        .arg("bench")
-        .arg(&scene)
-        .args([
-            "--frames",
-            "2",
-            "--warmup",
-            "0",
-            "--width",
-            "32",
-            "--height",
-            "18",
-            "--validate",
-            "--json",
-        ])
-        .arg(&current)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    common::succeed(
+        aerial()
+            .arg("bench")
+            .arg(&scene)
+            .args([
+                "--frames",
+                "2",
+                "--warmup",
+                "0",
+                "--width",
+                "32",
+                "--height",
+                "18",
+                "--validate",
+                "--json",
+            ])
+            .arg(&current),
     );
 
     // The same report compared with itself passes; with every scene renamed

@@ -106,12 +106,7 @@ fn sweep_rmse_against_cpu(tag: &str, scene: &str, knobs: &[&str]) -> Vec<f64> {
     for knob in knobs {
         command.args(["--knob", knob]);
     }
-    let status = command.arg("--out-dir").arg(&out).output().unwrap();
-    assert!(
-        status.status.success(),
-        "{}",
-        String::from_utf8_lossy(&status.stderr)
-    );
+    common::succeed(command.arg("--out-dir").arg(&out));
     let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
     std::fs::remove_dir_all(&out).ok();
     let mut lines = csv.lines();

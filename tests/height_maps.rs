@@ -70,19 +70,14 @@ fn the_normalmap_command_writes_the_map_the_renderer_makes() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     write_ramp(&d.join("ramp.png"));
-    let out = common::aerial()
-        .arg("normalmap")
-        .arg(d.join("ramp.png"))
-        .arg("--out")
-        .arg(d.join("normals.png"))
-        .arg("--scale")
-        .arg(tilt_scale().to_string())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    common::succeed(
+        common::aerial()
+            .arg("normalmap")
+            .arg(d.join("ramp.png"))
+            .arg("--out")
+            .arg(d.join("normals.png"))
+            .arg("--scale")
+            .arg(tilt_scale().to_string()),
     );
     // The centre texel of the written map is the 30-degree tilt towards -x.
     let map = image::open(d.join("normals.png")).unwrap().to_rgba8();

@@ -1,6 +1,8 @@
 //! `aerial mesh`: the report on a small model whose counts are known by
 //! construction.
 
+mod common;
+
 use std::path::Path;
 
 /// Two objects, each a unit square of two triangles, side by side and
@@ -47,17 +49,12 @@ fn mesh_reports_counts_known_by_construction() {
     let model = dir.path().join("m.obj");
     let json = dir.path().join("m.json");
     write_model(&model);
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
-        .arg("mesh")
-        .arg(&model)
-        .arg("--json")
-        .arg(&json)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    common::succeed(
+        common::aerial()
+            .arg("mesh")
+            .arg(&model)
+            .arg("--json")
+            .arg(&json),
     );
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
@@ -88,11 +85,7 @@ fn mesh_reports_counts_known_by_construction() {
             "--crease",
         ),
     ] {
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
-            .arg("mesh")
-            .args(&args)
-            .output()
-            .unwrap();
+        let out = common::aerial().arg("mesh").args(&args).output().unwrap();
         assert_eq!(out.status.code(), Some(2));
         assert!(String::from_utf8_lossy(&out.stderr).contains(needle));
     }

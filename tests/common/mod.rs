@@ -107,6 +107,18 @@ pub fn centre_rgb(p: &Pixels<u8>) -> [f32; 3] {
     sum
 }
 
+/// Runs `command`, failing the test with its standard error unless it
+/// exits 0.
+pub fn succeed(command: &mut std::process::Command) -> std::process::Output {
+    let out = command.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 /// The `aerial` binary built for these tests, ready for arguments.
 pub fn aerial() -> std::process::Command {
     std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))

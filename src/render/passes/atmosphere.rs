@@ -87,10 +87,12 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
 impl RecordPass for AtmospherePass {
     fn record(&self, cmd: &CommandBuffer, frame: &FrameResources<'_>) -> Result<(), RenderError> {
         let sky: &SkyResources = frame.sky()?;
+        // Both pipelines share the layout, so the sets stay bound across
+        // the pipeline switch.
+        cmd.bind_descriptor_set(&self.layout, 0, &sky.set, &[]);
+        cmd.bind_descriptor_set(&self.layout, 1, &self.inputs.set, &[]);
         for pipeline in &self.pipelines {
             cmd.bind_pipeline(pipeline);
-            cmd.bind_descriptor_set(&self.layout, 0, &sky.set, &[]);
-            cmd.bind_descriptor_set(&self.layout, 1, &self.inputs.set, &[]);
             cmd.draw(3);
         }
         Ok(())
