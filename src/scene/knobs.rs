@@ -438,6 +438,35 @@ mod tests {
     }
 
     #[test]
+    fn atmosphere_knobs_round_trip_and_name_bad_values() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/earth_noon.toml");
+        let mut scene = Scene::load(&path).unwrap();
+        for (name, value) in [
+            ("sky_view", "off"),
+            ("sky_view", "16x128"),
+            ("od_filter", "hardware"),
+            ("atmosphere_samples", "8"),
+        ] {
+            let knob = Knob::find(name).unwrap();
+            knob.set(&mut scene, value).unwrap();
+            assert_eq!((knob.read)(&scene), value, "knob {name}");
+        }
+        for (name, value) in [
+            ("sky_view", "16x127"),
+            ("sky_view", "on"),
+            ("od_filter", "cubic"),
+        ] {
+            let e = Knob::find(name)
+                .unwrap()
+                .set(&mut scene, value)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(name) && e.contains(value), "{e}");
+        }
+    }
+
+    #[test]
     fn tessellation_scales_every_object() {
         let mut scene = Scene::default_scene();
         let before: Vec<_> = scene.objects.iter().map(|o| o.tessellation).collect();
