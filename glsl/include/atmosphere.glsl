@@ -38,11 +38,14 @@ layout(std140, set = 0, binding = 0) uniform Sky {
 // read with texelFetch, or filtered by the sampler (TABLE_FILTER 2).
 layout(set = 0, binding = 1) uniform sampler2D od_table;
 
-// The table's mapping (0: horizon, Bruneton-style; 1: the seed's linear
-// altitude × linear cosine) and filter (0: manual bilinear; 1: nearest;
-// 2: the sampler's bilinear filter).
+// The table's mapping (0: horizon, Bruneton-style, split at the
+// horizontal; 1: the seed's linear altitude × linear cosine) and filter
+// (0: manual bilinear; 1: nearest; 2: the sampler's bilinear filter).
 layout(constant_id = 0) const int TABLE_MAPPING = 0;
 layout(constant_id = 1) const int TABLE_FILTER = 0;
+// The ozone's integral towards the sun: in closed form (true) or from the
+// table's third channel (false).
+layout(constant_id = 2) const bool OZONE_EXACT = true;
 
 const float PI = 3.14159265358979;
 const float INF = 1.0 / 0.0;
@@ -70,55 +73,157 @@ bool sphere(vec3 o, vec3 d, float c, float radius, out float t0, out float t1) {
     return true;
 }
 
-// Density integrals to the top (Rayleigh, Mie, ozone) from altitude h
-// along cosine mu, directions into the ground excluded by the caller.
-vec3 table_densities(float h, float mu) {
-    float rb = sky.radii.x;
-    float thickness = sky.radii.y - sky.radii.x;
-    float big_h = sky.radii.z;
-    h = clamp(h, 0.0, thickness);
-    float x_mu;
-    float x_r;
-    if (TABLE_MAPPING == 1) {
-        x_mu = clamp((1.0 - mu) * 0.5, 0.0, 1.0);
-        x_r = clamp(h / thickness, 0.0, 1.0);
-    } else {
-        float r = rb + h;
-        float rho = sqrt(h * (2.0 * rb + h));
-        float d_min = thickness - h;
-        float disc = d_min * (sky.radii.y + r) + r * r * mu * mu;
-        float d = max(-r * mu + sqrt(max(disc, 0.0)), 0.0);
-        float d_max = rho + big_h;
-        x_mu = clamp((d - d_min) / max(d_max - d_min, 1e-6), 0.0, 1.0);
-        x_r = clamp(rho / big_h, 0.0, 1.0);
-    }
+// The table's texels at texel coordinates (fx, fy) (centres on integers),
+// filtered between rows first_row and last_row (equal: that row alone).
+vec3 table_texels(float fx, float fy, int first_row, int last_row) {
     int w = int(sky.ozone_layer.z);
     int hh = int(sky.ozone_layer.w);
-    float fx = x_mu * float(w - 1);
-    float fy = x_r * float(hh - 1);
-    vec3 v;
     if (TABLE_FILTER == 1) {
-        v = texelFetch(od_table, ivec2(round(fx), round(fy)), 0).xyz;
-    } else if (TABLE_FILTER == 2) {
-        // Texel centres sit on x = 0 and x = 1 (see the table's mapping).
-        v = textureLod(od_table, (vec2(fx, fy) + 0.5) / vec2(w, hh), 0.0).xyz;
-    } else {
-        int x0 = min(int(floor(fx)), w - 2);
-        int y0 = min(int(floor(fy)), hh - 2);
-        float ax = fx - float(x0);
-        float ay = fy - float(y0);
-        // Manual bilinear from four texel fetches (32-bit floats).
-        vec3 t00 = texelFetch(od_table, ivec2(x0, y0), 0).xyz;
-        vec3 t10 = texelFetch(od_table, ivec2(x0 + 1, y0), 0).xyz;
-        vec3 t01 = texelFetch(od_table, ivec2(x0, y0 + 1), 0).xyz;
-        vec3 t11 = texelFetch(od_table, ivec2(x0 + 1, y0 + 1), 0).xyz;
-        v = mix(mix(t00, t10, ax), mix(t01, t11, ax), ay);
+        return texelFetch(od_table, ivec2(round(fx), round(fy)), 0).xyz;
     }
+    if (TABLE_FILTER == 2) {
+        // Texel centres sit on x = 0 and x = 1 (see the table's mapping);
+        // at a row's centre the sampler gives the next row no weight.
+        return textureLod(od_table, (vec2(fx, fy) + 0.5) / vec2(w, hh), 0.0).xyz;
+    }
+    int x0 = min(int(floor(fx)), w - 2);
+    int y0 = clamp(int(floor(fy)), first_row, max(last_row - 1, first_row));
+    int y1 = min(y0 + 1, last_row);
+    float ax = fx - float(x0);
+    float ay = clamp(fy - float(y0), 0.0, 1.0);
+    // Manual bilinear from four texel fetches (32-bit floats).
+    vec3 t00 = texelFetch(od_table, ivec2(x0, y0), 0).xyz;
+    vec3 t10 = texelFetch(od_table, ivec2(x0 + 1, y0), 0).xyz;
+    vec3 t01 = texelFetch(od_table, ivec2(x0, y1), 0).xyz;
+    vec3 t11 = texelFetch(od_table, ivec2(x0 + 1, y1), 0).xyz;
+    return mix(mix(t00, t10, ax), mix(t01, t11, ax), ay);
+}
+
+// Density integrals from a filtered texel value v stored for altitude h.
+vec3 table_decode(vec3 v, float h) {
     float offset = sky.ground_albedo.w;
     return vec3(
         max(exp(v.x - h * sky.rayleigh.w) - offset, 0.0),
         max(exp(v.y - h * sky.mie_scattering.w) - offset, 0.0),
         v.z);
+}
+
+// The horizon mapping's altitude axis, x = (2/pi) asin(sqrt(h / thickness)).
+float table_altitude_unit(float h, float thickness) {
+    return asin(sqrt(clamp(h / thickness, 0.0, 1.0))) * (2.0 / PI);
+}
+
+// The ray from altitude h along cosine mu, described from its lowest point
+// (src/atmosphere/ozone.rs): rho^2 = r^2 - Rb^2 and the altitude there,
+// both negative for a ray whose line passes below the ground (-Rb^2 and
+// -Rb for a vertical one). Chords computed from them depend on r^2 at
+// the lowest point, which float32 holds to a few m^2.
+void lowest_point(float h, float mu, out float rho2_low, out float alt_low) {
+    float rb = sky.radii.x;
+    float r = rb + h;
+    float rho = sqrt(h * (2.0 * rb + h));
+    rho2_low = (rho - r * abs(mu)) * (rho + r * abs(mu));
+    alt_low = rho2_low / (sqrt(max(rho2_low + rb * rb, 0.0)) + rb);
+}
+
+// Density integrals to the top (Rayleigh, Mie, ozone) from altitude h
+// along cosine mu, directions into the ground excluded by the caller.
+// Horizon mapping: the rows but the last hold upward directions; a
+// downward one is 2 F(lowest point) - (the upward ray at -mu), with F the
+// horizontal row (src/atmosphere/table.rs says why).
+vec3 table_densities(float h, float mu) {
+    float rb = sky.radii.x;
+    float rt = sky.radii.y;
+    float thickness = rt - rb;
+    h = clamp(h, 0.0, thickness);
+    int w = int(sky.ozone_layer.z);
+    int hh = int(sky.ozone_layer.w);
+    if (TABLE_MAPPING == 1) {
+        float fx = clamp((1.0 - mu) * 0.5, 0.0, 1.0) * float(w - 1);
+        float fy = clamp(h / thickness, 0.0, 1.0) * float(hh - 1);
+        return table_decode(table_texels(fx, fy, 0, hh - 1), h);
+    }
+    float r = rb + h;
+    float m = abs(mu);
+    // Distance to the top along m, and at its ends (straight up, horizontal),
+    // from q = Rt^2 - r^2 without cancellation.
+    float d_min = thickness - h;
+    float q = d_min * (rt + r);
+    float d = q / max(r * m + sqrt(q + r * r * m * m), 1e-30);
+    float d_max = sqrt(q);
+    float x_mu = clamp((d - d_min) / max(d_max - d_min, 1e-6), 0.0, 1.0);
+    float fy = table_altitude_unit(h, thickness) * float(hh - 2);
+    vec3 up = table_decode(table_texels(x_mu * float(w - 1), fy, 0, hh - 2), h);
+    if (mu >= 0.0) {
+        return up;
+    }
+    float rho2_low, alt_low;
+    lowest_point(h, mu, rho2_low, alt_low);
+    // A downward ray that misses the ground has its lowest point above it.
+    alt_low = max(alt_low, 0.0);
+    float fx = table_altitude_unit(alt_low, thickness) * float(w - 1);
+    vec3 horizontal = table_decode(table_texels(fx, float(hh - 1), hh - 1, hh - 1), alt_low);
+    return max(2.0 * horizontal - up, vec3(0.0));
+}
+
+// The ozone integral over [a, b] (distances from the start) of a density
+// slope * (altitude - zero), by three-point Gauss-Legendre; the ray is
+// given by its lowest point (u = s + start from there).
+float ozone_interval(float a, float b, float start, float rho2_low, float zero, float slope) {
+    if (b <= a) {
+        return 0.0;
+    }
+    float rb = sky.radii.x;
+    float mid = 0.5 * (a + b);
+    float half_length = 0.5 * (b - a);
+    float sum = 0.0;
+    for (int i = -1; i <= 1; i++) {
+        float u = mid + float(i) * half_length * 0.7745966692 + start;
+        float rho2 = rho2_low + u * u;
+        float alt = rho2 / (sqrt(rho2 + rb * rb) + rb);
+        sum += (i == 0 ? 8.0 / 9.0 : 5.0 / 9.0) * (alt - zero);
+    }
+    return half_length * slope * sum;
+}
+
+// Half the chord of the sphere at altitude k, from the lowest point;
+// negative when the ray passes above it.
+float ozone_half_chord(float k, float alt_low) {
+    float disc = (k - alt_low) * (2.0 * sky.radii.x + k + alt_low);
+    return disc < 0.0 ? -1.0 : sqrt(disc);
+}
+
+// The ozone density integral from altitude h along cosine mu to the top,
+// in closed form (src/atmosphere/ozone.rs, the same arithmetic): within
+// each shell of the tent the density is linear in the altitude, and the
+// ray meets a shell in at most two intervals.
+float ozone_to_top(float h, float mu) {
+    float thickness = sky.radii.y - sky.radii.x;
+    h = clamp(h, 0.0, thickness);
+    float rho2_low, alt_low;
+    lowest_point(h, mu, rho2_low, alt_low);
+    float start = (sky.radii.x + h) * mu;
+    float end = ozone_half_chord(thickness, alt_low) - start;
+    float knots[3] = float[3](sky.ozone_absorption.w, sky.ozone_layer.x, sky.ozone_layer.y);
+    float sum = 0.0;
+    for (int shell = 0; shell < 2; shell++) {
+        float lower = knots[shell];
+        float upper = min(knots[shell + 1], thickness);
+        float zero = shell == 0 ? knots[0] : knots[2];
+        float slope = shell == 0 ? 1.0 / (knots[1] - knots[0]) : -1.0 / (knots[2] - knots[1]);
+        float outer = ozone_half_chord(upper, alt_low);
+        if (lower >= upper || outer < 0.0) {
+            continue;
+        }
+        float a = max(-outer - start, 0.0);
+        float b = min(outer - start, end);
+        // Split where the ray enters and leaves the lower sphere, or at the
+        // lowest point when it passes above it.
+        float inner = max(ozone_half_chord(lower, alt_low), 0.0);
+        sum += ozone_interval(a, min(b, -inner - start), start, rho2_low, zero, slope);
+        sum += ozone_interval(max(a, inner - start), b, start, rho2_low, zero, slope);
+    }
+    return sum;
 }
 
 // Optical depth from a point at altitude h (radius r, position p relative
@@ -131,6 +236,9 @@ vec3 sun_optical_depth(float h, float r, vec3 p, out bool lit) {
         return vec3(0.0);
     }
     vec3 d = table_densities(h, mu);
+    if (OZONE_EXACT) {
+        d.z = ozone_to_top(h, mu);
+    }
     return sky.rayleigh.xyz * d.x + sky.mie_extinction.xyz * d.y + sky.ozone_absorption.xyz * d.z;
 }
 

@@ -9,10 +9,12 @@
 //!
 //! [`reference`](mod@reference) integrates the model adaptively (the oracle of the tests);
 //! [`table`] bakes the optical-depth table the GPU pass samples;
+//! [`ozone`] integrates the ozone layer along a ray in closed form;
 //! [`coefficients`] derives scattering coefficients from physical
 //! quantities (the seed's optional Rayleigh and Mie formulas).
 
 pub mod coefficients;
+pub mod ozone;
 pub mod reference;
 pub mod table;
 
@@ -20,7 +22,7 @@ use glam::DVec3;
 use std::f64::consts::PI;
 
 pub use crate::scene::{Atmosphere, Sky, Sun};
-pub use table::{OpticalDepthTable, TableMapping};
+pub use table::{OpticalDepthTable, OzoneDepth, TableMapping};
 
 /// The three density profiles at one point: Rayleigh, Mie and ozone, each
 /// dimensionless (1 at the ground for the exponentials, 1 at the ozone

@@ -3,27 +3,47 @@
 //! cosine of the zenith angle of the direction, as 32-bit floats, baked in
 //! double precision on the CPU (both cores).
 //!
-//! Mapping (`horizon`, after Bruneton 2017's transmittance table): with
-//! H = √(R_top² − R²), ρ = √(r² − R²) and d the distance to the top along
-//! the direction, x_r = ρ/H and x_μ = (d − d_min)/(d_max − d_min) with
-//! d_min = R_top − r, d_max = ρ + H. Only directions that miss the ground
-//! are in the table (x_μ = 1 is the horizon), so texels are spent where
-//! the optical depth changes fastest, and a direction into the planet is
-//! shadowed by an explicit test rather than an infinite value a filter
-//! would smear. Texel centres sit on x = 0 and x = 1 exactly
-//! (u = (x·(W−1) + 0.5)/W), so the ground, the top and the horizon are
-//! sampled without extrapolation. `seed` is the linear altitude × linear cosine mapping,
-//! for comparison (rays below the horizon are clamped to it).
+//! Mapping `horizon` (after Bruneton 2017's transmittance table, split at
+//! the horizontal). All rows but the last hold *upward* directions only
+//! (μ ≥ 0): x_μ = (d − d_min)/(d_max − d_min), with d the distance to the
+//! top, d_min = R_top − r (straight up) and d_max = √(R_top² − r²)
+//! (horizontal). The last row holds the horizontal ray alone, F(h), over
+//! all W texels. A downward ray that misses the ground passes its lowest
+//! point, at radius r·√(1 − μ²), and climbs back: its optical depth is
+//! 2·F(lowest point) − (the upward ray from r at −μ), because the stretch
+//! before the lowest point mirrors the stretch of the horizontal ray from
+//! the lowest point that the upward ray skips. Rows and the last row's
+//! columns follow the altitude axis of [`altitude_of_unit`].
+//!
+//! Why: one 2D table over all directions must follow, across the
+//! horizon, the optical depth of rays that skim the ground, which changes
+//! steeply with the direction; split, those rays come from the 1D row,
+//! indexed by their lowest point, and the 2D part only holds rays that
+//! climb. Measured at 256 × 64 with manual bilinear filtering, over
+//! 300 × 600 rays that miss the ground: max transmittance error 7.0e-5
+//! (Rayleigh and Mie) where the single Bruneton table had 1.8e-4. The
+//! ozone channel is still baked, but its tent's kinks defeat any texel
+//! grid (up to 1.4e-3 either way); the pass integrates ozone in closed
+//! form instead ([`super::ozone`]), unless `od_ozone = "table"`.
+//!
+//! Only directions that miss the ground are looked up: a direction into
+//! the planet is shadowed by an explicit test rather than an infinite
+//! value a filter would smear. Texel centres sit on x = 0 and x = 1
+//! exactly (u = (x·(W−1) + 0.5)/W), so the ground, the top, the zenith
+//! and the horizontal are sampled without extrapolation.
+//!
+//! `seed` is the linear altitude × linear cosine mapping over all W × H
+//! texels, for comparison (rays below the horizon are clamped to it).
 //!
 //! Sampling is manual bilinear from four texel fetches, the same
 //! arithmetic here ([`OpticalDepthTable::lookup`]) as in
-//! `glsl/atmosphere.frag`.
+//! `glsl/include/atmosphere.glsl`.
 
 use super::reference::densities_to_top;
 use super::{Atmosphere, Densities};
 use glam::DVec3;
 
-pub use crate::scene::TableMapping;
+pub use crate::scene::{OzoneDepth, TableMapping};
 
 /// Added to the Rayleigh and Mie density integrals (metres) before their
 /// logarithm is stored: 1 m of ground-level air is an optical depth of
@@ -48,7 +68,6 @@ pub struct OpticalDepthTable {
 struct Frame {
     bottom: f64,
     top: f64,
-    h: f64,
 }
 
 impl Frame {
@@ -56,8 +75,22 @@ impl Frame {
         Frame {
             bottom: a.bottom_radius,
             top: a.top_radius,
-            h: ((a.top_radius - a.bottom_radius) * (a.top_radius + a.bottom_radius)).sqrt(),
         }
+    }
+
+    fn thickness(&self) -> f64 {
+        self.top - self.bottom
+    }
+
+    /// ρ = √(r² − R²) at altitude `alt`, without a planet-scale difference.
+    fn rho(&self, alt: f64) -> f64 {
+        (alt * (2.0 * self.bottom + alt)).sqrt()
+    }
+
+    /// The altitude where ρ = `rho`.
+    fn altitude(&self, rho: f64) -> f64 {
+        let r = (rho * rho + self.bottom * self.bottom).sqrt();
+        (rho * rho / (r + self.bottom)).min(self.thickness())
     }
 
     /// Distance from radius `r` along cosine `mu` to the top sphere.
@@ -66,52 +99,83 @@ impl Frame {
         (-r * mu + disc.max(0.0).sqrt()).max(0.0)
     }
 
-    /// (x_mu, x_r) in [0, 1]² for altitude `alt` and cosine `mu`.
-    fn to_unit(&self, mapping: TableMapping, alt: f64, mu: f64) -> (f64, f64) {
-        let alt = alt.clamp(0.0, self.top - self.bottom);
+    /// x_μ in [0, 1] of an upward cosine `mu` ≥ 0 at altitude `alt`.
+    fn upward_unit(&self, alt: f64, mu: f64) -> f64 {
         let r = self.bottom + alt;
-        match mapping {
-            TableMapping::Horizon => {
-                let rho = (alt * (2.0 * self.bottom + alt)).sqrt();
-                let d = self.distance_to_top(r, mu);
-                let d_min = (self.top - self.bottom) - alt;
-                let d_max = rho + self.h;
-                let x_mu = if d_max > d_min {
-                    (d - d_min) / (d_max - d_min)
-                } else {
-                    0.0
-                };
-                (x_mu.clamp(0.0, 1.0), rho / self.h)
-            }
-            TableMapping::Seed => ((1.0 - mu) * 0.5, alt / (self.top - self.bottom)),
+        let d_min = self.thickness() - alt;
+        let d_max = ((self.top - r) * (self.top + r)).max(0.0).sqrt();
+        if d_max > d_min {
+            ((self.distance_to_top(r, mu) - d_min) / (d_max - d_min)).clamp(0.0, 1.0)
+        } else {
+            0.0
         }
     }
 
-    /// Inverse of `Frame::to_unit`: (altitude, mu).
-    fn unit_to_ray(&self, mapping: TableMapping, x_mu: f64, x_r: f64) -> (f64, f64) {
-        match mapping {
-            TableMapping::Horizon => {
-                let rho = self.h * x_r;
-                let r = (rho * rho + self.bottom * self.bottom).sqrt();
-                let alt = (rho * rho / (r + self.bottom)).min(self.top - self.bottom);
-                let d_min = (self.top - self.bottom) - alt;
-                let d_max = rho + self.h;
-                let d = d_min + x_mu * (d_max - d_min);
-                let mu = if d == 0.0 {
-                    1.0
-                } else {
-                    ((self.h * self.h - rho * rho - d * d) / (2.0 * r * d)).clamp(-1.0, 1.0)
-                };
-                (alt, mu)
-            }
-            TableMapping::Seed => (x_r * (self.top - self.bottom), 1.0 - 2.0 * x_mu),
+    /// Inverse of [`Frame::upward_unit`]: the cosine.
+    fn upward_cosine(&self, alt: f64, x_mu: f64) -> f64 {
+        let r = self.bottom + alt;
+        let d_min = self.thickness() - alt;
+        let d_max = ((self.top - r) * (self.top + r)).max(0.0).sqrt();
+        let d = d_min + x_mu * (d_max - d_min).max(0.0);
+        if d == 0.0 {
+            1.0
+        } else {
+            // |p + d·ω| = R_top: d² + 2 r d μ + r² = R_top².
+            (((self.top - r) * (self.top + r) - d * d) / (2.0 * r * d)).clamp(0.0, 1.0)
         }
+    }
+}
+
+/// The altitude axis of the upward part's rows and of the horizontal row's
+/// columns: altitude h = top · sin²(π x / 2) for x ∈ [0, 1].
+///
+/// Texels crowd towards both ends, as h ∝ x² near the ground and
+/// top − h ∝ (1 − x)² near the top. Near the ground the optical depth
+/// changes fastest (a ρ-linear axis, Bruneton's, does the same there).
+/// Near the top a horizontal ray's path to the top grows as √(top − h),
+/// which no linear filter follows on a ρ-linear axis (measured: 1.9e-3
+/// transmittance error at 59 km), and which this axis makes linear in x.
+fn altitude_of_unit(thickness: f64, x: f64) -> f64 {
+    thickness
+        * (0.5 * std::f64::consts::PI * x.clamp(0.0, 1.0))
+            .sin()
+            .powi(2)
+}
+
+/// Inverse of [`altitude_of_unit`].
+fn unit_of_altitude(thickness: f64, alt: f64) -> f64 {
+    (alt / thickness).clamp(0.0, 1.0).sqrt().asin() * std::f64::consts::FRAC_2_PI
+}
+
+/// The stored form of the density integrals `d` from altitude `alt`.
+fn encode(atmosphere: &Atmosphere, alt: f64, d: Densities) -> [f32; 4] {
+    // Logarithms plus h/H: the optical depth falls roughly as exp(-h/H)
+    // with the texel's own altitude h (rows are linear in sqrt(h), not h),
+    // and near the horizontal it is roughly exponential in the altitude.
+    // What is left is nearly linear in both texel coordinates, which
+    // bilinear filtering follows; LOG_OFFSET keeps a path of length 0
+    // finite.
+    [
+        ((d.rayleigh + LOG_OFFSET).ln() + alt / atmosphere.rayleigh_scale_height) as f32,
+        ((d.mie + LOG_OFFSET).ln() + alt / atmosphere.mie_scale_height) as f32,
+        d.ozone as f32,
+        0.0,
+    ]
+}
+
+/// Inverse of [`encode`] for a filtered value `v` at altitude `alt`.
+fn decode(atmosphere: &Atmosphere, alt: f64, v: [f64; 3]) -> Densities {
+    Densities {
+        rayleigh: ((v[0] - alt / atmosphere.rayleigh_scale_height).exp() - LOG_OFFSET).max(0.0),
+        mie: ((v[1] - alt / atmosphere.mie_scale_height).exp() - LOG_OFFSET).max(0.0),
+        ozone: v[2],
     }
 }
 
 impl OpticalDepthTable {
     /// Bakes the table for `atmosphere`, every texel integrated with the
-    /// reference quadrature, rows split between two threads.
+    /// reference quadrature, rows split between two threads. `height` is
+    /// at least 3 (the scene's validation says so).
     pub fn bake(
         atmosphere: &Atmosphere,
         width: u32,
@@ -119,20 +183,33 @@ impl OpticalDepthTable {
         mapping: TableMapping,
     ) -> OpticalDepthTable {
         let started = std::time::Instant::now();
-        let (w, h) = (width.max(2) as usize, height.max(2) as usize);
+        let (w, h) = (width.max(2) as usize, height.max(3) as usize);
         let frame = Frame::new(atmosphere);
+        // The ray (altitude, cosine) of texel (x, y).
+        let ray = |x: usize, y: usize| -> (f64, f64) {
+            let u = x as f64 / (w - 1) as f64;
+            match mapping {
+                TableMapping::Horizon if y == h - 1 => {
+                    (altitude_of_unit(frame.thickness(), u), 0.0)
+                }
+                TableMapping::Horizon => {
+                    let alt = altitude_of_unit(frame.thickness(), y as f64 / (h - 2) as f64);
+                    (alt, frame.upward_cosine(alt, u))
+                }
+                TableMapping::Seed => {
+                    let alt = y as f64 / (h - 1) as f64 * frame.thickness();
+                    // Directions into the ground hold the horizon's value
+                    // (the pass shadows them before looking them up).
+                    let horizon = -frame.rho(alt) / (frame.bottom + alt);
+                    (alt, (1.0 - 2.0 * u).max(horizon))
+                }
+            }
+        };
         let row = |y: usize| -> Vec<[f32; 4]> {
             (0..w)
                 .map(|x| {
-                    let x_mu = x as f64 / (w - 1) as f64;
-                    let x_r = y as f64 / (h - 1) as f64;
-                    let (alt, mu) = frame.unit_to_ray(mapping, x_mu, x_r);
+                    let (alt, mu) = ray(x, y);
                     let r = atmosphere.bottom_radius + alt;
-                    // The seed's mapping also has directions into the
-                    // ground: they hold the horizon's value (the pass
-                    // shadows them before looking them up).
-                    let horizon = -(alt * (2.0 * atmosphere.bottom_radius + alt)).sqrt() / r;
-                    let mu = mu.max(horizon);
                     let p = DVec3::new(0.0, r, 0.0);
                     let dir = DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), mu, 0.0);
                     // Exactly on the horizon the ground test may round either
@@ -141,20 +218,7 @@ impl OpticalDepthTable {
                         let d = frame.distance_to_top(r, mu);
                         super::reference::densities_between(atmosphere, p, p + d * dir)
                     });
-                    // Logarithms plus h/H: near the horizon the optical
-                    // depth is roughly exponential in the altitude of the
-                    // ray's lowest point, and it falls as exp(-h/H) with
-                    // the texel's own altitude h (rows are linear in
-                    // sqrt(h), not h). What is left is nearly linear in
-                    // both texel coordinates, which bilinear filtering
-                    // follows; LOG_OFFSET keeps a path of length 0 finite.
-                    [
-                        ((d.rayleigh + LOG_OFFSET).ln() + alt / atmosphere.rayleigh_scale_height)
-                            as f32,
-                        ((d.mie + LOG_OFFSET).ln() + alt / atmosphere.mie_scale_height) as f32,
-                        d.ozone as f32,
-                        0.0,
-                    ]
+                    encode(atmosphere, alt, d)
                 })
                 .collect()
         };
@@ -180,32 +244,86 @@ impl OpticalDepthTable {
         self.texels.len() * 16
     }
 
+    /// Bilinear filter of the first three channels at texel coordinates
+    /// (`fx`, `fy`), between rows 0 and `last_row`; with `last_row` = 0 a
+    /// linear filter along row `fy` alone.
+    fn bilinear(&self, fx: f64, fy: f64, last_row: usize) -> [f64; 3] {
+        let w = self.width as usize;
+        let x0 = (fx.floor().max(0.0) as usize).min(w - 2);
+        let (y0, y1) = if last_row == 0 {
+            (fy as usize, fy as usize)
+        } else {
+            let y0 = (fy.floor().max(0.0) as usize).min(last_row - 1);
+            (y0, y0 + 1)
+        };
+        let (ax, ay) = (fx - x0 as f64, (fy - y0 as f64).clamp(0.0, 1.0));
+        let texel = |x: usize, y: usize| self.texels[y * w + x];
+        let mut out = [0f64; 3];
+        for (c, o) in out.iter_mut().enumerate() {
+            let t00 = f64::from(texel(x0, y0)[c]);
+            let t10 = f64::from(texel(x0 + 1, y0)[c]);
+            let t01 = f64::from(texel(x0, y1)[c]);
+            let t11 = f64::from(texel(x0 + 1, y1)[c]);
+            *o = (t00 * (1.0 - ax) + t10 * ax) * (1.0 - ay) + (t01 * (1.0 - ax) + t11 * ax) * ay;
+        }
+        out
+    }
+
     /// Density integrals to the top from altitude `alt` along cosine `mu`,
     /// by manual bilinear filtering of four texels (as the shader does).
     /// Directions into the ground must be handled by the caller.
     pub fn lookup(&self, atmosphere: &Atmosphere, alt: f64, mu: f64) -> Densities {
         let frame = Frame::new(atmosphere);
-        let (x_mu, x_r) = frame.to_unit(self.mapping, alt, mu);
-        let fx = x_mu * (self.width - 1) as f64;
-        let fy = x_r * (self.height - 1) as f64;
-        let x0 = (fx.floor() as usize).min(self.width as usize - 2);
-        let y0 = (fy.floor() as usize).min(self.height as usize - 2);
-        let (ax, ay) = (fx - x0 as f64, fy - y0 as f64);
-        let texel = |x: usize, y: usize| self.texels[y * self.width as usize + x];
-        let mut out = [0f64; 3];
-        for (c, o) in out.iter_mut().enumerate() {
-            let t00 = f64::from(texel(x0, y0)[c]);
-            let t10 = f64::from(texel(x0 + 1, y0)[c]);
-            let t01 = f64::from(texel(x0, y0 + 1)[c]);
-            let t11 = f64::from(texel(x0 + 1, y0 + 1)[c]);
-            *o = (t00 * (1.0 - ax) + t10 * ax) * (1.0 - ay) + (t01 * (1.0 - ax) + t11 * ax) * ay;
+        let alt = alt.clamp(0.0, frame.thickness());
+        let (w, h) = (self.width as usize, self.height as usize);
+        let last = (w - 1) as f64;
+        match self.mapping {
+            TableMapping::Seed => {
+                let fx = ((1.0 - mu) * 0.5).clamp(0.0, 1.0) * last;
+                let fy = alt / frame.thickness() * (h - 1) as f64;
+                decode(atmosphere, alt, self.bilinear(fx, fy, h - 1))
+            }
+            TableMapping::Horizon => {
+                let upward = |mu: f64| {
+                    let fx = frame.upward_unit(alt, mu) * last;
+                    let fy = unit_of_altitude(frame.thickness(), alt) * (h - 2) as f64;
+                    decode(atmosphere, alt, self.bilinear(fx, fy, h - 2))
+                };
+                if mu >= 0.0 {
+                    return upward(mu);
+                }
+                // Down to the lowest point and back up: ρ at the lowest
+                // point is √(ρ² − r²μ²), no planet-scale difference.
+                let r = frame.bottom + alt;
+                let rho = frame.rho(alt);
+                let rho_low = ((rho - r * mu).max(0.0) * (rho + r * mu).max(0.0)).sqrt();
+                let alt_low = frame.altitude(rho_low);
+                let fx = unit_of_altitude(frame.thickness(), alt_low) * last;
+                let horizontal = decode(atmosphere, alt_low, self.bilinear(fx, (h - 1) as f64, 0));
+                let up = upward(-mu);
+                Densities {
+                    rayleigh: (2.0 * horizontal.rayleigh - up.rayleigh).max(0.0),
+                    mie: (2.0 * horizontal.mie - up.mie).max(0.0),
+                    ozone: (2.0 * horizontal.ozone - up.ozone).max(0.0),
+                }
+            }
         }
-        let alt = alt.clamp(0.0, atmosphere.top_radius - atmosphere.bottom_radius);
-        Densities {
-            rayleigh: ((out[0] - alt / atmosphere.rayleigh_scale_height).exp() - LOG_OFFSET)
-                .max(0.0),
-            mie: ((out[1] - alt / atmosphere.mie_scale_height).exp() - LOG_OFFSET).max(0.0),
-            ozone: out[2],
+    }
+
+    /// The density integrals the atmosphere pass uses towards the sun from
+    /// altitude `alt` along cosine `mu`: Rayleigh and Mie from the table,
+    /// ozone as `ozone` says.
+    pub fn densities(
+        &self,
+        atmosphere: &Atmosphere,
+        alt: f64,
+        mu: f64,
+        ozone: OzoneDepth,
+    ) -> Densities {
+        let mut d = self.lookup(atmosphere, alt, mu);
+        if ozone == OzoneDepth::Exact {
+            d.ozone = super::ozone::ozone_to_top(atmosphere, alt, mu);
         }
+        d
     }
 }

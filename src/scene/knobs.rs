@@ -6,7 +6,7 @@
 //! adding one entry to [`KNOBS`] and nothing else.
 
 use super::{
-    HdrFormat, Lighting, Scene, ShadingModel, TableFilter, TableMapping, TextureFilter,
+    HdrFormat, Lighting, OzoneDepth, Scene, ShadingModel, TableFilter, TableMapping, TextureFilter,
     ToneMapOperator,
 };
 
@@ -271,20 +271,12 @@ pub const KNOBS: &[Knob] = &[
     Knob {
         name: "od_table_size",
         best: Best::LastListed,
-        values: "WIDTHxHEIGHT: optical-depth table texels, direction x altitude (2..=4096 each)",
+        values: "WIDTHxHEIGHT: optical-depth table texels, direction x altitude (3..=4096 each)",
         apply: |s, v| {
             let (w, h) = v.split_once('x').ok_or("expected WIDTHxHEIGHT")?;
             let parse = |t: &str| t.trim().parse::<u32>().map_err(|e| format!("'{t}': {e}"));
             let (w, h) = (parse(w)?, parse(h)?);
-            if ![w, h]
-                .iter()
-                .all(|n| (2..=super::MAX_TABLE_SIDE).contains(n))
-            {
-                return Err(format!(
-                    "each side must be between 2 and {}",
-                    super::MAX_TABLE_SIDE
-                ));
-            }
+            super::sky::check_table_size(w, h)?;
             sky_mut(s)?.table_size = (w, h);
             Ok(())
         },
@@ -357,6 +349,27 @@ pub const KNOBS: &[Knob] = &[
                 TableFilter::Manual => "manual",
                 TableFilter::Nearest => "nearest",
                 TableFilter::Hardware => "hardware",
+            }
+            .into(),
+            None => "-".into(),
+        },
+    },
+    Knob {
+        name: "od_ozone",
+        best: Best::Fixed("exact"),
+        values: "exact | table: the ozone's integral towards the sun in closed form or from the optical-depth table",
+        apply: |s, v| {
+            sky_mut(s)?.ozone_depth = match v {
+                "exact" => OzoneDepth::Exact,
+                "table" => OzoneDepth::Table,
+                _ => return Err("expected exact or table".into()),
+            };
+            Ok(())
+        },
+        read: |s| match &s.sky {
+            Some(sky) => match sky.ozone_depth {
+                OzoneDepth::Exact => "exact",
+                OzoneDepth::Table => "table",
             }
             .into(),
             None => "-".into(),

@@ -28,8 +28,8 @@ pub use lights::{Light, LightRange};
 pub use material::{Material, ShadingModel};
 pub use object::{Object, Shape, Transform};
 pub use sky::{
-    Atmosphere, Sky, Sun, TableFilter, TableMapping, DEFAULT_ATMOSPHERE_SAMPLES,
-    DEFAULT_TABLE_SIZE, MAX_ATMOSPHERE_SAMPLES, MAX_TABLE_SIDE,
+    Atmosphere, OzoneDepth, Sky, Sun, TableFilter, TableMapping, DEFAULT_ATMOSPHERE_SAMPLES,
+    DEFAULT_TABLE_SIZE, MAX_ATMOSPHERE_SAMPLES, MAX_TABLE_SIDE, MIN_TABLE_SIDE,
 };
 
 use crate::mesh::{tessellate, Mesh};

@@ -17,7 +17,7 @@ use crate::atmosphere::TableMapping;
 use crate::render::plan::attachment;
 use crate::render::sky_resources::SkyResources;
 use crate::render::RenderError;
-use crate::scene::TableFilter;
+use crate::scene::{OzoneDepth, TableFilter};
 use crate::shaders;
 use crate::vk::{CommandBuffer, GraphicsPipeline, PipelineLayout};
 use ash::vk::CompareOp;
@@ -31,9 +31,9 @@ pub struct AtmospherePass {
 }
 
 /// The specialization constants the atmosphere shaders share: the
-/// optical-depth table's mapping and filter select code paths once, at
-/// pipeline creation.
-pub(super) fn table_constants(sky: &crate::scene::Sky) -> [(u32, u32); 2] {
+/// optical-depth table's mapping and filter, and where the ozone's
+/// integral comes from, select code paths once, at pipeline creation.
+pub(super) fn table_constants(sky: &crate::scene::Sky) -> [(u32, u32); 3] {
     let mapping = match sky.table_mapping {
         TableMapping::Horizon => 0,
         TableMapping::Seed => 1,
@@ -43,7 +43,8 @@ pub(super) fn table_constants(sky: &crate::scene::Sky) -> [(u32, u32); 2] {
         TableFilter::Nearest => 1,
         TableFilter::Hardware => 2,
     };
-    [(0, mapping), (1, filter)]
+    let ozone_exact = u32::from(sky.ozone_depth == OzoneDepth::Exact);
+    [(0, mapping), (1, filter), (2, ozone_exact)]
 }
 
 pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
@@ -53,7 +54,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     })?;
     let inputs = InputAttachments::new(setup, &[attachment::SURFACE, attachment::DEPTH])?;
     let layout = PipelineLayout::new(setup.ctx, &[&resources.layout, &inputs.layout])?;
-    let [mapping, filter] = table_constants(sky);
+    let constants = table_constants(sky);
     // (shader features, depth test) per draw.
     let draws: &[(&[&str], Option<CompareOp>)] = if resources.sky_view.is_some() {
         &[
@@ -72,7 +73,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
                 &setup.render_pass()?.render_pass,
                 setup.subpass,
                 shaders::ATMOSPHERE_FRAG.spirv(features),
-                &[mapping, filter],
+                &constants,
                 *test,
             )
         })
