@@ -165,5 +165,22 @@ pub fn hits_ground(atmosphere: &Atmosphere, p: DVec3, direction: DVec3) -> bool 
     mu < -(h * (2.0 * atmosphere.bottom_radius + h)).sqrt() / r
 }
 
+/// The lowest point of the line through a point at altitude `alt` along
+/// cosine `mu` of its zenith angle (the foot of the perpendicular from the
+/// planet centre; behind the point when `mu` > 0), for a planet of radius
+/// `bottom`: (ρ² = r² − R² there, its altitude). Both are negative when the
+/// line passes below the ground (−R² and −R for a vertical one).
+///
+/// ρ² − r²μ² is formed as (ρ − r|μ|)(ρ + r|μ|), so a nearly horizontal
+/// line needs no planet-scale difference; chords computed from these
+/// depend on r² at the lowest point, which they hold to a few m².
+pub fn lowest_point(bottom: f64, alt: f64, mu: f64) -> (f64, f64) {
+    let r = bottom + alt;
+    let rho = (alt * (2.0 * bottom + alt)).sqrt();
+    let rho2_low = (rho - r * mu.abs()) * (rho + r * mu.abs());
+    let r_low = (rho2_low + bottom * bottom).max(0.0).sqrt();
+    (rho2_low, rho2_low / (r_low + bottom))
+}
+
 #[cfg(test)]
 mod tests;

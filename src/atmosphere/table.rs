@@ -87,12 +87,6 @@ impl Frame {
         (alt * (2.0 * self.bottom + alt)).sqrt()
     }
 
-    /// The altitude where ρ = `rho`.
-    fn altitude(&self, rho: f64) -> f64 {
-        let r = (rho * rho + self.bottom * self.bottom).sqrt();
-        (rho * rho / (r + self.bottom)).min(self.thickness())
-    }
-
     /// Distance from radius `r` along cosine `mu` to the top sphere.
     fn distance_to_top(&self, r: f64, mu: f64) -> f64 {
         let disc = (self.top - r) * (self.top + r) + r * r * mu * mu;
@@ -245,17 +239,14 @@ impl OpticalDepthTable {
     }
 
     /// Bilinear filter of the first three channels at texel coordinates
-    /// (`fx`, `fy`), between rows 0 and `last_row`; with `last_row` = 0 a
-    /// linear filter along row `fy` alone.
-    fn bilinear(&self, fx: f64, fy: f64, last_row: usize) -> [f64; 3] {
+    /// (`fx`, `fy`), between rows `first_row` and `last_row` (equal: that
+    /// row alone), as `table_texels` in the shader.
+    fn filtered(&self, fx: f64, fy: f64, first_row: usize, last_row: usize) -> [f64; 3] {
         let w = self.width as usize;
         let x0 = (fx.floor().max(0.0) as usize).min(w - 2);
-        let (y0, y1) = if last_row == 0 {
-            (fy as usize, fy as usize)
-        } else {
-            let y0 = (fy.floor().max(0.0) as usize).min(last_row - 1);
-            (y0, y0 + 1)
-        };
+        let y0 = (fy.floor().max(0.0) as usize)
+            .clamp(first_row, last_row.saturating_sub(1).max(first_row));
+        let y1 = (y0 + 1).min(last_row);
         let (ax, ay) = (fx - x0 as f64, (fy - y0 as f64).clamp(0.0, 1.0));
         let texel = |x: usize, y: usize| self.texels[y * w + x];
         let mut out = [0f64; 3];
@@ -281,25 +272,27 @@ impl OpticalDepthTable {
             TableMapping::Seed => {
                 let fx = ((1.0 - mu) * 0.5).clamp(0.0, 1.0) * last;
                 let fy = alt / frame.thickness() * (h - 1) as f64;
-                decode(atmosphere, alt, self.bilinear(fx, fy, h - 1))
+                decode(atmosphere, alt, self.filtered(fx, fy, 0, h - 1))
             }
             TableMapping::Horizon => {
                 let upward = |mu: f64| {
                     let fx = frame.upward_unit(alt, mu) * last;
                     let fy = unit_of_altitude(frame.thickness(), alt) * (h - 2) as f64;
-                    decode(atmosphere, alt, self.bilinear(fx, fy, h - 2))
+                    decode(atmosphere, alt, self.filtered(fx, fy, 0, h - 2))
                 };
                 if mu >= 0.0 {
                     return upward(mu);
                 }
-                // Down to the lowest point and back up: ρ at the lowest
-                // point is √(ρ² − r²μ²), no planet-scale difference.
-                let r = frame.bottom + alt;
-                let rho = frame.rho(alt);
-                let rho_low = ((rho - r * mu).max(0.0) * (rho + r * mu).max(0.0)).sqrt();
-                let alt_low = frame.altitude(rho_low);
+                // Down to the lowest point (above the ground, as the ray
+                // misses it) and back up.
+                let (_, alt_low) = super::lowest_point(frame.bottom, alt, mu);
+                let alt_low = alt_low.max(0.0);
                 let fx = unit_of_altitude(frame.thickness(), alt_low) * last;
-                let horizontal = decode(atmosphere, alt_low, self.bilinear(fx, (h - 1) as f64, 0));
+                let horizontal = decode(
+                    atmosphere,
+                    alt_low,
+                    self.filtered(fx, (h - 1) as f64, h - 1, h - 1),
+                );
                 let up = upward(-mu);
                 Densities {
                     rayleigh: (2.0 * horizontal.rayleigh - up.rayleigh).max(0.0),
