@@ -348,7 +348,8 @@ fn the_limb_glows_from_orbit() {
 
 /// Stiff and extreme atmospheres stay finite and non-negative: 1000×
 /// denser (optical depths in the thousands, transmittance underflows),
-/// near vacuum, and a 100 m Mie scale height.
+/// near vacuum, a 100 m Mie scale height, the smallest table and an ozone
+/// layer cut by the top of the atmosphere.
 #[test]
 fn extreme_atmospheres_stay_finite() {
     for (label, atmosphere) in [
@@ -365,6 +366,17 @@ fn extreme_atmospheres_stay_finite() {
              ozone_absorption = [0.0, 0.0, 0.0]\n",
         ),
         ("Mie scale height 100 m", "mie_scale_height = 100.0\n"),
+        // The smallest table: one row of upward directions above another,
+        // and the horizontal row.
+        ("3x3 table", "od_table_size = [3, 3]\n"),
+        (
+            "ozone layer above the top, from the table",
+            "ozone_layer = [50000.0, 70000.0, 90000.0]\nod_ozone = \"table\"\n",
+        ),
+        (
+            "ozone layer above the top",
+            "ozone_layer = [50000.0, 70000.0, 90000.0]\n",
+        ),
     ] {
         let scene = common::scene(&format!(
             "[output]\nwidth = 64\nheight = 48\nhdr_format = \"rgba32f\"\n\

@@ -459,6 +459,9 @@ mod tests {
             ("sky_view", "off"),
             ("sky_view", "16x128"),
             ("od_filter", "hardware"),
+            ("od_ozone", "table"),
+            ("od_ozone", "exact"),
+            ("od_table_size", "3x3"),
             ("atmosphere_samples", "8"),
         ] {
             let knob = Knob::find(name).unwrap();
@@ -469,6 +472,8 @@ mod tests {
             ("sky_view", "16x127"),
             ("sky_view", "on"),
             ("od_filter", "cubic"),
+            ("od_ozone", "analytic"),
+            ("od_table_size", "256x2"),
         ] {
             let e = Knob::find(name)
                 .unwrap()

@@ -748,6 +748,10 @@ mod tests {
                 "atmosphere.od_table_size",
             ),
             (
+                "[atmosphere]\nod_table_size = [256, 2]\n",
+                "atmosphere.od_table_size",
+            ),
+            (
                 "[atmosphere]\nsky_view = [128, 255]\n",
                 "atmosphere.sky_view",
             ),
@@ -763,7 +767,11 @@ mod tests {
             assert_eq!(field_of(&text), field, "{text}");
         }
         // Named values outside their set are refused by the parser.
-        for bad in ["od_table_mapping = \"log\"", "od_filter = \"cubic\""] {
+        for bad in [
+            "od_table_mapping = \"log\"",
+            "od_filter = \"cubic\"",
+            "od_ozone = \"analytic\"",
+        ] {
             let text = format!("[sun]\ndirection = [0.0, 1.0, 0.0]\n[atmosphere]\n{bad}\n");
             let e = parse(&text).unwrap_err().to_string();
             assert!(e.contains(bad.split(' ').next().unwrap()), "{e}");
