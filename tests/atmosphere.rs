@@ -377,6 +377,14 @@ fn extreme_atmospheres_stay_finite() {
             "ozone layer above the top",
             "ozone_layer = [50000.0, 70000.0, 90000.0]\n",
         ),
+        (
+            "ozone layer from the ground",
+            "ozone_layer = [0.0, 5.0, 10.0]\n",
+        ),
+        (
+            "100 m thick atmosphere",
+            "top_radius = 6360100.0\nozone_layer = [10.0, 20.0, 30.0]\n",
+        ),
     ] {
         let scene = common::scene(&format!(
             "[output]\nwidth = 64\nheight = 48\nhdr_format = \"rgba32f\"\n\
