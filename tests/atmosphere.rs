@@ -433,7 +433,7 @@ fn table_settings_order_as_their_error_says() {
     let small = error("horizon 32x8 manual", &|s| s.table_size = (32, 8));
     // The table's ozone channel: its error lives on the few sun rays that
     // skim a kink of the tent, which these probes barely meet (measured
-    // 2.4e-5 / 8.3e-5, level with the default); bounded, not ordered.
+    // 6.2e-5 / 9.5e-5, level with the default); bounded, not ordered.
     let ozone_table = error("horizon 256x64 manual, ozone from the table", &|s| {
         s.ozone_depth = aerial::scene::OzoneDepth::Table
     });

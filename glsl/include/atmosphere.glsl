@@ -74,8 +74,8 @@ bool sphere(vec3 o, vec3 d, float c, float radius, out float t0, out float t1) {
 }
 
 // The table's texels at texel coordinates (fx, fy) (centres on integers),
-// filtered between rows first_row and last_row (equal: that row alone).
-vec3 table_texels(float fx, float fy, int first_row, int last_row) {
+// filtered between rows 0 and last_row.
+vec3 table_texels(float fx, float fy, int last_row) {
     int w = int(sky.ozone_layer.z);
     int hh = int(sky.ozone_layer.w);
     if (TABLE_FILTER == 1) {
@@ -87,16 +87,32 @@ vec3 table_texels(float fx, float fy, int first_row, int last_row) {
         return textureLod(od_table, (vec2(fx, fy) + 0.5) / vec2(w, hh), 0.0).xyz;
     }
     int x0 = min(int(floor(fx)), w - 2);
-    int y0 = clamp(int(floor(fy)), first_row, max(last_row - 1, first_row));
-    int y1 = min(y0 + 1, last_row);
+    int y0 = min(int(floor(fy)), last_row - 1);
     float ax = fx - float(x0);
-    float ay = clamp(fy - float(y0), 0.0, 1.0);
+    float ay = fy - float(y0);
     // Manual bilinear from four texel fetches (32-bit floats).
     vec3 t00 = texelFetch(od_table, ivec2(x0, y0), 0).xyz;
     vec3 t10 = texelFetch(od_table, ivec2(x0 + 1, y0), 0).xyz;
-    vec3 t01 = texelFetch(od_table, ivec2(x0, y1), 0).xyz;
-    vec3 t11 = texelFetch(od_table, ivec2(x0 + 1, y1), 0).xyz;
+    vec3 t01 = texelFetch(od_table, ivec2(x0, y0 + 1), 0).xyz;
+    vec3 t11 = texelFetch(od_table, ivec2(x0 + 1, y0 + 1), 0).xyz;
     return mix(mix(t00, t10, ax), mix(t01, t11, ax), ay);
+}
+
+// The table's last row (the horizontal ray) at texel coordinate fx,
+// filtered along the row alone: two fetches.
+vec3 table_row(float fx) {
+    int w = int(sky.ozone_layer.z);
+    int hh = int(sky.ozone_layer.w);
+    if (TABLE_FILTER == 1) {
+        return texelFetch(od_table, ivec2(round(fx), hh - 1), 0).xyz;
+    }
+    if (TABLE_FILTER == 2) {
+        return textureLod(od_table, vec2(fx + 0.5, float(hh) - 0.5) / vec2(w, hh), 0.0).xyz;
+    }
+    int x0 = min(int(floor(fx)), w - 2);
+    vec3 t0 = texelFetch(od_table, ivec2(x0, hh - 1), 0).xyz;
+    vec3 t1 = texelFetch(od_table, ivec2(x0 + 1, hh - 1), 0).xyz;
+    return mix(t0, t1, fx - float(x0));
 }
 
 // Density integrals from a filtered texel value v stored for altitude h.
@@ -108,43 +124,61 @@ vec3 table_decode(vec3 v, float h) {
         v.z);
 }
 
-// The horizon mapping's altitude axis, x = (2/pi) asin(sqrt(h / thickness)).
+// The horizon mapping's altitude axis: with q = h / thickness,
+// x = sqrt(q) / (sqrt(q) + sqrt(1 - q)) (src/atmosphere/table.rs).
 float table_altitude_unit(float h, float thickness) {
-    return asin(sqrt(clamp(h / thickness, 0.0, 1.0))) * (2.0 / PI);
+    float q = clamp(h / thickness, 0.0, 1.0);
+    float a = sqrt(q);
+    return a / (a + sqrt(1.0 - q));
 }
 
-// The ray from altitude h along cosine mu, described from its lowest point
-// (src/atmosphere/ozone.rs): rho^2 = r^2 - Rb^2 and the altitude there,
-// both negative for a ray whose line passes below the ground (-Rb^2 and
-// -Rb for a vertical one). Chords computed from them depend on r^2 at
-// the lowest point, which float32 holds to a few m^2.
-void lowest_point(float h, float mu, out float rho2_low, out float alt_low) {
+// A ray towards the sun from altitude h (clamped to the atmosphere) along
+// cosine mu, also described from its lowest point (src/atmosphere/mod.rs,
+// lowest_point): rho^2 = r^2 - Rb^2 there and its altitude, both negative
+// for a ray whose line passes below the ground (-Rb^2 and -Rb for a
+// vertical one). Chords computed from them depend on r^2 at the lowest
+// point, which float32 holds to a few m^2.
+struct SunRay {
+    float h;
+    float mu;
+    float rho;      // sqrt(r^2 - Rb^2) at the start
+    float rho2_low;
+    float alt_low;
+};
+
+SunRay sun_ray(float h, float mu) {
     float rb = sky.radii.x;
-    float r = rb + h;
-    float rho = sqrt(h * (2.0 * rb + h));
-    rho2_low = (rho - r * abs(mu)) * (rho + r * abs(mu));
-    alt_low = rho2_low / (sqrt(max(rho2_low + rb * rb, 0.0)) + rb);
+    SunRay ray;
+    ray.h = clamp(h, 0.0, sky.radii.y - rb);
+    ray.mu = mu;
+    float r = rb + ray.h;
+    ray.rho = sqrt(ray.h * (2.0 * rb + ray.h));
+    ray.rho2_low = (ray.rho - r * abs(mu)) * (ray.rho + r * abs(mu));
+    ray.alt_low = ray.rho2_low / (sqrt(max(ray.rho2_low + rb * rb, 0.0)) + rb);
+    return ray;
 }
 
-// Density integrals to the top (Rayleigh, Mie, ozone) from altitude h
-// along cosine mu, directions into the ground excluded by the caller.
-// Horizon mapping: the rows but the last hold upward directions; a
-// downward one is 2 F(lowest point) - (the upward ray at -mu), with F the
-// horizontal row (src/atmosphere/table.rs says why).
-vec3 table_densities(float h, float mu) {
+// Density integrals to the top (Rayleigh, Mie, ozone) along the ray,
+// directions into the ground excluded by the caller. Horizon mapping: the
+// rows but the last hold upward directions; a downward one is
+// 2 F(lowest point) - (the upward ray at -mu), with F the horizontal row
+// (src/atmosphere/table.rs says why). Both lookups run for every ray, with
+// a select rather than a branch: a CPU driver runs both sides of a branch
+// its lanes disagree on anyway.
+vec3 table_densities(SunRay ray) {
     float rb = sky.radii.x;
     float rt = sky.radii.y;
     float thickness = rt - rb;
-    h = clamp(h, 0.0, thickness);
+    float h = ray.h;
     int w = int(sky.ozone_layer.z);
     int hh = int(sky.ozone_layer.w);
     if (TABLE_MAPPING == 1) {
-        float fx = clamp((1.0 - mu) * 0.5, 0.0, 1.0) * float(w - 1);
+        float fx = clamp((1.0 - ray.mu) * 0.5, 0.0, 1.0) * float(w - 1);
         float fy = clamp(h / thickness, 0.0, 1.0) * float(hh - 1);
-        return table_decode(table_texels(fx, fy, 0, hh - 1), h);
+        return table_decode(table_texels(fx, fy, hh - 1), h);
     }
     float r = rb + h;
-    float m = abs(mu);
+    float m = abs(ray.mu);
     // Distance to the top along m, and at its ends (straight up, horizontal),
     // from q = Rt^2 - r^2 without cancellation.
     float d_min = thickness - h;
@@ -153,33 +187,25 @@ vec3 table_densities(float h, float mu) {
     float d_max = sqrt(q);
     float x_mu = clamp((d - d_min) / max(d_max - d_min, 1e-6), 0.0, 1.0);
     float fy = table_altitude_unit(h, thickness) * float(hh - 2);
-    vec3 up = table_decode(table_texels(x_mu * float(w - 1), fy, 0, hh - 2), h);
-    if (mu >= 0.0) {
-        return up;
-    }
-    float rho2_low, alt_low;
-    lowest_point(h, mu, rho2_low, alt_low);
+    vec3 up = table_decode(table_texels(x_mu * float(w - 1), fy, hh - 2), h);
     // A downward ray that misses the ground has its lowest point above it.
-    alt_low = max(alt_low, 0.0);
+    float alt_low = max(ray.alt_low, 0.0);
     float fx = table_altitude_unit(alt_low, thickness) * float(w - 1);
-    vec3 horizontal = table_decode(table_texels(fx, float(hh - 1), hh - 1, hh - 1), alt_low);
-    return max(2.0 * horizontal - up, vec3(0.0));
+    vec3 horizontal = table_decode(table_row(fx), alt_low);
+    return ray.mu >= 0.0 ? up : max(2.0 * horizontal - up, vec3(0.0));
 }
 
-// The ozone integral over [a, b] (distances from the start) of a density
-// slope * (altitude - zero), by three-point Gauss-Legendre; the ray is
-// given by its lowest point (u = s + start from there).
-float ozone_interval(float a, float b, float start, float rho2_low, float zero, float slope) {
-    if (b <= a) {
-        return 0.0;
-    }
+// The ozone integral over [a, b] (distances from the start; empty when
+// b <= a) of a density slope * (altitude - zero), by three-point
+// Gauss-Legendre.
+float ozone_interval(SunRay ray, float start, float a, float b, float zero, float slope) {
     float rb = sky.radii.x;
-    float mid = 0.5 * (a + b);
-    float half_length = 0.5 * (b - a);
+    float mid = 0.5 * (a + b) + start;
+    float half_length = 0.5 * max(b - a, 0.0);
     float sum = 0.0;
     for (int i = -1; i <= 1; i++) {
-        float u = mid + float(i) * half_length * 0.7745966692 + start;
-        float rho2 = rho2_low + u * u;
+        float u = mid + float(i) * half_length * 0.7745966692;
+        float rho2 = ray.rho2_low + u * u;
         float alt = rho2 / (sqrt(rho2 + rb * rb) + rb);
         sum += (i == 0 ? 8.0 / 9.0 : 5.0 / 9.0) * (alt - zero);
     }
@@ -193,17 +219,15 @@ float ozone_half_chord(float k, float alt_low) {
     return disc < 0.0 ? -1.0 : sqrt(disc);
 }
 
-// The ozone density integral from altitude h along cosine mu to the top,
-// in closed form (src/atmosphere/ozone.rs, the same arithmetic): within
-// each shell of the tent the density is linear in the altitude, and the
-// ray meets a shell in at most two intervals.
-float ozone_to_top(float h, float mu) {
+// The ozone density integral along the ray to the top, in closed form
+// (src/atmosphere/ozone.rs, the same arithmetic): within each shell of
+// the tent the density is linear in the altitude, and the ray meets a
+// shell in at most two intervals. Distances are from the lowest point
+// (u = s + start).
+float ozone_to_top(SunRay ray) {
     float thickness = sky.radii.y - sky.radii.x;
-    h = clamp(h, 0.0, thickness);
-    float rho2_low, alt_low;
-    lowest_point(h, mu, rho2_low, alt_low);
-    float start = (sky.radii.x + h) * mu;
-    float end = ozone_half_chord(thickness, alt_low) - start;
+    float start = (sky.radii.x + ray.h) * ray.mu;
+    float end = ozone_half_chord(thickness, ray.alt_low) - start;
     float knots[3] = float[3](sky.ozone_absorption.w, sky.ozone_layer.x, sky.ozone_layer.y);
     float sum = 0.0;
     for (int shell = 0; shell < 2; shell++) {
@@ -211,17 +235,16 @@ float ozone_to_top(float h, float mu) {
         float upper = min(knots[shell + 1], thickness);
         float zero = shell == 0 ? knots[0] : knots[2];
         float slope = shell == 0 ? 1.0 / (knots[1] - knots[0]) : -1.0 / (knots[2] - knots[1]);
-        float outer = ozone_half_chord(upper, alt_low);
-        if (lower >= upper || outer < 0.0) {
-            continue;
-        }
-        float a = max(-outer - start, 0.0);
-        float b = min(outer - start, end);
+        // A ray that passes above the upper sphere, or a shell above the
+        // top, leaves both intervals empty.
+        float outer = lower < upper ? ozone_half_chord(upper, ray.alt_low) : -1.0;
+        float a = outer < 0.0 ? 0.0 : max(-outer - start, 0.0);
+        float b = outer < 0.0 ? 0.0 : min(outer - start, end);
         // Split where the ray enters and leaves the lower sphere, or at the
         // lowest point when it passes above it.
-        float inner = max(ozone_half_chord(lower, alt_low), 0.0);
-        sum += ozone_interval(a, min(b, -inner - start), start, rho2_low, zero, slope);
-        sum += ozone_interval(max(a, inner - start), b, start, rho2_low, zero, slope);
+        float inner = max(ozone_half_chord(lower, ray.alt_low), 0.0);
+        sum += ozone_interval(ray, start, a, min(b, -inner - start), zero, slope);
+        sum += ozone_interval(ray, start, max(a, inner - start), b, zero, slope);
     }
     return sum;
 }
@@ -229,15 +252,15 @@ float ozone_to_top(float h, float mu) {
 // Optical depth from a point at altitude h (radius r, position p relative
 // to the centre) to the sun; lit is false in the planet's shadow.
 vec3 sun_optical_depth(float h, float r, vec3 p, out bool lit) {
-    float mu = dot(p, sky.sun_direction.xyz) / r;
-    float horizon = -sqrt(max(h, 0.0) * (2.0 * sky.radii.x + max(h, 0.0))) / r;
-    lit = mu >= horizon;
+    SunRay ray = sun_ray(h, dot(p, sky.sun_direction.xyz) / r);
+    lit = ray.mu >= -ray.rho / r;
     if (!lit) {
         return vec3(0.0);
     }
-    vec3 d = table_densities(h, mu);
-    if (OZONE_EXACT) {
-        d.z = ozone_to_top(h, mu);
+    vec3 d = table_densities(ray);
+    // Uniform branch: an atmosphere without ozone skips the integral.
+    if (OZONE_EXACT && any(greaterThan(sky.ozone_absorption.xyz, vec3(0.0)))) {
+        d.z = ozone_to_top(ray);
     }
     return sky.rayleigh.xyz * d.x + sky.mie_extinction.xyz * d.y + sky.ozone_absorption.xyz * d.z;
 }

@@ -253,12 +253,12 @@ fn a_256x64_horizon_table_meets_its_transmittance_bounds() {
     assert!(with_ozone <= 1e-4, "with ozone {with_ozone:e}");
     assert!(table.bake_seconds <= 5.0, "bake {} s", table.bake_seconds);
     // Ozone from the table's channel instead: the tent's kinks cost more
-    // than ten times the goal (measured 1.4e-3), which is why the pass
+    // than ten times the goal (measured 2.6e-3), which is why the pass
     // integrates it in closed form by default.
     let (from_table, _) = table_errors(&a, &table, OzoneDepth::Table);
     println!("256x64 horizon table, ozone from the table: {from_table:.3e}");
     assert!(
-        from_table > 5.0 * with_ozone && from_table < 3e-3,
+        from_table > 5.0 * with_ozone && from_table < 5e-3,
         "{from_table:e}"
     );
     // The seed's linear mapping at the same size is far worse: the mapping
