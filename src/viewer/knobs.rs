@@ -79,6 +79,11 @@ const CYCLES: &[Cycle] = &[
         values: &["off", "64x128", "128x256"],
         applies: has_sky,
     },
+    Cycle {
+        name: "od_ozone",
+        values: &["exact", "table"],
+        applies: has_sky,
+    },
 ];
 
 /// The knobs that apply to `scene`; key N cycles entry N-1 (key 0 the
@@ -114,12 +119,13 @@ pub fn listing(scene: &Scene) -> String {
         .enumerate()
         .map(|(i, c)| {
             let value = c.current(scene).unwrap_or_else(|e| e.to_string());
-            format!(
-                "  {} {}={value} ({})",
-                (i + 1) % 10,
-                c.name,
-                c.values.join("|")
-            )
+            // Keys 1..9 and 0; an eleventh knob has no key.
+            let key = if i < 10 {
+                ((i + 1) % 10).to_string()
+            } else {
+                "-".into()
+            };
+            format!("  {key} {}={value} ({})", c.name, c.values.join("|"))
         })
         .collect::<Vec<_>>()
         .join("\n")
