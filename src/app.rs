@@ -34,6 +34,9 @@ pub struct RenderRun {
     pub frames: Vec<FrameTiming>,
     pub output: Pixels<u8>,
     pub hdr: Option<Pixels<f32>>,
+    /// What building the frame cost beyond its passes
+    /// ([`crate::render::Renderer::setup_measures`]).
+    pub setup: Vec<(&'static str, f64)>,
     /// Validation messages that were not on the allow-list (empty without
     /// validation).
     pub validation: Vec<ValidationMessage>,
@@ -205,7 +208,13 @@ pub fn run_with_progress(
     // as well.
     drop(ctx);
     let validation = log.map(|l| l.messages()).unwrap_or_default();
-    let (passes, frames, output, hdr) = match produced {
+    let Produced {
+        passes,
+        frames,
+        output,
+        hdr,
+        setup,
+    } = match produced {
         Ok(p) => p,
         Err(error) => return Err(RunError { error, validation }),
     };
@@ -215,6 +224,7 @@ pub fn run_with_progress(
         frames,
         output,
         hdr,
+        setup,
         validation,
     })
 }
@@ -243,7 +253,13 @@ fn produce(
         FrameSource::EmptyPass { width, height } => {
             let mut pass = EmptyPass::new(ctx, width, height)?;
             let frames = submit_frames(settings, on_frame, || pass.render_frame())?;
-            (vec![empty_pass::PASS_NAME], frames, pass.output(), None)
+            Produced {
+                passes: vec![empty_pass::PASS_NAME],
+                frames,
+                output: pass.output(),
+                hdr: None,
+                setup: Vec::new(),
+            }
         }
         FrameSource::ValidationCheck(misuse) => {
             match misuse {
@@ -253,12 +269,17 @@ fn produce(
             if misuse == Misuse::LeakThenFail {
                 return Err(Context::deliberate_failure_for_validation_check().into());
             }
-            let nothing = Pixels {
-                width: 0,
-                height: 0,
-                data: Vec::new(),
-            };
-            (Vec::new(), Vec::new(), nothing, None)
+            Produced {
+                passes: Vec::new(),
+                frames: Vec::new(),
+                output: Pixels {
+                    width: 0,
+                    height: 0,
+                    data: Vec::new(),
+                },
+                hdr: None,
+                setup: Vec::new(),
+            }
         }
     })
 }
@@ -277,12 +298,14 @@ pub fn render_empty_pass(
 
 /// What one renderer produced over the frames: pass names, timings, and
 /// the images of the last frame.
-type Produced = (
-    Vec<&'static str>,
-    Vec<FrameTiming>,
-    Pixels<u8>,
-    Option<Pixels<f32>>,
-);
+/// What one run's frames produced, before the validation log is read.
+struct Produced {
+    passes: Vec<&'static str>,
+    frames: Vec<FrameTiming>,
+    output: Pixels<u8>,
+    hdr: Option<Pixels<f32>>,
+    setup: Vec<(&'static str, f64)>,
+}
 
 fn drive(
     mut renderer: Renderer,
@@ -291,7 +314,13 @@ fn drive(
 ) -> Result<Produced, RenderError> {
     let passes = renderer.plan().pass_names();
     let frames = submit_frames(settings, on_frame, || renderer.render_frame())?;
-    Ok((passes, frames, renderer.output(), renderer.hdr()))
+    Ok(Produced {
+        passes,
+        frames,
+        output: renderer.output(),
+        hdr: renderer.hdr(),
+        setup: renderer.setup_measures(),
+    })
 }
 
 fn context(settings: &RenderSettings) -> Result<std::sync::Arc<Context>, RenderError> {

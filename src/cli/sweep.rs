@@ -112,6 +112,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                     frames: Vec::new(),
                     output: run.output,
                     hdr: Some(hdr),
+                    setup: Vec::new(),
                 });
             }
         };
@@ -123,6 +124,11 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             frames: run.frames,
             output: run.output,
             hdr: run.hdr,
+            setup: run
+                .setup
+                .iter()
+                .map(|(name, value)| (name.to_string(), *value))
+                .collect(),
         })
     };
     let result = sweep

@@ -254,6 +254,19 @@ impl Renderer {
         self.render_pass.as_ref()?.images.get(index)
     }
 
+    /// What building this frame cost beyond its passes, as named values
+    /// for the reports: the optical-depth table's size (`od_table_kib`) and
+    /// bake time (`od_table_bake_ms`) when the scene has an atmosphere.
+    pub fn setup_measures(&self) -> Vec<(&'static str, f64)> {
+        match &self.sky_resources {
+            Some(sky) => vec![
+                ("od_table_kib", sky.table_bytes as f64 / 1024.0),
+                ("od_table_bake_ms", sky.table_bake_seconds * 1e3),
+            ],
+            None => Vec::new(),
+        }
+    }
+
     pub fn plan(&self) -> &FramePlan {
         &self.plan
     }

@@ -177,6 +177,10 @@ pub struct SkyResources {
     _sampler: Sampler,
     /// The sky-view table's size (directions), when there is one.
     pub sky_view: Option<(u32, u32)>,
+    /// The optical-depth table's size in bytes and its bake time (wall
+    /// clock), for the reports.
+    pub table_bytes: usize,
+    pub table_bake_seconds: f64,
 }
 
 impl SkyResources {
@@ -322,6 +326,8 @@ impl SkyResources {
             sky_view_image,
             _sampler: sampler,
             sky_view: sky.sky_view,
+            table_bytes: table.bytes(),
+            table_bake_seconds: table.bake_seconds,
         })
     }
 }

@@ -42,8 +42,13 @@
 //! - `rmse`, the primary error: whole-image RMSE of the linear HDR images
 //!   over all pixels and the R, G, B channels (alpha ignored), in the scene's
 //!   linear radiance units.
+//! - `max_rel_error`: the largest per-pixel relative error of the linear HDR
+//!   image ([`max_relative_error`]).
 //! - `flip_mean` and `flip_p99`: FLIP of the tone-mapped 8-bit sRGB outputs
 //!   (what a viewer sees), mean and 99th percentile over the pixels.
+//! - Setup measures the renderer reports beyond its passes, by name: with
+//!   an atmosphere, the optical-depth table's size (`od_table_kib`) and bake
+//!   time (`od_table_bake_ms`, wall clock).
 //!
 //! See [`crate::report::image_diff`] for the exact metric definitions.
 //!
@@ -72,6 +77,7 @@ pub use run::{
 };
 
 use crate::render::reference::ReferenceError;
+use crate::render::Pixels;
 use crate::report::image_diff::CompareError;
 use crate::report::plot::PlotError;
 use crate::report::stats::Summary;
@@ -173,10 +179,16 @@ pub struct Row {
     pub cpu_ms: Summary,
     /// Whole-image RMSE of the linear HDR image against the reference.
     pub rmse: f64,
+    /// Largest per-pixel relative error of the linear HDR image
+    /// ([`max_relative_error`]).
+    pub max_rel_error: f64,
     /// Mean FLIP of the sRGB output against the reference's.
     pub flip_mean: f64,
     /// 99th percentile of the per-pixel FLIP.
     pub flip_p99: f64,
+    /// Setup measures of the timed run, by name (see the module docs).
+    #[serde(serialize_with = "ordered_map")]
+    pub setup: Vec<(String, f64)>,
     /// On the Pareto front of (GPU median, rmse).
     pub pareto: bool,
 }
@@ -194,6 +206,8 @@ pub struct SweepResult {
     pub knobs: Vec<String>,
     /// Every pass name seen, in frame order.
     pub passes: Vec<String>,
+    /// Every setup measure name seen, in order.
+    pub setup: Vec<String>,
     pub rows: Vec<Row>,
 }
 
@@ -204,6 +218,39 @@ fn ordered_map<S: Serializer, V: Serialize>(
     s: S,
 ) -> Result<S::Ok, S::Error> {
     s.collect_map(pairs.iter().map(|(k, v)| (k, v)))
+}
+
+/// The largest relative error of `test` against `reference` (linear RGBA
+/// images of one size): per pixel, the largest |test − reference| over R, G
+/// and B, divided by the reference pixel's brightest channel. A pixel darker
+/// than a thousandth of the reference's 99th-percentile brightness is
+/// divided by that floor instead: against a black pixel any difference
+/// would be infinitely relative, and the percentile (rather than the
+/// brightest pixel) keeps a small sun disc from lifting the floor above the
+/// sky. For an all-black reference the floor is 1 (absolute error).
+pub fn max_relative_error(reference: &Pixels<f32>, test: &Pixels<f32>) -> f64 {
+    let brightest = |p: &[f32]| p[..3].iter().fold(0f64, |m, &c| m.max(f64::from(c)));
+    let mut levels: Vec<f64> = reference.data.chunks_exact(4).map(brightest).collect();
+    if levels.is_empty() {
+        return 0.0;
+    }
+    let rank = ((levels.len() - 1) as f64 * 0.99).round() as usize;
+    let (_, p99, _) = levels.select_nth_unstable_by(rank, f64::total_cmp);
+    let floor = match *p99 * 1e-3 {
+        f if f > 0.0 => f,
+        _ => 1.0,
+    };
+    reference
+        .data
+        .chunks_exact(4)
+        .zip(test.data.chunks_exact(4))
+        .map(|(r, t)| {
+            let difference = (0..3).fold(0f64, |m, c| {
+                m.max((f64::from(t[c]) - f64::from(r[c])).abs())
+            });
+            difference / brightest(r).max(floor)
+        })
+        .fold(0.0, f64::max)
 }
 
 #[cfg(test)]

@@ -7,8 +7,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// The sweep as CSV: one row per combination, knob columns first, then the
-/// reference's settings, per-pass and total times in ms, the error metrics
-/// and the Pareto flag. Times are rounded to 0.1 µs (far below the noise
+/// reference's settings, per-pass and total times in ms, the error metrics,
+/// the setup measures and the Pareto flag. Times are rounded to 0.1 µs (far below the noise
 /// between frames); errors keep every digit. Fields are quoted only where
 /// RFC 4180 needs it (a comma, quote or line break), lines end in `\n`.
 pub fn to_csv(result: &SweepResult) -> Result<String, SweepError> {
@@ -22,12 +22,14 @@ pub fn to_csv(result: &SweepResult) -> Result<String, SweepError> {
             "gpu_p95_ms",
             "cpu_median_ms",
             "rmse",
+            "max_rel_error",
             "flip_mean",
             "flip_p99",
-            "pareto",
         ]
         .map(String::from),
     );
+    header.extend(result.setup.iter().cloned());
+    header.push("pareto".into());
     let mut out = csv::Writer::from_writer(Vec::new());
     out.write_record(&header)?;
     for row in &result.rows {
@@ -67,10 +69,17 @@ pub fn to_csv(result: &SweepResult) -> Result<String, SweepError> {
             format!("{:.4}", row.gpu_ms.p95),
             format!("{:.4}", row.cpu_ms.median),
             row.rmse.to_string(),
+            row.max_rel_error.to_string(),
             row.flip_mean.to_string(),
             row.flip_p99.to_string(),
-            row.pareto.to_string(),
         ]);
+        // A measure this combination does not report is an empty cell.
+        fields.extend(result.setup.iter().map(|name| {
+            setup_value(row, name)
+                .map(|v| v.to_string())
+                .unwrap_or_default()
+        }));
+        fields.push(row.pareto.to_string());
         out.write_record(&fields)?;
     }
     let bytes = out
@@ -78,6 +87,11 @@ pub fn to_csv(result: &SweepResult) -> Result<String, SweepError> {
         .map_err(|e| csv::Error::from(e.into_error()))?;
     // Every field was a `String`, so the bytes are UTF-8 and nothing is lost.
     Ok(String::from_utf8_lossy(&bytes).into_owned())
+}
+
+/// The row's setup measure `name`, if it reported one.
+fn setup_value(row: &super::Row, name: &str) -> Option<f64> {
+    row.setup.iter().find(|(n, _)| n == name).map(|(_, v)| *v)
 }
 
 /// The sweep as a fixed-width table for the terminal.
@@ -109,23 +123,43 @@ pub fn to_table(result: &SweepResult) -> String {
     for (k, w) in result.knobs.iter().zip(&widths) {
         let _ = write!(out, "{k:<w$}  ");
     }
-    let _ = writeln!(
+    let _ = write!(
         out,
-        "{:>10} {:>10} {:>11} {:>9} {:>9}  pareto",
-        "gpu ms", "p95 ms", "rmse", "flip", "flip p99"
+        "{:>10} {:>10} {:>11} {:>9} {:>9} {:>9}",
+        "gpu ms", "p95 ms", "rmse", "max rel", "flip", "flip p99"
     );
+    for name in &result.setup {
+        let _ = write!(out, " {name:>w$}", w = name.len().max(9));
+    }
+    out.push_str("  pareto\n");
     for (row, label) in result.rows.iter().zip(&labels) {
         for (v, w) in label.iter().zip(&widths) {
             let _ = write!(out, "{v:<w$}  ");
         }
-        let _ = writeln!(
+        let _ = write!(
             out,
-            "{:>10.3} {:>10.3} {:>11.4e} {:>9.5} {:>9.5}  {}{}",
+            "{:>10.3} {:>10.3} {:>11.4e} {:>9.2e} {:>9.5} {:>9.5}",
             row.gpu_ms.median,
             row.gpu_ms.p95,
             row.rmse,
+            row.max_rel_error,
             row.flip_mean,
             row.flip_p99,
+        );
+        for name in &result.setup {
+            let w = name.len().max(9);
+            match setup_value(row, name) {
+                Some(v) => {
+                    let _ = write!(out, " {v:>w$.1}");
+                }
+                None => {
+                    let _ = write!(out, " {:>w$}", "-");
+                }
+            }
+        }
+        let _ = writeln!(
+            out,
+            "  {}{}",
             if row.pareto { "*" } else { "" },
             if row.is_reference { " (reference)" } else { "" },
         );

@@ -106,6 +106,10 @@ pub struct Rendered {
     pub output: Pixels<u8>,
     /// Required for [`Job::Images`] and [`Job::Reference`].
     pub hdr: Option<Pixels<f32>>,
+    /// What building the frame cost beyond its passes, by name (for
+    /// example the optical-depth table's size and bake time); read from
+    /// the timed run.
+    pub setup: Vec<(String, f64)>,
 }
 
 /// One combination and the reference it is compared with, as values in
@@ -274,6 +278,7 @@ impl Sweep {
         let mut cpu_cache: Vec<(ReferenceScene, Rc<Images>)> = Vec::new();
         let mut device = String::new();
         let mut passes: Vec<String> = Vec::new();
+        let mut setup_names: Vec<String> = Vec::new();
         let mut rows = Vec::with_capacity(self.combinations.len());
 
         for (index, c) in self.combinations.iter().enumerate() {
@@ -297,6 +302,12 @@ impl Sweep {
                     passes.push(name.clone());
                 }
             }
+            for (name, _) in &timed.setup {
+                if !setup_names.contains(name) {
+                    setup_names.push(name.clone());
+                }
+            }
+            let setup = timed.setup.clone();
             drop(timed);
 
             let mut images = |values: &[String]| -> Result<Rc<Images>, SweepError> {
@@ -359,6 +370,7 @@ impl Sweep {
                 Metric::Rmse,
             )
             .map_err(compare_err)?;
+            let max_rel_error = super::max_relative_error(&reference.hdr, &test.hdr);
             let flip = compare_images(
                 &ref_name,
                 srgb(&reference.output),
@@ -376,8 +388,10 @@ impl Sweep {
                 gpu_ms,
                 cpu_ms,
                 rmse: rmse.mean,
+                max_rel_error,
                 flip_mean: flip.mean,
                 flip_p99: flip.p99,
+                setup,
                 pareto: false,
             };
             on_row(index, &row);
@@ -396,6 +410,7 @@ impl Sweep {
             reference: self.options.reference,
             knobs: self.axes.iter().map(|a| a.knob.name.to_string()).collect(),
             passes,
+            setup: setup_names,
             rows,
         })
     }

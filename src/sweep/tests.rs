@@ -29,8 +29,10 @@ fn row(values: &[(&str, &str)], ms: f64, rmse: f64, pareto: bool) -> Row {
         gpu_ms: summary(ms),
         cpu_ms: summary(ms + 1.0),
         rmse,
+        max_rel_error: rmse * 4.0,
         flip_mean: rmse / 2.0,
         flip_p99: rmse,
+        setup: Vec::new(),
         pareto,
     }
 }
@@ -67,13 +69,17 @@ fn csv_has_a_header_and_one_line_per_row() {
         reference: ReferenceKind::GpuBest,
         knobs: vec!["tessellation".into(), "hdr_format".into()],
         passes: vec!["opaque".into(), "tonemap".into(), "transparent".into()],
+        setup: vec!["od_table_kib".into()],
         rows: vec![
-            row(
-                &[("tessellation", "0.5"), ("hdr_format", "rgba16f")],
-                2.0,
-                0.25,
-                true,
-            ),
+            Row {
+                setup: vec![("od_table_kib".into(), 256.0)],
+                ..row(
+                    &[("tessellation", "0.5"), ("hdr_format", "rgba16f")],
+                    2.0,
+                    0.25,
+                    true,
+                )
+            },
             row(
                 &[("tessellation", "1"), ("hdr_format", "rgba32f")],
                 4.0,
@@ -89,11 +95,11 @@ fn csv_has_a_header_and_one_line_per_row() {
         [
             "tessellation,hdr_format,reference,is_reference,opaque_median_ms,\
                  tonemap_median_ms,transparent_median_ms,gpu_median_ms,gpu_p95_ms,\
-                 cpu_median_ms,rmse,flip_mean,flip_p99,pareto",
+                 cpu_median_ms,rmse,max_rel_error,flip_mean,flip_p99,od_table_kib,pareto",
             "0.5,rgba16f,tessellation=1 hdr_format=rgba32f,false,\
-                 1.5000,0.5000,,2.0000,2.0000,3.0000,0.25,0.125,0.25,true",
+                 1.5000,0.5000,,2.0000,2.0000,3.0000,0.25,1,0.125,0.25,256,true",
             "1,rgba32f,tessellation=1 hdr_format=rgba32f,true,\
-                 3.0000,1.0000,,4.0000,4.0000,5.0000,0,0,0,true",
+                 3.0000,1.0000,,4.0000,4.0000,5.0000,0,0,0,0,,true",
         ]
     );
     assert!(csv.ends_with('\n'));
@@ -117,6 +123,7 @@ fn csv_fields_are_quoted_when_needed() {
         reference: ReferenceKind::Cpu,
         knobs: knobs.clone(),
         passes: vec![],
+        setup: vec![],
         rows: vec![row(&settings, 1.0, 0.5, true)],
     };
     let csv = to_csv(&result).unwrap();
@@ -137,6 +144,7 @@ fn json_keeps_knob_order_and_has_the_metrics() {
         reference: ReferenceKind::GpuBest,
         knobs: vec!["tessellation".into(), "hdr_format".into()],
         passes: vec!["opaque".into()],
+        setup: vec![],
         rows: vec![row(
             &[("tessellation", "1"), ("hdr_format", "rgba32f")],
             4.0,
@@ -271,6 +279,7 @@ fn fake_render(scene: &Scene, job: Job) -> Result<Rendered, String> {
             height: h,
             data: [value, 0.0, 0.0, 1.0].repeat(n),
         }),
+        setup: vec![("triangles".into(), tris as f64)],
     })
 }
 
@@ -318,6 +327,10 @@ fn run_renders_each_reference_once_and_scores_it_zero() {
     assert!((r.gpu_ms.median - (r.pass_median_ms[0].1 + 1.0)).abs() < 1e-9);
     // Coarser is faster and worse: both on the front.
     assert!(result.rows[0].rmse > result.rows[1].rmse);
+    assert!(result.rows[0].max_rel_error > result.rows[1].max_rel_error);
+    // The timed run's setup measures reach the rows, by name.
+    assert_eq!(result.setup, ["triangles"]);
+    assert!(result.rows[0].setup[0].1 < result.rows[1].setup[0].1);
     assert!(result.rows[1].rmse > 0.0);
     assert!(result.rows.iter().all(|r| r.pareto));
 
@@ -537,4 +550,37 @@ fn outputs_are_written_whole() {
         "fixed knobs are not in the labels"
     );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The relative error against hand-made images: relative to each
+/// reference pixel's brightest channel, with dark pixels measured against
+/// a thousandth of the 99th-percentile brightness, not against themselves.
+#[test]
+fn max_relative_error_is_relative_with_a_floor_for_dark_pixels() {
+    let image = |pixels: &[[f32; 3]]| Pixels {
+        width: pixels.len() as u32,
+        height: 1,
+        data: pixels
+            .iter()
+            .flat_map(|p| [p[0], p[1], p[2], 1.0])
+            .collect(),
+    };
+    // 200 sky pixels at 0.1, one sun pixel at 1e4, one black pixel.
+    let mut reference = vec![[0.1f32, 0.05, 0.2]; 200];
+    reference.push([1e4, 1e4, 1e4]);
+    reference.push([0.0, 0.0, 0.0]);
+    let same = image(&reference);
+    assert_eq!(crate::sweep::max_relative_error(&same, &same), 0.0);
+    // 1 % off in the green channel of one sky pixel: relative to its
+    // brightest channel (0.2), not to the green itself.
+    let mut test = reference.clone();
+    test[7][1] += 0.002;
+    let e = crate::sweep::max_relative_error(&same, &image(&test));
+    assert!((e - 0.01).abs() < 1e-6, "{e}");
+    // The black pixel lit to 1e-5: measured against 1e-3 of the 99th
+    // percentile (0.2, not the sun's 1e4), so 1e-5 / 2e-4.
+    let mut test = reference.clone();
+    test[201] = [1e-5, 0.0, 0.0];
+    let e = crate::sweep::max_relative_error(&same, &image(&test));
+    assert!((e - 0.05).abs() < 1e-6, "{e}");
 }
