@@ -425,9 +425,37 @@ vec3 ground_radiance(vec3 p) {
 // rows H/2..H-1 hit the ground, from the horizon (row H/2) to the nadir.
 // Both halves put a texel centre on the horizon and square their row
 // coordinate, so texels crowd where the sky changes fastest and no filter
-// mixes ground and sky. The table is an RGBA32F image three times as
+// mixes ground and sky. From space the sky half also crowds its rows
+// towards the atmosphere's edge (f = s^2 / (s^2 + (1-s)^2)): there the
+// path through the air grows as the square root of the angle from the
+// edge, which rows spaced for the horizon missed by half on a pixel
+// beside the edge. The table is an RGBA32F image three times as
 // wide: the Rayleigh sums in columns 0..W-1, the Mie sums in W..2W-1, the
 // transmittance in 2W..3W-1.
+
+// Whether the camera is outside the atmosphere (its edge's nadir angle is
+// pi inside; from space it is below pi/2 plus the planet's angular size).
+bool sky_view_from_space() {
+    return sky.azimuth_zero.w < 0.99 * PI;
+}
+
+// The sky half's row spacing: the fraction f of the way from the horizon
+// to the zenith or the atmosphere's edge at row coordinate s in [0, 1].
+float sky_view_row_fraction(float s) {
+    if (sky_view_from_space()) {
+        return s * s / (s * s + (1.0 - s) * (1.0 - s));
+    }
+    return s * s;
+}
+
+// Inverse of sky_view_row_fraction.
+float sky_view_row_unit(float f) {
+    if (sky_view_from_space()) {
+        float a = sqrt(f);
+        return a / (a + sqrt(1.0 - f));
+    }
+    return sqrt(f);
+}
 
 // The direction of the texel at column x, row y.
 vec3 sky_view_direction(int x, int y) {
@@ -438,7 +466,7 @@ vec3 sky_view_direction(int x, int y) {
     float horizon = sky.zenith.w;
     if (y < half_h) {
         s = float(y) / float(half_h - 1);
-        nadir = horizon + (sky.azimuth_zero.w - horizon) * s * s;
+        nadir = horizon + (sky.azimuth_zero.w - horizon) * sky_view_row_fraction(s);
     } else {
         s = float(y - half_h) / float(half_h - 1);
         nadir = horizon - horizon * s * s;
@@ -470,7 +498,7 @@ vec2 sky_view_coords(vec3 d, out bool below) {
         s = sqrt(clamp((horizon - nadir) / horizon, 0.0, 1.0));
     } else {
         float span = sky.azimuth_zero.w - horizon;
-        s = sqrt(clamp((nadir - horizon) / max(span, 1e-30), 0.0, 1.0));
+        s = sky_view_row_unit(clamp((nadir - horizon) / max(span, 1e-30), 0.0, 1.0));
     }
     return vec2(azimuth / PI * float(w - 1), s * float(half_h - 1));
 }
