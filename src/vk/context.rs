@@ -59,6 +59,8 @@ pub struct Context {
     pub(crate) limits: vk::PhysicalDeviceLimits,
     info: DeviceInfo,
     validation_log: Option<Arc<ValidationLog>>,
+    // Released after Drop::drop destroyed the device and the instance.
+    _layer_hold: Option<validation::LayerHold>,
 }
 
 impl Context {
@@ -68,6 +70,8 @@ impl Context {
         let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::Loader(e.to_string()))?;
 
         let validate = options.validate.is_on();
+        // Before the layer is loaded: see `LayerHold`.
+        let layer_hold = validate.then(validation::LayerHold::acquire);
         let validation_log = validate.then(|| Arc::new(ValidationLog::default()));
         if validate {
             // SAFETY: plain query of the loader.
@@ -161,6 +165,7 @@ impl Context {
             debug,
             validation_log,
             entry: Some(entry),
+            layer_hold,
         };
         partial.finish(options)
     }
@@ -229,6 +234,8 @@ struct PartialInstance {
     // is dropped after Drop::drop has destroyed the instance; as a separate
     // argument of `finish` it was dropped first on the error path (crash).
     entry: Option<ash::Entry>,
+    // Released after the instance is destroyed, on the error path too.
+    layer_hold: Option<validation::LayerHold>,
 }
 
 impl PartialInstance {
@@ -320,6 +327,7 @@ impl PartialInstance {
             limits: props.limits,
             info,
             validation_log: self.validation_log.clone(),
+            _layer_hold: self.layer_hold.take(),
         }))
     }
 }

@@ -7,7 +7,8 @@
 
 use ash::vk;
 use std::ffi::CStr;
-use std::sync::Mutex;
+use std::sync::{Condvar, Mutex};
+use std::thread::ThreadId;
 
 /// Which checks of `VK_LAYER_KHRONOS_validation` a run enables.
 ///
@@ -192,4 +193,92 @@ pub(crate) unsafe extern "system" fn debug_callback(
         text: text(data.p_message),
     });
     vk::FALSE
+}
+
+/// Which thread may use the validation layer, and how many of its contexts
+/// hold it.
+static LAYER_OWNER: Mutex<Option<(ThreadId, usize)>> = Mutex::new(None);
+static LAYER_FREED: Condvar = Condvar::new();
+
+/// One validated context's hold on the validation layer: while it lives,
+/// contexts with validation are created and used by one thread of the
+/// process at a time.
+///
+/// Why: `VK_LAYER_KHRONOS_validation` 1.3.239 crashed (two threads
+/// segfaulting inside the layer at the same instant) when two tests of one
+/// process ran validated contexts in parallel threads. One context per
+/// process, as the CLI runs, never waits. The hold is reentrant for its
+/// thread, so a thread may keep one context while it builds another (a
+/// test comparing two renderers); another thread waits until the holder's
+/// last validated context is dropped.
+pub(crate) struct LayerHold;
+
+impl LayerHold {
+    pub(crate) fn acquire() -> LayerHold {
+        let me = std::thread::current().id();
+        let mut owner = LAYER_OWNER.lock().unwrap_or_else(|e| e.into_inner());
+        loop {
+            match owner.as_mut() {
+                None => {
+                    *owner = Some((me, 1));
+                    break;
+                }
+                Some((thread, count)) if *thread == me => {
+                    *count += 1;
+                    break;
+                }
+                Some(_) => {
+                    owner = LAYER_FREED.wait(owner).unwrap_or_else(|e| e.into_inner());
+                }
+            }
+        }
+        LayerHold
+    }
+}
+
+impl Drop for LayerHold {
+    fn drop(&mut self) {
+        // Counted, not tied to the dropping thread: an `Arc<Context>` may
+        // be dropped on another thread than the one that made it.
+        let mut owner = LAYER_OWNER.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, count)) = owner.as_mut() {
+            *count -= 1;
+            if *count == 0 {
+                *owner = None;
+                LAYER_FREED.notify_all();
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::LayerHold;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    use std::time::Duration;
+
+    /// A second thread waits for the first thread's holds to end; the
+    /// first thread may hold twice (a context kept while another is built).
+    #[test]
+    fn the_layer_hold_is_reentrant_and_excludes_other_threads() {
+        let outer = LayerHold::acquire();
+        let inner = LayerHold::acquire();
+        let entered = Arc::new(AtomicBool::new(false));
+        let other = {
+            let entered = entered.clone();
+            std::thread::spawn(move || {
+                let _hold = LayerHold::acquire();
+                entered.store(true, Ordering::SeqCst);
+            })
+        };
+        std::thread::sleep(Duration::from_millis(100));
+        assert!(!entered.load(Ordering::SeqCst), "entered while held twice");
+        drop(inner);
+        std::thread::sleep(Duration::from_millis(100));
+        assert!(!entered.load(Ordering::SeqCst), "entered while held once");
+        drop(outer);
+        other.join().unwrap();
+        assert!(entered.load(Ordering::SeqCst));
+    }
 }
