@@ -306,15 +306,23 @@ pub(super) fn check(
         }
         Ok(d)
     };
-    let length = |field: &str, x: f64| -> Result<f64, SceneError> {
+    // A finite number for which `ok` holds, or an error saying what it
+    // `must` be.
+    let within = |field: &str, x: f64, ok: &dyn Fn(f64) -> bool, must: &str| {
         let x = finite(field, x)?;
-        if !(x > 0.0 && x <= MAX_RADIUS) {
-            return Err(invalid(
-                field,
-                format!("must be greater than 0 and at most {MAX_RADIUS:e}, got {x:e}"),
-            ));
+        if ok(x) {
+            Ok(x)
+        } else {
+            Err(invalid(field, format!("must be {must}, got {x:e}")))
         }
-        Ok(x)
+    };
+    let length = |field: &str, x: f64| -> Result<f64, SceneError> {
+        within(
+            field,
+            x,
+            &|x| x > 0.0 && x <= MAX_RADIUS,
+            &format!("greater than 0 and at most {MAX_RADIUS:e}"),
+        )
     };
 
     let direction = vector("sun.direction", sun.direction)?;
@@ -324,13 +332,12 @@ pub(super) fn check(
     }
     let direction = (direction / largest).normalize();
     let irradiance = non_negative("sun.irradiance", sun.irradiance, 1e6)?;
-    let angular_radius = finite("sun.angular_radius", sun.angular_radius)?;
-    if !(angular_radius > 0.0 && angular_radius < std::f64::consts::FRAC_PI_2) {
-        return Err(invalid(
-            "sun.angular_radius",
-            format!("must be between 0 and pi/2 radians (exclusive), got {angular_radius}"),
-        ));
-    }
+    let angular_radius = within(
+        "sun.angular_radius",
+        sun.angular_radius,
+        &|x| x > 0.0 && x < std::f64::consts::FRAC_PI_2,
+        "between 0 and pi/2 radians (exclusive)",
+    )?;
 
     let earth = Atmosphere::earth();
     let bottom_radius = length(
@@ -425,40 +432,28 @@ pub(super) fn check(
     let rayleigh_given = match &atmosphere.rayleigh_from {
         None => atmosphere.rayleigh_scattering,
         Some(from) => {
-            let n = finite(
+            let n = within(
                 "atmosphere.rayleigh_from.refractive_index",
                 from.refractive_index
                     .unwrap_or(coefficients::AIR_REFRACTIVE_INDEX),
+                &|n| n > 1.0 && n <= 2.0,
+                "above 1 and at most 2",
             )?;
-            if !(n > 1.0 && n <= 2.0) {
-                return Err(invalid(
-                    "atmosphere.rayleigh_from.refractive_index",
-                    format!("must be above 1 and at most 2, got {n}"),
-                ));
-            }
-            let number_density = finite(
+            let number_density = within(
                 "atmosphere.rayleigh_from.number_density",
                 from.number_density
                     .unwrap_or(coefficients::AIR_NUMBER_DENSITY),
+                &|x| (1e10..=1e35).contains(&x),
+                "between 1e10 and 1e35 per m^3",
             )?;
-            if !(1e10..=1e35).contains(&number_density) {
-                return Err(invalid(
-                    "atmosphere.rayleigh_from.number_density",
-                    format!("must be between 1e10 and 1e35 per m^3, got {number_density:e}"),
-                ));
-            }
-            let p = finite(
+            // (6 + 3p)/(6 - 7p): physical factors are 0..0.5.
+            let p = within(
                 "atmosphere.rayleigh_from.depolarization",
                 from.depolarization
                     .unwrap_or(coefficients::AIR_DEPOLARIZATION),
+                &|p| (0.0..=0.5).contains(&p),
+                "between 0 and 0.5",
             )?;
-            // (6 + 3p)/(6 - 7p): physical factors are 0..0.5.
-            if !(0.0..=0.5).contains(&p) {
-                return Err(invalid(
-                    "atmosphere.rayleigh_from.depolarization",
-                    format!("must be between 0 and 0.5, got {p}"),
-                ));
-            }
             let beta = DVec3::from_array(std::array::from_fn(|i| {
                 coefficients::rayleigh_scattering(n, number_density, p, wavelengths[i] * 1e-9)
             }));
@@ -468,28 +463,27 @@ pub(super) fn check(
     let (mie_scattering_given, mie_extinction_given) = match &atmosphere.mie_from {
         None => (atmosphere.mie_scattering, atmosphere.mie_extinction),
         Some(from) => {
-            let t = finite("atmosphere.mie_from.turbidity", from.turbidity)?;
-            if !(t > coefficients::MIN_TURBIDITY && t <= 1000.0) {
-                return Err(invalid(
-                    "atmosphere.mie_from.turbidity",
-                    format!(
-                        "must be above {:.4} (where the formula's aerosol concentration                          0.6544 T - 0.6510 turns positive) and at most 1000, got {t}",
-                        coefficients::MIN_TURBIDITY
-                    ),
-                ));
-            }
+            let t = within(
+                "atmosphere.mie_from.turbidity",
+                from.turbidity,
+                &|t| t > coefficients::MIN_TURBIDITY && t <= 1000.0,
+                &format!(
+                    "above {:.4} (where the formula's aerosol concentration \
+                     0.6544 T - 0.6510 turns positive) and at most 1000",
+                    coefficients::MIN_TURBIDITY
+                ),
+            )?;
             let k = non_negative(
                 "atmosphere.mie_from.k",
                 from.k.unwrap_or([coefficients::MIE_K; 3]),
                 10.0,
             )?;
-            let albedo = finite("atmosphere.mie_from.albedo", from.albedo.unwrap_or(0.9))?;
-            if !(albedo > 0.0 && albedo <= 1.0) {
-                return Err(invalid(
-                    "atmosphere.mie_from.albedo",
-                    format!("must be above 0 and at most 1, got {albedo}"),
-                ));
-            }
+            let albedo = within(
+                "atmosphere.mie_from.albedo",
+                from.albedo.unwrap_or(0.9),
+                &|a| a > 0.0 && a <= 1.0,
+                "above 0 and at most 1",
+            )?;
             let beta = DVec3::from_array(std::array::from_fn(|i| {
                 coefficients::mie_scattering(t, k[i], wavelengths[i] * 1e-9)
             }));
@@ -549,14 +543,13 @@ pub(super) fn check(
         atmosphere.mie_scale_height,
         earth.mie_scale_height,
     )?;
-    let mie_g = finite("atmosphere.mie_g", atmosphere.mie_g.unwrap_or(earth.mie_g))?;
     // |g| -> 1 makes the phase function a delta; 0.999 already peaks at 1e8.
-    if mie_g.abs() >= 0.999 {
-        return Err(invalid(
-            "atmosphere.mie_g",
-            format!("must be between -0.999 and 0.999, got {mie_g}"),
-        ));
-    }
+    let mie_g = within(
+        "atmosphere.mie_g",
+        atmosphere.mie_g.unwrap_or(earth.mie_g),
+        &|g| g.abs() < 0.999,
+        "between -0.999 and 0.999",
+    )?;
     let ozone_layer = atmosphere.ozone_layer.unwrap_or(earth.ozone_layer);
     for (i, x) in ozone_layer.iter().enumerate() {
         if !x.is_finite() || *x < 0.0 || *x > MAX_RADIUS {
