@@ -243,7 +243,7 @@ impl OpticalDepthTable {
 
     /// Bilinear filter of the first three channels at texel coordinates
     /// (`fx`, `fy`), between rows `first_row` and `last_row` (equal: that
-    /// row alone), as `table_texels` in the shader.
+    /// row alone), as `table_texels` and `table_row` in the shader.
     fn filtered(&self, fx: f64, fy: f64, first_row: usize, last_row: usize) -> [f64; 3] {
         let w = self.width as usize;
         let x0 = (fx.floor().max(0.0) as usize).min(w - 2);

@@ -297,16 +297,8 @@ impl Sweep {
             if device.is_empty() {
                 device = timed.device.clone();
             }
-            for name in &timed.passes {
-                if !passes.contains(name) {
-                    passes.push(name.clone());
-                }
-            }
-            for (name, _) in &timed.setup {
-                if !setup_names.contains(name) {
-                    setup_names.push(name.clone());
-                }
-            }
+            add_new_names(&mut passes, &timed.passes);
+            add_new_names(&mut setup_names, timed.setup.iter().map(|(name, _)| name));
             let setup = timed.setup.clone();
             drop(timed);
 
@@ -413,6 +405,15 @@ impl Sweep {
             setup: setup_names,
             rows,
         })
+    }
+}
+
+/// Appends the names in `names` that `seen` does not hold yet, in order.
+fn add_new_names<'a>(seen: &mut Vec<String>, names: impl IntoIterator<Item = &'a String>) {
+    for name in names {
+        if !seen.contains(name) {
+            seen.push(name.clone());
+        }
     }
 }
 
