@@ -24,6 +24,11 @@ pub struct RenderSettings {
     pub frames: u32,
     /// Read back the linear HDR image too.
     pub keep_hdr: bool,
+    /// Also time the empty pass at the scene's output size after every
+    /// frame, on the same device ([`RenderRun::empty_pass_frames`]): a
+    /// floor measured over the same seconds as the scene, so the ratio of
+    /// the two does not depend on what the machine did in between.
+    pub empty_pass_between_frames: bool,
 }
 
 /// Everything a run produced.
@@ -37,6 +42,10 @@ pub struct RenderRun {
     /// What building the frame cost beyond its passes
     /// ([`crate::render::Renderer::setup_measures`]).
     pub setup: Vec<(&'static str, f64)>,
+    /// The empty pass's timings, [`EMPTY_PASSES_PER_FRAME`] after each
+    /// measured frame, with [`RenderSettings::empty_pass_between_frames`];
+    /// empty otherwise.
+    pub empty_pass_frames: Vec<FrameTiming>,
     /// Validation messages that were not on the allow-list (empty without
     /// validation).
     pub validation: Vec<ValidationMessage>,
@@ -214,6 +223,7 @@ pub fn run_with_progress(
         output,
         hdr,
         setup,
+        empty_pass_frames,
     } = match produced {
         Ok(p) => p,
         Err(error) => return Err(RunError { error, validation }),
@@ -225,6 +235,7 @@ pub fn run_with_progress(
         output,
         hdr,
         setup,
+        empty_pass_frames,
         validation,
     })
 }
@@ -239,14 +250,21 @@ fn produce(
     Ok(match source {
         FrameSource::Scene(scene) => {
             preflight::scene_on_device(scene, ctx)?;
-            drive(
-                Renderer::new(ctx, scene, settings.keep_hdr)?,
-                settings,
-                on_frame,
-            )?
+            let renderer = Renderer::new(ctx, scene, settings.keep_hdr)?;
+            let empty = if settings.empty_pass_between_frames {
+                Some(EmptyPass::new(
+                    ctx,
+                    scene.output.width,
+                    scene.output.height,
+                )?)
+            } else {
+                None
+            };
+            drive(renderer, empty, settings, on_frame)?
         }
         FrameSource::HdrImage(image, tone_map) => drive(
             Renderer::for_hdr_image(ctx, tone_map, image)?,
+            None,
             settings,
             on_frame,
         )?,
@@ -259,6 +277,7 @@ fn produce(
                 output: pass.output(),
                 hdr: None,
                 setup: Vec::new(),
+                empty_pass_frames: Vec::new(),
             }
         }
         FrameSource::ValidationCheck(misuse) => {
@@ -279,6 +298,7 @@ fn produce(
                 },
                 hdr: None,
                 setup: Vec::new(),
+                empty_pass_frames: Vec::new(),
             }
         }
     })
@@ -305,21 +325,49 @@ struct Produced {
     output: Pixels<u8>,
     hdr: Option<Pixels<f32>>,
     setup: Vec<(&'static str, f64)>,
+    empty_pass_frames: Vec<FrameTiming>,
 }
 
+/// Empty passes timed after each frame with
+/// [`RenderSettings::empty_pass_between_frames`] (after one more that is not
+/// kept).
+pub const EMPTY_PASSES_PER_FRAME: usize = 3;
+
+/// Submits the renderer's frames; with `empty`, the empty pass after each
+/// one.
 fn drive(
     mut renderer: Renderer,
+    mut empty: Option<EmptyPass>,
     settings: &RenderSettings,
     on_frame: &mut dyn FnMut(),
 ) -> Result<Produced, RenderError> {
     let passes = renderer.plan().pass_names();
-    let frames = submit_frames(settings, on_frame, || renderer.render_frame())?;
+    let mut empty_pass_frames = Vec::new();
+    let frames = submit_frames(settings, on_frame, || {
+        let frame = renderer.render_frame()?;
+        if let Some(empty) = empty.as_mut() {
+            // The first empty pass after a frame finds the caches full of
+            // the frame's data and measured 10-40 % slower than the rest:
+            // it is not the floor, so it is not kept.
+            empty.render_frame()?;
+            for _ in 0..EMPTY_PASSES_PER_FRAME {
+                empty_pass_frames.push(empty.render_frame()?);
+            }
+        }
+        Ok(frame)
+    })?;
+    // Those after warm-up frames are not measurements either.
+    let warmup = empty_pass_frames
+        .len()
+        .saturating_sub(EMPTY_PASSES_PER_FRAME * frames.len());
+    empty_pass_frames.drain(..warmup);
     Ok(Produced {
         passes,
         frames,
         output: renderer.output(),
         hdr: renderer.hdr(),
         setup: renderer.setup_measures(),
+        empty_pass_frames,
     })
 }
 

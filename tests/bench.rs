@@ -153,8 +153,21 @@ fn bench_json_has_every_field_and_round_trips() {
         assert_eq!(p.ms.count, 3, "{}", p.name);
         assert!(p.ms.min > 0.0 && p.ms.min <= p.ms.median && p.ms.median <= p.ms.max);
     }
+    // The multiples divide by the empty pass timed between this scene's
+    // frames, EMPTY_PASSES_PER_FRAME after each measured one.
+    let floor = s
+        .empty_pass_between_frames
+        .as_ref()
+        .expect("empty pass timed between frames");
+    assert_eq!(floor.ms.count, 3 * aerial::app::EMPTY_PASSES_PER_FRAME);
+    assert!(floor.ms.min > 0.0);
     for p in s.passes.iter().chain(&s.gpu_total) {
-        assert!(p.empty_pass_multiple.is_some_and(|m| m > 0.0), "{}", p.name);
+        let m = p.empty_pass_multiple.expect("a multiple");
+        assert!(
+            (m - p.ms.median / floor.ms.median).abs() <= 1e-9 * m,
+            "{}: {m} is not median / floor",
+            p.name
+        );
     }
 
     // Save and load again: nothing lost.
@@ -286,6 +299,7 @@ fn empty_pass_is_clean_under_validation_and_takes_time() {
             warmup: 1,
             frames: 3,
             keep_hdr: false,
+            empty_pass_between_frames: false,
         },
         &mut || {},
     )

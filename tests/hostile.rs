@@ -655,6 +655,7 @@ fn tone_map(values: &[f32], operator: ToneMapOperator, exposure: f32) -> Vec<u8>
             warmup: 0,
             frames: 1,
             keep_hdr: false,
+            empty_pass_between_frames: false,
         },
     )
     .expect("tone map runs");

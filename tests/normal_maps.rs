@@ -230,6 +230,7 @@ fn non_png_normal_map_is_a_clear_error() {
             warmup: 0,
             frames: 1,
             keep_hdr: false,
+            empty_pass_between_frames: false,
         },
     ) {
         Ok(_) => panic!("a JPEG normal map rendered"),

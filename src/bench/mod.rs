@@ -17,6 +17,7 @@ pub use report::{
 };
 
 use crate::app::{self, RenderRun, RenderSettings, RunError};
+use crate::render::empty_pass;
 use crate::report::stats::{summarise_passes, PassTimesError, Summary};
 use crate::scene::{knob_settings, Scene, SceneError};
 use sha2::{Digest, Sha256};
@@ -156,6 +157,7 @@ pub fn run(
         warmup: settings.warmup,
         frames: settings.frames,
         keep_hdr: false,
+        empty_pass_between_frames: true,
     };
 
     let mut device = None;
@@ -194,11 +196,30 @@ pub fn run(
         })?;
         check_validation(&label, &run)?;
         let (mut passes, mut gpu_total, cpu_frame) = summarise(&label, &run)?;
-        let floor = empty_passes
+        // The floor is the empty pass timed between this scene's frames:
+        // on a CPU driver the machine's speed drifts by more than 10 %
+        // within seconds, and a floor measured in other seconds moved the
+        // ratio by up to 2x between identical runs.
+        let between = run
+            .empty_pass_frames
             .iter()
-            .find(|e| e.resolution == s.resolution())
-            .and_then(|e| e.gpu.as_ref())
-            .map(|g| g.ms.median)
+            .filter_map(|f| f.pass_ms.first().copied())
+            .collect::<Vec<f64>>();
+        let empty_pass_between_frames = if between.is_empty() {
+            None
+        } else {
+            Some(PassReport {
+                name: empty_pass::PASS_NAME.to_string(),
+                ms: Summary::of(&between).ok_or_else(|| BenchError::BadSamples {
+                    run: label.clone(),
+                    what: "empty pass between frames".to_string(),
+                })?,
+                empty_pass_multiple: None,
+            })
+        };
+        let floor = empty_pass_between_frames
+            .as_ref()
+            .map(|e| e.ms.median)
             .filter(|m| *m > 0.0);
         if let Some(floor) = floor {
             for p in passes.iter_mut().chain(gpu_total.as_mut()) {
@@ -219,6 +240,7 @@ pub fn run(
             passes,
             gpu_total,
             cpu_frame,
+            empty_pass_between_frames,
         });
         device.get_or_insert_with(|| DeviceRecord::from(&run.device));
     }

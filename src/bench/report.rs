@@ -103,7 +103,8 @@ pub struct PassReport {
     /// Per-frame times in milliseconds.
     pub ms: Summary,
     /// Median time divided by the empty pass's median GPU time at the same
-    /// resolution; `None` for CPU rows or without timestamps.
+    /// resolution (for a scene, the one timed between its frames); `None`
+    /// for CPU rows or without timestamps.
     pub empty_pass_multiple: Option<f64>,
 }
 
@@ -134,6 +135,12 @@ pub struct SceneReport {
     /// The sum of the passes per frame; `None` without timestamps.
     pub gpu_total: Option<PassReport>,
     pub cpu_frame: PassReport,
+    /// The empty pass at this scene's resolution, timed after each of its
+    /// frames on the same device: the floor its `empty_pass_multiple`s
+    /// divide by. `None` without timestamps (and in reports from before
+    /// this field, whose multiples divide by the separate empty-pass run).
+    #[serde(default)]
+    pub empty_pass_between_frames: Option<PassReport>,
 }
 
 impl SceneReport {

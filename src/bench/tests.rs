@@ -50,6 +50,7 @@ fn report() -> BenchReport {
             passes: vec![row("opaque", 2.0), row("tonemap", 1.0)],
             gpu_total: Some(row(GPU_TOTAL, 3.0)),
             cpu_frame: row(CPU_FRAME, 3.5),
+            empty_pass_between_frames: Some(row("empty", 0.6)),
         }],
     }
 }

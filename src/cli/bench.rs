@@ -198,7 +198,9 @@ fn print_report(report: &BenchReport) {
             ""
         }
     );
-    println!("times in ms; x empty = median / empty pass median at the same resolution");
+    println!(
+        "times in ms; x empty = median / median of the empty pass timed between the scene's frames (its row 'empty')"
+    );
     println!("note: {}", aerial::render::SUBPASS_TIMING_NOTE);
     for e in &report.empty_passes {
         println!();
@@ -219,7 +221,8 @@ fn print_report(report: &BenchReport) {
         if s.passes.is_empty() {
             println!("(no GPU timestamps on this device: CPU frame time only)");
         }
-        print_rows(s.rows());
+        // The floor first: the empty pass timed between this scene's frames.
+        print_rows(s.empty_pass_between_frames.iter().chain(s.rows()));
     }
 }
 

@@ -70,6 +70,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             warmup: 0,
             frames: args.frames,
             keep_hdr: args.hdr.is_some(),
+            empty_pass_between_frames: false,
         },
     )
     .with_context(|| format!("rendering {scene_name} failed"))?;

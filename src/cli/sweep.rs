@@ -92,6 +92,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         warmup,
         frames,
         keep_hdr,
+        empty_pass_between_frames: false,
     };
     let render = |scene: &Scene, job: Job| -> anyhow::Result<Rendered> {
         let (warmup, frames, keep_hdr) = match job {

@@ -53,6 +53,7 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
             warmup: 0,
             frames: 1,
             keep_hdr: false,
+            empty_pass_between_frames: false,
         },
     )
     .context("tone mapping failed")?;

@@ -29,6 +29,7 @@ pub fn render(scene: &Scene, keep_hdr: bool) -> RenderRun {
             warmup: 0,
             frames: 1,
             keep_hdr,
+            empty_pass_between_frames: false,
         },
     )
     .unwrap_or_else(|e| panic!("render failed: {e}"));
