@@ -48,7 +48,24 @@ rotate = { axis = [0.0, 0.0, 1.0], degrees = 20.0 }
 /// the tessellation error a sweep measures, not a defect.
 #[test]
 fn the_cpu_reference_matches_the_gpu_inside_silhouettes() {
-    let scene = common::scene(SPHERE);
+    gpu_matches_cpu_inside_silhouettes(SPHERE);
+}
+
+/// A whole-number shininess up to 1023 is raised to by multiplying
+/// (specialization constant 4), any other with `pow`: both match the
+/// reference's `powf`. Odd exponents use the lowest bit, 1023 every one.
+#[test]
+fn whole_number_and_fractional_shininess_match_the_reference() {
+    for shininess in ["1.0", "7.0", "30.5", "97.0", "1023.0", "1024.0", "0.25"] {
+        println!("shininess {shininess}");
+        gpu_matches_cpu_inside_silhouettes(
+            &SPHERE.replace("shininess = 30.0", &format!("shininess = {shininess}")),
+        );
+    }
+}
+
+fn gpu_matches_cpu_inside_silhouettes(text: &str) {
+    let scene = common::scene(text);
     let gpu = common::render(&scene, true).hdr.unwrap();
     let cpu = render_reference(&scene).unwrap();
     assert_eq!((gpu.width, gpu.height), (cpu.width, cpu.height));

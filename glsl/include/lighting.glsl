@@ -15,9 +15,49 @@ void light_at(Light light, vec3 p, out vec3 l, out vec3 radiance) {
     radiance = light.color.rgb * att;
 }
 
+// A whole-number shininess of at most 1023 (MAX_SHININESS_EXPONENT in
+// src/render/plan.rs), as a specialization constant of the object shaders
+// (0: none; the deferred lighting pass reads shininess per pixel and
+// leaves it 0). cos^n is then at most 18 multiplications, where pow is
+// exp2(n * log2(cos)): on lavapipe that cut a full-screen plane lit by six
+// lights by about 15 %.
+layout(constant_id = 4) const uint SHININESS_EXPONENT = 0u;
+
+// x^SHININESS_EXPONENT by squaring, written out: the conditions are
+// constants, so only the multiplications the exponent's bits need remain
+// (lavapipe does not unroll the loop form of this, which was slower than
+// pow).
+float power_by_squaring(float x) {
+    float r = (SHININESS_EXPONENT & 1u) != 0u ? x : 1.0;
+    float b = x;
+    b *= b;
+    r = (SHININESS_EXPONENT & 2u) != 0u ? r * b : r;
+    b *= b;
+    r = (SHININESS_EXPONENT & 4u) != 0u ? r * b : r;
+    b *= b;
+    r = (SHININESS_EXPONENT & 8u) != 0u ? r * b : r;
+    b *= b;
+    r = (SHININESS_EXPONENT & 16u) != 0u ? r * b : r;
+    b *= b;
+    r = (SHININESS_EXPONENT & 32u) != 0u ? r * b : r;
+    b *= b;
+    r = (SHININESS_EXPONENT & 64u) != 0u ? r * b : r;
+    b *= b;
+    r = (SHININESS_EXPONENT & 128u) != 0u ? r * b : r;
+    b *= b;
+    r = (SHININESS_EXPONENT & 256u) != 0u ? r * b : r;
+    b *= b;
+    r = (SHININESS_EXPONENT & 512u) != 0u ? r * b : r;
+    return r;
+}
+
 float specular_power(float cos_nh, float shininess) {
+    float x = max(cos_nh, 0.0);
+    if (SHININESS_EXPONENT != 0u) {
+        return power_by_squaring(x);
+    }
     // pow(0, 0) is undefined in GLSL; cos^0 is 1 by continuity.
-    return shininess > 0.0 ? pow(max(cos_nh, 0.0), shininess) : 1.0;
+    return shininess > 0.0 ? pow(x, shininess) : 1.0;
 }
 
 // Blinn-Phong for one light: Le * (kd cos+theta + ks cos+(N.H)^shine).

@@ -17,8 +17,8 @@ use crate::vk::{DepthUse, Format};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-/// A pipeline variant: shading model and light count (specialization
-/// constants), base colour texture (a shader variant with its own
+/// A pipeline variant: shading model, light count and whole-number
+/// shininess (specialization constants), base colour texture (a shader variant with its own
 /// descriptor set) and alpha blending (the transparent pass).
 ///
 /// The light count is a constant so the driver compiles the light loop with
@@ -38,6 +38,22 @@ pub struct PipelineKey {
     /// The attribute a debug view draws (`DebugView as u32`), 0 for none
     /// (shader feature `DEBUG_VIEW`, specialization constant 3).
     pub debug: u32,
+    /// The material's shininess when it is a whole number from 1 to
+    /// [`MAX_SHININESS_EXPONENT`], else 0 (specialization constant 4): the
+    /// shader then raises to that power by multiplying instead of `pow`.
+    pub shininess_exponent: u32,
+}
+
+/// The largest shininess the shaders raise to by squaring (nine squarings).
+pub const MAX_SHININESS_EXPONENT: u32 = 1023;
+
+/// [`PipelineKey::shininess_exponent`] for `shininess`.
+pub fn shininess_exponent(shininess: f32) -> u32 {
+    if shininess.fract() == 0.0 && (1.0..=MAX_SHININESS_EXPONENT as f32).contains(&shininess) {
+        shininess as u32
+    } else {
+        0
+    }
 }
 
 /// `ShadingModel` as an ordered key (the GLSL specialization value).
@@ -285,6 +301,13 @@ impl FramePlan {
                     blended,
                     lights: (lights.len() + usize::from(sun.is_some())) as u32,
                     debug,
+                    // The G-buffer form leaves lighting to the lighting
+                    // pass; only the forward shaders use it.
+                    shininess_exponent: if lit_later {
+                        0
+                    } else {
+                        shininess_exponent(material.shininess)
+                    },
                 },
                 texture,
                 normal_map,
@@ -303,11 +326,17 @@ impl FramePlan {
         // back within a group, so the depth test rejects hidden fragments
         // before they are shaded.
         let mut keyed: Vec<(f32, Draw)> = opaque.into_iter().map(|d| (distance(&d), d)).collect();
-        keyed.sort_by(|a, b| {
-            (a.1.pipeline, a.1.texture, a.1.normal_map)
-                .cmp(&(b.1.pipeline, b.1.texture, b.1.normal_map))
-                .then(a.0.total_cmp(&b.0))
-        });
+        // The shininess exponent is left out of the grouping: it only
+        // changes the specular arithmetic, and materials differing in it
+        // alone are better drawn front to back than a bind apart.
+        let group = |d: &Draw| {
+            let pipeline = PipelineKey {
+                shininess_exponent: 0,
+                ..d.pipeline
+            };
+            (pipeline, d.texture, d.normal_map)
+        };
+        keyed.sort_by(|a, b| group(&a.1).cmp(&group(&b.1)).then(a.0.total_cmp(&b.0)));
         let opaque: Vec<Draw> = keyed.into_iter().map(|(_, d)| d).collect();
         // Transparent: back to front; ties keep scene order.
         let mut keyed: Vec<(f32, Draw)> =
@@ -590,6 +619,7 @@ pub fn hdr_format(format: HdrFormat) -> Format {
 
 #[cfg(test)]
 mod tests {
+
     use super::*;
     use std::path::Path;
 
@@ -600,6 +630,49 @@ mod tests {
         let scene = Scene::load(&path).unwrap();
         let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);
         (scene, plan)
+    }
+
+    #[test]
+    fn only_whole_shininess_up_to_the_maximum_is_an_exponent() {
+        for (shininess, exponent) in [
+            (1.0, 1),
+            (30.0, 30),
+            (1023.0, MAX_SHININESS_EXPONENT),
+            (30.5, 0),
+            (0.0, 0),
+            (0.25, 0),
+            (1024.0, 0),
+            (f32::NAN, 0),
+        ] {
+            assert_eq!(shininess_exponent(shininess), exponent, "{shininess}");
+        }
+    }
+
+    /// Forward draws carry their material's exponent; G-buffer draws of
+    /// Phong surfaces leave lighting to the lighting pass and carry none.
+    #[test]
+    fn forward_draws_carry_the_shininess_exponent() {
+        let (mut scene, plan) = load("default.toml");
+        assert!(!plan.opaque.is_empty());
+        for d in plan.opaque.iter().chain(&plan.transparent) {
+            let material = &scene.materials[scene.objects[d.object].material];
+            assert_eq!(
+                d.pipeline.shininess_exponent,
+                shininess_exponent(material.shininess)
+            );
+        }
+        assert!(plan
+            .opaque
+            .iter()
+            .any(|d| d.pipeline.shininess_exponent > 0));
+        scene.output.lighting = Lighting::Deferred;
+        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);
+        for d in &plan.opaque {
+            let material = &scene.materials[scene.objects[d.object].material];
+            if material.shading == ShadingModel::Phong {
+                assert_eq!(d.pipeline.shininess_exponent, 0);
+            }
+        }
     }
 
     #[test]

@@ -103,6 +103,7 @@ impl SurfacePass {
                             (1, key.lights),
                             (2, key.lights.max(1)),
                             (3, key.debug),
+                            (4, key.shininess_exponent),
                         ],
                         vertex_stride: std::mem::size_of::<Vertex>() as u32,
                         vertex_attributes: &attributes,
