@@ -367,7 +367,26 @@ fn bench_scenes_have_the_intended_load_and_render_cleanly() {
         .fold(0.0, f32::max);
     assert!(brightest >= 10.0, "brightest light {brightest}");
 
-    for (name, mut scene) in [("many_lights", many), ("hdr", hdr), ("triangle", tiny)] {
+    // The same six lights over one plane that covers every pixel.
+    let plane = load("lights_on_a_plane.toml");
+    assert_eq!(plane.objects.len(), 1);
+    assert_eq!(triangles(&plane), 32);
+    assert_eq!(plane.lights, many.lights);
+    assert!(plane.materials[0].texture.is_none() && plane.materials[0].normal_map.is_none());
+    let mut small = plane.clone();
+    small.set_output_size(Some(160), Some(90)).unwrap();
+    let covered = common::render(&small, true).hdr.unwrap();
+    assert!(
+        covered.data.chunks_exact(4).all(|p| p[3] > 0.0),
+        "the plane must cover every pixel"
+    );
+
+    for (name, mut scene) in [
+        ("many_lights", many),
+        ("hdr", hdr),
+        ("triangle", tiny),
+        ("lights_on_a_plane", plane),
+    ] {
         scene.set_output_size(Some(160), Some(90)).unwrap();
         let run = common::render(&scene, false);
         let lit = run
