@@ -30,24 +30,18 @@ layout(constant_id = 4) const uint SHININESS_EXPONENT = 0u;
 float power_by_squaring(float x) {
     float r = (SHININESS_EXPONENT & 1u) != 0u ? x : 1.0;
     float b = x;
-    b *= b;
-    r = (SHININESS_EXPONENT & 2u) != 0u ? r * b : r;
-    b *= b;
-    r = (SHININESS_EXPONENT & 4u) != 0u ? r * b : r;
-    b *= b;
-    r = (SHININESS_EXPONENT & 8u) != 0u ? r * b : r;
-    b *= b;
-    r = (SHININESS_EXPONENT & 16u) != 0u ? r * b : r;
-    b *= b;
-    r = (SHININESS_EXPONENT & 32u) != 0u ? r * b : r;
-    b *= b;
-    r = (SHININESS_EXPONENT & 64u) != 0u ? r * b : r;
-    b *= b;
-    r = (SHININESS_EXPONENT & 128u) != 0u ? r * b : r;
-    b *= b;
-    r = (SHININESS_EXPONENT & 256u) != 0u ? r * b : r;
-    b *= b;
-    r = (SHININESS_EXPONENT & 512u) != 0u ? r * b : r;
+// Squares the base and multiplies it in where the exponent has `bit`.
+#define SQUARE_AND_MULTIPLY(bit) b *= b; r = (SHININESS_EXPONENT & (bit)) != 0u ? r * b : r
+    SQUARE_AND_MULTIPLY(2u);
+    SQUARE_AND_MULTIPLY(4u);
+    SQUARE_AND_MULTIPLY(8u);
+    SQUARE_AND_MULTIPLY(16u);
+    SQUARE_AND_MULTIPLY(32u);
+    SQUARE_AND_MULTIPLY(64u);
+    SQUARE_AND_MULTIPLY(128u);
+    SQUARE_AND_MULTIPLY(256u);
+    SQUARE_AND_MULTIPLY(512u);
+#undef SQUARE_AND_MULTIPLY
     return r;
 }
 
