@@ -440,7 +440,7 @@ fn load_normal_map(ctx: &Arc<Context>, path: &std::path::Path) -> Result<Image, 
     // More than one byte per channel (the same rule as the preflight's
     // memory estimate).
     let sixteen_bit = img.color().bytes_per_pixel() > img.color().channel_count();
-    if sixteen_bit && vk::supports_linear_filter(ctx, NORMAL_MAP_FORMAT_16) {
+    if sixteen_bit && vk::supports_linear_blits(ctx, NORMAL_MAP_FORMAT_16) {
         let img = img.to_rgba16();
         let (w, h) = img.dimensions();
         upload_texture(
@@ -468,7 +468,7 @@ fn upload_texture(
     format: Format,
 ) -> Result<Image, RenderError> {
     let mip_levels = 32 - w.max(h).leading_zeros();
-    let linear_blits = vk::supports_linear_filter(ctx, format);
+    let linear_blits = vk::supports_linear_blits(ctx, format);
     let mip_levels = if linear_blits { mip_levels } else { 1 };
     let texture = Image::new(
         ctx,

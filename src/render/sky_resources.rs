@@ -266,7 +266,7 @@ impl SkyResources {
         // optical-depth table with od_filter = hardware: then the sampler
         // filters it (texel centres: the shader adds half a texel).
         let filter = if sky.table_filter == TableFilter::Hardware {
-            if !crate::vk::supports_linear_filter(ctx, TABLE_FORMAT) {
+            if !crate::vk::supports_linear_sampling(ctx, TABLE_FORMAT) {
                 return Err(RenderError::Frame(format!(
                     "atmosphere.od_filter = \"hardware\": this device cannot filter {TABLE_FORMAT:?} \
                      images linearly; use \"manual\""

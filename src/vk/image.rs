@@ -164,12 +164,7 @@ fn check_format(
     format: vk::Format,
     usage: vk::ImageUsageFlags,
 ) -> Result<(), VkError> {
-    // SAFETY: valid physical device of this instance.
-    let props = unsafe {
-        ctx.instance
-            .get_physical_device_format_properties(ctx.physical_device, format)
-    };
-    let have = props.optimal_tiling_features;
+    let have = optimal_tiling_features(ctx, format);
     let needs = [
         (
             vk::ImageUsageFlags::COLOR_ATTACHMENT,
@@ -213,18 +208,39 @@ fn check_format(
     Ok(())
 }
 
-/// Whether linear filtering in blits and samplers works for `format`.
-pub fn supports_linear_filter(ctx: &Context, format: vk::Format) -> bool {
-    // SAFETY: valid physical device of this instance.
-    let props = unsafe {
-        ctx.instance
-            .get_physical_device_format_properties(ctx.physical_device, format)
-    };
-    props.optimal_tiling_features.contains(
+/// Whether a sampler may filter `format` linearly (optimal tiling).
+pub fn supports_linear_sampling(ctx: &Context, format: vk::Format) -> bool {
+    has_features(
+        ctx,
+        format,
+        vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR,
+    )
+}
+
+/// Whether `format` can be blitted into itself with a linear filter (how
+/// mip chains are built), and sampled linearly afterwards.
+pub fn supports_linear_blits(ctx: &Context, format: vk::Format) -> bool {
+    has_features(
+        ctx,
+        format,
         vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR
             | vk::FormatFeatureFlags::BLIT_SRC
             | vk::FormatFeatureFlags::BLIT_DST,
     )
+}
+
+fn has_features(ctx: &Context, format: vk::Format, features: vk::FormatFeatureFlags) -> bool {
+    optimal_tiling_features(ctx, format).contains(features)
+}
+
+/// What the device supports for `format` with optimal tiling.
+fn optimal_tiling_features(ctx: &Context, format: vk::Format) -> vk::FormatFeatureFlags {
+    // SAFETY: valid physical device of this instance.
+    unsafe {
+        ctx.instance
+            .get_physical_device_format_properties(ctx.physical_device, format)
+    }
+    .optimal_tiling_features
 }
 
 impl Drop for Image {

@@ -78,7 +78,7 @@ pub enum VkError {
     Surface(String),
 }
 
-pub use image::supports_linear_filter;
+pub use image::{supports_linear_blits, supports_linear_sampling};
 
 /// A colour clear value.
 pub fn clear_color(rgba: [f32; 4]) -> ash::vk::ClearValue {
