@@ -114,6 +114,7 @@ fn bench_json_has_every_field_and_round_trips() {
         "passes",
         "gpu_total",
         "cpu_frame",
+        "empty_pass_between_frames",
     ] {
         assert!(scene.get(field).is_some(), "missing scenes[0].{field}");
     }

@@ -63,6 +63,21 @@ fn report_round_trips_through_json() {
     assert_eq!(r, back);
 }
 
+/// Reports written before the between-frames floor still load: their
+/// multiples divided by the separate empty-pass run.
+#[test]
+fn reports_without_the_between_frames_floor_load() {
+    let r = report();
+    let mut value = serde_json::to_value(&r).unwrap();
+    value["scenes"][0]
+        .as_object_mut()
+        .unwrap()
+        .remove("empty_pass_between_frames");
+    let back = BenchReport::from_json(&value.to_string(), Path::new("old.json")).unwrap();
+    assert_eq!(back.scenes[0].empty_pass_between_frames, None);
+    assert_eq!(back.scenes[0].passes, r.scenes[0].passes);
+}
+
 #[test]
 fn other_formats_are_rejected_naming_the_field() {
     let mut r = report();
