@@ -68,25 +68,12 @@ pub const KNOBS: &[Knob] = &[
         best: Best::Fixed("phong"),
         values: "phong | gouraud | toon (every material)",
         apply: |s, v| {
-            let model = match v {
-                "phong" => ShadingModel::Phong,
-                "gouraud" => ShadingModel::Gouraud,
-                "toon" => ShadingModel::Toon,
-                _ => return Err("expected phong, gouraud or toon".into()),
-            };
+            let model = ShadingModel::parse(v)?;
             s.materials.iter_mut().for_each(|m| m.shading = model);
             Ok(())
         },
         read: |s| {
-            let mut names: Vec<&str> = s
-                .materials
-                .iter()
-                .map(|m| match m.shading {
-                    ShadingModel::Phong => "phong",
-                    ShadingModel::Gouraud => "gouraud",
-                    ShadingModel::Toon => "toon",
-                })
-                .collect();
+            let mut names: Vec<&str> = s.materials.iter().map(|m| m.shading.name()).collect();
             names.sort_unstable();
             names.dedup();
             names.join("+")
@@ -166,42 +153,20 @@ pub const KNOBS: &[Knob] = &[
         best: Best::Fixed("rgba32f"),
         values: "rgba16f | rgba32f",
         apply: |s, v| {
-            s.output.hdr_format = match v {
-                "rgba16f" => HdrFormat::Rgba16F,
-                "rgba32f" => HdrFormat::Rgba32F,
-                _ => return Err("expected rgba16f or rgba32f".into()),
-            };
+            s.output.hdr_format = HdrFormat::parse(v)?;
             Ok(())
         },
-        read: |s| {
-            match s.output.hdr_format {
-                HdrFormat::Rgba16F => "rgba16f",
-                HdrFormat::Rgba32F => "rgba32f",
-            }
-            .into()
-        },
+        read: |s| s.output.hdr_format.name().into(),
     },
     Knob {
         name: "texture_filter",
         best: Best::Fixed("trilinear"),
         values: "nearest | bilinear | trilinear",
         apply: |s, v| {
-            s.output.texture_filter = match v {
-                "nearest" => TextureFilter::Nearest,
-                "bilinear" => TextureFilter::Bilinear,
-                "trilinear" => TextureFilter::Trilinear,
-                _ => return Err("expected nearest, bilinear or trilinear".into()),
-            };
+            s.output.texture_filter = TextureFilter::parse(v)?;
             Ok(())
         },
-        read: |s| {
-            match s.output.texture_filter {
-                TextureFilter::Nearest => "nearest",
-                TextureFilter::Bilinear => "bilinear",
-                TextureFilter::Trilinear => "trilinear",
-            }
-            .into()
-        },
+        read: |s| s.output.texture_filter.name().into(),
     },
     Knob {
         name: "tone_map",
@@ -209,22 +174,10 @@ pub const KNOBS: &[Knob] = &[
         best: Best::Unchanged,
         values: "reinhard | aces | none (none: LDR output, no HDR target without --hdr)",
         apply: |s, v| {
-            s.tone_map.operator = match v {
-                "reinhard" => ToneMapOperator::Reinhard,
-                "aces" => ToneMapOperator::Aces,
-                "none" => ToneMapOperator::None,
-                _ => return Err("expected reinhard, aces or none".into()),
-            };
+            s.tone_map.operator = ToneMapOperator::parse(v)?;
             Ok(())
         },
-        read: |s| {
-            match s.tone_map.operator {
-                ToneMapOperator::Reinhard => "reinhard",
-                ToneMapOperator::Aces => "aces",
-                ToneMapOperator::None => "none",
-            }
-            .into()
-        },
+        read: |s| s.tone_map.operator.name().into(),
     },
     Knob {
         name: "lighting",
@@ -233,20 +186,10 @@ pub const KNOBS: &[Knob] = &[
         best: Best::Fixed("forward"),
         values: "forward | deferred",
         apply: |s, v| {
-            s.output.lighting = match v {
-                "forward" => Lighting::Forward,
-                "deferred" => Lighting::Deferred,
-                _ => return Err("expected forward or deferred".into()),
-            };
+            s.output.lighting = Lighting::parse(v)?;
             Ok(())
         },
-        read: |s| {
-            match s.output.lighting {
-                Lighting::Forward => "forward",
-                Lighting::Deferred => "deferred",
-            }
-            .into()
-        },
+        read: |s| s.output.lighting.name().into(),
     },
     Knob {
         name: "atmosphere_samples",
@@ -290,19 +233,11 @@ pub const KNOBS: &[Knob] = &[
         best: Best::Fixed("horizon"),
         values: "horizon | seed: how altitude and direction map to the optical-depth table",
         apply: |s, v| {
-            sky_mut(s)?.table_mapping = match v {
-                "horizon" => TableMapping::Horizon,
-                "seed" => TableMapping::Seed,
-                _ => return Err("expected horizon or seed".into()),
-            };
+            sky_mut(s)?.table_mapping = TableMapping::parse(v)?;
             Ok(())
         },
         read: |s| match &s.sky {
-            Some(sky) => match sky.table_mapping {
-                TableMapping::Horizon => "horizon",
-                TableMapping::Seed => "seed",
-            }
-            .into(),
+            Some(sky) => sky.table_mapping.name().into(),
             None => "-".into(),
         },
     },
@@ -336,21 +271,11 @@ pub const KNOBS: &[Knob] = &[
         best: Best::Fixed("manual"),
         values: "manual | nearest | hardware: how the atmosphere pass reads the optical-depth table",
         apply: |s, v| {
-            sky_mut(s)?.table_filter = match v {
-                "manual" => TableFilter::Manual,
-                "nearest" => TableFilter::Nearest,
-                "hardware" => TableFilter::Hardware,
-                _ => return Err("expected manual, nearest or hardware".into()),
-            };
+            sky_mut(s)?.table_filter = TableFilter::parse(v)?;
             Ok(())
         },
         read: |s| match &s.sky {
-            Some(sky) => match sky.table_filter {
-                TableFilter::Manual => "manual",
-                TableFilter::Nearest => "nearest",
-                TableFilter::Hardware => "hardware",
-            }
-            .into(),
+            Some(sky) => sky.table_filter.name().into(),
             None => "-".into(),
         },
     },
@@ -359,23 +284,105 @@ pub const KNOBS: &[Knob] = &[
         best: Best::Fixed("exact"),
         values: "exact | table: the ozone's integral towards the sun in closed form or from the optical-depth table",
         apply: |s, v| {
-            sky_mut(s)?.ozone_depth = match v {
-                "exact" => OzoneDepth::Exact,
-                "table" => OzoneDepth::Table,
-                _ => return Err("expected exact or table".into()),
-            };
+            sky_mut(s)?.ozone_depth = OzoneDepth::parse(v)?;
             Ok(())
         },
         read: |s| match &s.sky {
-            Some(sky) => match sky.ozone_depth {
-                OzoneDepth::Exact => "exact",
-                OzoneDepth::Table => "table",
-            }
-            .into(),
+            Some(sky) => sky.ozone_depth.name().into(),
             None => "-".into(),
         },
     },
 ];
+
+/// A knob whose values are the variants of an enum, by the names the scene
+/// file spells them with (each enum's serde `rename_all = "lowercase"`).
+trait Named: Copy + PartialEq + 'static {
+    /// Every variant and its name.
+    const NAMES: &'static [(&'static str, Self)];
+
+    /// The variant called `value`, or "expected a, b or c".
+    fn parse(value: &str) -> Result<Self, String> {
+        Self::NAMES
+            .iter()
+            .find(|(name, _)| *name == value)
+            .map(|&(_, variant)| variant)
+            .ok_or_else(|| {
+                let names: Vec<&str> = Self::NAMES.iter().map(|(name, _)| *name).collect();
+                let (last, rest) = names.split_last().expect("a named enum has variants");
+                if rest.is_empty() {
+                    format!("expected {last}")
+                } else {
+                    format!("expected {} or {last}", rest.join(", "))
+                }
+            })
+    }
+
+    /// This variant's name.
+    fn name(self) -> &'static str {
+        Self::NAMES
+            .iter()
+            .find(|(_, variant)| *variant == self)
+            .map_or("?", |(name, _)| name)
+    }
+}
+
+impl Named for ShadingModel {
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("phong", ShadingModel::Phong),
+        ("gouraud", ShadingModel::Gouraud),
+        ("toon", ShadingModel::Toon),
+    ];
+}
+
+impl Named for HdrFormat {
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("rgba16f", HdrFormat::Rgba16F),
+        ("rgba32f", HdrFormat::Rgba32F),
+    ];
+}
+
+impl Named for TextureFilter {
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("nearest", TextureFilter::Nearest),
+        ("bilinear", TextureFilter::Bilinear),
+        ("trilinear", TextureFilter::Trilinear),
+    ];
+}
+
+impl Named for ToneMapOperator {
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("reinhard", ToneMapOperator::Reinhard),
+        ("aces", ToneMapOperator::Aces),
+        ("none", ToneMapOperator::None),
+    ];
+}
+
+impl Named for Lighting {
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("forward", Lighting::Forward),
+        ("deferred", Lighting::Deferred),
+    ];
+}
+
+impl Named for TableMapping {
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("horizon", TableMapping::Horizon),
+        ("seed", TableMapping::Seed),
+    ];
+}
+
+impl Named for TableFilter {
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("manual", TableFilter::Manual),
+        ("nearest", TableFilter::Nearest),
+        ("hardware", TableFilter::Hardware),
+    ];
+}
+
+impl Named for OzoneDepth {
+    const NAMES: &'static [(&'static str, Self)] =
+        &[("exact", OzoneDepth::Exact), ("table", OzoneDepth::Table)];
+}
 
 /// The scene's sky, for the atmosphere knobs.
 fn sky_mut(s: &mut Scene) -> Result<&mut super::Sky, String> {
@@ -413,6 +420,47 @@ pub fn settings(scene: &Scene) -> Vec<(&'static str, String)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The names of every `Named` enum are exactly the variants the scene
+    /// file accepts (serde's list, from an unknown name's error), each
+    /// parsing to the variant it names.
+    fn names_match_the_scene_file<T>()
+    where
+        T: Named + std::fmt::Debug + serde::de::DeserializeOwned,
+    {
+        use serde::de::{value::StrDeserializer, IntoDeserializer};
+        for &(name, variant) in T::NAMES {
+            let d: StrDeserializer<'_, serde::de::value::Error> = name.into_deserializer();
+            assert_eq!(T::deserialize(d).unwrap(), variant, "{name}");
+            assert_eq!(T::parse(name), Ok(variant));
+            assert_eq!(variant.name(), name);
+        }
+        let d: StrDeserializer<'_, serde::de::value::Error> = "no such".into_deserializer();
+        let listed = T::deserialize(d).unwrap_err().to_string();
+        let serde_names: Vec<&str> = listed.split('`').skip(3).step_by(2).collect();
+        let names: Vec<&str> = T::NAMES.iter().map(|(n, _)| *n).collect();
+        assert_eq!(serde_names, names, "{listed}");
+    }
+
+    #[test]
+    fn enum_knobs_name_every_variant_as_the_scene_file_does() {
+        names_match_the_scene_file::<ShadingModel>();
+        names_match_the_scene_file::<HdrFormat>();
+        names_match_the_scene_file::<TextureFilter>();
+        names_match_the_scene_file::<ToneMapOperator>();
+        names_match_the_scene_file::<Lighting>();
+        names_match_the_scene_file::<TableMapping>();
+        names_match_the_scene_file::<TableFilter>();
+        names_match_the_scene_file::<OzoneDepth>();
+        assert_eq!(
+            TableFilter::parse("linear"),
+            Err("expected manual, nearest or hardware".to_string())
+        );
+        assert_eq!(
+            Lighting::parse("x"),
+            Err("expected forward or deferred".to_string())
+        );
+    }
 
     #[test]
     fn each_knob_round_trips_a_value() {
