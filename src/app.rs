@@ -217,25 +217,18 @@ pub fn run_with_progress(
     // as well.
     drop(ctx);
     let validation = log.map(|l| l.messages()).unwrap_or_default();
-    let Produced {
-        passes,
-        frames,
-        output,
-        hdr,
-        setup,
-        empty_pass_frames,
-    } = match produced {
+    let p = match produced {
         Ok(p) => p,
         Err(error) => return Err(RunError { error, validation }),
     };
     Ok(RenderRun {
         device,
-        passes,
-        frames,
-        output,
-        hdr,
-        setup,
-        empty_pass_frames,
+        passes: p.passes,
+        frames: p.frames,
+        output: p.output,
+        hdr: p.hdr,
+        setup: p.setup,
+        empty_pass_frames: p.empty_pass_frames,
         validation,
     })
 }
@@ -316,9 +309,8 @@ pub fn render_empty_pass(
     run_with_progress(FrameSource::EmptyPass { width, height }, settings, on_frame)
 }
 
-/// What one renderer produced over the frames: pass names, timings, and
-/// the images of the last frame.
-/// What one run's frames produced, before the validation log is read.
+/// What one run's frames produced, before the validation log is read: pass
+/// names, timings, the images of the last frame.
 struct Produced {
     passes: Vec<&'static str>,
     frames: Vec<FrameTiming>,

@@ -94,11 +94,18 @@ impl Frame {
         (-r * mu + disc.max(0.0).sqrt()).max(0.0)
     }
 
-    /// x_μ in [0, 1] of an upward cosine `mu` ≥ 0 at altitude `alt`.
-    fn upward_unit(&self, alt: f64, mu: f64) -> f64 {
+    /// Radius, and the shortest (straight up) and longest (horizontal)
+    /// upward distances to the top, at altitude `alt`.
+    fn upward_range(&self, alt: f64) -> (f64, f64, f64) {
         let r = self.bottom + alt;
         let d_min = self.thickness() - alt;
         let d_max = ((self.top - r) * (self.top + r)).max(0.0).sqrt();
+        (r, d_min, d_max)
+    }
+
+    /// x_μ in [0, 1] of an upward cosine `mu` ≥ 0 at altitude `alt`.
+    fn upward_unit(&self, alt: f64, mu: f64) -> f64 {
+        let (r, d_min, d_max) = self.upward_range(alt);
         if d_max > d_min {
             ((self.distance_to_top(r, mu) - d_min) / (d_max - d_min)).clamp(0.0, 1.0)
         } else {
@@ -108,9 +115,7 @@ impl Frame {
 
     /// Inverse of [`Frame::upward_unit`]: the cosine.
     fn upward_cosine(&self, alt: f64, x_mu: f64) -> f64 {
-        let r = self.bottom + alt;
-        let d_min = self.thickness() - alt;
-        let d_max = ((self.top - r) * (self.top + r)).max(0.0).sqrt();
+        let (r, d_min, d_max) = self.upward_range(alt);
         let d = d_min + x_mu * (d_max - d_min).max(0.0);
         if d == 0.0 {
             1.0
