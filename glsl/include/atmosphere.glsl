@@ -124,12 +124,24 @@ vec3 table_decode(vec3 v, float h) {
         v.z);
 }
 
-// The horizon mapping's altitude axis: with q = h / thickness,
-// x = sqrt(q) / (sqrt(q) + sqrt(1 - q)) (src/atmosphere/table.rs).
+// f = s^2 / (s^2 + (1 - s)^2) on [0, 1]: samples evenly spaced in s crowd
+// towards both ends of f, where f near 0 grows as s^2 and near 1 as
+// 1 - (1 - s)^2. The table's altitude axis and the sky view's rows from
+// space use it.
+float crowd_ends(float s) {
+    return s * s / (s * s + (1.0 - s) * (1.0 - s));
+}
+
+// Inverse of crowd_ends: s = sqrt(f) / (sqrt(f) + sqrt(1 - f)).
+float crowd_ends_inverse(float f) {
+    float a = sqrt(f);
+    return a / (a + sqrt(1.0 - f));
+}
+
+// The horizon mapping's altitude axis (src/atmosphere/table.rs): the
+// texel coordinate of altitude h is crowd_ends_inverse(h / thickness).
 float table_altitude_unit(float h, float thickness) {
-    float q = clamp(h / thickness, 0.0, 1.0);
-    float a = sqrt(q);
-    return a / (a + sqrt(1.0 - q));
+    return crowd_ends_inverse(clamp(h / thickness, 0.0, 1.0));
 }
 
 // A ray towards the sun from altitude h (clamped to the atmosphere) along
@@ -443,7 +455,7 @@ bool sky_view_from_space() {
 // to the zenith or the atmosphere's edge at row coordinate s in [0, 1].
 float sky_view_row_fraction(float s) {
     if (sky_view_from_space()) {
-        return s * s / (s * s + (1.0 - s) * (1.0 - s));
+        return crowd_ends(s);
     }
     return s * s;
 }
@@ -451,8 +463,7 @@ float sky_view_row_fraction(float s) {
 // Inverse of sky_view_row_fraction.
 float sky_view_row_unit(float f) {
     if (sky_view_from_space()) {
-        float a = sqrt(f);
-        return a / (a + sqrt(1.0 - f));
+        return crowd_ends_inverse(f);
     }
     return sqrt(f);
 }
