@@ -326,62 +326,24 @@ trait Named: Copy + PartialEq + 'static {
     }
 }
 
-impl Named for ShadingModel {
-    const NAMES: &'static [(&'static str, Self)] = &[
-        ("phong", ShadingModel::Phong),
-        ("gouraud", ShadingModel::Gouraud),
-        ("toon", ShadingModel::Toon),
-    ];
+/// `impl Named` for enums: `Type { "name" => Variant, ... }`.
+macro_rules! named {
+    ($($ty:ident { $($name:literal => $variant:ident),+ $(,)? })+) => {
+        $(impl Named for $ty {
+            const NAMES: &'static [(&'static str, Self)] = &[$(($name, $ty::$variant)),+];
+        })+
+    };
 }
 
-impl Named for HdrFormat {
-    const NAMES: &'static [(&'static str, Self)] = &[
-        ("rgba16f", HdrFormat::Rgba16F),
-        ("rgba32f", HdrFormat::Rgba32F),
-    ];
-}
-
-impl Named for TextureFilter {
-    const NAMES: &'static [(&'static str, Self)] = &[
-        ("nearest", TextureFilter::Nearest),
-        ("bilinear", TextureFilter::Bilinear),
-        ("trilinear", TextureFilter::Trilinear),
-    ];
-}
-
-impl Named for ToneMapOperator {
-    const NAMES: &'static [(&'static str, Self)] = &[
-        ("reinhard", ToneMapOperator::Reinhard),
-        ("aces", ToneMapOperator::Aces),
-        ("none", ToneMapOperator::None),
-    ];
-}
-
-impl Named for Lighting {
-    const NAMES: &'static [(&'static str, Self)] = &[
-        ("forward", Lighting::Forward),
-        ("deferred", Lighting::Deferred),
-    ];
-}
-
-impl Named for TableMapping {
-    const NAMES: &'static [(&'static str, Self)] = &[
-        ("horizon", TableMapping::Horizon),
-        ("seed", TableMapping::Seed),
-    ];
-}
-
-impl Named for TableFilter {
-    const NAMES: &'static [(&'static str, Self)] = &[
-        ("manual", TableFilter::Manual),
-        ("nearest", TableFilter::Nearest),
-        ("hardware", TableFilter::Hardware),
-    ];
-}
-
-impl Named for OzoneDepth {
-    const NAMES: &'static [(&'static str, Self)] =
-        &[("exact", OzoneDepth::Exact), ("table", OzoneDepth::Table)];
+named! {
+    ShadingModel { "phong" => Phong, "gouraud" => Gouraud, "toon" => Toon }
+    HdrFormat { "rgba16f" => Rgba16F, "rgba32f" => Rgba32F }
+    TextureFilter { "nearest" => Nearest, "bilinear" => Bilinear, "trilinear" => Trilinear }
+    ToneMapOperator { "reinhard" => Reinhard, "aces" => Aces, "none" => None }
+    Lighting { "forward" => Forward, "deferred" => Deferred }
+    TableMapping { "horizon" => Horizon, "seed" => Seed }
+    TableFilter { "manual" => Manual, "nearest" => Nearest, "hardware" => Hardware }
+    OzoneDepth { "exact" => Exact, "table" => Table }
 }
 
 /// The scene's sky, for the atmosphere knobs.
