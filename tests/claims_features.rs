@@ -444,25 +444,7 @@ fn read_png_text_of(path: &Path) -> Vec<(String, String)> {
 fn the_bench_gate_fails_when_no_pass_matched() {
     let dir = temp_dir("gate");
     let current = dir.join("current.json");
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bench/triangle.toml");
-    common::succeed(
-        aerial()
-            .arg("bench")
-            .arg(&scene)
-            .args([
-                "--frames",
-                "2",
-                "--warmup",
-                "0",
-                "--width",
-                "32",
-                "--height",
-                "18",
-                "--validate",
-                "--json",
-            ])
-            .arg(&current),
-    );
+    common::succeed(common::tiny_triangle_bench(2).arg("--json").arg(&current));
 
     // The same report compared with itself passes; with every scene renamed
     // and no empty pass, nothing matches and the gate fails, whatever the

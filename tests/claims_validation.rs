@@ -265,20 +265,7 @@ fn render_with_a_message_fails_and_writes_nothing() {
 fn bench_and_sweep_with_a_message_fail() {
     let dir = temp_dir("bench");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bench/triangle.toml");
-    let out = aerial()
-        .arg("bench")
-        .arg(&scene)
-        .args([
-            "--frames",
-            "1",
-            "--warmup",
-            "0",
-            "--width",
-            "32",
-            "--height",
-            "18",
-            "--validate",
-        ])
+    let out = common::tiny_triangle_bench(1)
         .env("VK_LAYER_ENABLES", VENDOR_CHECKS)
         .output()
         .unwrap();

@@ -125,6 +125,28 @@ pub fn aerial() -> std::process::Command {
     std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
 }
 
+/// `aerial bench` of `assets/bench/triangle.toml` at 32×18, `frames`
+/// measured frames and no warm-up, under validation: the smallest bench
+/// run, ready for more arguments.
+pub fn tiny_triangle_bench(frames: u32) -> std::process::Command {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bench/triangle.toml");
+    let mut command = aerial();
+    command
+        .arg("bench")
+        .arg(scene)
+        .args(["--frames", &frames.to_string()])
+        .args([
+            "--warmup",
+            "0",
+            "--width",
+            "32",
+            "--height",
+            "18",
+            "--validate",
+        ]);
+    command
+}
+
 /// The world-space ray through the centre of pixel (x, y): two points of
 /// the pixel unprojected with the inverse view-projection in f64.
 pub fn pixel_ray(scene: &Scene, x: u32, y: u32) -> DVec3 {
