@@ -6,7 +6,10 @@
 //! pass that benchmarks measure the driver's floor with.
 
 use crate::budget::MemoryBudget;
-use crate::render::{empty_pass, preflight, EmptyPass, FrameTiming, Pixels, RenderError, Renderer};
+use crate::instructions::Callgrind;
+use crate::render::{
+    empty_pass, preflight, EmptyPass, FrameTiming, Pixels, PrefixFrames, RenderError, Renderer,
+};
 use crate::scene::{Scene, ToneMap};
 use crate::vk::validation::{Validation, ValidationMessage};
 use crate::vk::{Context, ContextOptions, DeviceInfo};
@@ -29,6 +32,13 @@ pub struct RenderSettings {
     /// floor measured over the same seconds as the scene, so the ratio of
     /// the two does not depend on what the machine did in between.
     pub empty_pass_between_frames: bool,
+    /// Count each pass's pipeline statistics in every measured frame
+    /// ([`FrameTiming::work`]); needs a device with the queries.
+    pub count_work: bool,
+    /// Count each pass's CPU instructions ([`RenderRun::instruction_frames`]);
+    /// only in a process started by
+    /// [`crate::instructions::spawn_counting_run`].
+    pub count_instructions: bool,
 }
 
 /// Everything a run produced.
@@ -46,6 +56,10 @@ pub struct RenderRun {
     /// measured frame, with [`RenderSettings::empty_pass_between_frames`];
     /// empty otherwise.
     pub empty_pass_frames: Vec<FrameTiming>,
+    /// With [`RenderSettings::count_instructions`], per measured frame the
+    /// instructions of each prefix of the frame (the first k passes, k =
+    /// 0..=passes); see [`crate::instructions`]. Empty otherwise.
+    pub instruction_frames: Vec<Vec<u64>>,
     /// Validation messages that were not on the allow-list (empty without
     /// validation).
     pub validation: Vec<ValidationMessage>,
@@ -229,6 +243,7 @@ pub fn run_with_progress(
         hdr: p.hdr,
         setup: p.setup,
         empty_pass_frames: p.empty_pass_frames,
+        instruction_frames: p.instruction_frames,
         validation,
     })
 }
@@ -253,7 +268,11 @@ fn produce(
             } else {
                 None
             };
-            drive(renderer, empty, settings, on_frame)?
+            if settings.count_instructions {
+                count(renderer, settings, on_frame)?
+            } else {
+                drive(renderer, empty, settings, on_frame)?
+            }
         }
         FrameSource::HdrImage(image, tone_map) => drive(
             Renderer::for_hdr_image(ctx, tone_map, image)?,
@@ -263,14 +282,28 @@ fn produce(
         )?,
         FrameSource::EmptyPass { width, height } => {
             let mut pass = EmptyPass::new(ctx, width, height)?;
-            let frames = submit_frames(settings, on_frame, || pass.render_frame())?;
-            Produced {
-                passes: vec![empty_pass::PASS_NAME],
-                frames,
-                output: pass.output(),
-                hdr: None,
-                setup: Vec::new(),
-                empty_pass_frames: Vec::new(),
+            if settings.count_instructions {
+                let (frames, instruction_frames) = count_prefixes(&mut pass, settings, on_frame)?;
+                Produced {
+                    passes: vec![empty_pass::PASS_NAME],
+                    frames,
+                    output: pass.output(),
+                    hdr: None,
+                    setup: Vec::new(),
+                    empty_pass_frames: Vec::new(),
+                    instruction_frames,
+                }
+            } else {
+                let frames = submit_frames(settings, on_frame, || pass.render_frame())?;
+                Produced {
+                    passes: vec![empty_pass::PASS_NAME],
+                    frames,
+                    output: pass.output(),
+                    hdr: None,
+                    setup: Vec::new(),
+                    empty_pass_frames: Vec::new(),
+                    instruction_frames: Vec::new(),
+                }
             }
         }
         FrameSource::ValidationCheck(misuse) => {
@@ -292,6 +325,7 @@ fn produce(
                 hdr: None,
                 setup: Vec::new(),
                 empty_pass_frames: Vec::new(),
+                instruction_frames: Vec::new(),
             }
         }
     })
@@ -318,6 +352,7 @@ struct Produced {
     hdr: Option<Pixels<f32>>,
     setup: Vec<(&'static str, f64)>,
     empty_pass_frames: Vec<FrameTiming>,
+    instruction_frames: Vec<Vec<u64>>,
 }
 
 /// Empty passes timed after each frame with
@@ -360,15 +395,81 @@ fn drive(
         hdr: renderer.hdr(),
         setup: renderer.setup_measures(),
         empty_pass_frames,
+        instruction_frames: Vec::new(),
     })
 }
 
+/// Counts the renderer's instructions per frame prefix ([`count_prefixes`]).
+fn count(
+    mut renderer: Renderer,
+    settings: &RenderSettings,
+    on_frame: &mut dyn FnMut(),
+) -> Result<Produced, RenderError> {
+    let passes = renderer.plan().pass_names();
+    let (frames, instruction_frames) = count_prefixes(&mut renderer, settings, on_frame)?;
+    Ok(Produced {
+        passes,
+        frames,
+        output: renderer.output(),
+        hdr: renderer.hdr(),
+        setup: renderer.setup_measures(),
+        empty_pass_frames: Vec::new(),
+        instruction_frames,
+    })
+}
+
+/// Submits the warm-up frames uninstrumented, then for each measured frame
+/// every prefix of it (0..=passes recorded), each counted by callgrind;
+/// returns the whole frames' timings and each frame's prefix counts. The
+/// whole frame is submitted last, so the read-back images are the frame's.
+fn count_prefixes(
+    frames: &mut dyn PrefixFrames,
+    settings: &RenderSettings,
+    on_frame: &mut dyn FnMut(),
+) -> Result<(Vec<FrameTiming>, Vec<Vec<u64>>), RenderError> {
+    let callgrind =
+        Callgrind::from_env()?.ok_or(crate::instructions::CountError::NotUnderValgrind)?;
+    let passes = frames.pass_count();
+    // Warm-up runs every prefix too: the driver compiles some shader
+    // variants on first use, which must not land in a counted frame.
+    for _ in 0..settings.warmup.max(1) {
+        for k in 0..=passes {
+            frames.render_prefix(k)?;
+        }
+        on_frame();
+    }
+    callgrind.start();
+    let mut timings = Vec::new();
+    let mut counts = Vec::new();
+    for _ in 0..settings.frames.max(1) {
+        let mut prefixes = Vec::with_capacity(passes + 1);
+        let mut whole = None;
+        for k in 0..=passes {
+            let (timing, n) = callgrind.count(|| frames.render_prefix(k))?;
+            prefixes.push(n);
+            whole = Some(timing);
+        }
+        timings.extend(whole);
+        counts.push(prefixes);
+        on_frame();
+    }
+    Ok((timings, counts))
+}
+
 fn context(settings: &RenderSettings) -> Result<std::sync::Arc<Context>, RenderError> {
-    Ok(Context::new(&ContextOptions {
+    let ctx = Context::new(&ContextOptions {
         validate: settings.validate,
         device: settings.device.clone(),
         display: None,
-    })?)
+        pipeline_statistics: settings.count_work,
+    })?;
+    if settings.count_instructions && !ctx.device_info().cpu {
+        return Err(crate::instructions::CountError::NotCpuDevice {
+            device: ctx.device_info().name.clone(),
+        }
+        .into());
+    }
+    Ok(ctx)
 }
 
 /// Submits `settings.warmup` discarded frames, then `settings.frames` (at

@@ -301,6 +301,7 @@ fn empty_pass_is_clean_under_validation_and_takes_time() {
             frames: 3,
             keep_hdr: false,
             empty_pass_between_frames: false,
+            ..Default::default()
         },
         &mut || {},
     )

@@ -74,6 +74,7 @@ fn a_leaked_object_is_counted_on_a_context_dropped_by_hand() {
         validate: Validation::All,
         device: None,
         display: None,
+        ..Default::default()
     })
     .expect("a Vulkan device with the validation layer");
     let log = ctx.validation_log().expect("validation enabled");

@@ -656,6 +656,7 @@ fn tone_map(values: &[f32], operator: ToneMapOperator, exposure: f32) -> Vec<u8>
             frames: 1,
             keep_hdr: false,
             empty_pass_between_frames: false,
+            ..Default::default()
         },
     )
     .expect("tone map runs");

@@ -231,6 +231,7 @@ fn non_png_normal_map_is_a_clear_error() {
             frames: 1,
             keep_hdr: false,
             empty_pass_between_frames: false,
+            ..Default::default()
         },
     ) {
         Ok(_) => panic!("a JPEG normal map rendered"),

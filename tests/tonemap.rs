@@ -27,6 +27,7 @@ fn tone_map_on_gpu(values: &[[f32; 4]], operator: ToneMapOperator, exposure: f32
             frames: 1,
             keep_hdr: false,
             empty_pass_between_frames: false,
+            ..Default::default()
         },
     )
     .expect("tone map runs");

@@ -8,6 +8,7 @@ fn validated() -> std::sync::Arc<Context> {
         validate: aerial::vk::validation::Validation::All,
         device: None,
         display: None,
+        ..Default::default()
     })
     .expect("a Vulkan device with the validation layer")
 }

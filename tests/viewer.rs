@@ -439,6 +439,7 @@ fn moving_the_view_draws_what_a_new_renderer_draws() {
         validate: Validation::All,
         device: None,
         display: None,
+        ..Default::default()
     })
     .expect("a Vulkan device with the validation layer");
     let log = ctx.validation_log().expect("validation on");

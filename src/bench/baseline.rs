@@ -1,17 +1,21 @@
 //! Comparing a benchmark run with a stored baseline, for CI.
 //!
-//! Rows are matched by scene file (as given on the command line) and row
-//! name (a pass, `gpu total` or `cpu frame`); empty-pass rows by resolution.
-//! Each matched row gets the ratio of medians `current / baseline`, so a
-//! slowdown is judged relative to the same machine's earlier figure rather
-//! than against an absolute time that only holds on one machine.
+//! Rows are matched by scene file (as given on the command line), row name
+//! (a pass, `gpu total` or `cpu frame`) and metric (time, and instructions
+//! where both reports counted them); empty-pass rows by resolution. Each
+//! matched row gets the ratio of medians `current / baseline` and its 95 %
+//! interval, so a slowdown is judged relative to the same machine's earlier
+//! figure rather than against an absolute time that only holds on one
+//! machine, and the gate ([`Verdict`]) decides on the interval, not the
+//! point.
 //!
 //! Differences that make the comparison less meaningful (another device or
 //! driver, another resolution, a changed scene file, other knob settings,
 //! another build profile) are reported as warnings, not failures: CI
 //! decides what to do with them. Rows present on one side only are listed.
 
-use super::report::{BenchReport, PassReport, Resolution};
+use super::report::{BenchReport, Metric, PassReport, Resolution};
+use crate::report::stats::{ratio_interval, Interval};
 use std::fmt;
 
 /// A row's identity: which scene (or empty pass) and which pass.
@@ -32,17 +36,52 @@ impl fmt::Display for RowKey {
 #[derive(Clone, Debug, PartialEq)]
 pub struct RatioRow {
     pub key: RowKey,
-    pub baseline_ms: f64,
-    pub current_ms: f64,
-    /// `current_ms / baseline_ms`; `None` when the baseline median is not
+    /// Time (ms) or instructions.
+    pub metric: Metric,
+    /// The baseline's median.
+    pub baseline: f64,
+    /// This run's median.
+    pub current: f64,
+    /// `current / baseline`; `None` when the baseline median is not
     /// positive (a zero-length interval has no meaningful ratio).
     pub ratio: Option<f64>,
+    /// The ratio's 95 % interval: a bootstrap over both sides' frames when
+    /// both reports kept them, else over this run's frames against the
+    /// baseline's median; `None` without samples on this side.
+    pub interval: Option<Interval>,
+}
+
+/// What the gate decides for a row, or for a whole comparison.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Verdict {
+    /// The whole interval (or, without one, the ratio) is at most the limit.
+    Pass,
+    /// The interval straddles the limit: more frames are needed to tell.
+    Inconclusive,
+    /// The whole interval lies above the limit.
+    Fail,
 }
 
 impl RatioRow {
-    /// Whether this row is slower than `max_ratio` allows.
+    /// Whether this row is slower than `max_ratio` allows: its interval
+    /// lies above it.
     pub fn exceeds(&self, max_ratio: f64) -> bool {
-        self.ratio.is_some_and(|r| r > max_ratio)
+        self.verdict(max_ratio) == Verdict::Fail
+    }
+
+    /// The gate's decision for this row at `max_ratio`.
+    pub fn verdict(&self, max_ratio: f64) -> Verdict {
+        let Some(ratio) = self.ratio else {
+            return Verdict::Pass;
+        };
+        let interval = self.interval.unwrap_or(Interval::point(ratio));
+        if interval.low > max_ratio {
+            Verdict::Fail
+        } else if interval.high <= max_ratio {
+            Verdict::Pass
+        } else {
+            Verdict::Inconclusive
+        }
     }
 }
 
@@ -60,29 +99,62 @@ pub struct BaselineComparison {
 }
 
 impl BaselineComparison {
-    /// The rows whose ratio is above `max_ratio`.
+    /// The rows whose interval lies above `max_ratio`.
     pub fn exceeding(&self, max_ratio: f64) -> Vec<&RatioRow> {
         self.rows.iter().filter(|r| r.exceeds(max_ratio)).collect()
     }
+
+    /// The worst row verdict ([`Verdict::Pass`] for no rows).
+    pub fn verdict(&self, max_ratio: f64) -> Verdict {
+        self.rows
+            .iter()
+            .map(|r| r.verdict(max_ratio))
+            .max()
+            .unwrap_or(Verdict::Pass)
+    }
 }
+
+/// How the keys of empty-pass rows begin.
+pub const EMPTY_PASS_PREFIX: &str = "empty pass ";
 
 /// The key of the empty pass at `resolution`.
 pub fn empty_pass_scene(resolution: Resolution) -> String {
-    format!("empty pass {resolution}")
+    format!("{EMPTY_PASS_PREFIX}{resolution}")
 }
 
-/// Every timed row of a report with its median, in report order: the empty
-/// passes, then each scene's passes and totals.
-pub fn rows(report: &BenchReport) -> Vec<(RowKey, f64)> {
+/// One metric of one row: its median and its frames' values.
+#[derive(Clone, Debug)]
+pub struct MetricRow {
+    pub key: RowKey,
+    pub metric: Metric,
+    pub median: f64,
+    pub samples: Vec<f64>,
+}
+
+/// Every row of a report, per metric it carries (time always,
+/// instructions where counted), in report order: the empty passes, then
+/// each scene's passes and totals.
+pub fn rows(report: &BenchReport) -> Vec<MetricRow> {
     let mut out = Vec::new();
     let mut push = |scene: &str, row: &PassReport| {
-        out.push((
-            RowKey {
-                scene: scene.to_string(),
-                pass: row.name.clone(),
-            },
-            row.ms.median,
-        ));
+        let key = RowKey {
+            scene: scene.to_string(),
+            pass: row.name.clone(),
+        };
+        out.push(MetricRow {
+            key: key.clone(),
+            metric: Metric::Time,
+            median: row.ms.median,
+            samples: row.samples_ms.clone(),
+        });
+        if let Some(c) = &row.instructions {
+            out.push(MetricRow {
+                key,
+                metric: Metric::Instructions,
+                median: c.summary.median,
+                samples: c.samples.iter().map(|&n| n as f64).collect(),
+            });
+        }
     };
     for e in &report.empty_passes {
         let scene = empty_pass_scene(e.resolution);
@@ -94,8 +166,13 @@ pub fn rows(report: &BenchReport) -> Vec<(RowKey, f64)> {
     out
 }
 
-/// Compares `current` with `baseline`.
-pub fn compare(current: &BenchReport, baseline: &BenchReport) -> BaselineComparison {
+/// Compares `current` with `baseline` in the `metrics` asked for (time
+/// rows always exist; instruction rows where both reports counted).
+pub fn compare(
+    current: &BenchReport,
+    baseline: &BenchReport,
+    metrics: &[Metric],
+) -> BaselineComparison {
     let mut warnings = Vec::new();
     if current.device != baseline.device {
         warnings.push(format!(
@@ -157,27 +234,42 @@ pub fn compare(current: &BenchReport, baseline: &BenchReport) -> BaselineCompari
         }
     }
 
-    let current_rows = rows(current);
-    let baseline_rows = rows(baseline);
+    let wanted = |r: &MetricRow| metrics.contains(&r.metric);
+    let current_rows: Vec<MetricRow> = rows(current).into_iter().filter(wanted).collect();
+    let baseline_rows: Vec<MetricRow> = rows(baseline).into_iter().filter(wanted).collect();
+    let same = |a: &MetricRow, b: &MetricRow| a.key == b.key && a.metric == b.metric;
     let mut matched = Vec::new();
     let mut new = Vec::new();
-    for (key, current_ms) in &current_rows {
-        match baseline_rows.iter().find(|(k, _)| k == key) {
-            Some((_, baseline_ms)) => matched.push(RatioRow {
-                key: key.clone(),
-                baseline_ms: *baseline_ms,
-                current_ms: *current_ms,
-                ratio: (*baseline_ms > 0.0 && baseline_ms.is_finite() && current_ms.is_finite())
-                    .then(|| current_ms / baseline_ms),
-            }),
-            None => new.push(key.clone()),
+    for c in &current_rows {
+        match baseline_rows.iter().find(|b| same(b, c)) {
+            Some(b) => {
+                let usable = b.median > 0.0 && b.median.is_finite() && c.median.is_finite();
+                let interval = if !usable || c.samples.is_empty() {
+                    None
+                } else if b.samples.is_empty() {
+                    ratio_interval(&c.samples, &[b.median])
+                } else {
+                    ratio_interval(&c.samples, &b.samples)
+                };
+                matched.push(RatioRow {
+                    key: c.key.clone(),
+                    metric: c.metric,
+                    baseline: b.median,
+                    current: c.median,
+                    ratio: usable.then(|| c.median / b.median),
+                    interval,
+                })
+            }
+            None => new.push(c.key.clone()),
         }
     }
-    let missing = baseline_rows
-        .into_iter()
-        .filter(|(k, _)| !current_rows.iter().any(|(c, _)| c == k))
-        .map(|(k, _)| k)
+    let mut missing: Vec<RowKey> = baseline_rows
+        .iter()
+        .filter(|b| !current_rows.iter().any(|c| same(b, c)))
+        .map(|b| b.key.clone())
         .collect();
+    missing.dedup();
+    new.dedup();
     BaselineComparison {
         rows: matched,
         missing,

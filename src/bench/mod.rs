@@ -10,10 +10,10 @@
 pub mod baseline;
 pub mod report;
 
-pub use baseline::{compare, BaselineComparison, RatioRow, RowKey};
+pub use baseline::{compare, BaselineComparison, RatioRow, RowKey, Verdict};
 pub use report::{
-    BenchReport, DeviceRecord, EmptyPassReport, PassReport, Resolution, SceneReport, CPU_FRAME,
-    FORMAT, GPU_TOTAL,
+    BenchReport, CountReport, DeviceRecord, EmptyPassReport, Metric, PassReport, Resolution,
+    SceneReport, CPU_FRAME, FORMAT, GPU_TOTAL,
 };
 
 use crate::app::{self, RenderRun, RenderSettings, RunError};
@@ -64,6 +64,13 @@ pub struct BenchSettings {
     pub frames: u32,
     pub validate: crate::vk::validation::Validation,
     pub device: Option<String>,
+    /// What to measure; time always is (see [`Metric`]).
+    pub metrics: Vec<Metric>,
+    /// Count instructions in this process, which must have been started
+    /// under callgrind by [`crate::instructions::spawn_counting_run`]:
+    /// every run counts each frame prefix instead of timing frames, and the
+    /// report's rows carry [`PassReport::instructions`].
+    pub counting: bool,
 }
 
 /// A scene to benchmark: its file, the file's hash, and the scene as
@@ -157,7 +164,11 @@ pub fn run(
         warmup: settings.warmup,
         frames: settings.frames,
         keep_hdr: false,
-        empty_pass_between_frames: true,
+        // Counted runs need no floor timed between frames: the empty
+        // pass's count does not drift.
+        empty_pass_between_frames: !settings.counting,
+        count_work: settings.metrics.contains(&Metric::Work) && !settings.counting,
+        count_instructions: settings.counting,
     };
 
     let mut device = None;
@@ -178,6 +189,9 @@ pub fn run(
         check_validation(&label, &run)?;
         let (mut passes, _, cpu_frame) = summarise(&label, &run)?;
         device.get_or_insert_with(|| DeviceRecord::from(&run.device));
+        if let Some(c) = passes.first_mut().and_then(|p| p.instructions.as_mut()) {
+            c.empty_pass_multiple = Some(1.0);
+        }
         empty_passes.push(EmptyPassReport {
             resolution,
             gpu: passes.pop(),
@@ -195,11 +209,7 @@ pub fn run(
             error,
         })?;
         check_validation(&label, &run)?;
-        let (mut passes, mut gpu_total, cpu_frame) = summarise(&label, &run)?;
-        // The floor is the empty pass timed between this scene's frames:
-        // on a CPU driver the machine's speed drifts by more than 10 %
-        // within seconds, and a floor measured in other seconds moved the
-        // ratio by up to 2x between identical runs.
+        let (passes, gpu_total, cpu_frame) = summarise(&label, &run)?;
         let between = run
             .empty_pass_frames
             .iter()
@@ -208,24 +218,15 @@ pub fn run(
         let empty_pass_between_frames = if between.is_empty() {
             None
         } else {
-            Some(PassReport {
-                name: empty_pass::PASS_NAME.to_string(),
-                ms: Summary::of(&between).ok_or_else(|| BenchError::BadSamples {
+            Some(PassReport::timed(
+                empty_pass::PASS_NAME,
+                &between,
+                Summary::of(&between).ok_or_else(|| BenchError::BadSamples {
                     run: label.clone(),
                     what: "empty pass between frames".to_string(),
                 })?,
-                empty_pass_multiple: None,
-            })
+            ))
         };
-        let floor = empty_pass_between_frames
-            .as_ref()
-            .map(|e| e.ms.median)
-            .filter(|m| *m > 0.0);
-        if let Some(floor) = floor {
-            for p in passes.iter_mut().chain(gpu_total.as_mut()) {
-                p.empty_pass_multiple = Some(p.ms.median / floor);
-            }
-        }
         reports.push(SceneReport {
             file: label,
             sha256: s.sha256.clone(),
@@ -245,7 +246,7 @@ pub fn run(
         device.get_or_insert_with(|| DeviceRecord::from(&run.device));
     }
 
-    Ok(BenchReport {
+    let mut report = BenchReport {
         format: FORMAT.to_string(),
         commit: COMMIT.to_string(),
         aerial_version: env!("CARGO_PKG_VERSION").to_string(),
@@ -267,9 +268,143 @@ pub fn run(
         warmup: settings.warmup,
         frames: settings.frames,
         validate: settings.validate.is_on(),
+        metrics: settings.metrics.clone(),
         empty_passes,
         scenes: reports,
-    })
+    };
+    set_multiples(&mut report);
+    Ok(report)
+}
+
+/// Copies the instruction counts of `counted` (a report of the same scenes
+/// from the counting run under valgrind) into `report`'s matching rows.
+pub fn merge_counts(report: &mut BenchReport, counted: &BenchReport) {
+    fn copy<'a>(to: impl Iterator<Item = &'a mut PassReport>, from: &[&PassReport]) {
+        for row in to {
+            if let Some(c) = from.iter().find(|c| c.name == row.name) {
+                row.instructions = c.instructions.clone();
+            }
+        }
+    }
+    for e in &mut report.empty_passes {
+        if let Some(c) = counted.empty_pass(e.resolution) {
+            copy(e.gpu.iter_mut(), &c.gpu.iter().collect::<Vec<_>>());
+        }
+    }
+    for s in &mut report.scenes {
+        if let Some(c) = counted.scenes.iter().find(|c| c.file == s.file) {
+            let from: Vec<&PassReport> = c.passes.iter().chain(&c.gpu_total).collect();
+            copy(s.passes.iter_mut().chain(s.gpu_total.as_mut()), &from);
+        }
+    }
+    if !report.metrics.contains(&Metric::Instructions) {
+        report.metrics.push(Metric::Instructions);
+    }
+}
+
+/// One report of several runs of the same benchmark (the rounds of
+/// `--against`): each row's frames pooled and its summaries and multiples
+/// computed again from them. The first report gives everything else.
+pub fn pool(reports: &[BenchReport]) -> Result<BenchReport, BenchError> {
+    let Some(first) = reports.first() else {
+        return Err(BenchError::NoFrames);
+    };
+    let mut out = first.clone();
+    let pool_row = |row: &mut PassReport, from: Vec<&PassReport>| {
+        let times: Vec<f64> = from.iter().flat_map(|r| r.samples_ms.clone()).collect();
+        if let Some(ms) = Summary::of(&times) {
+            row.ms = ms;
+            row.samples_ms = times;
+        }
+        let counts: Vec<u64> = from
+            .iter()
+            .filter_map(|r| r.instructions.as_ref())
+            .flat_map(|c| c.samples.clone())
+            .collect();
+        if row.instructions.is_some() {
+            row.instructions = CountReport::of(counts);
+        }
+    };
+    for e in &mut out.empty_passes {
+        let theirs: Vec<&EmptyPassReport> = reports
+            .iter()
+            .filter_map(|r| r.empty_pass(e.resolution))
+            .collect();
+        if let Some(gpu) = e.gpu.as_mut() {
+            pool_row(gpu, theirs.iter().filter_map(|t| t.gpu.as_ref()).collect());
+            if let Some(c) = gpu.instructions.as_mut() {
+                c.empty_pass_multiple = Some(1.0);
+            }
+        }
+        pool_row(
+            &mut e.cpu_frame,
+            theirs.iter().map(|t| &t.cpu_frame).collect(),
+        );
+    }
+    for s in &mut out.scenes {
+        let theirs: Vec<&SceneReport> = reports
+            .iter()
+            .filter_map(|r| r.scenes.iter().find(|t| t.file == s.file))
+            .collect();
+        for row in s
+            .passes
+            .iter_mut()
+            .chain(s.gpu_total.as_mut())
+            .chain(std::iter::once(&mut s.cpu_frame))
+        {
+            let name = row.name.clone();
+            pool_row(
+                row,
+                theirs
+                    .iter()
+                    .filter_map(|t| t.rows().find(|p| p.name == name))
+                    .collect(),
+            );
+        }
+        if let Some(floor) = s.empty_pass_between_frames.as_mut() {
+            pool_row(
+                floor,
+                theirs
+                    .iter()
+                    .filter_map(|t| t.empty_pass_between_frames.as_ref())
+                    .collect(),
+            );
+        }
+    }
+    set_multiples(&mut out);
+    Ok(out)
+}
+
+/// Each scene row's multiples of the empty pass: its median time over the
+/// median of the empty pass timed between its frames, its median count
+/// over the empty pass's count at its resolution. The time floor is timed
+/// between the scene's frames because on a CPU driver the machine's speed
+/// drifts by more than 10 % within seconds, and a floor measured in other
+/// seconds moved the ratio by up to 2x between identical runs; counts do
+/// not drift.
+fn set_multiples(report: &mut BenchReport) {
+    for s in &mut report.scenes {
+        let floor = s
+            .empty_pass_between_frames
+            .as_ref()
+            .map(|e| e.ms.median)
+            .filter(|m| *m > 0.0);
+        let count_floor = report
+            .empty_passes
+            .iter()
+            .find(|e| e.resolution == s.resolution)
+            .and_then(|e| e.gpu.as_ref()?.instructions.as_ref())
+            .map(|c| c.summary.median)
+            .filter(|m| *m > 0.0);
+        for p in s.passes.iter_mut().chain(s.gpu_total.as_mut()) {
+            if let Some(floor) = floor {
+                p.empty_pass_multiple = Some(p.ms.median / floor);
+            }
+            if let (Some(floor), Some(c)) = (count_floor, p.instructions.as_mut()) {
+                c.empty_pass_multiple = Some(c.summary.median / floor);
+            }
+        }
+    }
 }
 
 fn check_validation(label: &str, run: &RenderRun) -> Result<(), BenchError> {
@@ -280,7 +415,8 @@ fn check_validation(label: &str, run: &RenderRun) -> Result<(), BenchError> {
 }
 
 /// Per-pass GPU rows, the GPU total row (both only with timestamps) and
-/// the CPU frame row of one run.
+/// the CPU frame row of one run, with their work and instruction counts
+/// when the run took them.
 fn summarise(
     label: &str,
     run: &RenderRun,
@@ -289,28 +425,63 @@ fn summarise(
         run: label.to_string(),
         what: what.to_string(),
     };
-    let pass_report = |name: &str, ms: Summary| PassReport {
-        name: name.to_string(),
-        ms,
-        empty_pass_multiple: None,
+    let column = |i: usize| -> Vec<f64> {
+        run.frames
+            .iter()
+            .filter_map(|f| f.pass_ms.get(i).copied())
+            .collect()
     };
     let gpu = summarise_passes(&run.passes, run.frames.iter().map(|f| f.pass_ms.as_slice()))
         .map_err(|e| match e {
             PassTimesError::Pass(name) => bad(&name),
             PassTimesError::Total => bad(GPU_TOTAL),
         })?;
-    let (passes, gpu_total) = match gpu {
-        Some(gpu) => (
-            gpu.passes
-                .iter()
-                .map(|(name, ms)| pass_report(name, *ms))
-                .collect(),
-            Some(pass_report(GPU_TOTAL, gpu.total)),
-        ),
+    let (mut passes, mut gpu_total) = match gpu {
+        Some(gpu) => {
+            let totals: Vec<f64> = run.frames.iter().map(|f| f.pass_ms.iter().sum()).collect();
+            (
+                gpu.passes
+                    .iter()
+                    .enumerate()
+                    .map(|(i, (name, ms))| PassReport::timed(name, &column(i), *ms))
+                    .collect::<Vec<_>>(),
+                Some(PassReport::timed(GPU_TOTAL, &totals, gpu.total)),
+            )
+        }
         None => (Vec::new(), None),
     };
+    // Pipeline statistics are exact: every frame counts the same, so the
+    // last frame's stand for all.
+    if let Some(work) = run.frames.last().map(|f| &f.work) {
+        for (p, w) in passes.iter_mut().zip(work) {
+            p.work = Some(*w);
+        }
+    }
+    if !run.instruction_frames.is_empty() {
+        let per_pass: Vec<Vec<u64>> = run
+            .instruction_frames
+            .iter()
+            .map(|prefixes| crate::instructions::pass_counts(prefixes))
+            .collect();
+        for (i, p) in passes.iter_mut().enumerate() {
+            p.instructions =
+                CountReport::of(per_pass.iter().filter_map(|f| f.get(i).copied()).collect());
+        }
+        if let Some(total) = gpu_total.as_mut() {
+            total.instructions = CountReport::of(
+                run.instruction_frames
+                    .iter()
+                    .filter_map(|f| f.last().copied())
+                    .collect(),
+            );
+        }
+    }
     let cpu: Vec<f64> = run.frames.iter().map(|f| f.cpu_ms).collect();
-    let cpu_frame = pass_report(CPU_FRAME, Summary::of(&cpu).ok_or_else(|| bad(CPU_FRAME))?);
+    let cpu_frame = PassReport::timed(
+        CPU_FRAME,
+        &cpu,
+        Summary::of(&cpu).ok_or_else(|| bad(CPU_FRAME))?,
+    );
     Ok((passes, gpu_total, cpu_frame))
 }
 

@@ -42,6 +42,10 @@ pub struct BenchReport {
     pub frames: u32,
     /// Whether the validation layer was on (which slows everything down).
     pub validate: bool,
+    /// What was measured beyond time; reports from before this field
+    /// measured time only.
+    #[serde(default = "only_time")]
+    pub metrics: Vec<Metric>,
     /// The empty pass at each resolution the scenes use.
     pub empty_passes: Vec<EmptyPassReport>,
     pub scenes: Vec<SceneReport>,
@@ -94,18 +98,97 @@ impl fmt::Display for Resolution {
     }
 }
 
-/// One timed row: a pass, or a whole-frame total.
+/// What a benchmark measures (`--metric`). Time is always measured; the
+/// others are asked for.
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize, clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Metric {
+    /// GPU time per pass (timestamps) and CPU time per frame.
+    Time,
+    /// CPU instructions the driver executes per pass, counted under
+    /// valgrind (CPU drivers only).
+    Instructions,
+    /// Pipeline statistics per pass: primitives, vertex, fragment and
+    /// compute invocations (exact on any device with the queries).
+    Work,
+}
+
+fn only_time() -> Vec<Metric> {
+    vec![Metric::Time]
+}
+
+/// One measured row: a pass, or a whole-frame total.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PassReport {
     /// The pass name (`opaque`, `tonemap`, ...), [`GPU_TOTAL`] or
     /// [`CPU_FRAME`].
     pub name: String,
-    /// Per-frame times in milliseconds.
+    /// Per-frame times in milliseconds, with the median's 95 % interval.
     pub ms: Summary,
     /// Median time divided by the empty pass's median GPU time at the same
     /// resolution (for a scene, the one timed between its frames); `None`
     /// for CPU rows or without timestamps.
     pub empty_pass_multiple: Option<f64>,
+    /// Every measured frame's time, in frame order, for intervals of ratios
+    /// (`--compare`, `--against`); absent in older reports.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub samples_ms: Vec<f64>,
+    /// Instructions per frame (`--metric instructions`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub instructions: Option<CountReport>,
+    /// Pipeline statistics per frame (`--metric work`): the same in every
+    /// frame, so one set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub work: Option<crate::vk::PipelineStats>,
+}
+
+impl PassReport {
+    /// A row with its times and nothing else yet.
+    pub fn timed(name: &str, samples_ms: &[f64], ms: Summary) -> PassReport {
+        PassReport {
+            name: name.to_string(),
+            ms,
+            empty_pass_multiple: None,
+            samples_ms: samples_ms.to_vec(),
+            instructions: None,
+            work: None,
+        }
+    }
+}
+
+/// A row's instruction counts over the measured frames.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CountReport {
+    /// Every frame's count, in frame order.
+    pub samples: Vec<u64>,
+    /// Their summary, with the median's 95 % interval.
+    pub summary: Summary,
+    /// `max / min - 1` over the frames: how well the count repeats.
+    pub spread: f64,
+    /// The median divided by the empty pass's median count at the same
+    /// resolution.
+    pub empty_pass_multiple: Option<f64>,
+}
+
+impl CountReport {
+    /// `None` for no samples.
+    pub fn of(samples: Vec<u64>) -> Option<CountReport> {
+        let as_f64: Vec<f64> = samples.iter().map(|&n| n as f64).collect();
+        let summary = Summary::of(&as_f64)?;
+        let spread = if summary.min > 0.0 {
+            summary.max / summary.min - 1.0
+        } else {
+            0.0
+        };
+        Some(CountReport {
+            samples,
+            summary,
+            spread,
+            empty_pass_multiple: None,
+        })
+    }
 }
 
 /// The empty pass (the driver's floor) at one resolution.

@@ -2,6 +2,7 @@
 //! Vulkan needed).
 
 use super::*;
+use crate::bench::baseline::Verdict;
 use std::collections::BTreeMap;
 
 fn summary(median: f64) -> Summary {
@@ -9,11 +10,7 @@ fn summary(median: f64) -> Summary {
 }
 
 fn row(name: &str, median: f64) -> PassReport {
-    PassReport {
-        name: name.into(),
-        ms: summary(median),
-        empty_pass_multiple: None,
-    }
+    PassReport::timed(name, &[], summary(median))
 }
 
 fn report() -> BenchReport {
@@ -36,6 +33,7 @@ fn report() -> BenchReport {
         warmup: 1,
         frames: 3,
         validate: false,
+        metrics: vec![Metric::Time],
         empty_passes: vec![EmptyPassReport {
             resolution,
             gpu: Some(row("empty", 0.5)),
@@ -100,7 +98,7 @@ fn other_formats_are_rejected_naming_the_field() {
 #[test]
 fn comparing_with_itself_gives_ratio_one_everywhere() {
     let r = report();
-    let c = compare(&r, &r);
+    let c = compare(&r, &r, &[Metric::Time]);
     assert_eq!(c.rows.len(), 2 + 4);
     assert!(c.rows.iter().all(|row| row.ratio == Some(1.0)));
     assert!(c.missing.is_empty() && c.new.is_empty() && c.warnings.is_empty());
@@ -112,7 +110,7 @@ fn a_slower_pass_exceeds_the_ratio() {
     let baseline = report();
     let mut current = report();
     current.scenes[0].passes[0].ms = summary(3.0);
-    let c = compare(&current, &baseline);
+    let c = compare(&current, &baseline, &[Metric::Time]);
     let slow = c.exceeding(1.2);
     assert_eq!(slow.len(), 1);
     assert_eq!(slow[0].key.scene, "a.toml");
@@ -125,7 +123,7 @@ fn missing_and_new_passes_are_listed() {
     let baseline = report();
     let mut current = report();
     current.scenes[0].passes[1].name = "transparent".into();
-    let c = compare(&current, &baseline);
+    let c = compare(&current, &baseline, &[Metric::Time]);
     let key = |pass: &str| RowKey {
         scene: "a.toml".into(),
         pass: pass.into(),
@@ -143,7 +141,7 @@ fn device_resolution_and_knob_changes_are_warnings() {
     current.scenes[0]
         .knobs
         .insert("shading".into(), "toon".into());
-    let c = compare(&current, &baseline);
+    let c = compare(&current, &baseline, &[Metric::Time]);
     let all = c.warnings.join("\n");
     assert!(all.contains("device differs"), "{all}");
     assert!(all.contains("resolution differs"), "{all}");
@@ -156,10 +154,92 @@ fn device_resolution_and_knob_changes_are_warnings() {
 fn a_zero_baseline_has_no_ratio_and_never_fails() {
     let mut baseline = report();
     baseline.scenes[0].passes[1].ms = Summary::of(&[0.0]).unwrap();
-    let c = compare(&report(), &baseline);
+    let c = compare(&report(), &baseline, &[Metric::Time]);
     let tonemap = c.rows.iter().find(|r| r.key.pass == "tonemap").unwrap();
     assert_eq!(tonemap.ratio, None);
     assert!(c.exceeding(1.0).is_empty());
+}
+
+/// A row with these frame times.
+fn sampled(name: &str, samples: &[f64]) -> PassReport {
+    PassReport::timed(name, samples, Summary::of(samples).expect("finite"))
+}
+
+/// Frame times around `centre` with a ±`spread` fraction of wobble.
+fn wobbly(centre: f64, spread: f64, n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|i| centre * (1.0 + spread * ((i * 7 % 11) as f64 / 5.0 - 1.0)))
+        .collect()
+}
+
+#[test]
+fn the_gate_decides_on_the_interval_not_the_point() {
+    let mut baseline = report();
+    baseline.scenes[0].passes[0] = sampled("opaque", &wobbly(2.0, 0.2, 30));
+    let verdict = |current_samples: Vec<f64>| {
+        let mut current = report();
+        current.scenes[0].passes[0] = sampled("opaque", &current_samples);
+        let c = compare(&current, &baseline, &[Metric::Time]);
+        let row = c
+            .rows
+            .iter()
+            .find(|r| r.key.pass == "opaque")
+            .unwrap()
+            .clone();
+        (row.verdict(1.25), row)
+    };
+    // Twice as slow: the whole interval lies above 1.25.
+    let (v, row) = verdict(wobbly(4.0, 0.2, 30));
+    assert_eq!(v, Verdict::Fail, "{row:?}");
+    // The same distribution: the interval holds 1 and stays below 1.25.
+    let (v, row) = verdict(wobbly(2.0, 0.2, 30));
+    assert_eq!(v, Verdict::Pass, "{row:?}");
+    // 25 % slower with ±20 % wobble: the point is at the limit, the
+    // interval straddles it.
+    let (v, row) = verdict(wobbly(2.5, 0.2, 30));
+    assert_eq!(v, Verdict::Inconclusive, "{row:?}");
+    let i = row.interval.unwrap();
+    assert!(i.low < 1.25 && 1.25 < i.high, "{i}");
+}
+
+#[test]
+fn instruction_rows_are_compared_only_when_asked_for() {
+    let mut baseline = report();
+    let mut current = report();
+    baseline.scenes[0].passes[0].instructions = CountReport::of(vec![1_000_000; 5]);
+    current.scenes[0].passes[0].instructions = CountReport::of(vec![1_030_000; 5]);
+    let time_only = compare(&current, &baseline, &[Metric::Time]);
+    assert!(time_only.rows.iter().all(|r| r.metric == Metric::Time));
+    let c = compare(&current, &baseline, &[Metric::Instructions]);
+    assert_eq!(c.rows.len(), 1);
+    let row = &c.rows[0];
+    assert_eq!(row.metric, Metric::Instructions);
+    assert!((row.ratio.unwrap() - 1.03).abs() < 1e-12);
+    // Exact counts: the interval is the point, so a 2 % gate is decisive.
+    assert_eq!(row.verdict(1.02), Verdict::Fail);
+    assert_eq!(row.verdict(1.04), Verdict::Pass);
+}
+
+#[test]
+fn reports_without_samples_or_metrics_still_load() {
+    // A report as written before samples, intervals and metrics existed.
+    let mut old = serde_json::to_value(report()).unwrap();
+    old.as_object_mut().unwrap().remove("metrics");
+    strip_key(&mut old, "median_ci");
+    let r = BenchReport::from_json(&old.to_string(), std::path::Path::new("old.json")).unwrap();
+    assert_eq!(r.metrics, vec![Metric::Time]);
+    assert!(r.scenes[0].passes[0].ms.median_ci.is_none());
+}
+
+fn strip_key(v: &mut serde_json::Value, key: &str) {
+    match v {
+        serde_json::Value::Object(m) => {
+            m.remove(key);
+            m.values_mut().for_each(|x| strip_key(x, key));
+        }
+        serde_json::Value::Array(a) => a.iter_mut().for_each(|x| strip_key(x, key)),
+        _ => {}
+    }
 }
 
 #[test]

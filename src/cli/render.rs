@@ -71,6 +71,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             frames: args.frames,
             keep_hdr: args.hdr.is_some(),
             empty_pass_between_frames: false,
+            ..Default::default()
         },
     )
     .with_context(|| format!("rendering {scene_name} failed"))?;

@@ -93,6 +93,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         frames,
         keep_hdr,
         empty_pass_between_frames: false,
+        ..Default::default()
     };
     let render = |scene: &Scene, job: Job| -> anyhow::Result<Rendered> {
         let (warmup, frames, keep_hdr) = match job {

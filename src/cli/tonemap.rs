@@ -54,6 +54,7 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
             frames: 1,
             keep_hdr: false,
             empty_pass_between_frames: false,
+            ..Default::default()
         },
     )
     .context("tone mapping failed")?;

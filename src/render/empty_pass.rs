@@ -34,10 +34,13 @@ pub const CONSTANT_RGBA8: [u8; 4] = [64, 128, 191, 255];
 /// drop in declaration order: command buffer first, context last.
 pub struct EmptyPass {
     frame: TimedFrame,
+    /// The same frame without the draw, recorded on first use by
+    /// `PrefixFrames::render_prefix`.
+    without_draw: Option<TimedFrame>,
     readback: Buffer,
-    _pipeline: GraphicsPipeline,
+    pipeline: GraphicsPipeline,
     _layout: PipelineLayout,
-    _render_pass: GraphRenderPass,
+    render_pass: GraphRenderPass,
     width: u32,
     height: u32,
     ctx: Arc<Context>,
@@ -89,22 +92,15 @@ impl EmptyPass {
         )?;
         // Recorded like the scene renderer's frame: one timestamp on each
         // side of the render pass.
-        let frame = TimedFrame::begin(ctx, 1)?;
-        let cmd = frame.cmd();
-        cmd.begin_render_pass(&render_pass);
-        cmd.bind_pipeline(&pipeline);
-        cmd.draw(3);
-        cmd.end_render_pass(&render_pass);
-        frame.stamp();
-        cmd.copy_image_to_buffer(&render_pass.images[0], &readback);
-        let frame = frame.finish()?;
+        let frame = record(ctx, &render_pass, &pipeline, &readback, true)?;
 
         Ok(EmptyPass {
             frame,
+            without_draw: None,
             readback,
-            _pipeline: pipeline,
+            pipeline,
             _layout: layout,
-            _render_pass: render_pass,
+            render_pass,
             width,
             height,
             ctx: ctx.clone(),
@@ -128,9 +124,58 @@ impl EmptyPass {
     }
 }
 
+impl super::PrefixFrames for EmptyPass {
+    fn pass_count(&self) -> usize {
+        1
+    }
+
+    /// Like `Renderer::render_prefix` for this one-pass frame: 0 submits
+    /// the frame without its draw (the render pass begun and ended, the
+    /// copy out), 1 the whole frame.
+    fn render_prefix(&mut self, recorded: usize) -> Result<FrameTiming, RenderError> {
+        if recorded >= 1 {
+            return self.frame.submit();
+        }
+        if self.without_draw.is_none() {
+            self.without_draw = Some(record(
+                &self.ctx,
+                &self.render_pass,
+                &self.pipeline,
+                &self.readback,
+                false,
+            )?);
+        }
+        self.without_draw.as_mut().expect("recorded above").submit()
+    }
+}
+
 impl Drop for EmptyPass {
     fn drop(&mut self) {
         // As for the renderer: nothing may be pending when resources go.
         let _ = self.ctx.wait_idle();
     }
+}
+
+/// The empty pass's frame: the render pass with one full-screen draw (or,
+/// without `draw`, none), timed, then copied out.
+fn record(
+    ctx: &Arc<Context>,
+    render_pass: &GraphRenderPass,
+    pipeline: &GraphicsPipeline,
+    readback: &Buffer,
+    draw: bool,
+) -> Result<TimedFrame, RenderError> {
+    let frame = TimedFrame::begin(ctx, 1)?;
+    let cmd = frame.cmd();
+    cmd.begin_render_pass(render_pass);
+    frame.begin_pass();
+    if draw {
+        cmd.bind_pipeline(pipeline);
+        cmd.draw(3);
+    }
+    frame.end_pass();
+    cmd.end_render_pass(render_pass);
+    frame.stamp();
+    cmd.copy_image_to_buffer(&render_pass.images[0], readback);
+    frame.finish()
 }

@@ -22,6 +22,7 @@ pub mod sky_resources;
 pub mod tiles;
 
 pub use empty_pass::EmptyPass;
+pub use frame::PrefixFrames;
 pub use geometry::SceneGeometry;
 pub use plan::{FramePlan, SUBPASS_TIMING_NOTE};
 pub use reference::{render_reference, ReferenceError};
@@ -60,4 +61,6 @@ pub enum RenderError {
     Input { path: PathBuf, reason: String },
     #[error("size {width}x{height}: each side must be in 1..={max}", max = crate::scene::MAX_OUTPUT_SIZE)]
     Size { width: u32, height: u32 },
+    #[error(transparent)]
+    Count(#[from] crate::instructions::CountError),
 }

@@ -25,6 +25,9 @@ pub struct FrameTiming {
     pub pass_ms: Vec<f64>,
     /// CPU time from submit to fence signalled, in milliseconds.
     pub cpu_ms: f64,
+    /// Pipeline statistics per pass (in `FramePlan::passes` order); empty
+    /// unless the context counts them.
+    pub work: Vec<crate::vk::PipelineStats>,
 }
 
 /// A read-back image, row-major, top row first, RGBA.
@@ -55,6 +58,9 @@ pub enum ViewChange {
 /// attachments, and the context (inside each wrapper) last.
 pub struct Renderer {
     frame: TimedFrame,
+    /// The frame's prefixes, recorded on first use by
+    /// `PrefixFrames::render_prefix`: element k records the first k passes.
+    prefixes: Vec<TimedFrame>,
     passes: Vec<Box<dyn RecordPass>>,
     scene_resources: Option<SceneResources>,
     sky_resources: Option<SkyResources>,
@@ -131,14 +137,12 @@ impl Renderer {
             }
             _ => None,
         };
-        let frame_resources = FrameResources {
-            attachments: Attachments {
-                names: plan.attachments.iter().map(|a| a.name).collect(),
-                images: render_pass.as_ref().map_or(&[], |p| p.images.as_slice()),
-            },
-            scene: scene_resources.as_ref(),
-            sky: sky_resources.as_ref(),
-        };
+        let frame_resources = frame_resources(
+            &plan,
+            render_pass.as_ref(),
+            scene_resources.as_ref(),
+            sky_resources.as_ref(),
+        );
 
         // Create every pass, numbering the subpasses in plan order.
         let mut passes = Vec::with_capacity(plan.passes.len());
@@ -160,11 +164,19 @@ impl Renderer {
             }
         }
 
-        let frame = record(ctx, &plan, &passes, render_pass.as_ref(), &frame_resources)?;
+        let frame = record(
+            ctx,
+            &plan,
+            &passes,
+            render_pass.as_ref(),
+            &frame_resources,
+            usize::MAX,
+        )?;
         drop(frame_resources);
 
         Ok(Renderer {
             frame,
+            prefixes: Vec::new(),
             passes,
             scene_resources,
             sky_resources,
@@ -209,25 +221,22 @@ impl Renderer {
             } else {
                 // Only the draw order changed: record the frame again with
                 // the same pipelines, buffers and attachments.
-                let frame_resources = FrameResources {
-                    attachments: Attachments {
-                        names: plan.attachments.iter().map(|a| a.name).collect(),
-                        images: self
-                            .render_pass
-                            .as_ref()
-                            .map_or(&[], |p| p.images.as_slice()),
-                    },
-                    scene: self.scene_resources.as_ref(),
-                    sky: self.sky_resources.as_ref(),
-                };
+                let frame_resources = frame_resources(
+                    &plan,
+                    self.render_pass.as_ref(),
+                    self.scene_resources.as_ref(),
+                    self.sky_resources.as_ref(),
+                );
                 let frame = record(
                     &self.ctx,
                     &plan,
                     &self.passes,
                     self.render_pass.as_ref(),
                     &frame_resources,
+                    usize::MAX,
                 )?;
                 drop(frame_resources);
+                self.prefixes.clear();
                 // The old command buffer is not pending: render_frame
                 // waited for it.
                 self.frame = frame;
@@ -320,6 +329,47 @@ impl Renderer {
     }
 }
 
+impl super::PrefixFrames for Renderer {
+    fn pass_count(&self) -> usize {
+        self.plan.passes.len()
+    }
+
+    /// Submits the frame with only its first `recorded` passes and waits
+    /// for it; `recorded` = [`Self::pass_count`] is the whole frame. The
+    /// difference between the work of prefixes k+1 and k is the work of
+    /// pass k, wherever the driver did it (a CPU driver bins draws and may
+    /// rasterise them only at the end of the render pass). The prefixes
+    /// are recorded on the first call.
+    fn render_prefix(&mut self, recorded: usize) -> Result<FrameTiming, RenderError> {
+        if recorded >= self.pass_count() {
+            return self.frame.submit();
+        }
+        if self.prefixes.is_empty() {
+            let frame_resources = frame_resources(
+                &self.plan,
+                self.render_pass.as_ref(),
+                self.scene_resources.as_ref(),
+                self.sky_resources.as_ref(),
+            );
+            let prefixes = (0..self.pass_count())
+                .map(|k| {
+                    record(
+                        &self.ctx,
+                        &self.plan,
+                        &self.passes,
+                        self.render_pass.as_ref(),
+                        &frame_resources,
+                        k,
+                    )
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            drop(frame_resources);
+            self.prefixes = prefixes;
+        }
+        self.prefixes[recorded].submit()
+    }
+}
+
 impl Drop for Renderer {
     fn drop(&mut self) {
         // Nothing may be pending when the resources go; render_frame always
@@ -331,12 +381,19 @@ impl Drop for Renderer {
 /// Records the frame once; every submission replays it. The render pass
 /// begins before the first subpass and ends right after the last, before
 /// that pass's closing timestamp.
+///
+/// Only the first `recorded` passes record their commands; the later ones
+/// keep their place (their subpass is still begun, their timestamps still
+/// written) but do nothing. A frame of all passes is the frame; the shorter
+/// ones are the prefixes whose differences give each pass's instruction
+/// count (see `PrefixFrames::render_prefix`).
 fn record(
     ctx: &Arc<Context>,
     plan: &FramePlan,
     passes: &[Box<dyn RecordPass>],
     render_pass: Option<&GraphRenderPass>,
     frame_resources: &FrameResources<'_>,
+    recorded: usize,
 ) -> Result<TimedFrame, RenderError> {
     let frame = TimedFrame::begin(ctx, plan.passes.len() as u32)?;
     let cmd = frame.cmd();
@@ -350,7 +407,11 @@ fn record(
                 in_render_pass = true;
             }
         }
-        pass.record(cmd, frame_resources)?;
+        frame.begin_pass();
+        if i < recorded {
+            pass.record(cmd, frame_resources)?;
+        }
+        frame.end_pass();
         let next_is_subpass = plan.passes.get(i + 1).is_some_and(|d| d.is_subpass());
         if let (true, false, Some(rp)) = (in_render_pass, next_is_subpass, render_pass) {
             cmd.end_render_pass(rp);
@@ -359,6 +420,23 @@ fn record(
         frame.stamp();
     }
     frame.finish()
+}
+
+/// What the passes record against, from the renderer's parts.
+fn frame_resources<'a>(
+    plan: &FramePlan,
+    render_pass: Option<&'a GraphRenderPass>,
+    scene: Option<&'a SceneResources>,
+    sky: Option<&'a SkyResources>,
+) -> FrameResources<'a> {
+    FrameResources {
+        attachments: Attachments {
+            names: plan.attachments.iter().map(|a| a.name).collect(),
+            images: render_pass.map_or(&[], |p| p.images.as_slice()),
+        },
+        scene,
+        sky,
+    }
 }
 
 /// What of a draw the recorded commands depend on: everything but the

@@ -267,6 +267,7 @@ fn fake_render(scene: &Scene, job: Job) -> Result<Rendered, String> {
             .map(|i| FrameTiming {
                 pass_ms: vec![tris as f64 / 100.0 + i as f64 * 0.01, 1.0],
                 cpu_ms: 1.0,
+                work: Vec::new(),
             })
             .collect(),
         output: Pixels {

@@ -146,6 +146,7 @@ mod tests {
                 &FrameTiming {
                     pass_ms: vec![ms, 1.0],
                     cpu_ms: 2.0,
+                    work: Vec::new(),
                 },
                 0.5,
             );

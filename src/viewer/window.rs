@@ -259,6 +259,7 @@ impl App {
             validate: self.options.validate,
             device: self.options.device.clone(),
             display: Some(display),
+            ..Default::default()
         })?;
         self.log = ctx.validation_log();
         preflight::scene_on_device(&scene, &ctx)?;

@@ -7,7 +7,7 @@ use super::descriptors::DescriptorSet;
 use super::image::ImageState;
 use super::{
     Buffer, ComputePipeline, Context, GraphRenderPass, GraphicsPipeline, Image, PipelineLayout,
-    TimestampQueries, VkError,
+    PipelineStatsQueries, TimestampQueries, VkError,
 };
 use ash::vk;
 use std::sync::Arc;
@@ -686,6 +686,41 @@ impl CommandBuffer {
             self.ctx
                 .device
                 .cmd_reset_query_pool(self.handle, queries.pool, 0, queries.capacity)
+        };
+    }
+
+    /// Resets every pipeline-statistics query of `queries`.
+    pub fn reset_stats_queries(&self, queries: &PipelineStatsQueries) {
+        // SAFETY: recording outside a render pass.
+        unsafe {
+            self.ctx
+                .device
+                .cmd_reset_query_pool(self.handle, queries.pool, 0, queries.capacity)
+        };
+    }
+
+    /// Begins counting pipeline statistics into query `index`.
+    pub fn begin_stats_query(&self, queries: &PipelineStatsQueries, index: u32) {
+        // SAFETY: recording; index < capacity, reset in this buffer and not
+        // active; the caller ends it in the same subpass.
+        unsafe {
+            self.ctx.device.cmd_begin_query(
+                self.handle,
+                queries.pool,
+                index,
+                vk::QueryControlFlags::empty(),
+            )
+        };
+    }
+
+    /// Ends query `index`, begun by [`Self::begin_stats_query`].
+    pub fn end_stats_query(&self, queries: &PipelineStatsQueries, index: u32) {
+        // SAFETY: recording; the query is active and was begun in this
+        // subpass (or outside any render pass, as now).
+        unsafe {
+            self.ctx
+                .device
+                .cmd_end_query(self.handle, queries.pool, index)
         };
     }
 

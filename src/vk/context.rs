@@ -29,6 +29,9 @@ pub struct ContextOptions {
     /// `VK_KHR_swapchain` (see [`super::Surface`]). `None` for headless
     /// runs, which enable neither.
     pub display: Option<raw_window_handle::RawDisplayHandle>,
+    /// Enable pipeline-statistics queries ([`super::PipelineStatsQueries`]);
+    /// a device without them is refused.
+    pub pipeline_statistics: bool,
 }
 
 /// What identifies the device an output came from; recorded with every
@@ -43,6 +46,9 @@ pub struct DeviceInfo {
     pub api_version: String,
     pub timestamp_period_ns: f32,
     pub timestamp_valid_bits: u32,
+    /// A CPU implementation (lavapipe, llvmpipe, SwiftShader): its "GPU"
+    /// work is the host's instructions, which can be counted.
+    pub cpu: bool,
 }
 
 /// The Vulkan instance, device and allocator, owned together.
@@ -58,6 +64,8 @@ pub struct Context {
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
     pub(crate) limits: vk::PhysicalDeviceLimits,
     info: DeviceInfo,
+    /// Created with [`ContextOptions::pipeline_statistics`].
+    pipeline_statistics: bool,
     validation_log: Option<Arc<ValidationLog>>,
     // Released after Drop::drop destroyed the device and the instance.
     _layer_hold: Option<validation::LayerHold>,
@@ -175,6 +183,12 @@ impl Context {
         &self.info
     }
 
+    /// Whether frames count each pass's pipeline statistics (the context
+    /// was created with [`ContextOptions::pipeline_statistics`]).
+    pub fn pipeline_statistics(&self) -> bool {
+        self.pipeline_statistics
+    }
+
     /// The validation messages counted so far; `None` without `--validate`.
     pub fn validation_log(&self) -> Option<Arc<ValidationLog>> {
         self.validation_log.clone()
@@ -250,11 +264,19 @@ impl PartialInstance {
             .queue_priorities(&priorities)];
         // Features to enable must be chosen from what the device reports
         // (best-practices validation warns when vkCreateDevice comes
-        // without this query). The renderer uses no optional feature, so
-        // it enables none of them whatever the device supports.
+        // without this query). The only optional feature used is
+        // pipeline-statistics queries, and only when asked for (`bench
+        // --metric work`).
         // SAFETY: valid physical device of this instance.
-        let _supported = unsafe { instance.get_physical_device_features(physical_device) };
-        let features = vk::PhysicalDeviceFeatures::default();
+        let supported = unsafe { instance.get_physical_device_features(physical_device) };
+        if options.pipeline_statistics && supported.pipeline_statistics_query == vk::FALSE {
+            return Err(VkError::Unsupported(format!(
+                "{}: no pipeline-statistics queries (needed for --metric work)",
+                c_chars(&props.device_name)
+            )));
+        }
+        let features = vk::PhysicalDeviceFeatures::default()
+            .pipeline_statistics_query(options.pipeline_statistics);
         let device_extensions: Vec<*const c_char> = if options.display.is_some() {
             vec![ash::khr::swapchain::NAME.as_ptr()]
         } else {
@@ -306,6 +328,7 @@ impl PartialInstance {
             ),
             timestamp_period_ns: props.limits.timestamp_period,
             timestamp_valid_bits: queue_props[queue_family as usize].timestamp_valid_bits,
+            cpu: props.device_type == vk::PhysicalDeviceType::CPU,
         };
         log::info!(
             "device: {} ({} {}), Vulkan {}",
@@ -326,6 +349,7 @@ impl PartialInstance {
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             limits: props.limits,
             info,
+            pipeline_statistics: options.pipeline_statistics,
             validation_log: self.validation_log.clone(),
             _layer_hold: self.layer_hold.take(),
         }))

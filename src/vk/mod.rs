@@ -29,7 +29,7 @@ pub use pipeline::{
     Blend, ComputePipeline, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, ShaderModule,
     VertexAttribute,
 };
-pub use query::TimestampQueries;
+pub use query::{PipelineStats, PipelineStatsQueries, TimestampQueries};
 pub use render_graph::{
     AttachmentSpec, AttachmentStart, DepthUse, Framebuffer, GraphRenderPass, RenderPass,
     SubpassSpec,
@@ -76,6 +76,8 @@ pub enum VkError {
     Spirv(String),
     #[error("window surface: {0}")]
     Surface(String),
+    #[error("unsupported: {0}")]
+    Unsupported(String),
 }
 
 pub use image::{supports_linear_blits, supports_linear_sampling};

@@ -1,7 +1,9 @@
-//! GPU timestamp queries.
+//! GPU timestamp and pipeline-statistics queries.
 //!
 //! Raw ticks are masked to `timestampValidBits` (higher bits are undefined)
-//! and converted with `timestampPeriod` (nanoseconds per tick).
+//! and converted with `timestampPeriod` (nanoseconds per tick). Pipeline
+//! statistics are exact counts of the work a pass made the device do, the
+//! same on every run and every host.
 
 use super::{Context, VkError};
 use ash::vk;
@@ -72,6 +74,89 @@ pub(crate) fn intervals_ns(ticks: &[u64], valid_bits: u32, period_ns: f64) -> Ve
 }
 
 impl Drop for TimestampQueries {
+    fn drop(&mut self) {
+        // SAFETY: no pending submission uses the pool.
+        unsafe { self.ctx.device.destroy_query_pool(self.pool, None) };
+    }
+}
+
+/// What one pass made the device do, counted by a pipeline-statistics
+/// query (`bench --metric work`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct PipelineStats {
+    /// Primitives the input assembler assembled (triangles of the draws).
+    pub input_primitives: u64,
+    pub vertex_invocations: u64,
+    /// Primitives that left the clipper (what rasterisation set up).
+    pub clipped_primitives: u64,
+    pub fragment_invocations: u64,
+    pub compute_invocations: u64,
+}
+
+/// The counters asked for, in the order Vulkan writes them (ascending bit
+/// order of the flags), matching [`PipelineStats`]'s fields.
+const STATISTICS: [vk::QueryPipelineStatisticFlags; 5] = [
+    vk::QueryPipelineStatisticFlags::INPUT_ASSEMBLY_PRIMITIVES,
+    vk::QueryPipelineStatisticFlags::VERTEX_SHADER_INVOCATIONS,
+    vk::QueryPipelineStatisticFlags::CLIPPING_PRIMITIVES,
+    vk::QueryPipelineStatisticFlags::FRAGMENT_SHADER_INVOCATIONS,
+    vk::QueryPipelineStatisticFlags::COMPUTE_SHADER_INVOCATIONS,
+];
+
+/// One pipeline-statistics query per pass. Needs a context created with
+/// [`super::ContextOptions::pipeline_statistics`].
+pub struct PipelineStatsQueries {
+    ctx: Arc<Context>,
+    pub(crate) pool: vk::QueryPool,
+    pub(crate) capacity: u32,
+}
+
+impl PipelineStatsQueries {
+    pub fn new(ctx: &Arc<Context>, capacity: u32) -> Result<PipelineStatsQueries, VkError> {
+        let flags = STATISTICS
+            .iter()
+            .fold(vk::QueryPipelineStatisticFlags::empty(), |a, f| a | *f);
+        let info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::PIPELINE_STATISTICS)
+            .pipeline_statistics(flags)
+            .query_count(capacity);
+        // SAFETY: valid device; the feature was enabled at device creation
+        // (ContextOptions::pipeline_statistics), or creation fails cleanly.
+        let pool = unsafe { ctx.device.create_query_pool(&info, None) }?;
+        Ok(PipelineStatsQueries {
+            ctx: ctx.clone(),
+            pool,
+            capacity,
+        })
+    }
+
+    /// Waits for the queries and returns one [`PipelineStats`] per query.
+    pub fn read(&self) -> Result<Vec<PipelineStats>, VkError> {
+        let mut raw = vec![[0u64; STATISTICS.len()]; self.capacity as usize];
+        // SAFETY: every query was begun and ended by the submission waited for;
+        // each element holds the five counters of one query.
+        unsafe {
+            self.ctx.device.get_query_pool_results(
+                self.pool,
+                0,
+                &mut raw,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }?;
+        Ok(raw
+            .iter()
+            .map(|r| PipelineStats {
+                input_primitives: r[0],
+                vertex_invocations: r[1],
+                clipped_primitives: r[2],
+                fragment_invocations: r[3],
+                compute_invocations: r[4],
+            })
+            .collect())
+    }
+}
+
+impl Drop for PipelineStatsQueries {
     fn drop(&mut self) {
         // SAFETY: no pending submission uses the pool.
         unsafe { self.ctx.device.destroy_query_pool(self.pool, None) };

@@ -30,6 +30,7 @@ pub fn render(scene: &Scene, keep_hdr: bool) -> RenderRun {
             frames: 1,
             keep_hdr,
             empty_pass_between_frames: false,
+            ..Default::default()
         },
     )
     .unwrap_or_else(|e| panic!("render failed: {e}"));

@@ -1,0 +1,194 @@
+//! `aerial bench --metric work|instructions`: exact counts per pass, their
+//! repeatability, their sensitivity to 3 % more work, and the gate that
+//! decides on intervals. Every run is under validation.
+
+mod common;
+
+use aerial::bench::BenchReport;
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+fn triangle() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bench/triangle.toml")
+}
+
+/// `aerial bench` of the smallest scene at `width` x 48, 3 frames after 1
+/// warm-up, validated.
+fn bench(width: u32, extra: &[&str]) -> Output {
+    common::aerial()
+        .arg("bench")
+        .arg(triangle())
+        .args([
+            "--frames",
+            "3",
+            "--warmup",
+            "1",
+            "--height",
+            "48",
+            "--validate",
+        ])
+        .arg(format!("--width={width}"))
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+fn code(out: &Output) -> Option<i32> {
+    out.status.code()
+}
+
+fn show(out: &Output) -> String {
+    format!(
+        "exit {:?}\nstdout: {}\nstderr: {}",
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    )
+}
+
+fn measured(width: u32, metric: &str, json: &Path) -> BenchReport {
+    let out = bench(
+        width,
+        &[
+            &format!("--metric={metric}"),
+            "--json",
+            json.to_str().unwrap(),
+        ],
+    );
+    assert_eq!(code(&out), Some(0), "{}", show(&out));
+    BenchReport::load(json).unwrap()
+}
+
+#[test]
+fn work_counts_primitives_and_fragments_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = measured(64, "work", &dir.path().join("work.json"));
+    let pixels = 64 * 48;
+    // The empty pass: one full-screen triangle. Vulkan lets a driver count
+    // helper and partly covered invocations too, so a full-screen pass
+    // counts at least one per pixel, and not many more (lavapipe counts
+    // 12.5 % more at 64x48, 10 % at 60x48).
+    let full_screen = |n: u64| n >= pixels && n <= pixels + pixels / 4;
+    let empty = r.empty_passes[0].gpu.as_ref().unwrap().work.unwrap();
+    assert_eq!(empty.input_primitives, 1);
+    assert_eq!(empty.vertex_invocations, 3);
+    assert!(full_screen(empty.fragment_invocations), "{empty:?}");
+    let scene = &r.scenes[0];
+    let pass = |name: &str| {
+        scene
+            .passes
+            .iter()
+            .find(|p| p.name == name)
+            .unwrap_or_else(|| panic!("no pass {name}"))
+            .work
+            .unwrap()
+    };
+    // The opaque pass assembles every triangle the scene has.
+    assert_eq!(pass("opaque").input_primitives, scene.triangles);
+    assert!(pass("opaque").fragment_invocations > 0);
+    // The tone map is one full-screen triangle over every pixel.
+    assert_eq!(pass("tonemap").input_primitives, 1);
+    assert_eq!(
+        pass("tonemap").fragment_invocations,
+        empty.fragment_invocations
+    );
+    // The triangle covers part of the screen.
+    assert!(pass("opaque").fragment_invocations < pixels);
+    // A transfer pass does no shader work.
+    assert_eq!(pass("readback").fragment_invocations, 0);
+    assert_eq!(pass("readback").input_primitives, 0);
+}
+
+#[test]
+fn instruction_counts_repeat_and_see_three_percent_more_pixels() {
+    let dir = tempfile::tempdir().unwrap();
+    let base_json = dir.path().join("base.json");
+    let base = measured(64, "instructions", &base_json);
+    let scene = &base.scenes[0];
+    let total = scene
+        .gpu_total
+        .as_ref()
+        .unwrap()
+        .instructions
+        .as_ref()
+        .unwrap();
+    let mut sum = 0.0;
+    for p in &scene.passes {
+        let c = p
+            .instructions
+            .as_ref()
+            .unwrap_or_else(|| panic!("{}: no count", p.name));
+        assert_eq!(c.samples.len(), 3, "{}", p.name);
+        // Repeatable to 0.1 % from frame to frame.
+        assert!(c.spread < 1e-3, "{}: spread {}", p.name, c.spread);
+        assert!(c.empty_pass_multiple.is_some(), "{}", p.name);
+        sum += c.summary.median;
+    }
+    // The passes are differences of prefixes: with the fixed part (an
+    // empty render pass, submission, fence) they make up the frame.
+    assert!(
+        sum > 0.0 && sum < total.summary.median,
+        "{sum} vs {total:?}"
+    );
+    let tonemap = |r: &BenchReport| {
+        r.scenes[0]
+            .passes
+            .iter()
+            .find(|p| p.name == "tonemap")
+            .and_then(|p| p.instructions.clone())
+            .unwrap()
+            .summary
+            .median
+    };
+    let empty = base.empty_passes[0].gpu.as_ref().unwrap();
+    assert!(empty.instructions.as_ref().unwrap().summary.median > 0.0);
+
+    // The same build again: the gate at 2 % passes on the interval.
+    let same = bench(
+        64,
+        &[
+            "--metric=instructions",
+            "--compare",
+            base_json.to_str().unwrap(),
+            "--max-ratio",
+            "1.02",
+        ],
+    );
+    assert_eq!(code(&same), Some(0), "{}", show(&same));
+
+    // 66 x 48 is 3.1 % more pixels: the tone map (one fragment per pixel)
+    // costs at least 2 % more, and the 2 % gate fails.
+    let wider_json = dir.path().join("wider.json");
+    let wider = measured(66, "instructions", &wider_json);
+    let growth = tonemap(&wider) / tonemap(&base);
+    assert!(growth > 1.02 && growth < 1.10, "tone map grew {growth}");
+    let gate = common::aerial()
+        .args(["bench", "--from-json"])
+        .arg(&wider_json)
+        .args(["--metric=instructions", "--compare"])
+        .arg(&base_json)
+        .args(["--max-ratio", "1.02"])
+        .output()
+        .unwrap();
+    assert_eq!(code(&gate), Some(1), "{}", show(&gate));
+    assert!(String::from_utf8_lossy(&gate.stderr).contains("tonemap"));
+}
+
+#[test]
+fn a_gate_whose_interval_straddles_the_limit_is_inconclusive() {
+    // Time ratios of a run with itself hold 1, and wobble: a limit of 1.0
+    // lies inside the interval, which is neither a pass nor a failure.
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("t.json");
+    measured(64, "time", &json);
+    let gate = common::aerial()
+        .args(["bench", "--from-json"])
+        .arg(&json)
+        .arg("--compare")
+        .arg(&json)
+        .args(["--max-ratio", "1.0"])
+        .output()
+        .unwrap();
+    assert_eq!(code(&gate), Some(3), "{}", show(&gate));
+    assert!(String::from_utf8_lossy(&gate.stderr).contains("inconclusive"));
+}
