@@ -13,6 +13,14 @@ fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// A path as the repository names it.
+fn shown(path: &Path) -> String {
+    path.strip_prefix(root())
+        .unwrap_or(path)
+        .display()
+        .to_string()
+}
+
 /// `README.md` and every `docs/*.md`.
 fn documents() -> Vec<PathBuf> {
     let mut docs = vec![root().join("README.md")];
@@ -122,7 +130,7 @@ fn check_link(doc: &Path, target: &str) -> Option<String> {
         doc.parent().expect("a document's folder").join(path)
     };
     if !file.exists() {
-        return Some(format!("{} does not exist", file.display()));
+        return Some(format!("{} does not exist", shown(&file)));
     }
     let anchor = anchor?;
     if file.extension().is_none_or(|ext| ext != "md") {
@@ -132,7 +140,7 @@ fn check_link(doc: &Path, target: &str) -> Option<String> {
     if anchors(&text).contains(anchor) {
         None
     } else {
-        Some(format!("no heading with id '{anchor}' in {}", file.display()))
+        Some(format!("no heading with id '{anchor}' in {}", shown(&file)))
     }
 }
 
@@ -148,8 +156,7 @@ fn every_relative_link_and_anchor_resolves() {
             }
             checked += 1;
             if let Some(problem) = check_link(&doc, &target) {
-                let name = doc.strip_prefix(root()).unwrap_or(&doc).display();
-                broken.push(format!("{name}:{line}: ({target}): {problem}"));
+                broken.push(format!("{}:{line}: ({target}): {problem}", shown(&doc)));
             }
         }
     }
@@ -171,7 +178,8 @@ fn readme_is_short() {
 fn readme_keeps_the_ci_test_command() {
     let text = fs::read_to_string(root().join("README.md")).expect("README.md");
     assert!(
-        text.lines().any(|line| line == "./scripts/setup.sh && cargo test"),
+        text.lines()
+            .any(|line| line == "./scripts/setup.sh && cargo test"),
         "README.md lost the line CI runs: ./scripts/setup.sh && cargo test"
     );
 }
@@ -179,10 +187,16 @@ fn readme_keeps_the_ci_test_command() {
 #[test]
 fn slugs_follow_github() {
     assert_eq!(slug("Quick start"), "quick-start");
-    assert_eq!(slug("OBJ models and normal maps"), "obj-models-and-normal-maps");
+    assert_eq!(
+        slug("OBJ models and normal maps"),
+        "obj-models-and-normal-maps"
+    );
     assert_eq!(slug("Error against run time"), "error-against-run-time");
     assert_eq!(slug("What's in `docs/`?"), "whats-in-docs");
-    assert_eq!(slug("Time against error (1280×720)"), "time-against-error-1280720");
+    assert_eq!(
+        slug("Time against error (1280×720)"),
+        "time-against-error-1280720"
+    );
     let ids = anchors("# A\n## Measured\n```\n# not a heading\n```\n## Measured\n### Measured\n");
     for id in ["a", "measured", "measured-1", "measured-2"] {
         assert!(ids.contains(id), "{id} missing from {ids:?}");
