@@ -271,7 +271,7 @@ fn a_scene_without_atmosphere_has_no_atmosphere_pass() {
 }
 
 /// Error against the sample count (run with `--ignored --nocapture`): the
-/// figures behind the README's samples table.
+/// figures behind the time-against-error table in docs/atmosphere.md.
 #[test]
 #[ignore]
 fn sky_error_against_sample_count() {
@@ -285,7 +285,7 @@ fn sky_error_against_sample_count() {
 }
 
 /// Sky error against the sky-view table's size and the sample count (noon
-/// and sunset from 2 m): the figures behind the README's sky-view tables.
+/// and sunset from 2 m): the figures behind the sky-view tables in docs/atmosphere.md.
 #[test]
 #[ignore]
 fn sky_error_against_sky_view_size() {

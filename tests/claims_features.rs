@@ -188,7 +188,7 @@ fn reinhard(x: f64) -> f64 {
     x / (1.0 + x)
 }
 
-/// Narkowicz's ACES fit, as the README names it.
+/// Narkowicz's ACES fit, as docs/frame.md names it.
 fn aces(x: f64) -> f64 {
     ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
 }

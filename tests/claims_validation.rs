@@ -1,4 +1,4 @@
-//! Validation is what the README says: synchronization validation is on,
+//! Validation is what docs/regression.md says: synchronization validation is on,
 //! leaks at teardown are counted (on the error path too), best practices
 //! are checked and every scene is clean under them, and each command fails
 //! a run on a message.

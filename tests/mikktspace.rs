@@ -1,7 +1,7 @@
 //! `tangents = "mikktspace"`: MikkTSpace frames (through bevy_mikktspace)
 //! next to aerial's own. On models with continuous UVs both methods build
 //! the tangent from the same UV gradient, so they must nearly agree; the
-//! figures are printed for the README. MikkTSpace frames must be as sound as
+//! figures are printed for docs/models.md. MikkTSpace frames must be as sound as
 //! aerial's (finite, orthonormal to 1e-5) on degenerate input too.
 
 use aerial::mesh::obj::{load_obj, model_meshes, ModelOptions, TangentMethod};

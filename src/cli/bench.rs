@@ -35,8 +35,8 @@ pub struct BenchArgs {
     #[arg(long)]
     height: Option<u32>,
     /// Set a knob on every scene, NAME=VALUE (repeatable; applied after
-    /// --width/--height). An unknown NAME lists the knobs; the README's
-    /// knob table says what each does.
+    /// --width/--height). An unknown NAME lists the knobs; the knob table
+    /// in docs/scenes.md says what each does.
     #[arg(long = "knob", value_name = "NAME=VALUE")]
     knobs: Vec<String>,
     /// What to measure and gate on, comma-separated or repeated: time (GPU

@@ -173,7 +173,7 @@ impl Key {
     }
 }
 
-/// The key bindings, for `F1` and the README.
+/// The key bindings, for `F1` and docs/viewer.md.
 pub const HELP: &str = "\
 keys: W/S or Up/Down forward/back, A/D or Left/Right sideways, E/Q up/down, Shift x10 speed;
       drag with the left mouse button to look around; wheel or +/- field of view;

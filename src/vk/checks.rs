@@ -2,7 +2,7 @@
 //!
 //! A validation run that reports nothing is only evidence when the layer
 //! would have reported a mistake. The tests make one of each kind the
-//! README promises is caught (a synchronization hazard, an object leaked
+//! documentation promises is caught (a synchronization hazard, an object leaked
 //! at teardown) and assert the message arrives.
 
 use super::{Context, VkError};
