@@ -35,6 +35,9 @@ enum Command {
     Mesh(cli::mesh::MeshArgs),
     /// Convert a height map (PNG) into a tangent-space normal map.
     Normalmap(cli::normalmap::NormalMapArgs),
+    /// Write the scene `render MODEL` and `view MODEL` build around a model
+    /// file (camera, lights, materials) as a scene file to edit.
+    Scene(cli::scene::SceneArgs),
     /// Show a scene in a window: fly with WASD and the mouse, cycle knobs,
     /// watch per-pass GPU times, take screenshots (F12).
     View(cli::view::ViewArgs),
@@ -75,6 +78,7 @@ fn run(cli: Cli) -> anyhow::Result<std::process::ExitCode> {
         Command::Normalmap(args) => {
             cli::normalmap::run(args).map(|()| std::process::ExitCode::SUCCESS)
         }
+        Command::Scene(args) => cli::scene::run(args).map(|()| std::process::ExitCode::SUCCESS),
         Command::View(args) => cli::view::run(args).map(|()| std::process::ExitCode::SUCCESS),
     }
 }

@@ -51,6 +51,7 @@ fn report() -> BenchReport {
             gpu_total: Some(row(GPU_TOTAL, 3.0)),
             cpu_frame: row(CPU_FRAME, 3.5),
             empty_pass_between_frames: Some(row("empty", 0.6)),
+            asset_warnings: 1,
         }],
     }
 }

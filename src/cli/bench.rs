@@ -49,10 +49,13 @@ pub struct BenchArgs {
         long,
         value_name = "FILE",
         conflicts_with_all = [
-            "scenes", "frames", "warmup", "json", "width", "height", "knobs", "validate", "device"
+            "scenes", "frames", "warmup", "json", "width", "height", "knobs", "validate", "device",
+            "strict"
         ]
     )]
     from_json: Option<PathBuf>,
+    #[command(flatten)]
+    strict: super::StrictArgs,
     #[command(flatten)]
     gpu: super::GpuArgs,
 }
@@ -120,6 +123,9 @@ fn measure(args: &BenchArgs) -> anyhow::Result<BenchReport> {
     let mut scenes = Vec::new();
     for path in &args.scenes {
         let mut s = BenchScene::load(path)?;
+        args.strict
+            .apply(&s.scene)
+            .with_context(|| path.display().to_string())?;
         s.scene.set_output_size(args.width, args.height)?;
         for (knob, value) in &knobs {
             knob.set(&mut s.scene, value)

@@ -70,6 +70,7 @@ fn csv_has_a_header_and_one_line_per_row() {
         knobs: vec!["tessellation".into(), "hdr_format".into()],
         passes: vec!["opaque".into(), "tonemap".into(), "transparent".into()],
         setup: vec!["od_table_kib".into()],
+        asset_warnings: 0,
         rows: vec![
             Row {
                 setup: vec![("od_table_kib".into(), 256.0)],
