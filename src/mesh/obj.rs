@@ -238,10 +238,47 @@ fn read_mtl(
     // `tobj` refuses a whole library for one `newmtl` without a name; that
     // material cannot be used by any `usemtl`, so it is named here and the
     // rest of the library loads.
+    //
+    // A colour statement (`Kd r g b`) may give one number for all three
+    // (`Kd 0.5`, the MTL rule); `tobj` panics on fewer than three, so the
+    // one number is repeated here, and a statement with two numbers or in
+    // another form (`Kd spectral file.rfl`, `Kd xyz x y z`) is left out
+    // with a warning.
     let mut fixed = String::with_capacity(text.len());
     for (number, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
-        if words.next() == Some("newmtl") && words.next().is_none() {
+        let keyword = words.next();
+        if let Some(colour @ ("Ka" | "Kd" | "Ks" | "Ke")) = keyword {
+            let values: Vec<&str> = line
+                .split('#')
+                .next()
+                .unwrap_or("")
+                .split_whitespace()
+                .skip(1)
+                .collect();
+            let numbers = values.iter().all(|v| v.parse::<f32>().is_ok());
+            match values.as_slice() {
+                [one] if numbers => {
+                    fixed.push_str(&format!("{colour} {one} {one} {one}\n"));
+                    continue;
+                }
+                [_, _, _, ..] if numbers => {}
+                _ => {
+                    warnings.push(AssetWarning {
+                        problem: format!(
+                            "{}:{}: {colour} needs one or three numbers, got \"{}\"",
+                            path.display(),
+                            number + 1,
+                            values.join(" ")
+                        ),
+                        fallback: "the statement is left out".into(),
+                    });
+                    fixed.push('\n');
+                    continue;
+                }
+            }
+        }
+        if keyword == Some("newmtl") && words.next().is_none() {
             let name = format!("unnamed (line {})", number + 1);
             warnings.push(AssetWarning {
                 problem: format!("{}:{}: newmtl without a name", path.display(), number + 1),
@@ -267,6 +304,37 @@ fn read_mtl(
 /// `base_dir` is where MTL libraries and textures are looked for.
 pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, ObjError> {
     let corners = prescan(text, file)?;
+    // `tobj` refuses a `usemtl` without a name; it names no material, so
+    // the line is left out (its faces keep the material before it).
+    let mut warnings = Vec::new();
+    let text: std::borrow::Cow<str> = if corners.empty_usemtl.is_empty() {
+        text.into()
+    } else {
+        let lines: Vec<String> = corners
+            .empty_usemtl
+            .iter()
+            .map(|n| (n + 1).to_string())
+            .collect();
+        warnings.push(AssetWarning {
+            problem: format!(
+                "{file}: usemtl without a material name (line {})",
+                lines.join(", ")
+            ),
+            fallback: "left out: the faces after it keep the material before it".into(),
+        });
+        text.lines()
+            .enumerate()
+            .map(|(n, line)| {
+                if corners.empty_usemtl.contains(&n) {
+                    "#"
+                } else {
+                    line
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+            .into()
+    };
     let options = tobj::LoadOptions {
         triangulate: true,
         ignore_points: true,
@@ -276,7 +344,7 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
     let mut reader = std::io::BufReader::new(text.as_bytes());
     // A library that cannot be read or parsed is a warning and no
     // materials (see `read_mtl`), so `tobj` never sees a failed load.
-    let warnings = std::cell::RefCell::new(Vec::new());
+    let warnings = std::cell::RefCell::new(warnings);
     let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |mtl| {
         read_mtl(file, mtl, base_dir, &mut warnings.borrow_mut())
     })
@@ -432,6 +500,8 @@ struct Corners {
     all_uv: bool,
     all_normal: bool,
     usemtl: Vec<(usize, String)>,
+    /// Zero-based numbers of `usemtl` lines without a name.
+    empty_usemtl: Vec<usize>,
 }
 
 /// Checks every `v`, `vt`, `vn` and `f` line: numbers finite, indices
@@ -444,6 +514,7 @@ fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
         all_uv: true,
         all_normal: true,
         usemtl: Vec::new(),
+        empty_usemtl: Vec::new(),
     };
     for (number, line) in text.lines().enumerate() {
         let error = |reason: String| ObjError::Line {
@@ -461,7 +532,8 @@ fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
                 // The name is the rest of the line, as `tobj` reads it.
                 let name = line.trim_start()["usemtl".len()..].trim();
                 if name.is_empty() {
-                    return Err(error("usemtl without a material name".into()));
+                    all.empty_usemtl.push(number);
+                    continue;
                 }
                 if !all.usemtl.iter().any(|(_, n)| n == name) {
                     all.usemtl.push((number + 1, name.to_owned()));

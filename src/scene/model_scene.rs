@@ -8,7 +8,9 @@
 //!   three-quarter view (35 degrees to the right of the model's front, +Z,
 //!   and 25 degrees above), with a 40 degree vertical field of view and at
 //!   the distance where the whole sphere fits the narrower side of the
-//!   image, with a margin;
+//!   image, with a margin. An open model whose faces mostly face away from
+//!   that view (a single one-sided sheet, say) is seen from behind or below
+//!   instead, whichever shows the most front-facing area;
 //! - three directional lights, so the rig does not depend on the model's
 //!   size: a warm key light from the upper left of the view, a dim cool
 //!   fill from the right, and a rim light from behind that outlines the
@@ -148,7 +150,7 @@ fn direction(degrees_around: f64, degrees_up: f64) -> DVec3 {
 ///
 /// # Errors
 ///
-/// [`SceneError::Invalid`] when the model cannot be read or parsed (the
+/// [`SceneError::Model`] when the model cannot be read or parsed (the
 /// loader's message: file, line and reason).
 pub fn model_scene_toml(model: &Path, options: &ModelSceneOptions) -> Result<String, SceneError> {
     let invalid = |reason: String| SceneError::Invalid {
@@ -156,7 +158,7 @@ pub fn model_scene_toml(model: &Path, options: &ModelSceneOptions) -> Result<Str
         field: "model".into(),
         reason,
     };
-    let loaded = obj::load_obj(model).map_err(|e| invalid(e.to_string()))?;
+    let loaded = obj::load_obj(model)?;
     let absolute = std::path::absolute(model).map_err(|e| {
         invalid(format!(
             "cannot make the path absolute ({e}): {}",
@@ -174,7 +176,8 @@ pub fn model_scene_toml(model: &Path, options: &ModelSceneOptions) -> Result<Str
     let half_x = (aspect * half_y.tan()).atan();
     let half = half_y.min(half_x);
     let distance = radius / (FILL * half.sin());
-    let eye = centre + direction(MODEL_VIEW_AZIMUTH, MODEL_VIEW_ELEVATION) * distance;
+    let (azimuth, elevation) = view_angles(&loaded);
+    let eye = centre + direction(azimuth, elevation) * distance;
     // Close to the front of the sphere, for depth precision; the ground
     // may reach nearer than that, and is cut there.
     let near = ((distance - radius) * 0.5).max(distance * 1e-3);
@@ -187,7 +190,7 @@ pub fn model_scene_toml(model: &Path, options: &ModelSceneOptions) -> Result<Str
         vec3(centre),
         num(radius)
     );
-    let _ = writeln!(s, "ambient = [0.06, 0.06, 0.06]\n");
+    let _ = writeln!(s, "ambient = [0.04, 0.04, 0.04]\n");
     let _ = writeln!(
         s,
         "[output]\nwidth = {}\nheight = {}\n",
@@ -204,27 +207,9 @@ pub fn model_scene_toml(model: &Path, options: &ModelSceneOptions) -> Result<Str
     let _ = writeln!(s, "[tone_map]\noperator = \"aces\"\nexposure = 1.0\n");
     // Directions the light travels: from the light towards the model.
     let lights = [
-        (
-            "key",
-            MODEL_VIEW_AZIMUTH - 55.0,
-            50.0,
-            [1.0, 0.95, 0.88],
-            2.4,
-        ),
-        (
-            "fill",
-            MODEL_VIEW_AZIMUTH + 70.0,
-            10.0,
-            [0.8, 0.88, 1.0],
-            0.6,
-        ),
-        (
-            "rim",
-            MODEL_VIEW_AZIMUTH + 170.0,
-            35.0,
-            [1.0, 1.0, 1.0],
-            1.6,
-        ),
+        ("key", azimuth - 55.0, 45.0, [1.0, 0.95, 0.88], 1.1),
+        ("fill", azimuth + 70.0, 10.0, [0.8, 0.88, 1.0], 0.3),
+        ("rim", azimuth + 170.0, 35.0, [1.0, 1.0, 1.0], 1.2),
     ];
     for (name, around, up, colour, intensity) in lights {
         let _ = writeln!(
@@ -271,6 +256,39 @@ pub fn model_scene_toml(model: &Path, options: &ModelSceneOptions) -> Result<Str
         );
     }
     Ok(s)
+}
+
+/// The camera's azimuth and elevation: the three-quarter view, or when
+/// another of the four three-quarter views (front or back, above or below)
+/// sees clearly more front-facing area (faces are drawn one-sided), that one.
+fn view_angles(model: &obj::ObjModel) -> (f64, f64) {
+    let candidates = [
+        (MODEL_VIEW_AZIMUTH, MODEL_VIEW_ELEVATION),
+        (MODEL_VIEW_AZIMUTH + 180.0, MODEL_VIEW_ELEVATION),
+        (MODEL_VIEW_AZIMUTH, -MODEL_VIEW_ELEVATION),
+        (MODEL_VIEW_AZIMUTH + 180.0, -MODEL_VIEW_ELEVATION),
+    ];
+    // Projected area of the faces turned towards each view (twice the
+    // area; counter-clockwise faces are the front).
+    let mut seen = [0.0_f64; 4];
+    for part in &model.parts {
+        for t in part.positions.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|v| v.as_dvec3());
+            let normal = (b - a).cross(c - a);
+            if !normal.is_finite() {
+                continue;
+            }
+            for (area, (around, up)) in seen.iter_mut().zip(candidates) {
+                *area += normal.dot(direction(around, up)).max(0.0);
+            }
+        }
+    }
+    let best = seen.iter().copied().fold(0.0, f64::max);
+    candidates
+        .into_iter()
+        .zip(seen)
+        .find(|&(_, area)| area >= 0.8 * best)
+        .map_or(candidates[0], |(angles, _)| angles)
 }
 
 /// `text` as a TOML basic string.
