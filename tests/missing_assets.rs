@@ -55,10 +55,22 @@ fn a_missing_mtl_library_is_a_warning_naming_it_and_groups_get_the_default_mater
         "{error}"
     );
     // An unparsable library is the same kind of warning.
-    write(dir.path(), "gone.mtl", "newmtl m\nKd 0.1 x 0.2\n");
+    write(dir.path(), "gone.mtl", "newmtl m\nNs shiny\n");
     let scene = scene_of(dir.path(), "").unwrap();
     assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
     assert!(scene.warnings[0].to_string().contains("cannot parse"));
+    // A colour with one number is all three; one that is not numbers is
+    // left out, with a warning naming the line.
+    write(dir.path(), "gone.mtl", "newmtl m\nKd 0.25\nKs 0.1 x 0.2\n");
+    let scene = scene_of(dir.path(), "").unwrap();
+    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+    let warning = scene.warnings[0].to_string();
+    assert!(
+        warning.contains("gone.mtl:3: Ks needs one or three numbers"),
+        "{warning}"
+    );
+    let material = &scene.materials[scene.objects[0].material];
+    assert_eq!((material.kd, material.ks), (Vec3::splat(0.25), Vec3::ZERO));
 }
 
 #[test]

@@ -79,6 +79,21 @@ fn reports_without_the_between_frames_floor_load() {
     assert_eq!(back.scenes[0].passes, r.scenes[0].passes);
 }
 
+/// Reports written before asset warnings were counted still load, with 0.
+#[test]
+fn reports_without_the_asset_warning_count_load() {
+    let r = report();
+    let mut value = serde_json::to_value(&r).unwrap();
+    assert_eq!(value["scenes"][0]["asset_warnings"], 1);
+    value["scenes"][0]
+        .as_object_mut()
+        .unwrap()
+        .remove("asset_warnings");
+    let back = BenchReport::from_json(&value.to_string(), Path::new("old.json")).unwrap();
+    assert_eq!(back.scenes[0].asset_warnings, 0);
+    assert_eq!(back.scenes[0].passes, r.scenes[0].passes);
+}
+
 #[test]
 fn other_formats_are_rejected_naming_the_field() {
     let mut r = report();

@@ -181,7 +181,7 @@ pub fn load_obj(path: &Path) -> Result<ObjModel, ObjError> {
 pub fn decode_text(bytes: &[u8]) -> Result<String, String> {
     let utf16 = |big_endian: bool| -> Result<String, String> {
         let body = &bytes[2..];
-        if body.len() % 2 != 0 {
+        if !body.len().is_multiple_of(2) {
             return Err("UTF-16 encoded but with an odd number of bytes: convert to UTF-8".into());
         }
         let units = body.chunks_exact(2).map(|c| {
