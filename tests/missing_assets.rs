@@ -392,3 +392,41 @@ fn the_written_scene_parses_back_to_the_same_scene() {
     let loaded = Scene::load(&toml).unwrap();
     assert_eq!(loaded, built);
 }
+
+#[test]
+fn bench_counts_asset_warnings_in_its_json_and_strict_refuses_them() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "m.obj", &format!("mtllib m.mtl\n{QUAD}"));
+    write(dir.path(), "m.mtl", "newmtl m\nmap_Kd gone.png\n");
+    let scene = write(
+        dir.path(),
+        "s.toml",
+        "[camera]\neye = [0, 0, 3]\nlook_at = [0, 0, 0]\n\
+         [[objects]]\nname = \"q\"\nshape = { type = \"obj\", path = \"m.obj\" }\n",
+    );
+    let bench = |extra: &[&str]| {
+        common::aerial()
+            .arg("bench")
+            .arg(&scene)
+            .args([
+                "--frames", "1", "--warmup", "0", "--width", "32", "--height", "18",
+            ])
+            .arg("--validate")
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let json = dir.path().join("bench.json");
+    let out = bench(&["--json", json.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert_eq!(stderr.matches("warning: ").count(), 1, "{stderr}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["scenes"][0]["asset_warnings"], 1);
+
+    let out = bench(&["--strict"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("map_Kd file not found"), "{stderr}");
+}
