@@ -430,3 +430,26 @@ fn bench_counts_asset_warnings_in_its_json_and_strict_refuses_them() {
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("map_Kd file not found"), "{stderr}");
 }
+
+#[test]
+fn model_options_with_a_scene_file_are_refused() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/default.toml");
+    for flag in [
+        &["--ground"][..],
+        &["--material", "grey"],
+        &["--smoothing", "face"],
+    ] {
+        let out = common::aerial()
+            .arg("render")
+            .arg(&scene)
+            .args(flag)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(
+            stderr.contains(&format!("{}: only for a model file", flag[0])),
+            "{stderr}"
+        );
+    }
+}
