@@ -277,6 +277,9 @@ impl Scene {
     /// model, relative to the scene file; the object's `material` becomes
     /// optional and it takes `smoothing`, `crease_angle` and
     /// `weld_tolerance`, see `crate::mesh::obj`). Every number must be finite.
+    /// A model's missing or unreadable MTL library or texture does not fail
+    /// the load: it is drawn with the default material or a placeholder
+    /// texture, and recorded in [`Scene::warnings`] (`docs/models-corpus.md`).
     ///
     /// # Errors
     ///

@@ -246,7 +246,8 @@ pub fn model_scene_toml(model: &Path, options: &ModelSceneOptions) -> Result<Str
         let _ = writeln!(s, "smoothing = \"{}\"", smoothing.name());
     }
     if options.ground {
-        let size = radius * 16.0;
+        // At most the largest length a scene file accepts.
+        let size = (radius * 16.0).min(super::file::MAX_LENGTH);
         let _ = writeln!(
             s,
             "\n[[objects]]\nname = \"ground\"\nmaterial = \"ground\"\n\
