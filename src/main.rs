@@ -18,7 +18,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render a scene (the embedded default scene without SCENE).
+    /// Render a scene, or a model in a scene built around it (the embedded
+    /// default scene without SCENE).
     Render(cli::render::RenderArgs),
     /// Tone-map an existing HDR image (OpenEXR) with the GPU tone-map subpass.
     Tonemap(cli::tonemap::ToneMapArgs),
@@ -38,7 +39,7 @@ enum Command {
     /// Write the scene `render MODEL` and `view MODEL` build around a model
     /// file (camera, lights, materials) as a scene file to edit.
     Scene(cli::scene::SceneArgs),
-    /// Show a scene in a window: fly with WASD and the mouse, cycle knobs,
+    /// Show a scene (or a model) in a window: fly with WASD and the mouse, cycle knobs,
     /// watch per-pass GPU times, take screenshots (F12).
     View(cli::view::ViewArgs),
 }
