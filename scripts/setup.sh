@@ -16,6 +16,8 @@ packages=(
   pkg-config
   g++                   # nv-flip builds NVIDIA FLIP from C++ source
   assimp-testmodels     # real OBJ models (multi-group, JPEG textures, odd files) for tests/real_models.rs
+  neverball-common      # more OBJ models written by others, for tests/model_corpus.rs
+  glmark2-data          # the Stanford bunny and other OBJ models, for tests/model_corpus.rs
   libx11-6              # `aerial view`: winit opens X11 windows through these, loaded at run time
   libx11-xcb1
   libxcursor1

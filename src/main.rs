@@ -18,7 +18,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render a scene (the embedded default scene without SCENE).
+    /// Render a scene, or a model in a scene built around it (the embedded
+    /// default scene without SCENE).
     Render(cli::render::RenderArgs),
     /// Tone-map an existing HDR image (OpenEXR) with the GPU tone-map subpass.
     Tonemap(cli::tonemap::ToneMapArgs),
@@ -35,7 +36,10 @@ enum Command {
     Mesh(cli::mesh::MeshArgs),
     /// Convert a height map (PNG) into a tangent-space normal map.
     Normalmap(cli::normalmap::NormalMapArgs),
-    /// Show a scene in a window: fly with WASD and the mouse, cycle knobs,
+    /// Write the scene `render MODEL` and `view MODEL` build around a model
+    /// file (camera, lights, materials) as a scene file to edit.
+    Scene(cli::scene::SceneArgs),
+    /// Show a scene (or a model) in a window: fly with WASD and the mouse, cycle knobs,
     /// watch per-pass GPU times, take screenshots (F12).
     View(cli::view::ViewArgs),
 }
@@ -75,6 +79,7 @@ fn run(cli: Cli) -> anyhow::Result<std::process::ExitCode> {
         Command::Normalmap(args) => {
             cli::normalmap::run(args).map(|()| std::process::ExitCode::SUCCESS)
         }
+        Command::Scene(args) => cli::scene::run(args).map(|()| std::process::ExitCode::SUCCESS),
         Command::View(args) => cli::view::run(args).map(|()| std::process::ExitCode::SUCCESS),
     }
 }

@@ -377,7 +377,6 @@ fn bad_models_are_clear_errors() {
         ),
         (&format!("{tri}f 1 2\n"), "at least 3 corners"),
         ("v 0 0 0\nv 1 0 0\nf 1 2 1\n", "collapsed"),
-        (&format!("mtllib missing.mtl\n{tri}f 1 2 3\n"), "MTL"),
     ] {
         let error = scene_with_obj(dir.path(), obj, "").expect_err(obj);
         assert!(error.contains("objects[0].shape.path"), "{error}");

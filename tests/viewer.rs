@@ -692,3 +692,43 @@ fn the_window_shows_the_image_and_closing_it_exits_0() {
         text(&out)
     );
 }
+
+/// `aerial view MODEL.obj` shows the scene `aerial render MODEL.obj` draws
+/// (camera, lights, ground built around the model), from the first frame.
+#[test]
+fn a_model_is_viewed_in_the_scene_render_builds_around_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("box.obj");
+    std::fs::write(
+        &model,
+        "v -1 0 -1\nv 1 0 -1\nv 1 2 -1\nv -1 2 -1\nv -1 0 1\nv 1 0 1\nv 1 2 1\nv -1 2 1\n\
+         f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 4 8 7 3\nf 1 5 8 4\nf 2 3 7 6\n",
+    )
+    .unwrap();
+    let shot = dir.path().join("shot.png");
+    let x = Xvfb::start();
+    x.run_script(
+        dir.path(),
+        &model,
+        &["--width", "160", "--height", "90", "--ground"],
+        &format!("0 screenshot {}\n1 quit\n", shot.display()),
+    );
+    let png = dir.path().join("render.png");
+    let out = common::aerial()
+        .arg("render")
+        .arg(&model)
+        .args(["--width", "160", "--height", "90", "--ground", "--validate"])
+        .arg("--out")
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out));
+    let reference = read_png(&png);
+    let lit = reference
+        .data
+        .chunks_exact(4)
+        .filter(|p| p[..3] != [0, 0, 0])
+        .count();
+    assert!(lit > 160 * 90 / 10, "only {lit} pixels drawn");
+    assert_eq!(differing_pixels(&read_png(&shot), &reference), 0);
+}

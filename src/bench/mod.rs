@@ -242,6 +242,7 @@ pub fn run(
             gpu_total,
             cpu_frame,
             empty_pass_between_frames,
+            asset_warnings: s.scene.warnings.len(),
         });
         device.get_or_insert_with(|| DeviceRecord::from(&run.device));
     }

@@ -224,6 +224,11 @@ pub struct SceneReport {
     /// this field, whose multiples divide by the separate empty-pass run).
     #[serde(default)]
     pub empty_pass_between_frames: Option<PassReport>,
+    /// Asset warnings of the scene's models (missing MTL libraries and
+    /// textures drawn with defaults and placeholders); 0 in reports from
+    /// before this field.
+    #[serde(default)]
+    pub asset_warnings: usize,
 }
 
 impl SceneReport {

@@ -49,6 +49,7 @@ fn report() -> BenchReport {
             gpu_total: Some(row(GPU_TOTAL, 3.0)),
             cpu_frame: row(CPU_FRAME, 3.5),
             empty_pass_between_frames: Some(row("empty", 0.6)),
+            asset_warnings: 1,
         }],
     }
 }
@@ -73,6 +74,21 @@ fn reports_without_the_between_frames_floor_load() {
         .remove("empty_pass_between_frames");
     let back = BenchReport::from_json(&value.to_string(), Path::new("old.json")).unwrap();
     assert_eq!(back.scenes[0].empty_pass_between_frames, None);
+    assert_eq!(back.scenes[0].passes, r.scenes[0].passes);
+}
+
+/// Reports written before asset warnings were counted still load, with 0.
+#[test]
+fn reports_without_the_asset_warning_count_load() {
+    let r = report();
+    let mut value = serde_json::to_value(&r).unwrap();
+    assert_eq!(value["scenes"][0]["asset_warnings"], 1);
+    value["scenes"][0]
+        .as_object_mut()
+        .unwrap()
+        .remove("asset_warnings");
+    let back = BenchReport::from_json(&value.to_string(), Path::new("old.json")).unwrap();
+    assert_eq!(back.scenes[0].asset_warnings, 0);
     assert_eq!(back.scenes[0].passes, r.scenes[0].passes);
 }
 

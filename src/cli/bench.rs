@@ -75,10 +75,12 @@ pub struct BenchArgs {
         value_name = "FILE",
         conflicts_with_all = [
             "scenes", "frames", "warmup", "json", "width", "height", "knobs", "validate", "device",
-            "against"
+            "against", "strict"
         ]
     )]
     from_json: Option<PathBuf>,
+    #[command(flatten)]
+    strict: super::StrictArgs,
     #[command(flatten)]
     gpu: super::GpuArgs,
 }
@@ -187,6 +189,9 @@ fn run_args(args: &BenchArgs, metrics: &[Metric], json: &std::path::Path) -> Vec
     if let Some(d) = &args.gpu.device {
         out.push(format!("--device={d}").into());
     }
+    if args.strict.strict {
+        out.push("--strict".into());
+    }
     let mut json_arg = OsString::from("--json=");
     json_arg.push(json);
     out.push(json_arg);
@@ -210,6 +215,9 @@ fn measure(args: &BenchArgs) -> anyhow::Result<BenchReport> {
     let mut scenes = Vec::new();
     for path in &args.scenes {
         let mut s = BenchScene::load(path)?;
+        args.strict
+            .apply(&s.scene)
+            .with_context(|| path.display().to_string())?;
         s.scene.set_output_size(args.width, args.height)?;
         for (knob, value) in &knobs {
             knob.set(&mut s.scene, value)

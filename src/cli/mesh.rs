@@ -31,6 +31,8 @@ pub struct MeshArgs {
     /// Also write the report as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
+    #[command(flatten)]
+    strict: super::StrictArgs,
 }
 
 pub fn run(args: MeshArgs) -> anyhow::Result<()> {
@@ -56,6 +58,12 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
             tangents: args.tangents,
         },
     )?;
+    if let Some(w) = report.asset_warnings.first().filter(|_| args.strict.strict) {
+        bail!("{}", w.problem);
+    }
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
     println!("model                      {}", report.file);
     println!("smoothing                  {}", report.smoothing);
     println!("objects                    {}", report.objects);

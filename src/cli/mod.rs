@@ -5,11 +5,15 @@ pub mod compare;
 pub mod mesh;
 pub mod normalmap;
 pub mod render;
+pub mod scene;
 pub mod sweep;
 pub mod tonemap;
 pub mod view;
 
+use aerial::mesh::smoothing::Smoothing;
+use aerial::scene::{is_model_file, ModelSceneOptions, Scene};
 use aerial::vk::validation::Validation;
+use std::path::Path;
 
 /// The options of every command that renders: validation and device.
 #[derive(clap::Args)]
@@ -29,4 +33,111 @@ pub struct GpuArgs {
     /// Physical device by index or name substring.
     #[arg(long)]
     pub device: Option<String>,
+}
+
+/// `--strict`: every asset warning is an error.
+#[derive(clap::Args)]
+pub struct StrictArgs {
+    /// Refuse a model whose MTL library or textures are missing or broken
+    /// (exit 2) instead of drawing it with default materials and
+    /// placeholder textures and warning.
+    #[arg(long)]
+    pub strict: bool,
+}
+
+impl StrictArgs {
+    /// Under `--strict` the first warning of `scene` as an error; otherwise
+    /// its warnings printed to stderr (once each).
+    pub fn apply(&self, scene: &Scene) -> anyhow::Result<()> {
+        if self.strict {
+            scene.strict()?;
+        } else {
+            scene.print_warnings();
+        }
+        Ok(())
+    }
+}
+
+/// The materials of a scene made from a model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ModelMaterial {
+    /// The model's MTL materials.
+    Mtl,
+    /// One plain grey material (the MTL's textures are never opened).
+    Grey,
+}
+
+/// Options for a scene built around a model file.
+#[derive(clap::Args)]
+pub struct ModelArgs {
+    /// With a model: how shading normals are made (default: the file's
+    /// normals when every corner has one, otherwise smoothed over the
+    /// model).
+    #[arg(long, value_enum)]
+    pub smoothing: Option<Smoothing>,
+    /// With a model: its MTL materials, or plain grey.
+    #[arg(long, value_enum)]
+    pub material: Option<ModelMaterial>,
+    /// With a model: a ground plane under it.
+    #[arg(long)]
+    pub ground: bool,
+}
+
+impl ModelArgs {
+    fn given(&self) -> Option<&'static str> {
+        if self.smoothing.is_some() {
+            Some("--smoothing")
+        } else if self.material.is_some() {
+            Some("--material")
+        } else if self.ground {
+            Some("--ground")
+        } else {
+            None
+        }
+    }
+
+    /// The options for a scene around a model, `width` x `height` unless
+    /// overridden.
+    pub fn options(&self, width: Option<u32>, height: Option<u32>) -> ModelSceneOptions {
+        let default = ModelSceneOptions::default();
+        ModelSceneOptions {
+            width: width.unwrap_or(default.width),
+            height: height.unwrap_or(default.height),
+            smoothing: self.smoothing,
+            grey: self.material == Some(ModelMaterial::Grey),
+            ground: self.ground,
+        }
+    }
+}
+
+/// The scene a `render` or `view` argument names: a scene file, a scene
+/// built around a model file (by extension or content), or without one
+/// the embedded default scene; the output size overridden, asset warnings
+/// printed (or, under `--strict`, the first one as the error).
+pub fn load_scene(
+    path: Option<&Path>,
+    model: &ModelArgs,
+    width: Option<u32>,
+    height: Option<u32>,
+    strict: &StrictArgs,
+) -> anyhow::Result<Scene> {
+    let is_model = path.is_some_and(is_model_file);
+    if !is_model {
+        if let Some(flag) = model.given() {
+            anyhow::bail!("{flag}: only for a model file (OBJ), not a scene file");
+        }
+    }
+    let mut scene = match path {
+        Some(path) if is_model => {
+            // Validated like the scene file's output size before use.
+            let mut check = Scene::default_scene();
+            check.set_output_size(width, height)?;
+            Scene::from_model(path, &model.options(width, height))?
+        }
+        Some(path) => Scene::load(path)?,
+        None => Scene::default_scene(),
+    };
+    scene.set_output_size(width, height)?;
+    strict.apply(&scene)?;
+    Ok(scene)
 }

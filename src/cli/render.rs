@@ -5,14 +5,14 @@ use aerial::bench::{CPU_FRAME, GPU_TOTAL};
 use aerial::files;
 use aerial::render::output;
 use aerial::report::stats::{summarise_passes, Summary};
-use aerial::scene::Scene;
 use aerial::vk::validation;
 use anyhow::{bail, Context as _};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct RenderArgs {
-    /// Scene file (TOML); omit for the embedded default scene.
+    /// Scene file (TOML), or a model (OBJ) to render in a scene built
+    /// around it; omit for the embedded default scene.
     pub scene: Option<PathBuf>,
     /// Tone-mapped 8-bit sRGB output.
     #[arg(long, default_value = "out.png")]
@@ -35,15 +35,21 @@ pub struct RenderArgs {
     #[arg(long, value_enum)]
     debug_view: Option<aerial::scene::DebugView>,
     #[command(flatten)]
+    model: super::ModelArgs,
+    #[command(flatten)]
+    strict: super::StrictArgs,
+    #[command(flatten)]
     gpu: super::GpuArgs,
 }
 
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
-    let mut scene = match &args.scene {
-        Some(path) => Scene::load(path)?,
-        None => Scene::default_scene(),
-    };
-    scene.set_output_size(args.width, args.height)?;
+    let mut scene = super::load_scene(
+        args.scene.as_deref(),
+        &args.model,
+        args.width,
+        args.height,
+        &args.strict,
+    )?;
     if args.debug_view.is_some() {
         scene.output.debug_view = args.debug_view;
     }

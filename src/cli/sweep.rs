@@ -45,6 +45,8 @@ pub struct SweepArgs {
     #[arg(long, value_enum, default_value = "gpu-best")]
     reference: Reference,
     #[command(flatten)]
+    strict: super::StrictArgs,
+    #[command(flatten)]
     gpu: super::GpuArgs,
 }
 
@@ -56,6 +58,7 @@ enum Reference {
 
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     let scene = Scene::load(&args.scene)?;
+    args.strict.apply(&scene)?;
     // Before the work: a sweep takes minutes, a bad folder must not.
     aerial::files::check_output_dir(&args.out_dir)?;
     for name in ["sweep.csv", "sweep.json", "sweep.svg"] {

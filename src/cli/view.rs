@@ -1,14 +1,14 @@
 //! `aerial view`: the scene in a window, with keyboard and mouse
 //! navigation, live knobs and per-pass GPU times (see `aerial::viewer`).
 
-use aerial::scene::Scene;
 use aerial::viewer::{self, Script, ViewOptions};
 use aerial::vk::{validation, PresentMode};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct ViewArgs {
-    /// Scene file (TOML); omit for the embedded default scene.
+    /// Scene file (TOML), or a model (OBJ) to look at in a scene built
+    /// around it; omit for the embedded default scene.
     pub scene: Option<PathBuf>,
     /// Initial window width (default: the scene's output width).
     #[arg(long)]
@@ -25,23 +25,36 @@ pub struct ViewArgs {
     #[arg(long)]
     script: Option<PathBuf>,
     #[command(flatten)]
+    model: super::ModelArgs,
+    #[command(flatten)]
+    strict: super::StrictArgs,
+    #[command(flatten)]
     gpu: super::GpuArgs,
 }
 
 pub fn run(args: ViewArgs) -> anyhow::Result<()> {
-    let mut scene = match &args.scene {
-        Some(path) => Scene::load(path)?,
-        None => Scene::default_scene(),
-    };
-    scene.set_output_size(args.width, args.height)?;
+    let scene = super::load_scene(
+        args.scene.as_deref(),
+        &args.model,
+        args.width,
+        args.height,
+        &args.strict,
+    )?;
     let script = args.script.as_deref().map(Script::load).transpose()?;
     let scene_name = match &args.scene {
         Some(path) => path.display().to_string(),
         None => "the default scene".to_string(),
     };
+    // The window title shows that something was drawn with a fallback (the
+    // warnings themselves are on stderr).
+    let title = match scene.warnings.len() {
+        0 => scene_name.clone(),
+        1 => format!("{scene_name} (1 asset warning)"),
+        n => format!("{scene_name} ({n} asset warnings)"),
+    };
     let outcome = viewer::run(ViewOptions {
         scene,
-        scene_name: scene_name.clone(),
+        scene_name: title,
         validate: args.gpu.validate.unwrap_or_default(),
         device: args.gpu.device.clone(),
         present_mode: args.present_mode,

@@ -3,7 +3,7 @@
 //! across objects, degenerate and mirrored triangles, non-finite
 //! attributes, the worst tangent-frame error, and the time of each stage.
 
-use super::obj::{load_obj, model_frames, model_normals, ModelOptions, ObjError};
+use super::obj::{load_obj, model_frames, model_normals, AssetWarning, ModelOptions, ObjError};
 use super::smoothing::weld;
 use super::tangents::max_orthonormality_error;
 use std::path::Path;
@@ -48,6 +48,12 @@ pub struct MeshReport {
     /// Largest | |N| − 1 |, | |T| − 1 |, |N·T| or | |w| − 1 | over the vertices.
     pub max_orthonormality_error: f32,
     pub seconds: StageSeconds,
+    /// Problems with the MTL libraries and material references that
+    /// loading worked around (textures are never opened here).
+    pub warnings: Vec<String>,
+    /// The same, for `--strict`.
+    #[serde(skip)]
+    pub asset_warnings: Vec<AssetWarning>,
 }
 
 /// Loads `path` as the renderer would with `options` and reports on it.
@@ -107,6 +113,8 @@ pub fn inspect(path: &Path, options: &ModelOptions) -> Result<MeshReport, ObjErr
             smoothing,
             tangents,
         },
+        warnings: model.warnings.iter().map(|w| w.to_string()).collect(),
+        asset_warnings: model.warnings.clone(),
     };
     for (mesh, stats) in &meshes {
         report.vertices += mesh.vertices.len();

@@ -5,6 +5,13 @@
 //! input (non-finite numbers, indices out of range, an empty file) is
 //! reported with the file and line rather than a bare parser error code, and
 //! so that nothing non-finite ever reaches a vertex.
+//!
+//! Missing or broken material assets do not refuse the model: an MTL
+//! library that cannot be read or parsed, a `newmtl` without a name and a
+//! `usemtl` naming no loaded material are [`AssetWarning`]s on the model,
+//! and the groups concerned get the default material. Texture files are
+//! only resolved here, never opened: whoever draws the model decides what a
+//! missing one means (see `crate::scene`).
 
 use std::path::{Path, PathBuf};
 
@@ -47,6 +54,26 @@ pub enum ObjError {
     },
 }
 
+/// A problem with a model's assets that loading worked around. `problem`
+/// is the error `--strict` reports; `fallback` says what was done instead.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct AssetWarning {
+    /// What is wrong, starting with the file it is in.
+    pub problem: String,
+    /// What is drawn instead.
+    pub fallback: String,
+}
+
+impl std::fmt::Display for AssetWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}; {}", self.problem, self.fallback)
+    }
+}
+
+/// What groups get when their MTL material is not available.
+pub const DEFAULT_MATERIAL_FALLBACK: &str = "the groups using its materials get the default \
+     material (grey, kd 0.8)";
+
 /// An MTL material, with texture paths resolved against the OBJ's folder.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ObjMaterial {
@@ -62,9 +89,11 @@ pub struct ObjMaterial {
     pub shininess: f32,
     /// `d` (default 1, opaque).
     pub opacity: f32,
-    /// `map_Kd`.
+    /// `map_Kd`, resolved against the OBJ's folder (not checked: the file
+    /// may be missing).
     pub texture: Option<PathBuf>,
-    /// `norm` / `map_Bump` / `bump`, read as a tangent-space normal map.
+    /// `norm` / `map_Bump` / `bump`, read as a tangent-space normal map;
+    /// resolved like `texture`.
     pub normal_map: Option<PathBuf>,
 }
 
@@ -100,6 +129,9 @@ pub struct ObjModel {
     pub parts: Vec<ObjPart>,
     /// Materials of the MTL libraries the file names.
     pub materials: Vec<ObjMaterial>,
+    /// What was wrong with the MTL libraries and material references, in
+    /// file order, each once.
+    pub warnings: Vec<AssetWarning>,
 }
 
 impl ObjModel {
@@ -133,18 +165,176 @@ pub fn load_obj(path: &Path) -> Result<ObjModel, ObjError> {
         file: file.clone(),
         reason,
     })?;
-    // OBJ is ASCII; bytes outside UTF-8 (Latin-1 comments and names from
-    // older exporters) only ever occur in comments and names, so they are
-    // replaced rather than refusing the file.
-    let text = String::from_utf8_lossy(&bytes);
+    let text = decode_text(&bytes).map_err(|reason| ObjError::File {
+        file: file.clone(),
+        reason,
+    })?;
     let base_dir = path.parent().unwrap_or_else(|| Path::new(""));
     parse_obj(&text, &file, base_dir)
+}
+
+/// The text of an OBJ or MTL file. OBJ is ASCII; bytes outside UTF-8
+/// (Latin-1 comments and names from older exporters) only ever occur in
+/// comments and names, so they are replaced rather than refusing the file.
+/// A UTF-8 byte-order mark is skipped; UTF-16 files (with a byte-order
+/// mark, as Windows tools write them) are decoded.
+pub fn decode_text(bytes: &[u8]) -> Result<String, String> {
+    let utf16 = |big_endian: bool| -> Result<String, String> {
+        let body = &bytes[2..];
+        if !body.len().is_multiple_of(2) {
+            return Err("UTF-16 encoded but with an odd number of bytes: convert to UTF-8".into());
+        }
+        let units = body.chunks_exact(2).map(|c| {
+            if big_endian {
+                u16::from_be_bytes([c[0], c[1]])
+            } else {
+                u16::from_le_bytes([c[0], c[1]])
+            }
+        });
+        char::decode_utf16(units)
+            .collect::<Result<String, _>>()
+            .map_err(|_| "UTF-16 encoded with an unpaired surrogate: convert to UTF-8".to_owned())
+    };
+    match bytes {
+        [0xFF, 0xFE, ..] => utf16(false),
+        [0xFE, 0xFF, ..] => utf16(true),
+        [0xEF, 0xBB, 0xBF, rest @ ..] => Ok(String::from_utf8_lossy(rest).into_owned()),
+        _ => Ok(String::from_utf8_lossy(bytes).into_owned()),
+    }
+}
+
+/// Reads the MTL library `name` (as written after `mtllib`) from `base_dir`:
+/// its materials, or a warning and none.
+fn read_mtl(
+    file: &str,
+    name: &Path,
+    base_dir: &Path,
+    warnings: &mut Vec<AssetWarning>,
+) -> tobj::MTLLoadResult {
+    let path = base_dir.join(name.to_string_lossy().replace('\\', "/"));
+    let failed = |reason: String| AssetWarning {
+        problem: format!(
+            "{file}: cannot load its MTL library \"{}\" ({}): {reason}",
+            name.display(),
+            path.display()
+        ),
+        fallback: DEFAULT_MATERIAL_FALLBACK.to_owned(),
+    };
+    let nothing = || Ok((Vec::new(), Default::default()));
+    let bytes = match std::fs::read(&path) {
+        Ok(bytes) => bytes,
+        Err(e) => {
+            warnings.push(failed(e.to_string()));
+            return nothing();
+        }
+    };
+    let text = match decode_text(&bytes) {
+        Ok(text) => text,
+        Err(reason) => {
+            warnings.push(failed(reason));
+            return nothing();
+        }
+    };
+    // `tobj` refuses a whole library for one `newmtl` without a name; that
+    // material cannot be used by any `usemtl`, so it is named here and the
+    // rest of the library loads.
+    //
+    // A colour statement (`Kd r g b`) may give one number for all three
+    // (`Kd 0.5`, the MTL rule); `tobj` panics on fewer than three, so the
+    // one number is repeated here, and a statement with two numbers or in
+    // another form (`Kd spectral file.rfl`, `Kd xyz x y z`) is left out
+    // with a warning.
+    let mut fixed = String::with_capacity(text.len());
+    for (number, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        let keyword = words.next();
+        if let Some(colour @ ("Ka" | "Kd" | "Ks" | "Ke")) = keyword {
+            let values: Vec<&str> = line
+                .split('#')
+                .next()
+                .unwrap_or("")
+                .split_whitespace()
+                .skip(1)
+                .collect();
+            let numbers = values.iter().all(|v| v.parse::<f32>().is_ok());
+            match values.as_slice() {
+                [one] if numbers => {
+                    fixed.push_str(&format!("{colour} {one} {one} {one}\n"));
+                    continue;
+                }
+                [_, _, _, ..] if numbers => {}
+                _ => {
+                    warnings.push(AssetWarning {
+                        problem: format!(
+                            "{}:{}: {colour} needs one or three numbers, got \"{}\"",
+                            path.display(),
+                            number + 1,
+                            values.join(" ")
+                        ),
+                        fallback: "the statement is left out".into(),
+                    });
+                    fixed.push('\n');
+                    continue;
+                }
+            }
+        }
+        if keyword == Some("newmtl") && words.next().is_none() {
+            let name = format!("unnamed (line {})", number + 1);
+            warnings.push(AssetWarning {
+                problem: format!("{}:{}: newmtl without a name", path.display(), number + 1),
+                fallback: format!("the material is kept as \"{name}\", which no usemtl can name"),
+            });
+            fixed.push_str("newmtl ");
+            fixed.push_str(&name);
+        } else {
+            fixed.push_str(line);
+        }
+        fixed.push('\n');
+    }
+    match tobj::load_mtl_buf(&mut std::io::BufReader::new(fixed.as_bytes())) {
+        Ok(loaded) => Ok(loaded),
+        Err(e) => {
+            warnings.push(failed(format!("cannot parse it: {e}")));
+            nothing()
+        }
+    }
 }
 
 /// [`load_obj`] on text already read; `file` is only used in messages and
 /// `base_dir` is where MTL libraries and textures are looked for.
 pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, ObjError> {
     let corners = prescan(text, file)?;
+    // `tobj` refuses a `usemtl` without a name; it names no material, so
+    // the line is left out (its faces keep the material before it).
+    let mut warnings = Vec::new();
+    let text: std::borrow::Cow<str> = if corners.empty_usemtl.is_empty() {
+        text.into()
+    } else {
+        let lines: Vec<String> = corners
+            .empty_usemtl
+            .iter()
+            .map(|n| (n + 1).to_string())
+            .collect();
+        warnings.push(AssetWarning {
+            problem: format!(
+                "{file}: usemtl without a material name (line {})",
+                lines.join(", ")
+            ),
+            fallback: "left out: the faces after it keep the material before it".into(),
+        });
+        text.lines()
+            .enumerate()
+            .map(|(n, line)| {
+                if corners.empty_usemtl.contains(&n) {
+                    "#"
+                } else {
+                    line
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+            .into()
+    };
     let options = tobj::LoadOptions {
         triangulate: true,
         ignore_points: true,
@@ -152,20 +342,17 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
         ..Default::default()
     };
     let mut reader = std::io::BufReader::new(text.as_bytes());
+    // A library that cannot be read or parsed is a warning and no
+    // materials (see `read_mtl`), so `tobj` never sees a failed load.
+    let warnings = std::cell::RefCell::new(warnings);
     let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |mtl| {
-        // Read like the OBJ: non-UTF-8 bytes (in comments and names) are
-        // replaced rather than refusing the library.
-        let bytes =
-            std::fs::read(base_dir.join(mtl)).map_err(|_| tobj::LoadError::OpenFileFailed)?;
-        let text = String::from_utf8_lossy(&bytes);
-        tobj::load_mtl_buf(&mut std::io::BufReader::new(text.as_bytes()))
+        read_mtl(file, mtl, base_dir, &mut warnings.borrow_mut())
     })
     .map_err(|e| ObjError::File {
         file: file.to_owned(),
         reason: format!("cannot parse OBJ: {e}"),
     })?;
-    // A missing or broken MTL library is an error rather than a silent grey
-    // model: the file asked for those materials.
+    let mut warnings = warnings.into_inner();
     let materials = materials.map_err(|e| ObjError::File {
         file: file.to_owned(),
         reason: format!("cannot load its MTL library: {e}"),
@@ -174,7 +361,27 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
         .iter()
         .map(|m| material(m, file, base_dir))
         .collect::<Result<Vec<_>, _>>()?;
-
+    // `usemtl` lines naming no loaded material: their groups get the
+    // default. One warning for the file, and none when a library that
+    // failed to load already explains it.
+    let library_failed = warnings
+        .iter()
+        .any(|w| w.fallback == DEFAULT_MATERIAL_FALLBACK);
+    let unknown: Vec<String> = corners
+        .usemtl
+        .iter()
+        .filter(|(_, name)| !materials.iter().any(|m| &m.name == name))
+        .map(|(line, name)| format!("\"{name}\" (line {line})"))
+        .collect();
+    if !unknown.is_empty() && !library_failed {
+        warnings.push(AssetWarning {
+            problem: format!(
+                "{file}: usemtl names materials no MTL library defines: {}",
+                unknown.join(", ")
+            ),
+            fallback: "their groups get the default material (grey, kd 0.8)".into(),
+        });
+    }
     let mut parts = Vec::new();
     for model in models {
         let mesh = &model.mesh;
@@ -236,7 +443,11 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
             reason: "no faces (an OBJ model needs at least one triangle)".into(),
         });
     }
-    Ok(ObjModel { parts, materials })
+    Ok(ObjModel {
+        parts,
+        materials,
+        warnings,
+    })
 }
 
 fn material(m: &tobj::Material, file: &str, base_dir: &Path) -> Result<ObjMaterial, ObjError> {
@@ -258,26 +469,12 @@ fn material(m: &tobj::Material, file: &str, base_dir: &Path) -> Result<ObjMateri
     if !opacity.is_finite() {
         return Err(bad("d"));
     }
-    let texture = |name: &Option<String>, what: &str| -> Result<Option<PathBuf>, ObjError> {
-        let Some(name) = name else { return Ok(None) };
+    let texture = |name: &Option<String>| -> Option<PathBuf> {
         // Texture statements may carry options (`-bm 1.0 file.png`); the
         // file name is the last word.
-        let Some(last) = name.split_whitespace().last() else {
-            return Ok(None);
-        };
+        let last = name.as_deref()?.split_whitespace().last()?;
         // Windows exporters write `.\\dir\\file.jpg`.
-        let resolved = base_dir.join(last.replace('\\', "/"));
-        if !resolved.is_file() {
-            return Err(ObjError::File {
-                file: file.to_owned(),
-                reason: format!(
-                    "material \"{}\": {what} file not found: {}",
-                    m.name,
-                    resolved.display()
-                ),
-            });
-        }
-        Ok(Some(resolved))
+        Some(base_dir.join(last.replace('\\', "/")))
     };
     let normal_name = m
         .normal_texture
@@ -292,15 +489,19 @@ fn material(m: &tobj::Material, file: &str, base_dir: &Path) -> Result<ObjMateri
         // the shader's pow(0, 0) is undefined, so the smallest exponent is 1.
         shininess: shininess.max(1.0),
         opacity: opacity.clamp(0.0, 1.0),
-        texture: texture(&m.diffuse_texture, "map_Kd")?,
-        normal_map: texture(&normal_name, "normal map")?,
+        texture: texture(&m.diffuse_texture),
+        normal_map: texture(&normal_name),
     })
 }
 
-/// Which attributes every face corner of a file has.
+/// Which attributes every face corner of a file has, and the materials
+/// its `usemtl` lines name (with their line numbers, each name once).
 struct Corners {
     all_uv: bool,
     all_normal: bool,
+    usemtl: Vec<(usize, String)>,
+    /// Zero-based numbers of `usemtl` lines without a name.
+    empty_usemtl: Vec<usize>,
 }
 
 /// Checks every `v`, `vt`, `vn` and `f` line: numbers finite, indices
@@ -312,6 +513,8 @@ fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
     let mut all = Corners {
         all_uv: true,
         all_normal: true,
+        usemtl: Vec::new(),
+        empty_usemtl: Vec::new(),
     };
     for (number, line) in text.lines().enumerate() {
         let error = |reason: String| ObjError::Line {
@@ -325,6 +528,18 @@ fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
             continue;
         };
         let (slot, least) = match keyword {
+            "usemtl" => {
+                // The name is the rest of the line, as `tobj` reads it.
+                let name = line.trim_start()["usemtl".len()..].trim();
+                if name.is_empty() {
+                    all.empty_usemtl.push(number);
+                    continue;
+                }
+                if !all.usemtl.iter().any(|(_, n)| n == name) {
+                    all.usemtl.push((number + 1, name.to_owned()));
+                }
+                continue;
+            }
             "v" => (0, 3),
             "vt" => (1, 1),
             "vn" => (2, 3),

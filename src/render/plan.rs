@@ -12,7 +12,7 @@
 use super::geometry::SceneGeometry;
 use super::passes::{self, PassCreate};
 use super::tiles::{self, TileGroup};
-use crate::scene::{HdrFormat, Lighting, Scene, ShadingModel, ToneMapOperator};
+use crate::scene::{HdrFormat, Lighting, Scene, ShadingModel, Texture, ToneMapOperator};
 use crate::vk::{DepthUse, Format};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -220,7 +220,7 @@ pub struct FramePlan {
     /// Transparent draws, back to front from the camera.
     pub transparent: Vec<Draw>,
     /// Distinct base-colour textures, each loaded once.
-    pub textures: Vec<PathBuf>,
+    pub textures: Vec<Texture>,
     /// Distinct normal maps, each loaded once (linear, not sRGB).
     pub normal_maps: Vec<NormalMapSource>,
     /// Deferred lighting: screen tiles grouped by the lights that reach
@@ -237,7 +237,7 @@ impl FramePlan {
     /// The frame for `scene`, whose meshes and bounds are `geometry`;
     /// `keep_hdr` reads the linear HDR image back too.
     pub fn new(scene: &Scene, geometry: &SceneGeometry, keep_hdr: bool) -> FramePlan {
-        let mut textures: Vec<PathBuf> = Vec::new();
+        let mut textures: Vec<Texture> = Vec::new();
         let mut texture_index = BTreeMap::new();
         let mut normal_maps: Vec<NormalMapSource> = Vec::new();
         let mut normal_map_index = BTreeMap::new();
@@ -256,9 +256,9 @@ impl FramePlan {
             });
         for (i, object) in scene.objects.iter().enumerate() {
             let material = &scene.materials[object.material];
-            let texture = material.texture.as_ref().map(|path| {
-                *texture_index.entry(path.clone()).or_insert_with(|| {
-                    textures.push(path.clone());
+            let texture = material.texture.as_ref().map(|source| {
+                *texture_index.entry(source.clone()).or_insert_with(|| {
+                    textures.push(source.clone());
                     textures.len() - 1
                 })
             });

@@ -167,14 +167,19 @@ pub fn scene_memory(
     let size_what = format!("output size {w}x{h}");
     budget.check(&size_what, attachments)?;
     total = total.saturating_add(attachments);
-    let mut seen: Vec<&PathBuf> = Vec::new();
+    let mut seen: Vec<&Path> = Vec::new();
     // Base-colour textures and normal maps cost the same, plus, for a
     // height map, the conversion's working arrays.
     let images = scene.materials.iter().flat_map(|m| {
         m.texture
             .iter()
+            .filter_map(|t| t.file())
             .map(|p| (p, false))
-            .chain(m.normal_map.iter().map(|p| (p, m.height_scale.is_some())))
+            .chain(
+                m.normal_map
+                    .iter()
+                    .map(|p| (p.as_path(), m.height_scale.is_some())),
+            )
     });
     for (path, from_heights) in images {
         if seen.contains(&path) {
@@ -185,7 +190,7 @@ pub fn scene_memory(
         let (base, with_mips) = texture_bytes(info);
         if base > MAX_TEXTURE_BYTES {
             return Err(RenderError::Texture {
-                path: path.clone(),
+                path: path.to_path_buf(),
                 reason: format!(
                     "{}x{} decodes to {}; textures may decode to at most {} \
                      (e.g. 8192x8192)",
@@ -271,15 +276,17 @@ pub fn scene_on_device(scene: &Scene, ctx: &Context) -> Result<(), RenderError> 
     let max_side = ctx.limits.max_image_dimension2_d;
     // Base-colour textures and normal maps (both decoded by content): only
     // the device's size limit applies here.
-    let textures = scene
-        .materials
-        .iter()
-        .flat_map(|m| m.texture.iter().chain(m.normal_map.iter()));
+    let textures = scene.materials.iter().flat_map(|m| {
+        m.texture
+            .iter()
+            .filter_map(|t| t.file())
+            .chain(m.normal_map.iter().map(PathBuf::as_path))
+    });
     for path in textures {
         let info = inspect_texture(path)?;
         if info.width == 0 || info.height == 0 || info.width.max(info.height) > max_side {
             return Err(RenderError::Texture {
-                path: path.clone(),
+                path: path.to_path_buf(),
                 reason: format!(
                     "{}x{} is outside this device's image size limit of 1..={max_side} \
                      pixels per side (maxImageDimension2D)",

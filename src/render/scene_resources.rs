@@ -8,7 +8,7 @@ use super::gpu_types::{FrameUniforms, GpuLight, ObjectHeader};
 use super::plan::{Draw, FramePlan};
 use super::RenderError;
 use crate::mesh::height::{encode_normal_map, GreenAxis, HeightEdge, HeightFilter, HeightMap};
-use crate::scene::{Light, Scene, TextureFilter};
+use crate::scene::{placeholder_texels, Light, Scene, Texture, TextureFilter, PLACEHOLDER_TEXTURE};
 use crate::vk::{
     self, Buffer, BufferUsage, CommandBuffer, Context, DescriptorBinding, DescriptorPool,
     DescriptorSet, DescriptorSetLayout, DescriptorType, Format, Image, ImageAspectFlags, ImageDesc,
@@ -105,7 +105,13 @@ impl SceneResources {
         let textures = plan
             .textures
             .iter()
-            .map(|p| load_texture(ctx, p, TEXTURE_FORMAT))
+            .map(|source| match source {
+                Texture::File(path) => load_texture(ctx, path, TEXTURE_FORMAT),
+                Texture::Placeholder => {
+                    let (side, _) = PLACEHOLDER_TEXTURE;
+                    upload_texture(ctx, side, side, &placeholder_texels(), TEXTURE_FORMAT)
+                }
+            })
             .collect::<Result<Vec<_>, _>>()?;
         // Normal maps hold vectors, not colours: decoding them as sRGB
         // would bend every normal.

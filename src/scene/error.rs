@@ -40,6 +40,10 @@ pub enum SceneError {
         /// What is wrong with it.
         reason: String,
     },
+    /// A model given where a scene goes could not be loaded (the
+    /// loader's message names the file and line).
+    #[error(transparent)]
+    Model(#[from] crate::mesh::obj::ObjError),
 }
 
 impl SceneError {
@@ -48,7 +52,7 @@ impl SceneError {
     pub fn field(&self) -> Option<&str> {
         match self {
             SceneError::Invalid { field, .. } => Some(field),
-            SceneError::Io { .. } | SceneError::Parse { .. } => None,
+            SceneError::Io { .. } | SceneError::Parse { .. } | SceneError::Model(_) => None,
         }
     }
 }

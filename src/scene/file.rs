@@ -19,8 +19,9 @@ use glam::Vec3;
 use serde::Deserialize;
 
 use super::{
-    Camera, DebugView, HdrFormat, Light, Lighting, Material, Object, Output, Scene, SceneError,
-    ShadingModel, Shape, TextureFilter, ToneMap, ToneMapOperator, Transform,
+    AssetWarning, Camera, DebugView, HdrFormat, Light, Lighting, Material, Object, Output, Scene,
+    SceneError, SceneWarning, ShadingModel, Shape, Texture, TextureFilter, ToneMap,
+    ToneMapOperator, Transform,
 };
 use std::sync::Arc;
 
@@ -492,10 +493,17 @@ impl Check<'_> {
         }
 
         let mut objects = Vec::with_capacity(raw.objects.len());
+        let mut warnings = Vec::new();
         for (i, object) in raw.objects.into_iter().enumerate() {
             let path = format!("objects[{i}]");
             if matches!(object.shape.kind, ShapeKind::Obj) {
-                objects.extend(self.obj_object(&path, object, &mut materials, &mut by_name)?);
+                objects.extend(self.obj_object(
+                    &path,
+                    object,
+                    &mut materials,
+                    &mut by_name,
+                    &mut warnings,
+                )?);
             } else {
                 objects.push(self.object(&path, object, &materials, &by_name)?);
             }
@@ -513,6 +521,7 @@ impl Check<'_> {
             objects,
             light_cutoff,
             sky,
+            warnings,
         })
     }
 
@@ -736,7 +745,7 @@ impl Check<'_> {
             }
             Ok(Some(resolved))
         };
-        let texture = file_at("texture", raw.texture)?;
+        let texture = file_at("texture", raw.texture)?.map(Texture::File);
         let mut normal_map = file_at("normal_map", raw.normal_map)?;
         if raw.normal_map_green.is_some() && normal_map.is_none() {
             return Err(self.invalid(field("normal_map_green"), "given without a normal_map"));
@@ -916,13 +925,16 @@ impl Check<'_> {
     /// An `obj` shape: the model is loaded, smoothed and given tangent
     /// frames here, once, and becomes one object per object/group of the
     /// file (named `name/group`), each with its MTL material unless the
-    /// scene object names one.
+    /// scene object names one (then the MTL's textures are never opened,
+    /// and its problems are no concern of the scene's). Missing MTL
+    /// libraries and textures are `warnings` (see [`Check::mtl_material`]).
     fn obj_object(
         &self,
         path: &str,
         raw: ObjectFile,
         materials: &mut Vec<Material>,
         by_name: &mut HashMap<String, usize>,
+        warnings: &mut Vec<SceneWarning>,
     ) -> Result<Vec<Object>> {
         let field = |name: &str| format!("{path}.{name}");
         if raw.name.trim().is_empty() {
@@ -1016,6 +1028,16 @@ impl Check<'_> {
             }
             None => None,
         };
+        let mut warn = |warning: AssetWarning| {
+            warnings.push(SceneWarning {
+                file: self.file.to_owned(),
+                field: field("shape.path"),
+                warning,
+            })
+        };
+        if over.is_none() {
+            model.warnings.iter().cloned().for_each(&mut warn);
+        }
         // The model's own materials, added on first use as `name/material`.
         let mut own: HashMap<Option<usize>, usize> = HashMap::new();
         let mut objects = Vec::with_capacity(meshes.len());
@@ -1034,8 +1056,10 @@ impl Check<'_> {
                             &field("shape.path"),
                             &raw.name,
                             part.material.map(|m| &model.materials[m]),
+                            &resolved.display().to_string(),
                             materials,
                             by_name,
+                            &mut warn,
                         )?;
                         own.insert(part.material, m);
                         m
@@ -1083,14 +1107,20 @@ impl Check<'_> {
     }
 
     /// Adds the scene material for an MTL material (or the default grey for
-    /// faces without one) and returns its index.
+    /// faces without one) and returns its index. A texture that is missing
+    /// or not a readable PNG or JPEG (by its header) is a warning: the base
+    /// colour becomes the magenta/black checker placeholder, a normal map
+    /// the flat normal (0, 0, 1), which is the same as leaving it out.
+    #[allow(clippy::too_many_arguments)]
     fn mtl_material(
         &self,
         field: &str,
         object: &str,
         mtl: Option<&obj::ObjMaterial>,
+        model: &str,
         materials: &mut Vec<Material>,
         by_name: &mut HashMap<String, usize>,
+        warn: &mut dyn FnMut(AssetWarning),
     ) -> Result<usize> {
         let default = obj::ObjMaterial {
             name: "default".into(),
@@ -1111,15 +1141,43 @@ impl Check<'_> {
             ));
         }
         let bounded = |v: Vec3| v.min(Vec3::splat(MAX_COLOUR as f32));
+        let mut usable = |path: &Option<std::path::PathBuf>, what: &str, fallback: &str| {
+            let path = path.as_ref()?;
+            let problem = if !path.is_file() {
+                format!("file not found: {}", path.display())
+            } else {
+                match crate::render::preflight::inspect_texture(path) {
+                    Ok(_) => return Some(Ok(path.clone())),
+                    Err(e) => format!("is not usable: {e}"),
+                }
+            };
+            warn(AssetWarning {
+                problem: format!("{model}: material \"{}\": {what} {problem}", mtl.name),
+                fallback: fallback.to_owned(),
+            });
+            Some(Err(()))
+        };
+        let texture = usable(
+            &mtl.texture,
+            "map_Kd",
+            "drawn with a magenta/black checker instead",
+        )
+        .map(|t| t.map_or(Texture::Placeholder, Texture::File));
+        let normal_map = usable(
+            &mtl.normal_map,
+            "normal map",
+            "drawn with the flat normal (0, 0, 1) instead (the surface's own normals)",
+        )
+        .and_then(|usable| usable.ok());
         materials.push(Material {
             name: name.clone(),
             ka: bounded(mtl.ka.unwrap_or(mtl.kd)),
             kd: bounded(mtl.kd),
             ks: bounded(mtl.ks),
             shininess: mtl.shininess.min(MAX_COLOUR as f32),
-            texture: mtl.texture.clone(),
+            texture,
             opacity: mtl.opacity,
-            normal_map: mtl.normal_map.clone(),
+            normal_map,
             normal_map_green_down: false,
             height_scale: None,
             shading: ShadingModel::Phong,

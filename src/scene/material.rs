@@ -1,7 +1,7 @@
 //! Blinn-Phong [`Material`]s and the [`ShadingModel`] that selects where
 //! lighting is evaluated.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use serde::Deserialize;
@@ -32,9 +32,10 @@ pub struct Material {
     /// Blinn-Phong exponent, > 0 (0 is rejected because `pow(0, 0)` is
     /// undefined in GLSL).
     pub shininess: f32,
-    /// Base-colour texture, resolved relative to the scene file's folder;
-    /// the file existed when the scene was loaded.
-    pub texture: Option<PathBuf>,
+    /// Base-colour texture: a file resolved relative to the scene file's
+    /// folder (which existed when the scene was loaded), or the placeholder
+    /// drawn for a model's texture that is missing or unreadable.
+    pub texture: Option<Texture>,
     /// Opacity in `[0, 1]`; 1 is opaque.
     pub opacity: f32,
     /// Tangent-space normal map (read as linear, not sRGB), resolved like
@@ -51,6 +52,46 @@ pub struct Material {
     pub height_scale: Option<f32>,
     /// Shading model.
     pub shading: ShadingModel,
+}
+
+/// Where a base-colour texture comes from.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Texture {
+    /// An image file (PNG or JPEG, recognised by content).
+    File(PathBuf),
+    /// The placeholder for a texture that could not be used: a magenta and
+    /// black checker ([`PLACEHOLDER_TEXTURE`]), unmistakable on any model.
+    Placeholder,
+}
+
+impl Texture {
+    /// The file, unless this is the placeholder.
+    pub fn file(&self) -> Option<&Path> {
+        match self {
+            Texture::File(path) => Some(path),
+            Texture::Placeholder => None,
+        }
+    }
+}
+
+/// The placeholder texture: side in texels, and squares per side.
+pub const PLACEHOLDER_TEXTURE: (u32, u32) = (64, 8);
+
+/// The RGBA8 (sRGB) texels of [`Texture::Placeholder`], top row first:
+/// magenta (255, 0, 255) and black squares.
+pub fn placeholder_texels() -> Vec<u8> {
+    let (side, squares) = PLACEHOLDER_TEXTURE;
+    let cell = side / squares;
+    (0..side * side)
+        .flat_map(|i| {
+            let (x, y) = (i % side, i / side);
+            if (x / cell + y / cell) % 2 == 0 {
+                [255, 0, 255, 255]
+            } else {
+                [0, 0, 0, 255]
+            }
+        })
+        .collect()
 }
 
 impl Material {

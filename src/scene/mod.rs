@@ -10,6 +10,7 @@ mod file;
 mod knobs;
 mod lights;
 mod material;
+mod model_scene;
 mod object;
 mod sky;
 
@@ -18,6 +19,7 @@ use std::path::Path;
 use glam::Vec3;
 use serde::Deserialize;
 
+pub use crate::mesh::obj::AssetWarning;
 pub use camera::Camera;
 pub use error::SceneError;
 pub use file::{
@@ -25,7 +27,11 @@ pub use file::{
 };
 pub use knobs::{settings as knob_settings, Best, Knob, KnobError, KNOBS};
 pub use lights::{Light, LightRange};
-pub use material::{Material, ShadingModel};
+pub use material::{placeholder_texels, Material, ShadingModel, Texture, PLACEHOLDER_TEXTURE};
+pub use model_scene::{
+    is_model_file, model_scene_toml, ModelSceneOptions, MODEL_FOV_Y, MODEL_VIEW_AZIMUTH,
+    MODEL_VIEW_ELEVATION,
+};
 pub use object::{Object, Shape, Transform};
 pub use sky::{
     Atmosphere, OzoneDepth, Sky, Sun, TableFilter, TableMapping, DEFAULT_ATMOSPHERE_SAMPLES,
@@ -57,6 +63,37 @@ pub struct Scene {
     /// The sun and atmosphere (`[sun]`, `[atmosphere]`), drawn by the
     /// atmosphere pass; `None` without them.
     pub sky: Option<Sky>,
+    /// What was wrong with the models' assets (MTL libraries, textures)
+    /// and what is drawn instead; see [`Scene::strict`].
+    pub warnings: Vec<SceneWarning>,
+}
+
+/// An [`AssetWarning`] of one of the scene's objects.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SceneWarning {
+    /// The scene file (or name given to [`Scene::from_toml`]).
+    pub file: String,
+    /// The field that names the model, e.g. `objects[0].shape.path`.
+    pub field: String,
+    /// The problem and its fallback.
+    pub warning: AssetWarning,
+}
+
+impl std::fmt::Display for SceneWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.warning.fmt(f)
+    }
+}
+
+impl SceneWarning {
+    /// The warning as the error `--strict` makes of it.
+    pub fn to_error(&self) -> SceneError {
+        SceneError::Invalid {
+            file: self.file.clone(),
+            field: self.field.clone(),
+            reason: self.warning.problem.clone(),
+        }
+    }
 }
 
 /// Render target description.
@@ -240,6 +277,9 @@ impl Scene {
     /// model, relative to the scene file; the object's `material` becomes
     /// optional and it takes `smoothing`, `crease_angle` and
     /// `weld_tolerance`, see `crate::mesh::obj`). Every number must be finite.
+    /// A model's missing or unreadable MTL library or texture does not fail
+    /// the load: it is drawn with the default material or a placeholder
+    /// texture, and recorded in [`Scene::warnings`] (`docs/models-corpus.md`).
     ///
     /// # Errors
     ///
@@ -278,6 +318,23 @@ impl Scene {
             objects: Vec::new(),
             light_cutoff: DEFAULT_LIGHT_CUTOFF,
             sky: None,
+            warnings: Vec::new(),
+        }
+    }
+
+    /// Fails with the first asset warning as an error (`--strict`: a run
+    /// that must not draw placeholders or default materials).
+    pub fn strict(&self) -> Result<(), SceneError> {
+        match self.warnings.first() {
+            Some(w) => Err(w.to_error()),
+            None => Ok(()),
+        }
+    }
+
+    /// Prints each asset warning to stderr, once, as `warning: ...`.
+    pub fn print_warnings(&self) {
+        for w in &self.warnings {
+            eprintln!("warning: {w}");
         }
     }
 

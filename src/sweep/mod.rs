@@ -208,6 +208,9 @@ pub struct SweepResult {
     pub passes: Vec<String>,
     /// Every setup measure name seen, in order.
     pub setup: Vec<String>,
+    /// Asset warnings of the scene's models (missing MTL libraries and
+    /// textures drawn with defaults and placeholders).
+    pub asset_warnings: usize,
     pub rows: Vec<Row>,
 }
 

@@ -403,6 +403,7 @@ impl Sweep {
             knobs: self.axes.iter().map(|a| a.knob.name.to_string()).collect(),
             passes,
             setup: setup_names,
+            asset_warnings: self.base.warnings.len(),
             rows,
         })
     }

@@ -70,6 +70,7 @@ fn csv_has_a_header_and_one_line_per_row() {
         knobs: vec!["tessellation".into(), "hdr_format".into()],
         passes: vec!["opaque".into(), "tonemap".into(), "transparent".into()],
         setup: vec!["od_table_kib".into()],
+        asset_warnings: 0,
         rows: vec![
             Row {
                 setup: vec![("od_table_kib".into(), 256.0)],
@@ -124,6 +125,7 @@ fn csv_fields_are_quoted_when_needed() {
         knobs: knobs.clone(),
         passes: vec![],
         setup: vec![],
+        asset_warnings: 0,
         rows: vec![row(&settings, 1.0, 0.5, true)],
     };
     let csv = to_csv(&result).unwrap();
@@ -145,6 +147,7 @@ fn json_keeps_knob_order_and_has_the_metrics() {
         knobs: vec!["tessellation".into(), "hdr_format".into()],
         passes: vec!["opaque".into()],
         setup: vec![],
+        asset_warnings: 2,
         rows: vec![row(
             &[("tessellation", "1"), ("hdr_format", "rgba32f")],
             4.0,
@@ -162,6 +165,7 @@ fn json_keeps_knob_order_and_has_the_metrics() {
         "\"pareto\":true",
         "\"gpu_ms\":{",
         "\"p95\":",
+        "\"asset_warnings\":2",
     ] {
         assert!(json.contains(key), "{key} missing: {json}");
     }
