@@ -101,35 +101,44 @@ fn work_counts_primitives_and_fragments_exactly() {
 
 #[test]
 fn instruction_counts_repeat_and_see_three_percent_more_pixels() {
+    // 192x108: the tone map (one fragment per pixel) is over a million
+    // instructions, the smallest count the gate judges.
     let dir = tempfile::tempdir().unwrap();
     let base_json = dir.path().join("base.json");
-    let base = measured(64, "instructions", &base_json);
+    let counted = |width: u32, json: &Path, extra: &[&str]| {
+        let out = common::aerial()
+            .arg("bench")
+            .arg(triangle())
+            .args(["--frames=5", "--warmup=1", "--height=108", "--validate"])
+            .arg(format!("--width={width}"))
+            .args(["--metric=instructions", "--json", json.to_str().unwrap()])
+            .args(extra)
+            .output()
+            .unwrap();
+        (out, json.to_path_buf())
+    };
+    let (out, _) = counted(192, &base_json, &[]);
+    assert_eq!(code(&out), Some(0), "{}", show(&out));
+    let base = BenchReport::load(&base_json).unwrap();
     let scene = &base.scenes[0];
-    let total = scene
-        .gpu_total
-        .as_ref()
-        .unwrap()
-        .instructions
-        .as_ref()
-        .unwrap();
+    let total = scene.gpu_total.as_ref().unwrap().instructions.as_ref().unwrap();
+    // One frame's count wobbles by the driver's thread hand-offs (a few
+    // thousand instructions; now and then a larger allocation): under 1 %
+    // from frame to frame, and the median of 5 frames far less (below).
+    assert!(total.spread < 1e-2, "frame spread {}", total.spread);
     let mut sum = 0.0;
     for p in &scene.passes {
         let c = p
             .instructions
             .as_ref()
             .unwrap_or_else(|| panic!("{}: no count", p.name));
-        assert_eq!(c.samples.len(), 3, "{}", p.name);
-        // Repeatable to 0.1 % from frame to frame.
-        assert!(c.spread < 1e-3, "{}: spread {}", p.name, c.spread);
+        assert_eq!(c.samples.len(), 5, "{}", p.name);
         assert!(c.empty_pass_multiple.is_some(), "{}", p.name);
         sum += c.summary.median;
     }
     // The passes are differences of prefixes: with the fixed part (an
     // empty render pass, submission, fence) they make up the frame.
-    assert!(
-        sum > 0.0 && sum < total.summary.median,
-        "{sum} vs {total:?}"
-    );
+    assert!(sum > 0.0 && sum < total.summary.median, "{sum} vs {total:?}");
     let tonemap = |r: &BenchReport| {
         r.scenes[0]
             .passes
@@ -140,26 +149,31 @@ fn instruction_counts_repeat_and_see_three_percent_more_pixels() {
             .summary
             .median
     };
-    let empty = base.empty_passes[0].gpu.as_ref().unwrap();
-    assert!(empty.instructions.as_ref().unwrap().summary.median > 0.0);
+    assert!(tonemap(&base) > 1e6, "{}", tonemap(&base));
 
-    // The same build again: the gate at 2 % passes on the interval.
-    let same = bench(
-        64,
-        &[
-            "--metric=instructions",
-            "--compare",
-            base_json.to_str().unwrap(),
-            "--max-ratio",
-            "1.02",
-        ],
+    // The same build again: counts repeat to 0.1 % and the 2 % gate passes.
+    let again_json = dir.path().join("again.json");
+    let (same, _) = counted(
+        192,
+        &again_json,
+        &["--compare", base_json.to_str().unwrap(), "--max-ratio", "1.02"],
     );
     assert_eq!(code(&same), Some(0), "{}", show(&same));
+    let again = BenchReport::load(&again_json).unwrap();
+    let repeat = tonemap(&again) / tonemap(&base) - 1.0;
+    assert!(repeat.abs() < 1e-3, "tone map moved {repeat}");
+    let frame = |r: &BenchReport| {
+        r.scenes[0].gpu_total.as_ref().unwrap().instructions.as_ref().unwrap().summary.median
+    };
+    let repeat = frame(&again) / frame(&base) - 1.0;
+    assert!(repeat.abs() < 1e-3, "frame moved {repeat}");
 
-    // 66 x 48 is 3.1 % more pixels: the tone map (one fragment per pixel)
-    // costs at least 2 % more, and the 2 % gate fails.
+    // 198 x 108 is 3.1 % more pixels: the tone map costs at least 2 % more,
+    // and the 2 % gate fails on it.
     let wider_json = dir.path().join("wider.json");
-    let wider = measured(66, "instructions", &wider_json);
+    let (out, _) = counted(198, &wider_json, &[]);
+    assert_eq!(code(&out), Some(0), "{}", show(&out));
+    let wider = BenchReport::load(&wider_json).unwrap();
     let growth = tonemap(&wider) / tonemap(&base);
     assert!(growth > 1.02 && growth < 1.10, "tone map grew {growth}");
     let gate = common::aerial()

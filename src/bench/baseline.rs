@@ -49,7 +49,18 @@ pub struct RatioRow {
     /// both reports kept them, else over this run's frames against the
     /// baseline's median; `None` without samples on this side.
     pub interval: Option<Interval>,
+    /// Whether the gate judges this row: every time row, and instruction
+    /// rows of at least [`MIN_JUDGED_INSTRUCTIONS`] in the baseline.
+    pub judged: bool,
 }
+
+/// The smallest instruction count a gate judges. The driver's thread
+/// hand-offs (condition variables, allocator) move a submission's count by
+/// about ±2,000 instructions from one frame to the next; below a million
+/// that is more than 0.2 %, and a 2 % gate would fail on noise. Smaller
+/// rows are printed, not judged: a pass that small is under 1e-3 of any
+/// real frame.
+pub const MIN_JUDGED_INSTRUCTIONS: f64 = 1e6;
 
 /// What the gate decides for a row, or for a whole comparison.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -71,7 +82,7 @@ impl RatioRow {
 
     /// The gate's decision for this row at `max_ratio`.
     pub fn verdict(&self, max_ratio: f64) -> Verdict {
-        let Some(ratio) = self.ratio else {
+        let (Some(ratio), true) = (self.ratio, self.judged) else {
             return Verdict::Pass;
         };
         let interval = self.interval.unwrap_or(Interval::point(ratio));
@@ -258,6 +269,8 @@ pub fn compare(
                     current: c.median,
                     ratio: usable.then(|| c.median / b.median),
                     interval,
+                    judged: c.metric != Metric::Instructions
+                        || b.median >= MIN_JUDGED_INSTRUCTIONS,
                 })
             }
             None => new.push(c.key.clone()),

@@ -222,13 +222,20 @@ fn the_gate_decides_on_the_interval_not_the_point() {
 fn instruction_rows_are_compared_only_when_asked_for() {
     let mut baseline = report();
     let mut current = report();
-    baseline.scenes[0].passes[0].instructions = CountReport::of(vec![1_000_000; 5]);
-    current.scenes[0].passes[0].instructions = CountReport::of(vec![1_030_000; 5]);
+    baseline.scenes[0].passes[0].instructions = CountReport::of(vec![10_000_000; 5]);
+    current.scenes[0].passes[0].instructions = CountReport::of(vec![10_300_000; 5]);
+    // A row too small to judge: its noise is larger than the gate.
+    baseline.scenes[0].passes[1].instructions = CountReport::of(vec![100_000; 5]);
+    current.scenes[0].passes[1].instructions = CountReport::of(vec![110_000; 5]);
     let time_only = compare(&current, &baseline, &[Metric::Time]);
     assert!(time_only.rows.iter().all(|r| r.metric == Metric::Time));
     let c = compare(&current, &baseline, &[Metric::Instructions]);
-    assert_eq!(c.rows.len(), 1);
+    assert_eq!(c.rows.len(), 2);
+    let small = &c.rows[1];
+    assert!(!small.judged);
+    assert_eq!(small.verdict(1.02), Verdict::Pass);
     let row = &c.rows[0];
+    assert!(row.judged);
     assert_eq!(row.metric, Metric::Instructions);
     assert!((row.ratio.unwrap() - 1.03).abs() < 1e-12);
     // Exact counts: the interval is the point, so a 2 % gate is decisive.

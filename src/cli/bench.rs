@@ -486,6 +486,7 @@ fn print_ratios(c: &BaselineComparison, max_ratio: Option<f64>) {
             |i| format!("{:.4}..{:.4}", i.low, i.high),
         );
         let flag = match max_ratio.map(|m| (m, r.verdict(m))) {
+            _ if !r.judged => "  (not judged: under 1e6 instructions)".to_string(),
             Some((m, Verdict::Fail)) => format!("  > {m}"),
             Some((m, Verdict::Inconclusive)) => format!("  straddles {m}"),
             _ => String::new(),
@@ -551,7 +552,7 @@ fn gate(
     let unjudged: Vec<String> = c
         .rows
         .iter()
-        .filter(|r| r.ratio.is_none())
+        .filter(|r| r.judged && r.ratio.is_none())
         .map(|r| format!("{} (baseline {})", r.key, r.baseline))
         .collect();
     if !unjudged.is_empty() {
