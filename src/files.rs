@@ -5,9 +5,9 @@
 //! - Concurrent writers to the same path each get their own temporary file,
 //!   so the destination is always one whole file, never a mix.
 //! - A failed or interrupted write leaves no temporary file behind: the
-//!   temporary file is removed on drop, and [`remove_pending`] removes the
-//!   ones still open when the process is interrupted (the CLI calls it from
-//!   its SIGINT/SIGTERM handler).
+//!   temporary file is removed on drop (an interrupted run unwinds and
+//!   drops it, see [`crate::interrupt`]), and [`remove_pending`] removes
+//!   the ones still open when the process must end without unwinding.
 //! - Only regular files are replaced. A destination that is a device, FIFO,
 //!   socket or folder is refused; a symbolic link is written through (its
 //!   target is replaced, the link stays).
@@ -35,6 +35,18 @@ pub enum FileError {
     },
 }
 
+/// The error of a file not committed because of an interrupt (see
+/// [`crate::interrupt`]): an I/O error of kind `Interrupted`.
+fn interrupted(path: &Path) -> FileError {
+    FileError::Io {
+        path: path.to_path_buf(),
+        error: std::io::Error::new(
+            std::io::ErrorKind::Interrupted,
+            crate::interrupt::Interrupted,
+        ),
+    }
+}
+
 /// Temporary files currently being written, for [`remove_pending`].
 static PENDING: Mutex<Option<HashSet<PathBuf>>> = Mutex::new(None);
 
@@ -43,8 +55,8 @@ fn pending() -> std::sync::MutexGuard<'static, Option<HashSet<PathBuf>>> {
     PENDING.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-/// Removes every temporary file still being written. For an interrupt
-/// handler (which then exits); holding the lock also waits for a rename in
+/// Removes every temporary file still being written. For a process that
+/// ends without unwinding (it exits right after); holding the lock also waits for a rename in
 /// progress, so a file is either complete under its final name or gone.
 pub fn remove_pending() {
     let mut guard = pending();
@@ -199,6 +211,8 @@ impl PendingFile {
     /// Flushes the data to disk and renames the file into place. The
     /// destination is checked again, since it may have changed meanwhile.
     pub fn commit(self) -> Result<PathBuf, FileError> {
+        // A safe point: after an interrupt nothing more is committed.
+        crate::interrupt::check().map_err(|_| interrupted(&self.path))?;
         let ready = self.prepare()?;
         ready.persist(&mut pending())
     }
@@ -286,6 +300,10 @@ impl Drop for PendingFile {
 /// handler takes, so an interrupt leaves either none of the files or all
 /// of them, never some. Returns the paths written.
 pub fn commit_all(files: Vec<PendingFile>) -> Result<Vec<PathBuf>, FileError> {
+    // A safe point: after an interrupt nothing more is committed.
+    if let (Err(_), Some(first)) = (crate::interrupt::check(), files.first()) {
+        return Err(interrupted(&first.path));
+    }
     // The slow part (flushing to disk) before taking the lock.
     let ready = files
         .into_iter()

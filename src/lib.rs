@@ -11,6 +11,7 @@ pub mod bench;
 pub mod budget;
 pub mod files;
 pub mod image_file;
+pub mod interrupt;
 pub mod mesh;
 pub mod render;
 pub mod report;

@@ -60,4 +60,7 @@ pub enum RenderError {
     Input { path: PathBuf, reason: String },
     #[error("size {width}x{height}: each side must be in 1..={max}", max = crate::scene::MAX_OUTPUT_SIZE)]
     Size { width: u32, height: u32 },
+    /// Stopped at a safe point by an interrupt (see [`crate::interrupt`]).
+    #[error(transparent)]
+    Interrupted(#[from] crate::interrupt::Interrupted),
 }

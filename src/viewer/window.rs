@@ -216,6 +216,12 @@ impl ApplicationHandler for App {
     }
 
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        // A safe point between frames: an interrupt closes the window as
+        // the close button does (see `crate::interrupt`).
+        if crate::interrupt::requested() {
+            event_loop.exit();
+            return;
+        }
         let Some(live) = self.live.as_ref() else {
             return;
         };
