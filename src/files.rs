@@ -70,10 +70,72 @@ pub fn remove_pending() {
     std::mem::forget(guard);
 }
 
+/// What makes two paths the same file: the device and inode on Unix, so a
+/// symbolic link or a hard link to a file is that file; elsewhere the
+/// canonical path (symbolic links only).
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+struct FileId(#[cfg(unix)] (u64, u64), #[cfg(not(unix))] PathBuf);
+
+impl FileId {
+    /// The identity of the existing file at `path` (through symbolic
+    /// links); `None` when there is none.
+    fn of(path: &Path) -> Option<FileId> {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::MetadataExt as _;
+            std::fs::metadata(path)
+                .ok()
+                .map(|m| FileId((m.dev(), m.ino())))
+        }
+        #[cfg(not(unix))]
+        {
+            std::fs::canonicalize(path).ok().map(FileId)
+        }
+    }
+}
+
+/// The inputs of the running command, by identity, with the path they
+/// were given as (for messages). See [`protect_inputs`].
+static INPUTS: Mutex<Vec<(FileId, PathBuf)>> = Mutex::new(Vec::new());
+
+/// Records `paths` as inputs of the running command (its scene, models,
+/// MTL libraries, textures, height maps, scripts, baselines, images to
+/// compare...): from then on no output may be one of them.
+/// [`check_destination`], and so every write through this module, refuses
+/// a destination that is the same file as an input, whatever the path
+/// names it by (symbolic links, hard links, `./` and `..`). Paths that do
+/// not exist are skipped: they cannot be overwritten by accident.
+///
+/// Commands protect their inputs once they are parsed and then check
+/// their outputs, so the refusal comes before any work; the same check
+/// when each file is committed catches any output checked too early.
+pub fn protect_inputs<P: AsRef<Path>>(paths: impl IntoIterator<Item = P>) {
+    let mut inputs = INPUTS.lock().unwrap_or_else(|p| p.into_inner());
+    for path in paths {
+        let path = path.as_ref();
+        if let Some(id) = FileId::of(path) {
+            if !inputs.iter().any(|(known, _)| *known == id) {
+                inputs.push((id, path.to_path_buf()));
+            }
+        }
+    }
+}
+
+/// The protected input that `path` (an existing file) is, if any.
+fn protected_input(path: &Path) -> Option<PathBuf> {
+    let id = FileId::of(path)?;
+    let inputs = INPUTS.lock().unwrap_or_else(|p| p.into_inner());
+    inputs
+        .iter()
+        .find(|(known, _)| *known == id)
+        .map(|(_, given)| given.clone())
+}
+
 /// Checks that `path` can be an output: it names a file in an existing
-/// folder and is not a folder, device, FIFO or socket. Returns the path to
-/// replace (the target when `path` is a symbolic link). Call it before long
-/// work, so a bad output path fails in seconds, not after the render.
+/// folder, is not a folder, device, FIFO or socket, and is not one of the
+/// command's inputs ([`protect_inputs`]). Returns the path to replace (the
+/// target when `path` is a symbolic link). Call it before long work, so a
+/// bad output path fails in seconds, not after the render.
 pub fn check_destination(path: &Path) -> Result<PathBuf, FileError> {
     let refuse = |reason: String| FileError::Refused {
         path: path.to_path_buf(),
@@ -102,6 +164,17 @@ pub fn check_destination(path: &Path) -> Result<PathBuf, FileError> {
                     .into(),
             ));
         }
+        if let Some(input) = protected_input(&dest) {
+            let reason = if input == path {
+                "it is an input of this command; writing it would destroy the input".to_string()
+            } else {
+                format!(
+                    "it is the same file as the input {}; writing it would destroy the input",
+                    input.display()
+                )
+            };
+            return Err(refuse(reason));
+        }
     }
     let dir = parent(&dest);
     match std::fs::metadata(dir) {
@@ -109,6 +182,65 @@ pub fn check_destination(path: &Path) -> Result<PathBuf, FileError> {
         Ok(_) => Err(refuse(format!("{} is not a folder", dir.display()))),
         Err(e) => Err(refuse(format!("folder {}: {e}", dir.display()))),
     }
+}
+
+/// The file formats this crate writes images in. The name of an output
+/// must say its format: a PNG is named `*.png`, an OpenEXR `*.exr` (any
+/// case), so no file holds data its name misrepresents.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Png,
+    Exr,
+}
+
+impl Format {
+    /// The extension, without the dot.
+    pub fn extension(self) -> &'static str {
+        match self {
+            Format::Png => "png",
+            Format::Exr => "exr",
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Format::Png => "PNG",
+            Format::Exr => "OpenEXR",
+        }
+    }
+}
+
+/// Checks that the name of `path` ends in `format`'s extension.
+pub fn check_format(path: &Path, format: Format) -> Result<(), FileError> {
+    let ext = path.extension().map(|e| e.to_string_lossy().into_owned());
+    if ext
+        .as_deref()
+        .is_some_and(|e| e.eq_ignore_ascii_case(format.extension()))
+    {
+        return Ok(());
+    }
+    let named = match ext {
+        Some(e) => format!("the name ends in .{e}"),
+        None => "the name has no extension".to_string(),
+    };
+    Err(FileError::Refused {
+        path: path.to_path_buf(),
+        reason: format!(
+            "{named}, but this output is written as {}; name it *.{}",
+            format.name(),
+            format.extension()
+        ),
+    })
+}
+
+/// [`check_destination`] and [`check_format`]: what a command checks for
+/// each image output before its work.
+pub fn check_output(path: &Path, format: Format) -> Result<PathBuf, FileError> {
+    // The destination first: that an output is an input is the more
+    // important news.
+    let dest = check_destination(path)?;
+    check_format(path, format)?;
+    Ok(dest)
 }
 
 /// Checks that `dir` is a folder or can be created as one (its nearest

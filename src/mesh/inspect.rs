@@ -48,6 +48,11 @@ pub struct MeshReport {
     /// Largest | |N| − 1 |, | |T| − 1 |, |N·T| or | |w| − 1 | over the vertices.
     pub max_orthonormality_error: f32,
     pub seconds: StageSeconds,
+    /// The files the model was read from (the OBJ, its MTL libraries and
+    /// their textures; see [`crate::mesh::obj::ObjModel::files`]). Not
+    /// part of the JSON report.
+    #[serde(skip)]
+    pub files: Vec<std::path::PathBuf>,
 }
 
 /// Loads `path` as the renderer would with `options` and reports on it.
@@ -107,6 +112,7 @@ pub fn inspect(path: &Path, options: &ModelOptions) -> Result<MeshReport, ObjErr
             smoothing,
             tangents,
         },
+        files: model.files.clone(),
     };
     for (mesh, stats) in &meshes {
         report.vertices += mesh.vertices.len();

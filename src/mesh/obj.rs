@@ -100,6 +100,10 @@ pub struct ObjModel {
     pub parts: Vec<ObjPart>,
     /// Materials of the MTL libraries the file names.
     pub materials: Vec<ObjMaterial>,
+    /// Every file the model was read from or refers to: the OBJ itself
+    /// (when loaded with [`load_obj`]), its MTL libraries and their
+    /// textures. A command must never write over one of them.
+    pub files: Vec<PathBuf>,
 }
 
 impl ObjModel {
@@ -138,7 +142,9 @@ pub fn load_obj(path: &Path) -> Result<ObjModel, ObjError> {
     // replaced rather than refusing the file.
     let text = String::from_utf8_lossy(&bytes);
     let base_dir = path.parent().unwrap_or_else(|| Path::new(""));
-    parse_obj(&text, &file, base_dir)
+    let mut model = parse_obj(&text, &file, base_dir)?;
+    model.files.insert(0, path.to_path_buf());
+    Ok(model)
 }
 
 /// [`load_obj`] on text already read; `file` is only used in messages and
@@ -152,11 +158,13 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
         ..Default::default()
     };
     let mut reader = std::io::BufReader::new(text.as_bytes());
+    let libraries = std::cell::RefCell::new(Vec::new());
     let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |mtl| {
+        let path = base_dir.join(mtl);
+        libraries.borrow_mut().push(path.clone());
         // Read like the OBJ: non-UTF-8 bytes (in comments and names) are
         // replaced rather than refusing the library.
-        let bytes =
-            std::fs::read(base_dir.join(mtl)).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        let bytes = std::fs::read(path).map_err(|_| tobj::LoadError::OpenFileFailed)?;
         let text = String::from_utf8_lossy(&bytes);
         tobj::load_mtl_buf(&mut std::io::BufReader::new(text.as_bytes()))
     })
@@ -236,7 +244,15 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
             reason: "no faces (an OBJ model needs at least one triangle)".into(),
         });
     }
-    Ok(ObjModel { parts, materials })
+    let mut files = libraries.into_inner();
+    for m in &materials {
+        files.extend(m.texture.iter().chain(&m.normal_map).cloned());
+    }
+    Ok(ObjModel {
+        parts,
+        materials,
+        files,
+    })
 }
 
 fn material(m: &tobj::Material, file: &str, base_dir: &Path) -> Result<ObjMaterial, ObjError> {

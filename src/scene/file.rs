@@ -12,6 +12,7 @@
 //! loses the position of errors inside them; the per-type field checks are
 //! done here instead, with clearer messages.
 
+use std::cell::RefCell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -325,7 +326,12 @@ pub(super) fn parse(text: &str, file: &str, base_dir: &Path) -> Result<Scene> {
         file: file.to_owned(),
         message: e.to_string().trim_end().to_owned(),
     })?;
-    Check { file, base_dir }.scene(raw)
+    Check {
+        file,
+        base_dir,
+        models: RefCell::new(Vec::new()),
+    }
+    .scene(raw)
 }
 
 /// Validation context: where messages say the error is, and where textures
@@ -333,6 +339,8 @@ pub(super) fn parse(text: &str, file: &str, base_dir: &Path) -> Result<Scene> {
 struct Check<'a> {
     file: &'a str,
     base_dir: &'a Path,
+    /// The files of the OBJ models read so far (for [`Scene::files`]).
+    models: RefCell<Vec<PathBuf>>,
 }
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -503,6 +511,13 @@ impl Check<'_> {
 
         let sky = super::sky::check(self.file, raw.sun, raw.atmosphere)?;
 
+        let mut files = self.models.take();
+        for m in &materials {
+            files.extend(m.texture.iter().chain(&m.normal_map).cloned());
+        }
+        let mut seen = std::collections::HashSet::new();
+        files.retain(|f| seen.insert(f.clone()));
+
         Ok(Scene {
             output,
             camera,
@@ -513,6 +528,7 @@ impl Check<'_> {
             objects,
             light_cutoff,
             sky,
+            files,
         })
     }
 
@@ -961,6 +977,7 @@ impl Check<'_> {
         }
         let model = obj::load_obj(&resolved)
             .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
+        self.models.borrow_mut().extend(model.files.iter().cloned());
         let crease_degrees = match raw.crease_angle {
             None => obj::DEFAULT_CREASE_DEGREES,
             Some(x) => {

@@ -57,6 +57,11 @@ pub struct Scene {
     /// The sun and atmosphere (`[sun]`, `[atmosphere]`), drawn by the
     /// atmosphere pass; `None` without them.
     pub sky: Option<Sky>,
+    /// Every file the scene was read from: the scene file (when loaded
+    /// with [`Scene::load`]), OBJ models, their MTL libraries, textures,
+    /// normal and height maps. Empty for scenes built in code. A command
+    /// must never write over one of them (see [`crate::files::protect_inputs`]).
+    pub files: Vec<std::path::PathBuf>,
 }
 
 /// Render target description.
@@ -174,7 +179,9 @@ impl Scene {
             reason,
         })?;
         let base_dir = path.parent().unwrap_or_else(|| Path::new(""));
-        Scene::from_toml(&text, &file, base_dir)
+        let mut scene = Scene::from_toml(&text, &file, base_dir)?;
+        scene.files.insert(0, path.to_path_buf());
+        Ok(scene)
     }
 
     /// Parses and validates a scene from TOML text. `file` is only used in
@@ -278,6 +285,7 @@ impl Scene {
             objects: Vec::new(),
             light_cutoff: DEFAULT_LIGHT_CUTOFF,
             sky: None,
+            files: Vec::new(),
         }
     }
 

@@ -608,7 +608,7 @@ impl Live {
             crate::vk::validation::check(&log.messages())?;
         }
         let exr_path = path.with_extension("exr");
-        files::check_destination(path).map_err(|e| shot_err(e.to_string()))?;
+        files::check_output(path, files::Format::Png).map_err(|e| shot_err(e.to_string()))?;
         files::check_destination(&exr_path).map_err(|e| shot_err(e.to_string()))?;
         // The frame on screen (the renderer reads its output back every
         // frame) and, for the EXR, the same view drawn once more by a
