@@ -902,7 +902,10 @@ impl Check<'_> {
                     ),
                 ));
             }
-            if s > 0.0 && !(MIN_LENGTH..=MAX_LENGTH).contains(&f64::from(s)) {
+            // The bounds are checked on the value as written: rounded to
+            // f32, 1e-6 is just below 1e-6, and the documented bound
+            // itself would be refused.
+            if s > 0.0 && !(MIN_LENGTH..=MAX_LENGTH).contains(&raw.scale[i]) {
                 return Err(self.invalid(
                     field("scale"),
                     format!(
