@@ -158,9 +158,11 @@ pub enum ToneMapOperator {
     Reinhard,
     /// The ACES filmic approximation.
     Aces,
-    /// No curve: exposure, then clamped to [0, 1]. Without `--hdr` the
-    /// scene is then drawn straight into the 8-bit output, with no HDR
-    /// attachment and no tone-map subpass.
+    /// No curve: exposure, then clamped to [0, 1]. Without `--hdr`, with
+    /// an `rgba32f` HDR format, exposure 1, forward lighting, no
+    /// transparent object and no atmosphere, the scene is then drawn
+    /// straight into the 8-bit output, with no HDR attachment and no
+    /// tone-map subpass; the image is the same as through them.
     None,
 }
 
