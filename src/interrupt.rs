@@ -12,11 +12,14 @@
 //! files are removed by their drop, and the caller exits with
 //! [`EXIT_INTERRUPTED`].
 //!
-//! Work that reaches no safe point within [`GRACE`] of the signal (a
-//! single very long driver call, a long CPU phase), or a second signal,
-//! ends the process at once: the temporary output files are removed
-//! ([`crate::files::remove_pending`]) and the process exits with `_exit`,
-//! which runs no destructors, so it cannot crash either.
+//! Only while a Vulkan context exists ([`Busy`]) does the process wait for
+//! a safe point. Otherwise (parsing, CPU-only commands such as `mesh` or
+//! `compare`, encoding after the device is gone), and when the work
+//! reaches no safe point within [`GRACE`] of the signal (a single very
+//! long driver call) or at a second signal, the process ends at once: the
+//! temporary output files are removed ([`crate::files::remove_pending`])
+//! and it exits with `_exit`, which runs no destructors, so it cannot
+//! crash either.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
@@ -33,6 +36,30 @@ pub const GRACE: Duration = Duration::from_secs(10);
 pub const FORCED_MESSAGE: &str = "interrupted; stopped without waiting for the current step";
 
 static REQUESTED: AtomicBool = AtomicBool::new(false);
+
+/// How many [`Busy`] guards are alive.
+static BUSY: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// Held while work that must not be cut short is under way (a Vulkan
+/// context exists: the driver and the validation layer may be running):
+/// an interrupt then waits for a safe point instead of ending the process
+/// at once.
+#[derive(Debug)]
+pub struct Busy(());
+
+impl Busy {
+    /// Starts a stretch of such work, until the guard is dropped.
+    pub fn start() -> Busy {
+        BUSY.fetch_add(1, Ordering::SeqCst);
+        Busy(())
+    }
+}
+
+impl Drop for Busy {
+    fn drop(&mut self) {
+        BUSY.fetch_sub(1, Ordering::SeqCst);
+    }
+}
 
 /// The work was stopped by an interrupt.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
@@ -135,9 +162,10 @@ pub fn install() -> std::io::Result<()> {
     Ok(())
 }
 
-/// The watcher thread: after the first signal, waits [`GRACE`] for the
-/// process to end by itself; a second signal or the end of the grace
-/// period ends it at once.
+/// The watcher thread: after the first signal, ends the process at once
+/// unless a [`Busy`] guard is alive; then waits [`GRACE`] for the process to
+/// end by itself, and a second signal or the end of the grace period ends
+/// it at once.
 #[cfg(unix)]
 fn watch(read_fd: libc::c_int) {
     let mut byte = 0u8;
@@ -155,15 +183,24 @@ fn watch(read_fd: libc::c_int) {
     };
     // Wait for the first signal (poll restarts after EINTR by looping).
     while !read(-1) {}
-    let deadline = std::time::Instant::now() + GRACE;
-    loop {
-        let left = deadline.saturating_duration_since(std::time::Instant::now());
-        if left.is_zero() || read(left.as_millis().clamp(1, i32::MAX as u128) as libc::c_int) {
-            break;
+    let forced = BUSY.load(Ordering::SeqCst) > 0;
+    if forced {
+        let deadline = std::time::Instant::now() + GRACE;
+        loop {
+            let left = deadline.saturating_duration_since(std::time::Instant::now());
+            if left.is_zero() || read(left.as_millis().clamp(1, i32::MAX as u128) as libc::c_int) {
+                break;
+            }
         }
     }
+    // Under the lock of the pending files: a commit in progress finishes
+    // first, so its files are whole or gone.
     crate::files::remove_pending();
-    eprintln!("{FORCED_MESSAGE}; no output written");
+    if forced {
+        eprintln!("{FORCED_MESSAGE}; no output written");
+    } else {
+        eprintln!("interrupted; no output written");
+    }
     // SAFETY: _exit ends every thread at once without running exit-time
     // destructors, which is the point: the main thread may be inside the
     // driver.

@@ -14,6 +14,8 @@
 //!   the validation layer are busy: every trial must exit 130 (not crash
 //!   with a signal), having stopped at a safe point (not ended by the
 //!   grace-period fallback), with no output and no temporary file left.
+//! - Without a Vulkan context (a CPU-only `mesh` run) an interrupt ends the
+//!   run at once, with no output.
 
 mod common;
 
@@ -191,4 +193,47 @@ fn an_interrupt_during_a_validated_run_exits_130_every_time() {
         failures.len(),
         failures.join("\n")
     );
+}
+
+/// Without a Vulkan context there is no driver to wait for: an interrupt
+/// during a CPU-only command (`mesh` of a large model) ends it at once,
+/// well within the grace period a GPU run gets, with no output.
+#[test]
+#[cfg(unix)]
+fn an_interrupt_without_a_device_ends_the_run_at_once() {
+    use std::fmt::Write as _;
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("big.obj");
+    let mut text = String::new();
+    let n = 600_000u32;
+    for i in 0..n {
+        let t = f64::from(i);
+        writeln!(text, "v {} {} {}", t.sin(), t.cos(), (t * 0.37).sin()).unwrap();
+    }
+    for i in (1..n - 2).step_by(3) {
+        writeln!(text, "f {i} {} {}", i + 1, i + 2).unwrap();
+    }
+    std::fs::write(&model, text).unwrap();
+    let json = dir.path().join("report.json");
+    let mut command = common::aerial();
+    command.arg("mesh").arg(&model).arg("--json").arg(&json);
+    let child = command
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let sent = Instant::now();
+    signal(&child, libc::SIGINT);
+    let out = child.wait_with_output().unwrap();
+    let took = sent.elapsed();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted; no output written"), "{err}");
+    assert!(
+        took < aerial::interrupt::GRACE / 4,
+        "took {took:?} to stop after the signal"
+    );
+    assert!(!json.exists());
+    assert_eq!(leftovers(dir.path()), ["big.obj"]);
 }
