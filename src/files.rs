@@ -525,6 +525,53 @@ mod tests {
     }
 
     #[test]
+    fn files_refuse_an_output_that_is_a_protected_input_by_any_name() {
+        let d = dir("inputs");
+        std::fs::write(d.join("in.toml"), b"input").unwrap();
+        std::fs::write(d.join("other.png"), b"other").unwrap();
+        std::os::unix::fs::symlink(d.join("in.toml"), d.join("link.png")).unwrap();
+        std::fs::hard_link(d.join("in.toml"), d.join("hard.png")).unwrap();
+        // Not protected yet: any of them may be written.
+        assert!(check_destination(&d.join("hard.png")).is_ok());
+        protect_inputs([d.join("in.toml"), d.join("missing.toml")]);
+        for name in ["in.toml", "link.png", "hard.png", "./in.toml"] {
+            let path = d.join(name);
+            let msg = write_bytes(&path, b"x").unwrap_err().to_string();
+            assert!(msg.contains("input"), "{name}: {msg}");
+        }
+        let msg = check_destination(&d.join("link.png"))
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("same file as the input"), "{msg}");
+        assert_eq!(std::fs::read(d.join("in.toml")).unwrap(), b"input");
+        // Other files, and names that do not exist yet, are outputs as before.
+        write_bytes(&d.join("other.png"), b"new").unwrap();
+        write_bytes(&d.join("missing.toml"), b"new").unwrap();
+        std::fs::remove_dir_all(&d).ok();
+    }
+
+    #[test]
+    fn files_check_the_extension_of_each_format_in_any_case() {
+        for (name, format, ok) in [
+            ("a.png", Format::Png, true),
+            ("a.PNG", Format::Png, true),
+            ("a.Exr", Format::Exr, true),
+            ("a.exr", Format::Png, false),
+            ("a.jpg", Format::Png, false),
+            ("a", Format::Png, false),
+            ("a.png.tmp", Format::Png, false),
+            ("a.png", Format::Exr, false),
+        ] {
+            let result = check_format(Path::new(name), format);
+            assert_eq!(result.is_ok(), ok, "{name} as {format:?}: {result:?}");
+        }
+        let msg = check_format(Path::new("o.jpg"), Format::Png)
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains(".jpg") && msg.contains("*.png"), "{msg}");
+    }
+
+    #[test]
     fn files_commit_all_or_nothing_and_leave_no_temporaries() {
         let d = dir("commit");
         let a = PendingFile::create(&d.join("a")).unwrap();
