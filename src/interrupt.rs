@@ -86,9 +86,12 @@ pub fn check() -> Result<(), Interrupted> {
     }
 }
 
+// The handler is installed on Linux (it uses pipe2 and the errno location
+// of glibc and musl); elsewhere the signals keep their default action.
+
 /// The signals that stop a run: those whose default action ends the
 /// process and that a user or a process supervisor sends to stop it.
-#[cfg(unix)]
+#[cfg(target_os = "linux")]
 pub const SIGNALS: [libc::c_int; 6] = [
     libc::SIGINT,
     libc::SIGTERM,
@@ -100,10 +103,10 @@ pub const SIGNALS: [libc::c_int; 6] = [
 
 /// The write end of the pipe the handler wakes the watcher thread through
 /// (-1 before [`install`]).
-#[cfg(unix)]
+#[cfg(target_os = "linux")]
 static WAKE_FD: std::sync::atomic::AtomicI32 = std::sync::atomic::AtomicI32::new(-1);
 
-#[cfg(unix)]
+#[cfg(target_os = "linux")]
 extern "C" fn on_signal(_signal: libc::c_int) {
     // Only async-signal-safe work here: an atomic store and write(2).
     // errno is saved and restored around the write, as the interrupted
@@ -127,7 +130,7 @@ extern "C" fn on_signal(_signal: libc::c_int) {
 /// Installs the handler for [`SIGNALS`] and starts the thread that ends
 /// the process if the work does not stop within [`GRACE`] (or at a second
 /// signal). Call it once, early in `main`.
-#[cfg(unix)]
+#[cfg(target_os = "linux")]
 pub fn install() -> std::io::Result<()> {
     let mut fds = [0 as libc::c_int; 2];
     // SAFETY: pipe2 writes two descriptors into the array it is given.
@@ -166,7 +169,7 @@ pub fn install() -> std::io::Result<()> {
 /// unless a [`Busy`] guard is alive; then waits [`GRACE`] for the process to
 /// end by itself, and a second signal or the end of the grace period ends
 /// it at once.
-#[cfg(unix)]
+#[cfg(target_os = "linux")]
 fn watch(read_fd: libc::c_int) {
     let mut byte = 0u8;
     let mut read = |timeout_ms: libc::c_int| -> bool {

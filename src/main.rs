@@ -51,7 +51,7 @@ fn main() -> std::process::ExitCode {
     // at its next safe point; it then unwinds like an error, removing its
     // temporary files (see `aerial::interrupt`). If the handler cannot be
     // installed, the default (exit without cleanup) remains.
-    #[cfg(unix)]
+    #[cfg(target_os = "linux")]
     if let Err(e) = aerial::interrupt::install() {
         eprintln!(
             "warning: cannot handle interrupts ({e}); an interrupt may leave temporary files"

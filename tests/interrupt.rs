@@ -39,7 +39,7 @@ fn signal(child: &Child, signal: libc::c_int) {
     unsafe { libc::kill(child.id() as libc::pid_t, signal) };
 }
 
-#[cfg(unix)]
+#[cfg(target_os = "linux")]
 const SIGNALS: [(libc::c_int, &str); 6] = [
     (libc::SIGINT, "INT"),
     (libc::SIGTERM, "TERM"),
@@ -50,7 +50,7 @@ const SIGNALS: [(libc::c_int, &str); 6] = [
 ];
 
 #[test]
-#[cfg(unix)]
+#[cfg(target_os = "linux")]
 fn a_stop_signal_at_any_moment_leaves_whole_outputs_or_none() {
     // How long an uninterrupted run takes, to spread the signals over it.
     let dir = tempfile::tempdir().unwrap();
@@ -131,7 +131,7 @@ fn interrupted_run(mut command: Command, delay: Duration, sig: libc::c_int) -> O
 }
 
 #[test]
-#[cfg(unix)]
+#[cfg(target_os = "linux")]
 fn an_interrupt_during_a_validated_run_exits_130_every_time() {
     use std::os::unix::process::ExitStatusExt as _;
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/default.toml");
@@ -199,7 +199,7 @@ fn an_interrupt_during_a_validated_run_exits_130_every_time() {
 /// during a CPU-only command (`mesh` of a large model) ends it at once,
 /// well within the grace period a GPU run gets, with no output.
 #[test]
-#[cfg(unix)]
+#[cfg(target_os = "linux")]
 fn an_interrupt_without_a_device_ends_the_run_at_once() {
     use std::fmt::Write as _;
     let dir = tempfile::tempdir().unwrap();
