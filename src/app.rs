@@ -222,6 +222,9 @@ pub fn run_with_progress(
         }
         FrameSource::ValidationCheck(_) => {}
     }
+    // Safe points (see `crate::interrupt`): before the device is created,
+    // and in `produce` between the phases and before every frame.
+    crate::interrupt::check().map_err(RenderError::from)?;
     let ctx = context(settings)?;
     let log = ctx.validation_log();
     let device = ctx.device_info().clone();
@@ -255,6 +258,7 @@ fn produce(
     settings: &RenderSettings,
     on_frame: &mut dyn FnMut(),
 ) -> Result<Produced, RenderError> {
+    crate::interrupt::check()?;
     Ok(match source {
         FrameSource::Scene(scene) => {
             preflight::scene_on_device(scene, ctx)?;
@@ -480,11 +484,13 @@ fn submit_frames(
     mut frame: impl FnMut() -> Result<FrameTiming, RenderError>,
 ) -> Result<Vec<FrameTiming>, RenderError> {
     for _ in 0..settings.warmup {
+        crate::interrupt::check()?;
         frame()?;
         on_frame();
     }
     let mut frames = Vec::new();
     for _ in 0..settings.frames.max(1) {
+        crate::interrupt::check()?;
         frames.push(frame()?);
         on_frame();
     }

@@ -5,9 +5,9 @@
 //! - Concurrent writers to the same path each get their own temporary file,
 //!   so the destination is always one whole file, never a mix.
 //! - A failed or interrupted write leaves no temporary file behind: the
-//!   temporary file is removed on drop, and [`remove_pending`] removes the
-//!   ones still open when the process is interrupted (the CLI calls it from
-//!   its SIGINT/SIGTERM handler).
+//!   temporary file is removed on drop (an interrupted run unwinds and
+//!   drops it, see [`crate::interrupt`]), and [`remove_pending`] removes
+//!   the ones still open when the process must end without unwinding.
 //! - Only regular files are replaced. A destination that is a device, FIFO,
 //!   socket or folder is refused; a symbolic link is written through (its
 //!   target is replaced, the link stays).
@@ -35,6 +35,18 @@ pub enum FileError {
     },
 }
 
+/// The error of a file not committed because of an interrupt (see
+/// [`crate::interrupt`]): an I/O error of kind `Interrupted`.
+fn interrupted(path: &Path) -> FileError {
+    FileError::Io {
+        path: path.to_path_buf(),
+        error: std::io::Error::new(
+            std::io::ErrorKind::Interrupted,
+            crate::interrupt::Interrupted,
+        ),
+    }
+}
+
 /// Temporary files currently being written, for [`remove_pending`].
 static PENDING: Mutex<Option<HashSet<PathBuf>>> = Mutex::new(None);
 
@@ -43,8 +55,8 @@ fn pending() -> std::sync::MutexGuard<'static, Option<HashSet<PathBuf>>> {
     PENDING.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-/// Removes every temporary file still being written. For an interrupt
-/// handler (which then exits); holding the lock also waits for a rename in
+/// Removes every temporary file still being written. For a process that
+/// ends without unwinding (it exits right after); holding the lock also waits for a rename in
 /// progress, so a file is either complete under its final name or gone.
 pub fn remove_pending() {
     let mut guard = pending();
@@ -58,10 +70,72 @@ pub fn remove_pending() {
     std::mem::forget(guard);
 }
 
+/// What makes two paths the same file: the device and inode on Unix, so a
+/// symbolic link or a hard link to a file is that file; elsewhere the
+/// canonical path (symbolic links only).
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+struct FileId(#[cfg(unix)] (u64, u64), #[cfg(not(unix))] PathBuf);
+
+impl FileId {
+    /// The identity of the existing file at `path` (through symbolic
+    /// links); `None` when there is none.
+    fn of(path: &Path) -> Option<FileId> {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::MetadataExt as _;
+            std::fs::metadata(path)
+                .ok()
+                .map(|m| FileId((m.dev(), m.ino())))
+        }
+        #[cfg(not(unix))]
+        {
+            std::fs::canonicalize(path).ok().map(FileId)
+        }
+    }
+}
+
+/// The inputs of the running command, by identity, with the path they
+/// were given as (for messages). See [`protect_inputs`].
+static INPUTS: Mutex<Vec<(FileId, PathBuf)>> = Mutex::new(Vec::new());
+
+/// Records `paths` as inputs of the running command (its scene, models,
+/// MTL libraries, textures, height maps, scripts, baselines, images to
+/// compare...): from then on no output may be one of them.
+/// [`check_destination`], and so every write through this module, refuses
+/// a destination that is the same file as an input, whatever the path
+/// names it by (symbolic links, hard links, `./` and `..`). Paths that do
+/// not exist are skipped: they cannot be overwritten by accident.
+///
+/// Commands protect their inputs once they are parsed and then check
+/// their outputs, so the refusal comes before any work; the same check
+/// when each file is committed catches any output checked too early.
+pub fn protect_inputs<P: AsRef<Path>>(paths: impl IntoIterator<Item = P>) {
+    let mut inputs = INPUTS.lock().unwrap_or_else(|p| p.into_inner());
+    for path in paths {
+        let path = path.as_ref();
+        if let Some(id) = FileId::of(path) {
+            if !inputs.iter().any(|(known, _)| *known == id) {
+                inputs.push((id, path.to_path_buf()));
+            }
+        }
+    }
+}
+
+/// The protected input that `path` (an existing file) is, if any.
+fn protected_input(path: &Path) -> Option<PathBuf> {
+    let id = FileId::of(path)?;
+    let inputs = INPUTS.lock().unwrap_or_else(|p| p.into_inner());
+    inputs
+        .iter()
+        .find(|(known, _)| *known == id)
+        .map(|(_, given)| given.clone())
+}
+
 /// Checks that `path` can be an output: it names a file in an existing
-/// folder and is not a folder, device, FIFO or socket. Returns the path to
-/// replace (the target when `path` is a symbolic link). Call it before long
-/// work, so a bad output path fails in seconds, not after the render.
+/// folder, is not a folder, device, FIFO or socket, and is not one of the
+/// command's inputs ([`protect_inputs`]). Returns the path to replace (the
+/// target when `path` is a symbolic link). Call it before long work, so a
+/// bad output path fails in seconds, not after the render.
 pub fn check_destination(path: &Path) -> Result<PathBuf, FileError> {
     let refuse = |reason: String| FileError::Refused {
         path: path.to_path_buf(),
@@ -90,6 +164,17 @@ pub fn check_destination(path: &Path) -> Result<PathBuf, FileError> {
                     .into(),
             ));
         }
+        if let Some(input) = protected_input(&dest) {
+            let reason = if input == path {
+                "it is an input of this command; writing it would destroy the input".to_string()
+            } else {
+                format!(
+                    "it is the same file as the input {}; writing it would destroy the input",
+                    input.display()
+                )
+            };
+            return Err(refuse(reason));
+        }
     }
     let dir = parent(&dest);
     match std::fs::metadata(dir) {
@@ -97,6 +182,65 @@ pub fn check_destination(path: &Path) -> Result<PathBuf, FileError> {
         Ok(_) => Err(refuse(format!("{} is not a folder", dir.display()))),
         Err(e) => Err(refuse(format!("folder {}: {e}", dir.display()))),
     }
+}
+
+/// The file formats this crate writes images in. The name of an output
+/// must say its format: a PNG is named `*.png`, an OpenEXR `*.exr` (any
+/// case), so no file holds data its name misrepresents.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Png,
+    Exr,
+}
+
+impl Format {
+    /// The extension, without the dot.
+    pub fn extension(self) -> &'static str {
+        match self {
+            Format::Png => "png",
+            Format::Exr => "exr",
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Format::Png => "PNG",
+            Format::Exr => "OpenEXR",
+        }
+    }
+}
+
+/// Checks that the name of `path` ends in `format`'s extension.
+pub fn check_format(path: &Path, format: Format) -> Result<(), FileError> {
+    let ext = path.extension().map(|e| e.to_string_lossy().into_owned());
+    if ext
+        .as_deref()
+        .is_some_and(|e| e.eq_ignore_ascii_case(format.extension()))
+    {
+        return Ok(());
+    }
+    let named = match ext {
+        Some(e) => format!("the name ends in .{e}"),
+        None => "the name has no extension".to_string(),
+    };
+    Err(FileError::Refused {
+        path: path.to_path_buf(),
+        reason: format!(
+            "{named}, but this output is written as {}; name it *.{}",
+            format.name(),
+            format.extension()
+        ),
+    })
+}
+
+/// [`check_destination`] and [`check_format`]: what a command checks for
+/// each image output before its work.
+pub fn check_output(path: &Path, format: Format) -> Result<PathBuf, FileError> {
+    // The destination first: that an output is an input is the more
+    // important news.
+    let dest = check_destination(path)?;
+    check_format(path, format)?;
+    Ok(dest)
 }
 
 /// Checks that `dir` is a folder or can be created as one (its nearest
@@ -199,6 +343,8 @@ impl PendingFile {
     /// Flushes the data to disk and renames the file into place. The
     /// destination is checked again, since it may have changed meanwhile.
     pub fn commit(self) -> Result<PathBuf, FileError> {
+        // A safe point: after an interrupt nothing more is committed.
+        crate::interrupt::check().map_err(|_| interrupted(&self.path))?;
         let ready = self.prepare()?;
         ready.persist(&mut pending())
     }
@@ -286,6 +432,10 @@ impl Drop for PendingFile {
 /// handler takes, so an interrupt leaves either none of the files or all
 /// of them, never some. Returns the paths written.
 pub fn commit_all(files: Vec<PendingFile>) -> Result<Vec<PathBuf>, FileError> {
+    // A safe point: after an interrupt nothing more is committed.
+    if let (Err(_), Some(first)) = (crate::interrupt::check(), files.first()) {
+        return Err(interrupted(&first.path));
+    }
     // The slow part (flushing to disk) before taking the lock.
     let ready = files
         .into_iter()
@@ -372,6 +522,53 @@ mod tests {
         assert!(check_output_dir(&d.join("f")).is_err());
         assert!(check_output_dir(&d.join("f/sub")).is_err());
         std::fs::remove_dir_all(&d).ok();
+    }
+
+    #[test]
+    fn files_refuse_an_output_that_is_a_protected_input_by_any_name() {
+        let d = dir("inputs");
+        std::fs::write(d.join("in.toml"), b"input").unwrap();
+        std::fs::write(d.join("other.png"), b"other").unwrap();
+        std::os::unix::fs::symlink(d.join("in.toml"), d.join("link.png")).unwrap();
+        std::fs::hard_link(d.join("in.toml"), d.join("hard.png")).unwrap();
+        // Not protected yet: any of them may be written.
+        assert!(check_destination(&d.join("hard.png")).is_ok());
+        protect_inputs([d.join("in.toml"), d.join("missing.toml")]);
+        for name in ["in.toml", "link.png", "hard.png", "./in.toml"] {
+            let path = d.join(name);
+            let msg = write_bytes(&path, b"x").unwrap_err().to_string();
+            assert!(msg.contains("input"), "{name}: {msg}");
+        }
+        let msg = check_destination(&d.join("link.png"))
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("same file as the input"), "{msg}");
+        assert_eq!(std::fs::read(d.join("in.toml")).unwrap(), b"input");
+        // Other files, and names that do not exist yet, are outputs as before.
+        write_bytes(&d.join("other.png"), b"new").unwrap();
+        write_bytes(&d.join("missing.toml"), b"new").unwrap();
+        std::fs::remove_dir_all(&d).ok();
+    }
+
+    #[test]
+    fn files_check_the_extension_of_each_format_in_any_case() {
+        for (name, format, ok) in [
+            ("a.png", Format::Png, true),
+            ("a.PNG", Format::Png, true),
+            ("a.Exr", Format::Exr, true),
+            ("a.exr", Format::Png, false),
+            ("a.jpg", Format::Png, false),
+            ("a", Format::Png, false),
+            ("a.png.tmp", Format::Png, false),
+            ("a.png", Format::Exr, false),
+        ] {
+            let result = check_format(Path::new(name), format);
+            assert_eq!(result.is_ok(), ok, "{name} as {format:?}: {result:?}");
+        }
+        let msg = check_format(Path::new("o.jpg"), Format::Png)
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains(".jpg") && msg.contains("*.png"), "{msg}");
     }
 
     #[test]

@@ -12,6 +12,7 @@ pub mod budget;
 pub mod files;
 pub mod image_file;
 pub mod instructions;
+pub mod interrupt;
 pub mod mesh;
 pub mod render;
 pub mod report;

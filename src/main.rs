@@ -51,15 +51,28 @@ const EXIT_ERROR: u8 = 2;
 
 fn main() -> std::process::ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
-    // An interrupt must not leave temporary output files behind. Exit code
-    // 130 is the shell's convention for "killed by SIGINT". If the handler
-    // cannot be installed, the default (exit without cleanup) remains.
-    let _ = ctrlc::set_handler(|| {
-        aerial::files::remove_pending();
-        eprintln!("interrupted; no output written");
-        std::process::exit(130);
-    });
-    match run(Cli::parse()) {
+    // SIGINT, SIGTERM and the other stop signals only ask the work to stop
+    // at its next safe point; it then unwinds like an error, removing its
+    // temporary files (see `aerial::interrupt`). If the handler cannot be
+    // installed, the default (exit without cleanup) remains.
+    #[cfg(target_os = "linux")]
+    if let Err(e) = aerial::interrupt::install() {
+        eprintln!(
+            "warning: cannot handle interrupts ({e}); an interrupt may leave temporary files"
+        );
+    }
+    let result = run(Cli::parse());
+    // Whatever the work returned, an interrupt ends the run with 130 (the
+    // shell's convention for SIGINT): stopped at a safe point, the error is
+    // the interrupt itself, not worth showing.
+    if aerial::interrupt::requested() {
+        match result {
+            Ok(_) => eprintln!("interrupted after the work was done"),
+            Err(_) => eprintln!("interrupted; no output written"),
+        }
+        return std::process::ExitCode::from(aerial::interrupt::EXIT_INTERRUPTED);
+    }
+    match result {
         Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e:#}");

@@ -121,7 +121,13 @@ fn instruction_counts_repeat_and_see_three_percent_more_pixels() {
     assert_eq!(code(&out), Some(0), "{}", show(&out));
     let base = BenchReport::load(&base_json).unwrap();
     let scene = &base.scenes[0];
-    let total = scene.gpu_total.as_ref().unwrap().instructions.as_ref().unwrap();
+    let total = scene
+        .gpu_total
+        .as_ref()
+        .unwrap()
+        .instructions
+        .as_ref()
+        .unwrap();
     // One frame's count wobbles by the driver's thread hand-offs (a few
     // thousand instructions; now and then a larger allocation): under 1 %
     // from frame to frame, and the median of 5 frames far less (below).
@@ -138,7 +144,10 @@ fn instruction_counts_repeat_and_see_three_percent_more_pixels() {
     }
     // The passes are differences of prefixes: with the fixed part (an
     // empty render pass, submission, fence) they make up the frame.
-    assert!(sum > 0.0 && sum < total.summary.median, "{sum} vs {total:?}");
+    assert!(
+        sum > 0.0 && sum < total.summary.median,
+        "{sum} vs {total:?}"
+    );
     let tonemap = |r: &BenchReport| {
         r.scenes[0]
             .passes
@@ -156,14 +165,27 @@ fn instruction_counts_repeat_and_see_three_percent_more_pixels() {
     let (same, _) = counted(
         192,
         &again_json,
-        &["--compare", base_json.to_str().unwrap(), "--max-ratio", "1.02"],
+        &[
+            "--compare",
+            base_json.to_str().unwrap(),
+            "--max-ratio",
+            "1.02",
+        ],
     );
     assert_eq!(code(&same), Some(0), "{}", show(&same));
     let again = BenchReport::load(&again_json).unwrap();
     let repeat = tonemap(&again) / tonemap(&base) - 1.0;
     assert!(repeat.abs() < 1e-3, "tone map moved {repeat}");
     let frame = |r: &BenchReport| {
-        r.scenes[0].gpu_total.as_ref().unwrap().instructions.as_ref().unwrap().summary.median
+        r.scenes[0]
+            .gpu_total
+            .as_ref()
+            .unwrap()
+            .instructions
+            .as_ref()
+            .unwrap()
+            .summary
+            .median
     };
     let repeat = frame(&again) / frame(&base) - 1.0;
     assert!(repeat.abs() < 1e-3, "frame moved {repeat}");

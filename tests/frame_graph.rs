@@ -6,7 +6,7 @@ mod common;
 
 use aerial::render::tiles::{self, TILE_SIZE};
 use aerial::render::{FramePlan, Pixels, SceneGeometry};
-use aerial::scene::{Lighting, Scene, ToneMapOperator};
+use aerial::scene::{HdrFormat, Lighting, Scene, ToneMapOperator};
 use std::path::Path;
 
 fn example(name: &str) -> Scene {
@@ -172,15 +172,30 @@ fn a_light_whose_range_misses_a_tile_does_not_change_it() {
     }
 }
 
-/// `tone_map.operator = "none"`: the surface pass writes the sRGB output
-/// directly (no HDR attachment, no tone map); the image equals the clamped
-/// linear HDR image of the same scene (read back through the HDR path),
-/// sRGB-encoded, to within one step of rounding.
+/// `tone_map.operator = "none"` with an rgba32f target: the surface pass
+/// writes the sRGB output directly (no HDR attachment, no tone map); the
+/// image equals the clamped linear HDR image of the same scene (read back
+/// through the HDR path), sRGB-encoded, to within one step of rounding, and
+/// is the very image the HDR path gives. With rgba16f the HDR target stays
+/// (its rounding would change the PNG), so `--hdr` never changes the PNG.
 #[test]
 fn ldr_output_is_the_clamped_hdr_image() {
     let mut scene = example("default.toml");
     scene.set_output_size(Some(200), Some(120)).unwrap();
     scene.tone_map.operator = ToneMapOperator::None;
+    // rgba16f: the same frame with and without the HDR image read back.
+    assert_eq!(scene.output.hdr_format, HdrFormat::Rgba16F);
+    let without = common::render(&scene, false);
+    assert_eq!(without.passes, vec!["opaque", "tonemap", "readback"]);
+    common::assert_not_blank(&without.output, 0.2);
+    let with = common::render(&scene, true);
+    assert!(
+        without.output.data == with.output.data,
+        "rgba16f: the PNG depends on --hdr ({:?} differing/worst)",
+        diff_u8(&without.output, &with.output)
+    );
+
+    scene.output.hdr_format = HdrFormat::Rgba32F;
     let direct = common::render(&scene, false);
     assert_eq!(direct.passes, vec!["opaque", "readback"]);
     common::assert_not_blank(&direct.output, 0.2);
@@ -210,8 +225,8 @@ fn ldr_output_is_the_clamped_hdr_image() {
     // 0.5 for rounding, plus the 16-bit float HDR target's rounding seen
     // through the sRGB curve's steep start.
     assert!(worst <= 1.0, "worst difference {worst} LSB");
-    let (d, _) = diff_u8(&direct.output, &via_hdr.output);
-    assert!(d <= 1, "direct and tone-mapped LDR differ by {d}");
+    let (d, n) = diff_u8(&direct.output, &via_hdr.output);
+    assert_eq!((d, n), (0, 0), "direct and tone-mapped LDR differ");
 }
 
 /// LDR output with transparent objects, or with deferred lighting, keeps

@@ -269,8 +269,7 @@ pub fn compare(
                     current: c.median,
                     ratio: usable.then(|| c.median / b.median),
                     interval,
-                    judged: c.metric != Metric::Instructions
-                        || b.median >= MIN_JUDGED_INSTRUCTIONS,
+                    judged: c.metric != Metric::Instructions || b.median >= MIN_JUDGED_INSTRUCTIONS,
                 })
             }
             None => new.push(c.key.clone()),

@@ -104,8 +104,6 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         None => None,
     };
     if let Some(json) = &args.json {
-        // Checked before measuring: a bad path must not cost the run.
-        aerial::files::check_destination(json)?;
         if let Some(base) = &args.compare {
             if aerial::files::same_file(json, base) {
                 bail!(
@@ -116,6 +114,18 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                 );
             }
         }
+    }
+    // No output may be a file the run reads (`measure` adds the files the
+    // scenes name once they are parsed).
+    aerial::files::protect_inputs(
+        args.scenes
+            .iter()
+            .chain(&args.compare)
+            .chain(&args.from_json),
+    );
+    if let Some(json) = &args.json {
+        // Checked before measuring: a bad path must not cost the run.
+        aerial::files::check_destination(json).context("--json")?;
     }
     if let Some(other) = &args.against {
         return against(&args, other);
@@ -224,6 +234,10 @@ fn measure(args: &BenchArgs) -> anyhow::Result<BenchReport> {
                 .with_context(|| path.display().to_string())?;
         }
         scenes.push(s);
+    }
+    aerial::files::protect_inputs(scenes.iter().flat_map(|s| &s.scene.files));
+    if let Some(json) = &args.json {
+        aerial::files::check_destination(json).context("--json")?;
     }
     if cfg!(debug_assertions) {
         eprintln!("note: this is a debug build; users run release builds (cargo build --release)");

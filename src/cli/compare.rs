@@ -4,11 +4,12 @@
 //! threshold is exceeded (errors exit with 2, see `main.rs`), so a CI step
 //! can gate on it.
 
+use aerial::files;
 use aerial::render::output;
 use aerial::report::image_diff::{
     compare_files, write_diff_png, ImageDiff, Metric, Thresholds, WINDOW,
 };
-use anyhow::bail;
+use anyhow::{bail, Context as _};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -107,6 +108,11 @@ pub fn run(args: CompareArgs) -> anyhow::Result<ExitCode> {
         args.p99_threshold,
         args.window_threshold,
     )?;
+    // The diff image may be neither of the images compared.
+    files::protect_inputs([&args.reference, &args.test]);
+    if let Some(diff) = &args.diff {
+        files::check_output(diff, files::Format::Png).context("--diff")?;
+    }
     // The library's errors name the file and the reason, and also carry
     // the reason as their `source`; converting through Display keeps
     // main's `{:#}` from printing that reason a second time.

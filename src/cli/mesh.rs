@@ -46,8 +46,9 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
     if !(args.weld.is_finite() && (0.0..=1e-3).contains(&args.weld)) {
         bail!("--weld: must be between 0 and 1e-3, got {}", args.weld);
     }
+    aerial::files::protect_inputs([&args.model]);
     if let Some(json) = &args.json {
-        aerial::files::check_destination(json)?;
+        aerial::files::check_destination(json).context("--json")?;
     }
     let report = inspect(
         &args.model,
@@ -63,6 +64,11 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
     }
     for w in &report.warnings {
         eprintln!("warning: {w}");
+    }
+    // Its MTL libraries and textures are known once it is read.
+    aerial::files::protect_inputs(&report.files);
+    if let Some(json) = &args.json {
+        aerial::files::check_destination(json).context("--json")?;
     }
     println!("model                      {}", report.file);
     println!("smoothing                  {}", report.smoothing);

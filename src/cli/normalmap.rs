@@ -3,9 +3,10 @@
 //! reads (`src/mesh/height.rs`).
 
 use aerial::budget::MemoryBudget;
+use aerial::files;
 use aerial::mesh::height::{encode_normal_map, GreenAxis, HeightEdge, HeightFilter, HeightMap};
 use aerial::render::{output, preflight, Pixels};
-use anyhow::bail;
+use anyhow::{bail, Context as _};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -34,13 +35,8 @@ pub fn run(args: NormalMapArgs) -> anyhow::Result<()> {
     if !(args.scale.is_finite() && args.scale > 0.0) {
         bail!("--scale: must be finite and > 0, got {}", args.scale);
     }
-    if aerial::files::same_file(&args.input, &args.out) {
-        bail!(
-            "--out: {} is the input; write the normal map elsewhere",
-            args.out.display()
-        );
-    }
-    aerial::files::check_destination(&args.out)?;
+    files::protect_inputs([&args.input]);
+    files::check_output(&args.out, files::Format::Png).context("--out")?;
     // The size from the header first: refuse what does not fit the memory
     // budget before decoding.
     let info = preflight::inspect_texture(&args.input)?;

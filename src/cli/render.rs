@@ -56,13 +56,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     if args.frames == 0 {
         bail!("--frames: must be at least 1");
     }
-    // Outputs are checked before the render, so a bad path fails at once.
-    files::check_destination(&args.out)?;
+    // Outputs are checked before the render, so a bad path fails at once;
+    // none may be a file the scene was read from.
+    files::protect_inputs(&scene.files);
+    files::check_output(&args.out, files::Format::Png).context("--out")?;
     if let Some(hdr) = &args.hdr {
-        files::check_destination(hdr)?;
         if files::same_file(hdr, &args.out) {
             bail!("--hdr and --out name the same file: {}", hdr.display());
         }
+        files::check_output(hdr, files::Format::Exr).context("--hdr")?;
     }
     let scene_name = match &args.scene {
         Some(path) => path.display().to_string(),

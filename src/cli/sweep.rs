@@ -59,6 +59,7 @@ enum Reference {
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     let scene = Scene::load(&args.scene)?;
     args.strict.apply(&scene)?;
+    aerial::files::protect_inputs(&scene.files);
     // Before the work: a sweep takes minutes, a bad folder must not.
     aerial::files::check_output_dir(&args.out_dir)?;
     for name in ["sweep.csv", "sweep.json", "sweep.svg"] {

@@ -3,6 +3,7 @@
 //! exposure on a `render --hdr` output without rendering again.
 
 use aerial::app::{self, FrameSource, RenderSettings};
+use aerial::files;
 use aerial::render::output;
 use aerial::scene::{ToneMap, ToneMapOperator};
 use aerial::vk::validation;
@@ -36,7 +37,8 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         bail!("--exposure: must be finite and > 0, got {}", args.exposure);
     }
-    aerial::files::check_destination(&args.out)?;
+    files::protect_inputs([&args.input]);
+    files::check_output(&args.out, files::Format::Png).context("--out")?;
     let image = output::read_exr(&args.input)?;
     let tone_map = ToneMap {
         operator: match args.operator {

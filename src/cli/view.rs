@@ -1,8 +1,9 @@
 //! `aerial view`: the scene in a window, with keyboard and mouse
 //! navigation, live knobs and per-pass GPU times (see `aerial::viewer`).
 
-use aerial::viewer::{self, Script, ViewOptions};
+use aerial::viewer::{self, Script, ScriptAction, ViewOptions};
 use aerial::vk::{validation, PresentMode};
+use anyhow::Context as _;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -41,6 +42,20 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         &args.strict,
     )?;
     let script = args.script.as_deref().map(Script::load).transpose()?;
+    // No screenshot may be a file the run reads.
+    aerial::files::protect_inputs(scene.files.iter().chain(&args.script));
+    if let Some(script) = &script {
+        for (frame, action) in &script.steps {
+            if let ScriptAction::Screenshot(path) = action {
+                let check = || -> Result<(), aerial::files::FileError> {
+                    aerial::files::check_output(path, aerial::files::Format::Png)?;
+                    aerial::files::check_destination(&path.with_extension("exr"))?;
+                    Ok(())
+                };
+                check().with_context(|| format!("the script's screenshot at frame {frame}"))?;
+            }
+        }
+    }
     let scene_name = match &args.scene {
         Some(path) => path.display().to_string(),
         None => "the default scene".to_string(),

@@ -118,7 +118,12 @@ impl HeightMap {
                         (gx / 8.0, gy / 8.0)
                     }
                 };
-                out.push(Vec3::new(-scale * dx, -scale * dy, 1.0).normalize());
+                // Normalised in f64: in f32 the squared length of a steep
+                // slope at a large scale overflows, and the normal would
+                // come out as zero (any finite f32 scale fits in f64).
+                let s = f64::from(scale);
+                let n = glam::DVec3::new(-s * f64::from(dx), -s * f64::from(dy), 1.0).normalize();
+                out.push(n.as_vec3());
             }
         }
         Ok(out)
@@ -177,6 +182,35 @@ mod tests {
                 let angle = n.angle_between(exact).to_degrees();
                 assert!(angle < 0.2, "{filter:?} x={x}: {angle} degrees off");
                 assert!(n.y.abs() < 1e-6, "no slope along y");
+            }
+        }
+    }
+
+    #[test]
+    fn every_finite_scale_gives_unit_normals_that_saturate_towards_the_slope() {
+        // At huge scales the slope dominates: the normal lies flat, against
+        // the slope, and still has length 1 (the squared length of the
+        // unnormalised vector overflows f32 from about 1e19).
+        let map = sine(64, 4, 64.0);
+        for scale in [1.0, 1e10, 1e19, 1e20, 1e30, f32::MAX] {
+            for filter in [HeightFilter::Central, HeightFilter::Sobel] {
+                let normals = map.normals(scale, filter, HeightEdge::Wrap).unwrap();
+                for (i, n) in normals.iter().enumerate() {
+                    assert!(
+                        (n.length() - 1.0).abs() < 1e-5,
+                        "scale {scale:e} {filter:?} texel {i}: {n}"
+                    );
+                }
+                // x = 0: rising at slope pi/64, so the normal tilts to -x.
+                let n = normals[64];
+                if scale >= 1e10 {
+                    assert!(n.x < -0.999 && n.z >= 0.0, "scale {scale:e}: {n}");
+                }
+                let encoded = encode_normal_map(&normals, GreenAxis::Up);
+                assert!(
+                    encoded.chunks_exact(4).all(|p| p[..3] != [128, 128, 128]),
+                    "scale {scale:e}: a zero-length normal was encoded"
+                );
             }
         }
     }

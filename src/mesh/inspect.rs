@@ -54,6 +54,11 @@ pub struct MeshReport {
     /// The same, for `--strict`.
     #[serde(skip)]
     pub asset_warnings: Vec<AssetWarning>,
+    /// The files the model was read from (the OBJ, its MTL libraries and
+    /// their textures; see [`crate::mesh::obj::ObjModel::files`]). Not
+    /// part of the JSON report.
+    #[serde(skip)]
+    pub files: Vec<std::path::PathBuf>,
 }
 
 /// Loads `path` as the renderer would with `options` and reports on it.
@@ -115,6 +120,7 @@ pub fn inspect(path: &Path, options: &ModelOptions) -> Result<MeshReport, ObjErr
         },
         warnings: model.warnings.iter().map(|w| w.to_string()).collect(),
         asset_warnings: model.warnings.clone(),
+        files: model.files.clone(),
     };
     for (mesh, stats) in &meshes {
         report.vertices += mesh.vertices.len();

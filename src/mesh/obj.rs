@@ -132,6 +132,10 @@ pub struct ObjModel {
     /// What was wrong with the MTL libraries and material references, in
     /// file order, each once.
     pub warnings: Vec<AssetWarning>,
+    /// Every file the model was read from or refers to: the OBJ itself
+    /// (when loaded with [`load_obj`]), its MTL libraries and their
+    /// textures. A command must never write over one of them.
+    pub files: Vec<PathBuf>,
 }
 
 impl ObjModel {
@@ -170,7 +174,9 @@ pub fn load_obj(path: &Path) -> Result<ObjModel, ObjError> {
         reason,
     })?;
     let base_dir = path.parent().unwrap_or_else(|| Path::new(""));
-    parse_obj(&text, &file, base_dir)
+    let mut model = parse_obj(&text, &file, base_dir)?;
+    model.files.insert(0, path.to_path_buf());
+    Ok(model)
 }
 
 /// The text of an OBJ or MTL file. OBJ is ASCII; bytes outside UTF-8
@@ -345,7 +351,11 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
     // A library that cannot be read or parsed is a warning and no
     // materials (see `read_mtl`), so `tobj` never sees a failed load.
     let warnings = std::cell::RefCell::new(warnings);
+    let libraries = std::cell::RefCell::new(Vec::new());
     let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |mtl| {
+        libraries
+            .borrow_mut()
+            .push(base_dir.join(mtl.to_string_lossy().replace('\\', "/")));
         read_mtl(file, mtl, base_dir, &mut warnings.borrow_mut())
     })
     .map_err(|e| ObjError::File {
@@ -443,10 +453,15 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
             reason: "no faces (an OBJ model needs at least one triangle)".into(),
         });
     }
+    let mut files = libraries.into_inner();
+    for m in &materials {
+        files.extend(m.texture.iter().chain(&m.normal_map).cloned());
+    }
     Ok(ObjModel {
         parts,
         materials,
         warnings,
+        files,
     })
 }
 

@@ -63,4 +63,7 @@ pub enum RenderError {
     Size { width: u32, height: u32 },
     #[error(transparent)]
     Count(#[from] crate::instructions::CountError),
+    /// Stopped at a safe point by an interrupt (see [`crate::interrupt`]).
+    #[error(transparent)]
+    Interrupted(#[from] crate::interrupt::Interrupted),
 }

@@ -23,6 +23,7 @@ pub fn png_file(
         path: path.to_path_buf(),
         reason,
     };
+    files::check_output(path, files::Format::Png)?;
     let file = PendingFile::create(path)?;
     let mut out = std::io::BufWriter::new(file.file());
     let mut encoder = png::Encoder::new(&mut out, pixels.width, pixels.height);
@@ -110,6 +111,7 @@ pub fn read_png_text(path: &Path) -> Result<Vec<(String, String)>, RenderError> 
 /// into a temporary file for `path`.
 pub fn exr_file(path: &Path, pixels: &Pixels<f32>) -> Result<PendingFile, RenderError> {
     use exr::prelude::*;
+    files::check_output(path, files::Format::Exr)?;
     let file = PendingFile::create(path)?;
     let w = pixels.width as usize;
     let channels = SpecificChannels::rgba(|position: Vec2<usize>| {

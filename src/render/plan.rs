@@ -363,12 +363,17 @@ impl FramePlan {
         // term (accumulating in the 8-bit target rounds each partial sum:
         // measured 1/255 off on 9 % of the pixels), and no atmosphere, whose
         // pass reads HDR surfaces and writes the HDR target. Otherwise the
-        // HDR target stays, with a clamping tone map.
+        // HDR target stays, with a clamping tone map. And only with an
+        // rgba32f target: the shader's f32 colour is then what the target
+        // would hold, so the PNG is the same with or without --hdr (which
+        // needs the target); an rgba16f target rounds it (relative 2^-11),
+        // which moved 4.8 % of default.toml's pixels by 1/255.
         // A debug view shows surface attributes: no atmosphere over them.
         let sky = scene.sky.is_some() && debug == 0;
         let direct = debug == 0
             && scene.tone_map.operator == ToneMapOperator::None
             && scene.tone_map.exposure == 1.0
+            && scene.output.hdr_format == HdrFormat::Rgba32F
             && transparent.is_empty()
             && !keep_hdr
             && !deferred
@@ -750,6 +755,11 @@ mod tests {
         let (mut scene, _) = load("default.toml");
         scene.tone_map.operator = ToneMapOperator::None;
         let geometry = SceneGeometry::new(&scene).unwrap();
+        // An rgba16f target rounds the colour: it stays, so the PNG does
+        // not depend on --hdr.
+        let plan = FramePlan::new(&scene, &geometry, false);
+        assert_eq!(plan.pass_names(), vec!["opaque", "tonemap", "readback"]);
+        scene.output.hdr_format = HdrFormat::Rgba32F;
         let plan = FramePlan::new(&scene, &geometry, false);
         assert_eq!(plan.pass_names(), vec!["opaque", "readback"]);
         assert!(!plan.has_attachment(attachment::HDR));

@@ -122,7 +122,11 @@ impl Renderer {
         hdr_input: Option<&Pixels<f32>>,
         keep_hdr: bool,
     ) -> Result<Renderer, RenderError> {
+        // Safe points between the long phases (uploads, the sky's table,
+        // pipeline creation), so an interrupt does not wait for all of them.
+        crate::interrupt::check()?;
         let render_pass = build_render_pass(ctx, &plan)?;
+        crate::interrupt::check()?;
         let scene_resources = if plan.draws().next().is_some() {
             let geometry = geometry.as_deref().ok_or_else(|| {
                 RenderError::Frame("the plan draws objects but there is no geometry".into())
@@ -137,6 +141,7 @@ impl Renderer {
             }
             _ => None,
         };
+        crate::interrupt::check()?;
         let frame_resources = frame_resources(
             &plan,
             render_pass.as_ref(),
@@ -148,6 +153,7 @@ impl Renderer {
         let mut passes = Vec::with_capacity(plan.passes.len());
         let mut subpass = 0;
         for decl in &plan.passes {
+            crate::interrupt::check()?;
             let setup = PassSetup {
                 ctx,
                 scene,

@@ -1016,6 +1016,7 @@ fn write_atomically(
         crate::files::FileError::Io { error, .. } => io_err(error),
         refused => io_err(io::Error::other(refused.to_string())),
     };
+    crate::files::check_output(path, crate::files::Format::Png).map_err(as_io)?;
     let pending = crate::files::PendingFile::create(path).map_err(as_io)?;
     let mut w = BufWriter::new(pending.file().try_clone().map_err(io_err)?);
     write(&mut w)?;

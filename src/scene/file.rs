@@ -12,6 +12,7 @@
 //! loses the position of errors inside them; the per-type field checks are
 //! done here instead, with clearer messages.
 
+use std::cell::RefCell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -326,7 +327,12 @@ pub(super) fn parse(text: &str, file: &str, base_dir: &Path) -> Result<Scene> {
         file: file.to_owned(),
         message: e.to_string().trim_end().to_owned(),
     })?;
-    Check { file, base_dir }.scene(raw)
+    Check {
+        file,
+        base_dir,
+        models: RefCell::new(Vec::new()),
+    }
+    .scene(raw)
 }
 
 /// Validation context: where messages say the error is, and where textures
@@ -334,6 +340,8 @@ pub(super) fn parse(text: &str, file: &str, base_dir: &Path) -> Result<Scene> {
 struct Check<'a> {
     file: &'a str,
     base_dir: &'a Path,
+    /// The files of the OBJ models read so far (for [`Scene::files`]).
+    models: RefCell<Vec<PathBuf>>,
 }
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -511,6 +519,15 @@ impl Check<'_> {
 
         let sky = super::sky::check(self.file, raw.sun, raw.atmosphere)?;
 
+        let mut files = self.models.take();
+        for m in &materials {
+            let texture = m.texture.as_ref().and_then(|t| t.file());
+            files.extend(texture.map(Path::to_path_buf));
+            files.extend(m.normal_map.iter().cloned());
+        }
+        let mut seen = std::collections::HashSet::new();
+        files.retain(|f| seen.insert(f.clone()));
+
         Ok(Scene {
             output,
             camera,
@@ -522,6 +539,7 @@ impl Check<'_> {
             light_cutoff,
             sky,
             warnings,
+            files,
         })
     }
 
@@ -895,7 +913,10 @@ impl Check<'_> {
                     ),
                 ));
             }
-            if s > 0.0 && !(MIN_LENGTH..=MAX_LENGTH).contains(&f64::from(s)) {
+            // The bounds are checked on the value as written: rounded to
+            // f32, 1e-6 is just below 1e-6, and the documented bound
+            // itself would be refused.
+            if s > 0.0 && !(MIN_LENGTH..=MAX_LENGTH).contains(&raw.scale[i]) {
                 return Err(self.invalid(
                     field("scale"),
                     format!(
@@ -973,6 +994,7 @@ impl Check<'_> {
         }
         let model = obj::load_obj(&resolved)
             .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
+        self.models.borrow_mut().extend(model.files.iter().cloned());
         let crease_degrees = match raw.crease_angle {
             None => obj::DEFAULT_CREASE_DEGREES,
             Some(x) => {

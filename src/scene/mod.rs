@@ -66,6 +66,11 @@ pub struct Scene {
     /// What was wrong with the models' assets (MTL libraries, textures)
     /// and what is drawn instead; see [`Scene::strict`].
     pub warnings: Vec<SceneWarning>,
+    /// Every file the scene was read from: the scene file (when loaded
+    /// with [`Scene::load`]), OBJ models, their MTL libraries, textures,
+    /// normal and height maps. Empty for scenes built in code. A command
+    /// must never write over one of them (see [`crate::files::protect_inputs`]).
+    pub files: Vec<std::path::PathBuf>,
 }
 
 /// An [`AssetWarning`] of one of the scene's objects.
@@ -190,9 +195,11 @@ pub enum ToneMapOperator {
     Reinhard,
     /// The ACES filmic approximation.
     Aces,
-    /// No curve: exposure, then clamped to [0, 1]. Without `--hdr` the
-    /// scene is then drawn straight into the 8-bit output, with no HDR
-    /// attachment and no tone-map subpass.
+    /// No curve: exposure, then clamped to [0, 1]. Without `--hdr`, with
+    /// an `rgba32f` HDR format, exposure 1, forward lighting, no
+    /// transparent object and no atmosphere, the scene is then drawn
+    /// straight into the 8-bit output, with no HDR attachment and no
+    /// tone-map subpass; the image is the same as through them.
     None,
 }
 
@@ -211,7 +218,9 @@ impl Scene {
             reason,
         })?;
         let base_dir = path.parent().unwrap_or_else(|| Path::new(""));
-        Scene::from_toml(&text, &file, base_dir)
+        let mut scene = Scene::from_toml(&text, &file, base_dir)?;
+        scene.files.insert(0, path.to_path_buf());
+        Ok(scene)
     }
 
     /// Parses and validates a scene from TOML text. `file` is only used in
@@ -319,6 +328,7 @@ impl Scene {
             light_cutoff: DEFAULT_LIGHT_CUTOFF,
             sky: None,
             warnings: Vec::new(),
+            files: Vec::new(),
         }
     }
 

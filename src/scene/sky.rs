@@ -547,7 +547,7 @@ pub(super) fn check(
     let mie_g = within(
         "atmosphere.mie_g",
         atmosphere.mie_g.unwrap_or(earth.mie_g),
-        &|g| g.abs() < 0.999,
+        &|g| g.abs() <= 0.999,
         "between -0.999 and 0.999",
     )?;
     let ozone_layer = atmosphere.ozone_layer.unwrap_or(earth.ozone_layer);

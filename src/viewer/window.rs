@@ -216,6 +216,12 @@ impl ApplicationHandler for App {
     }
 
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        // A safe point between frames: an interrupt closes the window as
+        // the close button does (see `crate::interrupt`).
+        if crate::interrupt::requested() {
+            event_loop.exit();
+            return;
+        }
         let Some(live) = self.live.as_ref() else {
             return;
         };
@@ -603,7 +609,7 @@ impl Live {
             crate::vk::validation::check(&log.messages())?;
         }
         let exr_path = path.with_extension("exr");
-        files::check_destination(path).map_err(|e| shot_err(e.to_string()))?;
+        files::check_output(path, files::Format::Png).map_err(|e| shot_err(e.to_string()))?;
         files::check_destination(&exr_path).map_err(|e| shot_err(e.to_string()))?;
         // The frame on screen (the renderer reads its output back every
         // frame) and, for the EXR, the same view drawn once more by a

@@ -69,10 +69,15 @@ pub struct Context {
     validation_log: Option<Arc<ValidationLog>>,
     // Released after Drop::drop destroyed the device and the instance.
     _layer_hold: Option<validation::LayerHold>,
+    // Likewise: until then an interrupt waits for a safe point.
+    _busy: crate::interrupt::Busy,
 }
 
 impl Context {
     pub fn new(options: &ContextOptions) -> Result<Arc<Context>, VkError> {
+        // From the loader on, an interrupt must not end the process without
+        // the run reaching a safe point (see `crate::interrupt`).
+        let busy = crate::interrupt::Busy::start();
         // SAFETY: loading the system Vulkan loader; no Vulkan calls were made
         // before, and the entry is kept alive as long as the instance.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::Loader(e.to_string()))?;
@@ -174,6 +179,7 @@ impl Context {
             validation_log,
             entry: Some(entry),
             layer_hold,
+            busy: Some(busy),
         };
         partial.finish(options)
     }
@@ -250,6 +256,7 @@ struct PartialInstance {
     entry: Option<ash::Entry>,
     // Released after the instance is destroyed, on the error path too.
     layer_hold: Option<validation::LayerHold>,
+    busy: Option<crate::interrupt::Busy>,
 }
 
 impl PartialInstance {
@@ -352,6 +359,7 @@ impl PartialInstance {
             pipeline_statistics: options.pipeline_statistics,
             validation_log: self.validation_log.clone(),
             _layer_hold: self.layer_hold.take(),
+            _busy: self.busy.take().expect("set in new"),
         }))
     }
 }
