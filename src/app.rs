@@ -446,6 +446,7 @@ fn count_prefixes(
     let mut timings = Vec::new();
     let mut counts = Vec::new();
     for _ in 0..settings.frames.max(1) {
+        crate::interrupt::check()?;
         let mut prefixes = Vec::with_capacity(passes + 1);
         let mut whole = None;
         for k in 0..=passes {
