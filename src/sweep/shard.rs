@@ -12,7 +12,7 @@
 //! ([`Row::gpu_x_empty`](super::Row::gpu_x_empty)).
 //!
 //! [`merge`] joins the shards' results. It refuses results of different
-//! sweeps (naming the field: `aerial_version`, `scene`, `scene_hash`,
+//! sweeps (naming the field: `aerial_version`, `scene_hash`,
 //! `axes`, `frames`, `warmup`, `reference`, `combinations` or the shard
 //! count), a shard given twice, missing shards (listing them) and a shard
 //! whose rows are not its slice.
@@ -202,10 +202,11 @@ pub fn read_shard(dir: &Path) -> Result<(PathBuf, SweepResult), ShardError> {
 }
 
 /// The fields two shards of one sweep share, by name, as text.
-fn identity(r: &SweepResult, shard: Shard) -> [(&'static str, String); 9] {
+/// The scene's path is not one of them: machines may keep the same file
+/// in different places.
+fn identity(r: &SweepResult, shard: Shard) -> [(&'static str, String); 8] {
     [
         ("aerial_version", r.aerial_version.clone()),
-        ("scene", r.scene.clone()),
         ("scene_hash", r.scene_hash.clone()),
         ("axes", r.axes.join(" ")),
         ("frames", r.frames.to_string()),
