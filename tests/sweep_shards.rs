@@ -161,7 +161,9 @@ fn three_shards_in_separate_processes_merge_into_the_unsharded_sweep() {
     assert_ok(&out);
     let table = String::from_utf8_lossy(&out.stdout);
     assert!(
-        table.contains("x empty") && table.contains("(reference)"),
+        table.contains("x empty")
+            && table.contains("(reference)")
+            && table.contains("merged from 3 shards"),
         "{table}"
     );
 

@@ -129,6 +129,13 @@ pub fn to_table(result: &SweepResult) -> String {
         // none, so say once what the errors are against.
         out.push_str("errors against the exact CPU image of each row's own scene\n");
     }
+    if result.time_axis == TimeAxis::GpuXEmpty {
+        let _ = writeln!(
+            out,
+            "merged from {} shards; times are each shard's own, and the Pareto front is by x empty (GPU median over the shard's empty pass)",
+            result.shards.len()
+        );
+    }
     for (k, w) in result.knobs.iter().zip(&widths) {
         let _ = write!(out, "{k:<w$}  ");
     }

@@ -59,6 +59,12 @@ pub enum ShardError {
     },
     #[error("{} is not the output of one shard (it has no \"shard\" field): run the sweep with --shard I/N", path.display())]
     NotAShard { path: PathBuf },
+    #[error("{}: shard {index} of {count} is no shard (indices run from 0 to N - 1)", path.display())]
+    BadShard {
+        path: PathBuf,
+        index: usize,
+        count: usize,
+    },
     #[error("nothing to merge: give the shards' folders")]
     Nothing,
     #[error("{} is a shard of a different sweep than {}: {field} differs ({ours} against {theirs})", path.display(), first.display())]
@@ -224,9 +230,14 @@ fn identity(r: &SweepResult, shard: Shard) -> [(&'static str, String); 8] {
 /// for what is refused).
 pub fn merge(shards: Vec<(PathBuf, SweepResult)>) -> Result<SweepResult, ShardError> {
     let first_path = shards.first().ok_or(ShardError::Nothing)?.0.clone();
-    let shard_of = |(path, r): &(PathBuf, SweepResult)| {
-        r.shard
-            .ok_or_else(|| ShardError::NotAShard { path: path.clone() })
+    let shard_of = |(path, r): &(PathBuf, SweepResult)| match r.shard {
+        None => Err(ShardError::NotAShard { path: path.clone() }),
+        Some(s) if s.index >= s.count => Err(ShardError::BadShard {
+            path: path.clone(),
+            index: s.index,
+            count: s.count,
+        }),
+        Some(s) => Ok(s),
     };
     let first_shard = shard_of(&shards[0])?;
     let first_id = identity(&shards[0].1, first_shard);

@@ -859,6 +859,17 @@ fn merge_refuses_what_is_not_one_whole_sweep() {
     moved.1.scene = "elsewhere/default.toml".into();
     assert!(merge(vec![run_shard(0, 3), moved, run_shard(2, 3)]).is_ok());
 
+    // A hand-edited shard that is no shard.
+    for (index, count) in [(3, 3), (0, 0)] {
+        let mut odd = run_shard(1, 3);
+        odd.1.shard = Some(Shard { index, count });
+        let e = err(vec![run_shard(0, 3), odd]);
+        assert!(
+            e.contains(&format!("shard {index} of {count} is no shard")),
+            "{e}"
+        );
+    }
+
     // Rows that are not the shard's slice, and a whole sweep.
     let mut odd = run_shard(1, 3);
     odd.1.rows.pop();
