@@ -310,8 +310,7 @@ impl Sweep {
         let references: HashSet<&[String]> = chosen
             .iter()
             .filter(|_| !cpu)
-            .map(|(_, c)| c)
-            .map(|c| c.reference.as_slice())
+            .map(|(_, c)| c.reference.as_slice())
             .collect();
         let mut cache: HashMap<Vec<String>, Rc<Images>> = HashMap::new();
         // CPU references by what they depend on; a short list, searched
