@@ -5,14 +5,15 @@ use aerial::app::{self, FrameSource, RenderSettings};
 use aerial::render::render_reference;
 use aerial::scene::Scene;
 use aerial::sweep::{
-    self, Axis, Job, ReferenceKind, Rendered, Sweep, SweepOptions, DEFAULT_MAX_COMBINATIONS,
+    self, Axis, Job, ReferenceKind, Rendered, Shard, Sweep, SweepOptions, DEFAULT_MAX_COMBINATIONS,
 };
 use aerial::vk::validation;
 use anyhow::Context as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
-#[command(after_help = "\
+#[command(
+    after_help = "\
 Each combination is compared with a reference: the scene with every swept knob at its best \
 value. That is a fixed value for some knobs (e.g. hdr_format=rgba32f), the last value listed \
 for others (e.g. tessellation: so list values cheapest first), and the combination's own \
@@ -20,10 +21,23 @@ value for size. Knobs that are not swept keep the scene's settings.
 
 With --reference cpu, each combination is compared with the exact image of its own scene instead: \
 ray-cast in double precision against the analytic surfaces and shaded with the same formula \
-(phong spheres, planes and cylinders only; other scenes are refused before rendering).")]
+(phong spheres, planes and cylinders only; other scenes are refused before rendering).
+
+On many machines: --shard I/N renders only the combinations whose index k (the last knob \
+changing fastest) has k % N == I, with I counted from 0. --shard kubernetes/N takes I from \
+JOB_COMPLETION_INDEX (a Kubernetes Indexed Job); --shard slurm takes I and N from \
+SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN and SLURM_ARRAY_TASK_COUNT (a Slurm job array). \
+Each shard writes its own sweep.csv, sweep.json and sweep.svg; `aerial sweep merge DIR... \
+--out-dir OUT` joins them into the result of the whole sweep.",
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true
+)]
 pub struct SweepArgs {
+    #[command(subcommand)]
+    command: Option<SweepCommand>,
     /// Scene file (TOML).
-    pub scene: PathBuf,
+    #[arg(required = true)]
+    pub scene: Option<PathBuf>,
     /// A knob and the values to try, NAME=V1,V2,... (repeat for more knobs;
     /// cheapest value first). An unknown NAME lists the knobs.
     #[arg(long = "knob", value_name = "NAME=V1,V2,...", required = true)]
@@ -44,10 +58,37 @@ pub struct SweepArgs {
     /// settings, or the exact CPU image of each combination's scene.
     #[arg(long, value_enum, default_value = "gpu-best")]
     reference: Reference,
+    /// Run only one slice of the combinations: I/N (0 <= I < N),
+    /// kubernetes/N (I from JOB_COMPLETION_INDEX) or slurm (I and N from
+    /// the SLURM_ARRAY_TASK_* variables).
+    #[arg(long, value_name = "I/N|kubernetes/N|slurm")]
+    shard: Option<String>,
     #[command(flatten)]
     strict: super::StrictArgs,
     #[command(flatten)]
     gpu: super::GpuArgs,
+}
+
+#[derive(clap::Subcommand)]
+enum SweepCommand {
+    /// Join the outputs of every shard of one sweep (`--shard`) into the
+    /// table, sweep.csv, sweep.json and sweep.svg of the whole sweep.
+    Merge(MergeArgs),
+}
+
+#[derive(clap::Args)]
+#[command(after_help = "\
+Refuses shards of different sweeps (naming the field that differs), a shard given twice and \
+missing shards (naming them); then nothing is written. Error columns are those of the sweep \
+run at once; times stay each shard's own, and the Pareto front and plot rank them as \
+multiples of each shard's empty pass (gpu_x_empty), which compare between machines.")]
+struct MergeArgs {
+    /// The shards' output folders (each with its sweep.json).
+    #[arg(required = true, value_name = "DIR")]
+    dirs: Vec<PathBuf>,
+    /// Folder for the merged sweep.csv, sweep.json and sweep.svg.
+    #[arg(long)]
+    out_dir: PathBuf,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -56,25 +97,45 @@ enum Reference {
     Cpu,
 }
 
-pub fn run(args: SweepArgs) -> anyhow::Result<()> {
-    let scene = Scene::load(&args.scene)?;
-    args.strict.apply(&scene)?;
-    aerial::files::protect_inputs(&scene.files);
-    // Before the work: a sweep takes minutes, a bad folder must not.
-    aerial::files::check_output_dir(&args.out_dir)?;
+/// Refuses an output folder the sweep's files cannot be written to.
+fn check_out_dir(dir: &Path) -> anyhow::Result<()> {
+    aerial::files::check_output_dir(dir)?;
     for name in ["sweep.csv", "sweep.json", "sweep.svg"] {
-        let path = args.out_dir.join(name);
+        let path = dir.join(name);
         if path.exists() {
             aerial::files::check_destination(&path)?;
         }
     }
+    Ok(())
+}
+
+pub fn run(args: SweepArgs) -> anyhow::Result<()> {
+    let Some(scene_path) = args.scene.clone() else {
+        return match args.command {
+            Some(SweepCommand::Merge(merge)) => run_merge(merge),
+            // clap requires SCENE without a subcommand.
+            None => anyhow::bail!("give a scene file, or `merge`"),
+        };
+    };
+    let shard = args
+        .shard
+        .as_deref()
+        .map(|spec| Shard::parse(spec, |var| std::env::var(var).ok()))
+        .transpose()?;
+    let scene = Scene::load(&scene_path)?;
+    args.strict.apply(&scene)?;
+    aerial::files::protect_inputs(&scene.files);
+    let scene_bytes = std::fs::read(&scene_path)
+        .with_context(|| format!("cannot read {}", scene_path.display()))?;
+    // Before the work: a sweep takes minutes, a bad folder must not.
+    check_out_dir(&args.out_dir)?;
     let axes = args
         .knobs
         .iter()
         .map(|k| Axis::parse(k))
         .collect::<Result<Vec<_>, _>>()?;
-    let sweep = Sweep::new(
-        args.scene.display().to_string(),
+    let mut sweep = Sweep::new(
+        scene_path.display().to_string(),
         scene,
         axes,
         SweepOptions {
@@ -87,16 +148,30 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             },
         },
     )?;
-    let total = sweep.combinations().len();
-    eprintln!("{total} combinations");
+    sweep.set_scene_hash(sweep::scene_hash(&scene_bytes));
+    let all = sweep.combinations().len();
+    let total = match shard {
+        Some(s) => {
+            let mine = s.combinations(all).len();
+            eprintln!(
+                "shard {} of {} (0-based): {mine} of {all} combinations",
+                s.index, s.count
+            );
+            mine
+        }
+        None => {
+            eprintln!("{all} combinations");
+            all
+        }
+    };
 
-    let settings = |warmup, frames, keep_hdr| RenderSettings {
+    let settings = |warmup, frames, keep_hdr, empty_pass| RenderSettings {
         validate: args.gpu.validate.unwrap_or_default(),
         device: args.gpu.device.clone(),
         warmup,
         frames,
         keep_hdr,
-        empty_pass_between_frames: false,
+        empty_pass_between_frames: empty_pass,
         ..Default::default()
     };
     let render = |scene: &Scene, job: Job| -> anyhow::Result<Rendered> {
@@ -109,7 +184,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                 // pass, as the GPU images get theirs.
                 let run = app::run(
                     FrameSource::HdrImage(&hdr, scene.tone_map),
-                    &settings(0, 1, false),
+                    &settings(0, 1, false, false),
                 )?;
                 validation::check(&run.validation)?;
                 return Ok(Rendered {
@@ -119,10 +194,14 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                     output: run.output,
                     hdr: Some(hdr),
                     setup: Vec::new(),
+                    empty_pass_ms: Vec::new(),
                 });
             }
         };
-        let run = app::render(scene, &settings(warmup, frames, keep_hdr))?;
+        // The timed run also times the empty pass between its frames: the
+        // floor its time is a multiple of.
+        let timing = matches!(job, Job::Timing { .. });
+        let run = app::render(scene, &settings(warmup, frames, keep_hdr, timing))?;
         validation::check(&run.validation)?;
         Ok(Rendered {
             device: run.device.name.clone(),
@@ -135,18 +214,24 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                 .iter()
                 .map(|(name, value)| (name.to_string(), *value))
                 .collect(),
+            empty_pass_ms: run
+                .empty_pass_frames
+                .iter()
+                .map(|f| f.pass_ms.iter().sum())
+                .collect(),
         })
     };
+    let mut done = 0;
     let result = sweep
-        .run(render, |i, row| {
+        .run_shard(shard, render, |_, row| {
+            done += 1;
             let settings: Vec<String> = row
                 .settings
                 .iter()
                 .map(|(k, v)| format!("{k}={v}"))
                 .collect();
             eprintln!(
-                "[{}/{total}] {}: {:.3} ms, rmse {:.3e}",
-                i + 1,
+                "[{done}/{total}] {}: {:.3} ms, rmse {:.3e}",
                 settings.join(" "),
                 row.gpu_ms.median,
                 row.rmse
@@ -154,6 +239,37 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         })
         .context("sweep failed; no output written")?;
 
+    print!("{}", sweep::to_table(&result));
+    for path in sweep::write_outputs(&result, &args.out_dir)? {
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// `aerial sweep merge`: reads every shard, merges, and only then writes.
+fn run_merge(args: MergeArgs) -> anyhow::Result<()> {
+    check_out_dir(&args.out_dir)?;
+    // Writing over a shard's own files would lose it.
+    let out = std::fs::canonicalize(&args.out_dir).ok();
+    for dir in &args.dirs {
+        if out.is_some() && std::fs::canonicalize(dir).ok() == out {
+            anyhow::bail!(
+                "--out-dir {} is one of the shards' folders; merge into another folder",
+                args.out_dir.display()
+            );
+        }
+    }
+    let shards = args
+        .dirs
+        .iter()
+        .map(|dir| sweep::read_shard(dir))
+        .collect::<Result<Vec<_>, _>>()?;
+    let result = sweep::merge(shards).context("merge failed; nothing written")?;
+    eprintln!(
+        "merged {} shards: {} combinations",
+        result.shards.len(),
+        result.rows.len()
+    );
     print!("{}", sweep::to_table(&result));
     for path in sweep::write_outputs(&result, &args.out_dir)? {
         eprintln!("wrote {}", path.display());

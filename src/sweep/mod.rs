@@ -61,8 +61,20 @@
 //! # Layout
 //!
 //! [`run`] lists and measures the combinations; [`output`] turns the result
-//! into the terminal table, `sweep.csv`, `sweep.json` and `sweep.svg`. This
-//! file holds what both share: the errors and the result types.
+//! into the terminal table, `sweep.csv`, `sweep.json` and `sweep.svg`;
+//! [`shard`] splits a sweep into deterministic slices and merges the
+//! slices' results back into one. This file holds what they share: the
+//! errors and the result types.
+//!
+//! # Time against the floor
+//!
+//! Besides milliseconds, each combination's timed run also times the empty
+//! pass at the combination's output size after each frame, on the same
+//! device and over the same seconds (see
+//! [`RenderSettings::empty_pass_between_frames`](crate::app::RenderSettings::empty_pass_between_frames)).
+//! `gpu_x_empty` is the GPU median divided by that floor's median: a
+//! ratio that stays comparable between machines, which is what a sweep
+//! merged from shards run on different hosts is plotted and ranked by.
 //!
 //! Rendering is left to the caller (a closure taking a scene and a [`Job`]),
 //! which keeps this module free of Vulkan and lets it be tested without a
@@ -70,11 +82,13 @@
 
 pub mod output;
 pub mod run;
+pub mod shard;
 
 pub use output::{to_csv, to_svg, to_table, write_outputs};
 pub use run::{
     pareto_front, Axis, Combination, Job, Rendered, Sweep, SweepOptions, DEFAULT_MAX_COMBINATIONS,
 };
+pub use shard::{merge, read_shard, scene_hash, Shard, ShardError, ShardSource};
 
 use crate::render::reference::ReferenceError;
 use crate::render::Pixels;
@@ -82,7 +96,7 @@ use crate::report::image_diff::CompareError;
 use crate::report::plot::PlotError;
 use crate::report::stats::Summary;
 use crate::scene::KnobError;
-use serde::{Serialize, Serializer};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::path::PathBuf;
 
 /// Everything that can stop a sweep. Each message names the knob, value,
@@ -107,6 +121,12 @@ pub enum SweepError {
     NoKnobs,
     #[error("the sweep has {count} combinations, more than the limit of {max} (raise it with --max-combinations)")]
     TooMany { count: String, max: usize },
+    #[error("--shard {index}/{count}: the sweep has only {combinations} combinations, so some shards would have none (use at most {combinations} shards)")]
+    EmptyShard {
+        index: usize,
+        count: usize,
+        combinations: usize,
+    },
     #[error("rendering {what} failed: {reason}")]
     Render { what: String, reason: String },
     #[error("{what}: the device recorded no pass timings (no timestamp queries), so there is no GPU time to plot")]
@@ -137,7 +157,7 @@ pub enum SweepError {
 }
 
 /// What each combination's error is measured against (see the module docs).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ReferenceKind {
     /// The GPU image with every swept knob at its [`Best`](crate::scene::Best) value.
@@ -158,25 +178,35 @@ impl ReferenceKind {
 }
 
 /// One measured combination.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Row {
+    /// The combination's index in the whole sweep (the last axis changing
+    /// fastest), whichever shard measured it.
+    pub index: usize,
     /// Knob name and value, in the order of the sweep's axes.
-    #[serde(serialize_with = "ordered_map")]
+    #[serde(serialize_with = "ordered_map", deserialize_with = "ordered_pairs")]
     pub settings: Vec<(String, String)>,
     /// The settings of the scene the reference image was made from (with a
     /// CPU reference, the row's own).
-    #[serde(serialize_with = "ordered_map")]
+    #[serde(serialize_with = "ordered_map", deserialize_with = "ordered_pairs")]
     pub reference: Vec<(String, String)>,
     /// Whether this combination is its own reference (error 0; never with
     /// a CPU reference).
     pub is_reference: bool,
     /// Median GPU time of each pass, in ms.
-    #[serde(serialize_with = "ordered_map")]
+    #[serde(serialize_with = "ordered_map", deserialize_with = "ordered_pairs")]
     pub pass_median_ms: Vec<(String, f64)>,
     /// Per-frame GPU time (sum of the passes), in ms.
     pub gpu_ms: Summary,
     /// Per-frame CPU time from submit to fence, in ms.
     pub cpu_ms: Summary,
+    /// Median of the empty pass timed between this combination's frames
+    /// (at its output size, on the same device), in ms; `None` when the
+    /// renderer reported none.
+    pub empty_median_ms: Option<f64>,
+    /// `gpu_ms.median / empty_median_ms`: GPU time as a multiple of the
+    /// floor of the machine that measured it.
+    pub gpu_x_empty: Option<f64>,
     /// Whole-image RMSE of the linear HDR image against the reference.
     pub rmse: f64,
     /// Largest per-pixel relative error of the linear HDR image
@@ -187,16 +217,22 @@ pub struct Row {
     /// 99th percentile of the per-pixel FLIP.
     pub flip_p99: f64,
     /// Setup measures of the timed run, by name (see the module docs).
-    #[serde(serialize_with = "ordered_map")]
+    #[serde(serialize_with = "ordered_map", deserialize_with = "ordered_pairs")]
     pub setup: Vec<(String, f64)>,
     /// On the Pareto front of (GPU median, rmse).
     pub pareto: bool,
 }
 
 /// A finished sweep: what `sweep.json` holds.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SweepResult {
+    /// The `aerial` version that measured it.
+    pub aerial_version: String,
     pub scene: String,
+    /// What identifies the scene across machines: see [`scene_hash`].
+    pub scene_hash: String,
+    /// The device (for a merged sweep, every shard's device, distinct
+    /// names joined by `"; "`).
     pub device: String,
     pub frames: u32,
     pub warmup: u32,
@@ -204,6 +240,21 @@ pub struct SweepResult {
     pub reference: ReferenceKind,
     /// Swept knob names, in axis order.
     pub knobs: Vec<String>,
+    /// Every axis as `NAME=V1,V2,...`, in order: the whole sweep, also in a
+    /// shard's result, which holds only some of the values.
+    pub axes: Vec<String>,
+    /// Combinations in the whole sweep.
+    pub combinations: usize,
+    /// Which slice this result is, for the output of `--shard`; `None` for
+    /// a whole sweep, run at once or merged.
+    pub shard: Option<Shard>,
+    /// Where the rows were measured: one entry per shard (with its own
+    /// device), empty for a sweep run at once.
+    pub shards: Vec<ShardSource>,
+    /// What the Pareto front and the plot rank time by: `gpu_median_ms` for
+    /// a sweep measured on one machine at once, `gpu_x_empty` for one
+    /// merged from shards (milliseconds of different hosts do not compare).
+    pub time_axis: TimeAxis,
     /// Every pass name seen, in frame order.
     pub passes: Vec<String>,
     /// Every setup measure name seen, in order.
@@ -214,6 +265,28 @@ pub struct SweepResult {
     pub rows: Vec<Row>,
 }
 
+/// Which time column ranks the rows (see [`SweepResult::time_axis`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TimeAxis {
+    /// The median GPU time per frame, in ms.
+    #[default]
+    GpuMedianMs,
+    /// The median GPU time per frame as a multiple of the empty pass.
+    GpuXEmpty,
+}
+
+impl TimeAxis {
+    /// The row's time on this axis (NaN when the row has no floor, which
+    /// puts it on no front and off the plot's scale).
+    pub fn of(self, row: &Row) -> f64 {
+        match self {
+            TimeAxis::GpuMedianMs => row.gpu_ms.median,
+            TimeAxis::GpuXEmpty => row.gpu_x_empty.unwrap_or(f64::NAN),
+        }
+    }
+}
+
 /// Serialises `(key, value)` pairs as a JSON object in their own order
 /// (serde_json's `Map` would sort the keys).
 fn ordered_map<S: Serializer, V: Serialize>(
@@ -221,6 +294,31 @@ fn ordered_map<S: Serializer, V: Serialize>(
     s: S,
 ) -> Result<S::Ok, S::Error> {
     s.collect_map(pairs.iter().map(|(k, v)| (k, v)))
+}
+
+/// Reads a JSON object into `(key, value)` pairs in the file's order (the
+/// inverse of [`ordered_map`]).
+fn ordered_pairs<'de, D: Deserializer<'de>, V: Deserialize<'de>>(
+    d: D,
+) -> Result<Vec<(String, V)>, D::Error> {
+    struct Pairs<V>(std::marker::PhantomData<V>);
+    impl<'de, V: Deserialize<'de>> serde::de::Visitor<'de> for Pairs<V> {
+        type Value = Vec<(String, V)>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("an object")
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(
+            self,
+            mut map: A,
+        ) -> Result<Self::Value, A::Error> {
+            let mut pairs = Vec::new();
+            while let Some(pair) = map.next_entry()? {
+                pairs.push(pair);
+            }
+            Ok(pairs)
+        }
+    }
+    d.deserialize_map(Pairs(std::marker::PhantomData))
 }
 
 /// The largest relative error of `test` against `reference` (linear RGBA

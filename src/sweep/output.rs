@@ -1,14 +1,15 @@
 //! Writing a finished sweep: the terminal table, `sweep.csv`, `sweep.json`
 //! and the `sweep.svg` plot (drawn by [`crate::report::plot`]).
 
-use super::{ReferenceKind, SweepError, SweepResult};
+use super::{ReferenceKind, SweepError, SweepResult, TimeAxis};
 use crate::report::plot::{self, PlotPoint};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// The sweep as CSV: one row per combination, knob columns first, then the
-/// reference's settings, per-pass and total times in ms, the error metrics,
-/// the setup measures and the Pareto flag. Times are rounded to 0.1 µs (far below the noise
+/// reference's settings, per-pass and total times in ms, the empty pass's
+/// median and the GPU median as a multiple of it (`gpu_x_empty`), the
+/// error metrics, the setup measures and the Pareto flag. Times are rounded to 0.1 µs (far below the noise
 /// between frames); errors keep every digit. Fields are quoted only where
 /// RFC 4180 needs it (a comma, quote or line break), lines end in `\n`.
 pub fn to_csv(result: &SweepResult) -> Result<String, SweepError> {
@@ -21,6 +22,8 @@ pub fn to_csv(result: &SweepResult) -> Result<String, SweepError> {
             "gpu_median_ms",
             "gpu_p95_ms",
             "cpu_median_ms",
+            "empty_median_ms",
+            "gpu_x_empty",
             "rmse",
             "max_rel_error",
             "flip_mean",
@@ -68,6 +71,12 @@ pub fn to_csv(result: &SweepResult) -> Result<String, SweepError> {
             format!("{:.4}", row.gpu_ms.median),
             format!("{:.4}", row.gpu_ms.p95),
             format!("{:.4}", row.cpu_ms.median),
+            row.empty_median_ms
+                .map(|ms| format!("{ms:.4}"))
+                .unwrap_or_default(),
+            row.gpu_x_empty
+                .map(|x| format!("{x:.3}"))
+                .unwrap_or_default(),
             row.rmse.to_string(),
             row.max_rel_error.to_string(),
             row.flip_mean.to_string(),
@@ -120,13 +129,20 @@ pub fn to_table(result: &SweepResult) -> String {
         // none, so say once what the errors are against.
         out.push_str("errors against the exact CPU image of each row's own scene\n");
     }
+    if result.time_axis == TimeAxis::GpuXEmpty {
+        let _ = writeln!(
+            out,
+            "merged from {} shards; times are each shard's own, and the Pareto front is by x empty (GPU median over the shard's empty pass)",
+            result.shards.len()
+        );
+    }
     for (k, w) in result.knobs.iter().zip(&widths) {
         let _ = write!(out, "{k:<w$}  ");
     }
     let _ = write!(
         out,
-        "{:>10} {:>10} {:>11} {:>9} {:>9} {:>9}",
-        "gpu ms", "p95 ms", "rmse", "max rel", "flip", "flip p99"
+        "{:>10} {:>10} {:>8} {:>11} {:>9} {:>9} {:>9}",
+        "gpu ms", "p95 ms", "x empty", "rmse", "max rel", "flip", "flip p99"
     );
     for name in &result.setup {
         let _ = write!(out, " {name:>w$}", w = name.len().max(9));
@@ -138,9 +154,11 @@ pub fn to_table(result: &SweepResult) -> String {
         }
         let _ = write!(
             out,
-            "{:>10.3} {:>10.3} {:>11.4e} {:>9.2e} {:>9.5} {:>9.5}",
+            "{:>10.3} {:>10.3} {:>8} {:>11.4e} {:>9.2e} {:>9.5} {:>9.5}",
             row.gpu_ms.median,
             row.gpu_ms.p95,
+            row.gpu_x_empty
+                .map_or_else(|| "-".to_string(), |x| format!("{x:.2}")),
             row.rmse,
             row.max_rel_error,
             row.flip_mean,
@@ -189,7 +207,7 @@ fn plot_points(result: &SweepResult) -> Vec<PlotPoint> {
                 .map(|((_, value), _)| value.as_str())
                 .collect();
             PlotPoint {
-                x: r.gpu_ms.median,
+                x: result.time_axis.of(r),
                 y: r.rmse,
                 label: if parts.is_empty() {
                     r.settings
@@ -236,6 +254,9 @@ pub fn to_svg(result: &SweepResult) -> Result<String, SweepError> {
         result.frames,
         result.device
     );
+    if !result.shards.is_empty() {
+        let _ = write!(subtitle, "; {} shards", result.shards.len());
+    }
     if !fixed.is_empty() {
         let _ = write!(subtitle, "; {}", fixed.join(", "));
     }
@@ -245,7 +266,10 @@ pub fn to_svg(result: &SweepResult) -> Result<String, SweepError> {
     Ok(plot::error_vs_time_svg(&plot::Plot {
         title: &format!("{}: error against GPU time", result.scene),
         subtitle: &subtitle,
-        x_label: "GPU time per frame, median (ms)",
+        x_label: match result.time_axis {
+            TimeAxis::GpuMedianMs => "GPU time per frame, median (ms)",
+            TimeAxis::GpuXEmpty => "GPU time per frame, median, as a multiple of the empty pass",
+        },
         y_label: match result.reference {
             ReferenceKind::GpuBest => "RMSE of linear HDR vs reference (log)",
             ReferenceKind::Cpu => "RMSE of linear HDR vs exact CPU image (log)",

@@ -2,7 +2,7 @@
 //! have the caller render each one (timed, then for its images), compare
 //! it with its reference and mark the Pareto front.
 
-use super::{ReferenceKind, Row, SweepError, SweepResult};
+use super::{ReferenceKind, Row, Shard, SweepError, SweepResult, TimeAxis};
 use crate::render::reference::ReferenceScene;
 use crate::render::{FrameTiming, Pixels};
 use crate::report::image_diff::{compare_images, ImageRef, Metric};
@@ -110,6 +110,9 @@ pub struct Rendered {
     /// example the optical-depth table's size and bake time); read from
     /// the timed run.
     pub setup: Vec<(String, f64)>,
+    /// The empty pass timed between the timed frames (total ms of each),
+    /// for [`Job::Timing`]; empty when the renderer times none.
+    pub empty_pass_ms: Vec<f64>,
 }
 
 /// One combination and the reference it is compared with, as values in
@@ -124,6 +127,7 @@ pub struct Combination {
 /// A validated sweep, ready to run.
 pub struct Sweep {
     scene_name: String,
+    scene_hash: String,
     base: Scene,
     axes: Vec<Axis>,
     combinations: Vec<Combination>,
@@ -198,6 +202,7 @@ impl Sweep {
             .collect();
         let sweep = Sweep {
             scene_name: scene_name.into(),
+            scene_hash: String::new(),
             base,
             axes,
             combinations,
@@ -219,6 +224,13 @@ impl Sweep {
             what: self.describe(values),
             source,
         })
+    }
+
+    /// Records what identifies the scene across machines
+    /// ([`super::scene_hash`] of its file), for telling shards of different
+    /// sweeps apart.
+    pub fn set_scene_hash(&mut self, hash: impl Into<String>) {
+        self.scene_hash = hash.into();
     }
 
     pub fn combinations(&self) -> &[Combination] {
@@ -257,20 +269,48 @@ impl Sweep {
     /// combination with its index, for progress output.
     pub fn run<E>(
         &self,
+        render: impl FnMut(&Scene, Job) -> Result<Rendered, E>,
+        on_row: impl FnMut(usize, &Row),
+    ) -> Result<SweepResult, SweepError>
+    where
+        E: Into<Box<dyn std::error::Error + Send + Sync>>,
+    {
+        self.run_shard(None, render, on_row)
+    }
+
+    /// Like [`Sweep::run`], for only the combinations of `shard` (all of
+    /// them with `None`): their references are rendered here too, so the
+    /// errors are those of the whole sweep. The result records the shard
+    /// and, in every row, the combination's index in the whole sweep.
+    pub fn run_shard<E>(
+        &self,
+        shard: Option<Shard>,
         mut render: impl FnMut(&Scene, Job) -> Result<Rendered, E>,
         mut on_row: impl FnMut(usize, &Row),
     ) -> Result<SweepResult, SweepError>
     where
         E: Into<Box<dyn std::error::Error + Send + Sync>>,
     {
+        if let Some(s) = shard.filter(|s| s.count > self.combinations.len()) {
+            return Err(SweepError::EmptyShard {
+                index: s.index,
+                count: s.count,
+                combinations: self.combinations.len(),
+            });
+        }
+        let chosen: Vec<(usize, &Combination)> = self
+            .combinations
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| shard.is_none_or(|s| s.holds(*k)))
+            .collect();
         let cpu = self.options.reference == ReferenceKind::Cpu;
         // GPU images kept because they serve as references (none with a
         // CPU reference: then every GPU image is compared once).
-        let references: HashSet<&[String]> = self
-            .combinations
+        let references: HashSet<&[String]> = chosen
             .iter()
             .filter(|_| !cpu)
-            .map(|c| c.reference.as_slice())
+            .map(|(_, c)| c.reference.as_slice())
             .collect();
         let mut cache: HashMap<Vec<String>, Rc<Images>> = HashMap::new();
         // CPU references by what they depend on; a short list, searched
@@ -279,9 +319,9 @@ impl Sweep {
         let mut device = String::new();
         let mut passes: Vec<String> = Vec::new();
         let mut setup_names: Vec<String> = Vec::new();
-        let mut rows = Vec::with_capacity(self.combinations.len());
+        let mut rows = Vec::with_capacity(chosen.len());
 
-        for (index, c) in self.combinations.iter().enumerate() {
+        for (index, c) in chosen {
             let what = self.describe(&c.values);
             let scene = self.scene_for(&c.values)?;
             let job = Job::Timing {
@@ -300,6 +340,7 @@ impl Sweep {
             add_new_names(&mut passes, &timed.passes);
             add_new_names(&mut setup_names, timed.setup.iter().map(|(name, _)| name));
             let setup = timed.setup.clone();
+            let empty_median_ms = Summary::of(&timed.empty_pass_ms).map(|s| s.median);
             drop(timed);
 
             let mut images = |values: &[String]| -> Result<Rc<Images>, SweepError> {
@@ -373,10 +414,15 @@ impl Sweep {
             .map_err(compare_err)?;
 
             let row = Row {
+                index,
                 settings: self.pairs(&c.values),
                 reference: self.pairs(&c.reference),
                 is_reference: !cpu && c.values == c.reference,
                 pass_median_ms,
+                gpu_x_empty: empty_median_ms
+                    .filter(|&e| e > 0.0)
+                    .map(|e| gpu_ms.median / e),
+                empty_median_ms,
                 gpu_ms,
                 cpu_ms,
                 rmse: rmse.mean,
@@ -390,17 +436,33 @@ impl Sweep {
             rows.push(row);
         }
 
-        let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.gpu_ms.median, r.rmse)).collect();
+        let points: Vec<(f64, f64)> = rows
+            .iter()
+            .map(|r| (TimeAxis::GpuMedianMs.of(r), r.rmse))
+            .collect();
         for (row, on_front) in rows.iter_mut().zip(pareto_front(&points)) {
             row.pareto = on_front;
         }
         Ok(SweepResult {
+            aerial_version: env!("CARGO_PKG_VERSION").to_string(),
             scene: self.scene_name.clone(),
-            device,
+            scene_hash: self.scene_hash.clone(),
+            device: device.clone(),
             frames: self.options.frames.max(1),
             warmup: self.options.warmup,
             reference: self.options.reference,
             knobs: self.axes.iter().map(|a| a.knob.name.to_string()).collect(),
+            axes: self.axes.iter().map(|a| format!("{a:?}")).collect(),
+            combinations: self.combinations.len(),
+            shard,
+            shards: shard
+                .map(|s| super::ShardSource {
+                    index: s.index,
+                    device,
+                })
+                .into_iter()
+                .collect(),
+            time_axis: TimeAxis::GpuMedianMs,
             passes,
             setup: setup_names,
             asset_warnings: self.base.warnings.len(),
@@ -410,7 +472,10 @@ impl Sweep {
 }
 
 /// Appends the names in `names` that `seen` does not hold yet, in order.
-fn add_new_names<'a>(seen: &mut Vec<String>, names: impl IntoIterator<Item = &'a String>) {
+pub(super) fn add_new_names<'a>(
+    seen: &mut Vec<String>,
+    names: impl IntoIterator<Item = &'a String>,
+) {
     for name in names {
         if !seen.contains(name) {
             seen.push(name.clone());

@@ -22,12 +22,15 @@ fn row(values: &[(&str, &str)], ms: f64, rmse: f64, pareto: bool) -> Row {
             .collect::<Vec<_>>()
     };
     Row {
+        index: 0,
         settings: pairs(values),
         reference: pairs(&[("tessellation", "1"), ("hdr_format", "rgba32f")]),
         is_reference: rmse == 0.0,
         pass_median_ms: vec![("opaque".into(), ms * 0.75), ("tonemap".into(), ms * 0.25)],
         gpu_ms: summary(ms),
         cpu_ms: summary(ms + 1.0),
+        empty_median_ms: Some(ms / 8.0),
+        gpu_x_empty: Some(8.0),
         rmse,
         max_rel_error: rmse * 4.0,
         flip_mean: rmse / 2.0,
@@ -59,6 +62,29 @@ fn pareto_front_by_hand() {
     assert_eq!(pareto_front(&[(1.0, 1.0)]), [true]);
 }
 
+/// A result with no rows; tests fill in what they look at.
+fn blank_result() -> SweepResult {
+    SweepResult {
+        aerial_version: "0.0.0".into(),
+        scene: "s.toml".into(),
+        scene_hash: "0123456789abcdef".into(),
+        device: "dev".into(),
+        frames: 1,
+        warmup: 0,
+        reference: ReferenceKind::GpuBest,
+        knobs: Vec::new(),
+        axes: Vec::new(),
+        combinations: 0,
+        shard: None,
+        shards: Vec::new(),
+        time_axis: TimeAxis::GpuMedianMs,
+        passes: Vec::new(),
+        setup: Vec::new(),
+        asset_warnings: 0,
+        rows: Vec::new(),
+    }
+}
+
 #[test]
 fn csv_has_a_header_and_one_line_per_row() {
     let result = SweepResult {
@@ -88,6 +114,7 @@ fn csv_has_a_header_and_one_line_per_row() {
                 true,
             ),
         ],
+        ..blank_result()
     };
     let csv = to_csv(&result).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
@@ -96,11 +123,12 @@ fn csv_has_a_header_and_one_line_per_row() {
         [
             "tessellation,hdr_format,reference,is_reference,opaque_median_ms,\
                  tonemap_median_ms,transparent_median_ms,gpu_median_ms,gpu_p95_ms,\
-                 cpu_median_ms,rmse,max_rel_error,flip_mean,flip_p99,od_table_kib,pareto",
+                 cpu_median_ms,empty_median_ms,gpu_x_empty,rmse,max_rel_error,flip_mean,\
+                 flip_p99,od_table_kib,pareto",
             "0.5,rgba16f,tessellation=1 hdr_format=rgba32f,false,\
-                 1.5000,0.5000,,2.0000,2.0000,3.0000,0.25,1,0.125,0.25,256,true",
+                 1.5000,0.5000,,2.0000,2.0000,3.0000,0.2500,8.000,0.25,1,0.125,0.25,256,true",
             "1,rgba32f,tessellation=1 hdr_format=rgba32f,true,\
-                 3.0000,1.0000,,4.0000,4.0000,5.0000,0,0,0,0,,true",
+                 3.0000,1.0000,,4.0000,4.0000,5.0000,0.5000,8.000,0,0,0,0,,true",
         ]
     );
     assert!(csv.ends_with('\n'));
@@ -127,6 +155,7 @@ fn csv_fields_are_quoted_when_needed() {
         setup: vec![],
         asset_warnings: 0,
         rows: vec![row(&settings, 1.0, 0.5, true)],
+        ..blank_result()
     };
     let csv = to_csv(&result).unwrap();
     let line = csv.split_once('\n').unwrap().1;
@@ -154,6 +183,7 @@ fn json_keeps_knob_order_and_has_the_metrics() {
             0.0,
             true,
         )],
+        ..blank_result()
     };
     let json = serde_json::to_string(&result).unwrap();
     assert!(
@@ -285,6 +315,10 @@ fn fake_render(scene: &Scene, job: Job) -> Result<Rendered, String> {
             data: [value, 0.0, 0.0, 1.0].repeat(n),
         }),
         setup: vec![("triangles".into(), tris as f64)],
+        empty_pass_ms: match job {
+            Job::Timing { frames, .. } => vec![0.5; frames as usize * 3],
+            Job::Images | Job::Reference => Vec::new(),
+        },
     })
 }
 
@@ -588,4 +622,269 @@ fn max_relative_error_is_relative_with_a_floor_for_dark_pixels() {
     test[201] = [1e-5, 0.0, 0.0];
     let e = crate::sweep::max_relative_error(&same, &image(&test));
     assert!((e - 0.05).abs() < 1e-6, "{e}");
+}
+
+/// `--shard` with the given environment.
+fn parse_shard(spec: &str, env: &[(&str, &str)]) -> Result<Shard, String> {
+    Shard::parse(spec, |name| {
+        env.iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, v)| v.to_string())
+    })
+    .map_err(|e| e.to_string())
+}
+
+#[test]
+fn shard_specs_and_their_errors() {
+    let shard = |index, count| Ok(Shard { index, count });
+    assert_eq!(parse_shard("0/3", &[]), shard(0, 3));
+    assert_eq!(parse_shard("2/3", &[]), shard(2, 3));
+    assert_eq!(
+        parse_shard("kubernetes/4", &[("JOB_COMPLETION_INDEX", "3")]),
+        shard(3, 4)
+    );
+    // Arrays numbered from 1 and from 0 both give 0-based shards.
+    let slurm = |id, min, count| {
+        parse_shard(
+            "slurm",
+            &[
+                ("SLURM_ARRAY_TASK_ID", id),
+                ("SLURM_ARRAY_TASK_MIN", min),
+                ("SLURM_ARRAY_TASK_COUNT", count),
+            ],
+        )
+    };
+    assert_eq!(slurm("3", "1", "3"), shard(2, 3));
+    assert_eq!(slurm("0", "0", "3"), shard(0, 3));
+    for (spec, env, expected) in [
+        ("3/3", &[][..], "shard index 3 is out of range for 3 shards"),
+        ("0/0", &[], "at least 1 shard"),
+        ("1", &[], "no '/'"),
+        ("-1/3", &[], "I is not a whole number"),
+        ("a/3", &[], "I is not a whole number"),
+        ("0/x", &[], "N is not a whole number"),
+        ("kubernetes/3", &[], "JOB_COMPLETION_INDEX is not set"),
+        (
+            "kubernetes/3",
+            &[("JOB_COMPLETION_INDEX", "3")],
+            "shard index 3 is out of range",
+        ),
+        (
+            "kubernetes/3",
+            &[("JOB_COMPLETION_INDEX", "one")],
+            "JOB_COMPLETION_INDEX is 'one'",
+        ),
+        ("slurm", &[], "SLURM_ARRAY_TASK_ID is not set"),
+    ] {
+        let err = parse_shard(spec, env).unwrap_err();
+        assert!(err.contains(expected), "{spec}: {err}");
+    }
+    assert!(slurm("0", "1", "3")
+        .unwrap_err()
+        .contains("below SLURM_ARRAY_TASK_MIN"));
+    assert!(slurm("4", "1", "3").unwrap_err().contains("out of range"));
+}
+
+fn shard_sweep() -> Sweep {
+    let mut sweep = Sweep::new(
+        "default",
+        Scene::default_scene(),
+        axes(&[
+            "size=32x16",
+            "tessellation=0.25,0.5,1",
+            "hdr_format=rgba16f,rgba32f",
+        ]),
+        SweepOptions {
+            frames: 2,
+            warmup: 0,
+            ..SweepOptions::default()
+        },
+    )
+    .unwrap();
+    sweep.set_scene_hash(scene_hash(b"the scene"));
+    sweep
+}
+
+/// Shard `index` of `count` of [`shard_sweep`], as `merge` reads it.
+fn run_shard(index: usize, count: usize) -> (std::path::PathBuf, SweepResult) {
+    let shard = Shard { index, count };
+    let result = shard_sweep()
+        .run_shard(Some(shard), fake_render, |_, _| {})
+        .unwrap();
+    (format!("s{index}/sweep.json").into(), result)
+}
+
+#[test]
+fn shards_hold_round_robin_slices_and_render_their_own_references() {
+    let shard = Shard { index: 1, count: 4 };
+    assert_eq!(shard.combinations(6), [1, 5]);
+    assert!(shard.holds(5) && !shard.holds(4));
+
+    // Shard 0 of 4 holds combinations 0 and 4: (0.25, rgba16f) and
+    // (1, rgba16f); both are compared with (1, rgba32f), which is no row
+    // of this shard, so it renders that image itself.
+    let jobs = RefCell::new(Vec::new());
+    let result = shard_sweep()
+        .run_shard(
+            Some(Shard { index: 0, count: 4 }),
+            |scene, job| {
+                jobs.borrow_mut().push((
+                    scene.output.hdr_format,
+                    scene.objects[0].tessellation,
+                    job,
+                ));
+                fake_render(scene, job)
+            },
+            |_, _| {},
+        )
+        .unwrap();
+    let indices: Vec<usize> = result.rows.iter().map(|r| r.index).collect();
+    assert_eq!(indices, [0, 4]);
+    assert_eq!(result.shard, Some(Shard { index: 0, count: 4 }));
+    assert_eq!(result.combinations, 6);
+    assert_eq!(result.axes[1], "tessellation=0.25,0.5,1");
+    let images = jobs
+        .borrow()
+        .iter()
+        .filter(|(_, _, j)| *j == Job::Images)
+        .count();
+    assert_eq!(images, 3, "{:?}", jobs.borrow());
+    assert!(result.rows.iter().all(|r| r.rmse > 0.0));
+    // The fake floor is 0.5 ms.
+    for r in &result.rows {
+        assert_eq!(r.empty_median_ms, Some(0.5));
+        assert_eq!(r.gpu_x_empty, Some(r.gpu_ms.median / 0.5));
+    }
+
+    let err = shard_sweep()
+        .run_shard(Some(Shard { index: 0, count: 7 }), fake_render, |_, _| {})
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(err.contains("only 6 combinations"), "{err}");
+}
+
+#[test]
+fn merged_shards_are_the_whole_sweep() {
+    let whole = shard_sweep().run(fake_render, |_, _| {}).unwrap();
+    // Given in any order, through their JSON like the CLI reads them.
+    let shards: Vec<_> = [2, 0, 1]
+        .into_iter()
+        .map(|i| {
+            let (path, result) = run_shard(i, 3);
+            let json = serde_json::to_string_pretty(&result).unwrap();
+            (path, serde_json::from_str::<SweepResult>(&json).unwrap())
+        })
+        .collect();
+    let merged = merge(shards).unwrap();
+    assert_eq!(merged.rows.len(), whole.rows.len());
+    assert_eq!(merged.knobs, whole.knobs);
+    assert_eq!(merged.passes, whole.passes);
+    assert_eq!(merged.setup, whole.setup);
+    assert_eq!(merged.shard, None);
+    assert_eq!(merged.time_axis, TimeAxis::GpuXEmpty);
+    assert_eq!(merged.shards.len(), 3);
+    for (m, w) in merged.rows.iter().zip(&whole.rows) {
+        assert_eq!(m.index, w.index);
+        assert_eq!(m.settings, w.settings);
+        assert_eq!(m.reference, w.reference);
+        assert_eq!(m.is_reference, w.is_reference);
+        for (a, b) in [
+            (m.rmse, w.rmse),
+            (m.max_rel_error, w.max_rel_error),
+            (m.flip_mean, w.flip_mean),
+            (m.flip_p99, w.flip_p99),
+        ] {
+            assert_eq!(a.to_bits(), b.to_bits(), "{:?}", m.settings);
+        }
+    }
+    // The front is recomputed over the whole sweep, by multiples of the
+    // floor.
+    let points: Vec<(f64, f64)> = merged
+        .rows
+        .iter()
+        .map(|r| (r.gpu_x_empty.unwrap(), r.rmse))
+        .collect();
+    let front: Vec<bool> = merged.rows.iter().map(|r| r.pareto).collect();
+    assert_eq!(front, pareto_front(&points));
+    assert!(to_csv(&merged).is_ok() && to_svg(&merged).is_ok());
+}
+
+#[test]
+fn merge_refuses_what_is_not_one_whole_sweep() {
+    let err =
+        |shards: Vec<(std::path::PathBuf, SweepResult)>| merge(shards).unwrap_err().to_string();
+    let e = err(vec![run_shard(0, 3), run_shard(2, 3)]);
+    assert_eq!(e, "1 of 3 shards missing: shard 1");
+    let e = err(vec![run_shard(1, 3)]);
+    assert_eq!(e, "2 of 3 shards missing: shards 0, 2");
+    let e = err(vec![
+        run_shard(0, 3),
+        run_shard(1, 3),
+        run_shard(1, 3),
+        run_shard(2, 3),
+    ]);
+    assert!(e.contains("shard 1 is given twice"), "{e}");
+    let e = err(vec![run_shard(0, 2), run_shard(1, 3)]);
+    assert!(e.contains("shard count differs (3 against 2)"), "{e}");
+    assert!(err(Vec::new()).contains("nothing to merge"));
+
+    // Each identifying field, changed in one shard, is named.
+    type Change = fn(&mut SweepResult);
+    let changes: [(&str, Change); 6] = [
+        ("scene_hash", |r| {
+            r.scene_hash = scene_hash(b"another scene")
+        }),
+        ("axes", |r| r.axes[1] = "tessellation=0.25,0.5,2".into()),
+        ("frames", |r| r.frames = 3),
+        ("warmup", |r| r.warmup = 1),
+        ("reference", |r| r.reference = ReferenceKind::Cpu),
+        ("aerial_version", |r| r.aerial_version = "0.0.1".into()),
+    ];
+    for (field, change) in changes {
+        let mut odd = run_shard(1, 3);
+        change(&mut odd.1);
+        let e = err(vec![run_shard(0, 3), odd, run_shard(2, 3)]);
+        assert!(
+            e.contains(&format!(
+                "s1/sweep.json is a shard of a different sweep than s0/sweep.json: {field} differs"
+            )),
+            "{field}: {e}"
+        );
+    }
+
+    // The same scene file kept elsewhere on another machine is the same
+    // sweep.
+    let mut moved = run_shard(1, 3);
+    moved.1.scene = "elsewhere/default.toml".into();
+    assert!(merge(vec![run_shard(0, 3), moved, run_shard(2, 3)]).is_ok());
+
+    // A hand-edited shard that is no shard.
+    for (index, count) in [(3, 3), (0, 0)] {
+        let mut odd = run_shard(1, 3);
+        odd.1.shard = Some(Shard { index, count });
+        let e = err(vec![run_shard(0, 3), odd]);
+        assert!(
+            e.contains(&format!("shard {index} of {count} is no shard")),
+            "{e}"
+        );
+    }
+
+    // Rows that are not the shard's slice, and a whole sweep.
+    let mut odd = run_shard(1, 3);
+    odd.1.rows.pop();
+    let e = err(vec![run_shard(0, 3), odd, run_shard(2, 3)]);
+    assert!(
+        e.contains("should hold combinations 1, 4 but holds 1"),
+        "{e}"
+    );
+    let whole = (
+        "w/sweep.json".into(),
+        shard_sweep().run(fake_render, |_, _| {}).unwrap(),
+    );
+    let e = err(vec![run_shard(0, 3), whole]);
+    assert!(
+        e.contains("w/sweep.json is not the output of one shard"),
+        "{e}"
+    );
 }

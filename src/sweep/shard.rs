@@ -1,0 +1,337 @@
+//! Sweeps on many machines: a sweep split into `N` deterministic slices
+//! (shards), each run anywhere, and merged back into one result.
+//!
+//! Shard `i` of `n` (0-based: `0 <= i < n`) holds the combinations whose
+//! index `k` (the last axis changing fastest) has `k % n == i`. Round-robin
+//! spreads each axis's expensive values over the shards instead of giving
+//! one shard all of them.
+//!
+//! A shard renders the references its combinations need itself, so its
+//! error columns are those of the whole sweep, bit for bit; its time
+//! columns are its own machine's, with its own empty-pass floor
+//! ([`Row::gpu_x_empty`](super::Row::gpu_x_empty)).
+//!
+//! [`merge`] joins the shards' results. It refuses results of different
+//! sweeps (naming the field: `aerial_version`, `scene_hash`,
+//! `axes`, `frames`, `warmup`, `reference`, `combinations` or the shard
+//! count), a shard given twice, missing shards (listing them) and a shard
+//! whose rows are not its slice.
+
+use super::{pareto_front, Row, SweepResult, TimeAxis};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// One slice of a sweep: `index` of `count`, 0-based.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+}
+
+/// Where the rows of a merged sweep were measured.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ShardSource {
+    pub index: usize,
+    pub device: String,
+}
+
+/// What can go wrong choosing a shard or merging shards. Each message names
+/// the argument, variable, file or field involved.
+#[derive(Debug, thiserror::Error)]
+pub enum ShardError {
+    #[error("--shard '{spec}': {reason} (expected I/N with 0 <= I < N, kubernetes/N or slurm)")]
+    Spec { spec: String, reason: String },
+    #[error("--shard {spec}: environment variable {var} is {problem}")]
+    Env {
+        spec: String,
+        var: &'static str,
+        problem: String,
+    },
+    #[error("cannot read {}: {error}", path.display())]
+    Read {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+    #[error("{} is not a sweep's JSON: {error}", path.display())]
+    Parse {
+        path: PathBuf,
+        error: serde_json::Error,
+    },
+    #[error("{} is not the output of one shard (it has no \"shard\" field): run the sweep with --shard I/N", path.display())]
+    NotAShard { path: PathBuf },
+    #[error("{}: shard {index} of {count} is no shard (indices run from 0 to N - 1)", path.display())]
+    BadShard {
+        path: PathBuf,
+        index: usize,
+        count: usize,
+    },
+    #[error("nothing to merge: give the shards' folders")]
+    Nothing,
+    #[error("{} is a shard of a different sweep than {}: {field} differs ({ours} against {theirs})", path.display(), first.display())]
+    DifferentSweep {
+        path: PathBuf,
+        first: PathBuf,
+        field: &'static str,
+        ours: String,
+        theirs: String,
+    },
+    #[error("shard {index} is given twice: {} and {}", first.display(), second.display())]
+    Duplicate {
+        index: usize,
+        first: PathBuf,
+        second: PathBuf,
+    },
+    #[error("{} of {count} shards missing: {} {}", missing.len(), if missing.len() == 1 { "shard" } else { "shards" }, list(missing))]
+    Missing { missing: Vec<usize>, count: usize },
+    #[error("{}: shard {index} of {count} should hold combinations {expected} but holds {found}", path.display())]
+    WrongRows {
+        path: PathBuf,
+        index: usize,
+        count: usize,
+        expected: String,
+        found: String,
+    },
+}
+
+fn list(indices: &[usize]) -> String {
+    indices
+        .iter()
+        .map(usize::to_string)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+impl Shard {
+    /// Parses `--shard`: `I/N` (0-based), `kubernetes/N` (`I` from
+    /// `JOB_COMPLETION_INDEX`, which an Indexed Job sets 0-based) or `slurm`
+    /// (`I` = `SLURM_ARRAY_TASK_ID` − `SLURM_ARRAY_TASK_MIN`, `N` =
+    /// `SLURM_ARRAY_TASK_COUNT`, so arrays numbered from 0 or from 1 both
+    /// work). `env` looks a variable up (`std::env::var` in the CLI).
+    pub fn parse(spec: &str, env: impl Fn(&str) -> Option<String>) -> Result<Shard, ShardError> {
+        let bad = |reason: &str| ShardError::Spec {
+            spec: spec.to_string(),
+            reason: reason.to_string(),
+        };
+        let var = |name: &'static str| -> Result<usize, ShardError> {
+            let problem = |problem: String| ShardError::Env {
+                spec: spec.to_string(),
+                var: name,
+                problem,
+            };
+            let value = env(name).ok_or_else(|| problem("not set".into()))?;
+            value
+                .trim()
+                .parse()
+                .map_err(|_| problem(format!("'{value}', not a whole number >= 0")))
+        };
+        let count = |n: &str| -> Result<usize, ShardError> {
+            n.trim().parse().map_err(|_| bad("N is not a whole number"))
+        };
+        let (index, count) = if spec.trim() == "slurm" {
+            let id = var("SLURM_ARRAY_TASK_ID")?;
+            let min = var("SLURM_ARRAY_TASK_MIN")?;
+            let count = var("SLURM_ARRAY_TASK_COUNT")?;
+            let index = id.checked_sub(min).ok_or_else(|| ShardError::Env {
+                spec: spec.to_string(),
+                var: "SLURM_ARRAY_TASK_ID",
+                problem: format!("{id}, below SLURM_ARRAY_TASK_MIN ({min})"),
+            })?;
+            (index, count)
+        } else {
+            let (i, n) = spec.split_once('/').ok_or_else(|| bad("no '/'"))?;
+            let n = count(n)?;
+            let i = match i.trim() {
+                "kubernetes" => var("JOB_COMPLETION_INDEX")?,
+                i => i
+                    .parse()
+                    .map_err(|_| bad("I is not a whole number, 'kubernetes' or 'slurm'"))?,
+            };
+            (i, n)
+        };
+        if count == 0 {
+            return Err(bad("there must be at least 1 shard"));
+        }
+        if index >= count {
+            return Err(bad(&format!(
+                "shard index {index} is out of range for {count} shards (indices are 0-based: 0 to {})",
+                count - 1
+            )));
+        }
+        Ok(Shard { index, count })
+    }
+
+    /// Whether combination `k` belongs to this shard.
+    pub fn holds(self, k: usize) -> bool {
+        k % self.count == self.index
+    }
+
+    /// The combinations of a sweep of `total` this shard holds, in order.
+    pub fn combinations(self, total: usize) -> Vec<usize> {
+        (self.index..total).step_by(self.count).collect()
+    }
+}
+
+/// What identifies a scene file across machines: FNV-1a (64 bit) of its
+/// bytes, in hex. Two shards of one sweep must read the same file.
+pub fn scene_hash(bytes: &[u8]) -> String {
+    let hash = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    });
+    format!("{hash:016x}")
+}
+
+/// Reads `dir/sweep.json`, the output of one shard.
+pub fn read_shard(dir: &Path) -> Result<(PathBuf, SweepResult), ShardError> {
+    let path = dir.join("sweep.json");
+    let text = std::fs::read_to_string(&path).map_err(|error| ShardError::Read {
+        path: path.clone(),
+        error,
+    })?;
+    // A shard's file has a "shard" object; say so plainly rather than
+    // through a missing-field error when given a whole sweep or an older
+    // file.
+    let value: serde_json::Value =
+        serde_json::from_str(&text).map_err(|error| ShardError::Parse {
+            path: path.clone(),
+            error,
+        })?;
+    if value.get("shard").is_none_or(serde_json::Value::is_null) {
+        return Err(ShardError::NotAShard { path });
+    }
+    // Parsed again from the text: a `Value`'s objects sort their keys, and
+    // the order of knobs and passes is part of the result.
+    let result: SweepResult = serde_json::from_str(&text).map_err(|error| ShardError::Parse {
+        path: path.clone(),
+        error,
+    })?;
+    Ok((path, result))
+}
+
+/// The fields two shards of one sweep share, by name, as text.
+/// The scene's path is not one of them: machines may keep the same file
+/// in different places.
+fn identity(r: &SweepResult, shard: Shard) -> [(&'static str, String); 8] {
+    [
+        ("aerial_version", r.aerial_version.clone()),
+        ("scene_hash", r.scene_hash.clone()),
+        ("axes", r.axes.join(" ")),
+        ("frames", r.frames.to_string()),
+        ("warmup", r.warmup.to_string()),
+        ("reference", r.reference.name().to_string()),
+        ("combinations", r.combinations.to_string()),
+        ("shard count", shard.count.to_string()),
+    ]
+}
+
+/// Joins the results of every shard of one sweep (as [`read_shard`] gives
+/// them: path and result) into the result of the whole sweep: rows in
+/// combination order, pass and setup columns as a run at once lists them,
+/// and the Pareto front over [`TimeAxis::GpuXEmpty`] (see the module docs
+/// for what is refused).
+pub fn merge(shards: Vec<(PathBuf, SweepResult)>) -> Result<SweepResult, ShardError> {
+    let first_path = shards.first().ok_or(ShardError::Nothing)?.0.clone();
+    let shard_of = |(path, r): &(PathBuf, SweepResult)| match r.shard {
+        None => Err(ShardError::NotAShard { path: path.clone() }),
+        Some(s) if s.index >= s.count => Err(ShardError::BadShard {
+            path: path.clone(),
+            index: s.index,
+            count: s.count,
+        }),
+        Some(s) => Ok(s),
+    };
+    let first_shard = shard_of(&shards[0])?;
+    let first_id = identity(&shards[0].1, first_shard);
+    let count = first_shard.count;
+    let mut by_index: Vec<Option<usize>> = vec![None; count];
+    for (n, entry) in shards.iter().enumerate() {
+        let shard = shard_of(entry)?;
+        let (path, result) = entry;
+        for ((field, ours), (_, theirs)) in identity(result, shard).into_iter().zip(&first_id) {
+            if ours != *theirs {
+                return Err(ShardError::DifferentSweep {
+                    path: path.clone(),
+                    first: first_path.clone(),
+                    field,
+                    ours,
+                    theirs: theirs.clone(),
+                });
+            }
+        }
+        let slot = &mut by_index[shard.index];
+        if let Some(earlier) = *slot {
+            return Err(ShardError::Duplicate {
+                index: shard.index,
+                first: shards[earlier].0.clone(),
+                second: path.clone(),
+            });
+        }
+        *slot = Some(n);
+        let expected = shard.combinations(result.combinations);
+        let found: Vec<usize> = result.rows.iter().map(|r| r.index).collect();
+        if found != expected {
+            return Err(ShardError::WrongRows {
+                path: path.clone(),
+                index: shard.index,
+                count,
+                expected: list(&expected),
+                found: list(&found),
+            });
+        }
+    }
+    let missing: Vec<usize> = (0..count).filter(|&i| by_index[i].is_none()).collect();
+    if !missing.is_empty() {
+        return Err(ShardError::Missing { missing, count });
+    }
+
+    let first = &shards[0].1;
+    let mut sources = Vec::with_capacity(count);
+    let mut devices: Vec<&str> = Vec::new();
+    let mut rows: Vec<Row> = Vec::with_capacity(first.combinations);
+    for (index, n) in by_index.iter().enumerate() {
+        // Every slot was filled: `missing` is empty.
+        let Some(result) = n.map(|n| &shards[n].1) else {
+            continue;
+        };
+        sources.push(ShardSource {
+            index,
+            device: result.device.clone(),
+        });
+        if !devices.contains(&result.device.as_str()) {
+            devices.push(&result.device);
+        }
+        rows.extend(result.rows.iter().cloned());
+    }
+    rows.sort_by_key(|r| r.index);
+    // Columns in the order a run at once finds them: by combination.
+    let mut passes: Vec<String> = Vec::new();
+    let mut setup: Vec<String> = Vec::new();
+    for row in &rows {
+        super::run::add_new_names(&mut passes, row.pass_median_ms.iter().map(|(p, _)| p));
+        super::run::add_new_names(&mut setup, row.setup.iter().map(|(s, _)| s));
+    }
+    let time_axis = TimeAxis::GpuXEmpty;
+    let points: Vec<(f64, f64)> = rows.iter().map(|r| (time_axis.of(r), r.rmse)).collect();
+    for (row, on_front) in rows.iter_mut().zip(pareto_front(&points)) {
+        row.pareto = on_front;
+    }
+    let device = devices.join("; ");
+    Ok(SweepResult {
+        aerial_version: first.aerial_version.clone(),
+        scene: first.scene.clone(),
+        scene_hash: first.scene_hash.clone(),
+        device,
+        frames: first.frames,
+        warmup: first.warmup,
+        reference: first.reference,
+        knobs: first.knobs.clone(),
+        axes: first.axes.clone(),
+        combinations: first.combinations,
+        shard: None,
+        shards: sources,
+        time_axis,
+        passes,
+        setup,
+        asset_warnings: first.asset_warnings,
+        rows,
+    })
+}
