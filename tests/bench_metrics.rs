@@ -228,3 +228,44 @@ fn a_gate_whose_interval_straddles_the_limit_is_inconclusive() {
     assert_eq!(code(&gate), Some(3), "{}", show(&gate));
     assert!(String::from_utf8_lossy(&gate.stderr).contains("inconclusive"));
 }
+
+#[test]
+fn against_runs_both_builds_in_interleaved_rounds() {
+    // The other build is this binary: each round runs it twice, in turns.
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("pooled.json");
+    let out = bench(
+        64,
+        &[
+            "--metric=time,work",
+            "--rounds=2",
+            "--json",
+            json.to_str().unwrap(),
+            "--against",
+            env!("CARGO_BIN_EXE_aerial"),
+        ],
+    );
+    assert_eq!(code(&out), Some(0), "{}", show(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("2 interleaved rounds"), "{stdout}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    // ABBA: this, other, other, this.
+    let order: Vec<&str> = stderr
+        .lines()
+        .filter_map(|l| l.split(": ").nth(1))
+        .collect();
+    assert_eq!(
+        order,
+        ["this build", "other build", "other build", "this build"],
+        "{stderr}"
+    );
+    // The pooled report holds both of this build's rounds: 2 x 3 frames.
+    let pooled = BenchReport::load(&json).unwrap();
+    let opaque = &pooled.scenes[0].passes[0];
+    assert_eq!(opaque.samples_ms.len(), 6);
+    assert_eq!(opaque.ms.count, 6);
+    assert!(opaque.work.is_some());
+    // A ratio row per scene pass and total (and the empty pass).
+    let ratio_rows: Vec<&str> = stdout.lines().filter(|l| l.contains("time ms")).collect();
+    assert!(!ratio_rows.is_empty(), "{stdout}");
+}

@@ -202,9 +202,10 @@ impl PassDecl {
 /// Why the split between subpasses is approximate: printed under timing
 /// tables.
 pub const SUBPASS_TIMING_NOTE: &str =
-    "the surface, lighting, transparent and tonemap passes are subpasses of one render pass: \
-a binning rasterizer (lavapipe, tile-based GPUs) may do a draw's work after a later timestamp, \
-so their split is approximate; the sum over the render pass is exact";
+    "the gbuffer, lighting, opaque, transparent, atmosphere and tonemap passes are subpasses of \
+one render pass: a binning rasterizer (lavapipe, tile-based GPUs) may do a draw's work after a \
+later timestamp, so their time split is approximate; the sum over the render pass is exact, and \
+so is each pass's instruction count (--metric instructions counts frame prefixes)";
 
 /// The frame a scene needs.
 #[derive(Clone, Debug)]
