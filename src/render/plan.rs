@@ -283,7 +283,7 @@ impl FramePlan {
             };
             let sun = match &scene.sky {
                 Some(sky) if debug == 0 => {
-                    let centre = geometry.bounds[i].0.as_dvec3();
+                    let centre = geometry.bounds[i].0;
                     Some(
                         crate::atmosphere::sun_light_at(sky, centre)
                             .as_vec3()
@@ -325,7 +325,7 @@ impl FramePlan {
         // Opaque: grouped by pipeline and texture (fewer binds), front to
         // back within a group, so the depth test rejects hidden fragments
         // before they are shaded.
-        let mut keyed: Vec<(f32, Draw)> = opaque.into_iter().map(|d| (distance(&d), d)).collect();
+        let mut keyed: Vec<(f64, Draw)> = opaque.into_iter().map(|d| (distance(&d), d)).collect();
         // The shininess exponent is left out of the grouping: it only
         // changes the specular arithmetic, and materials differing in it
         // alone are better drawn front to back than a bind apart.
@@ -339,7 +339,7 @@ impl FramePlan {
         keyed.sort_by(|a, b| group(&a.1).cmp(&group(&b.1)).then(a.0.total_cmp(&b.0)));
         let opaque: Vec<Draw> = keyed.into_iter().map(|(_, d)| d).collect();
         // Transparent: back to front; ties keep scene order.
-        let mut keyed: Vec<(f32, Draw)> =
+        let mut keyed: Vec<(f64, Draw)> =
             transparent.into_iter().map(|d| (distance(&d), d)).collect();
         keyed.sort_by(|a, b| b.0.total_cmp(&a.0));
         let transparent: Vec<Draw> = keyed.into_iter().map(|(_, d)| d).collect();
@@ -727,7 +727,7 @@ mod tests {
         let sky = scene.sky.clone().unwrap();
         for d in plan.draws() {
             let (centre, _) = scene.object_bounds(d.object).unwrap();
-            let want = crate::atmosphere::sun_light_at(&sky, centre.as_dvec3()).as_vec3();
+            let want = crate::atmosphere::sun_light_at(&sky, centre).as_vec3();
             assert_eq!(d.sun, Some(want.to_array()));
             assert_eq!(d.pipeline.lights as usize, d.lights.len() + 1);
         }

@@ -365,7 +365,9 @@ fn upload_geometry(
 fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
     let object = &scene.objects[index];
     let material = &scene.materials[object.material];
-    let model = object.transform.matrix();
+    // Relative to the camera: composed in f64, then rounded (the shaders
+    // work in camera-relative space, see Camera::view).
+    let model = object.transform.matrix_relative_to(scene.camera.eye);
     let normal = glam::Mat4::from_mat3(object.transform.normal_matrix());
     let lights: Vec<GpuLight> = draw
         .map(|d| {
@@ -376,7 +378,7 @@ fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
             });
             d.lights
                 .iter()
-                .map(|&l| gpu_light(&scene.lights[l]))
+                .map(|&l| gpu_light(&scene.lights[l], scene.camera.eye))
                 .chain(sun)
                 .collect()
         })
@@ -400,15 +402,16 @@ fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
     bytes
 }
 
-/// A light as the shaders read it.
-pub fn gpu_light(light: &Light) -> GpuLight {
+/// A light as the shaders read it: positions relative to `eye` (the
+/// camera), subtracted in f64 before rounding.
+pub fn gpu_light(light: &Light, eye: glam::DVec3) -> GpuLight {
     match light {
         Light::Point {
             position,
             color,
             attenuation,
         } => GpuLight {
-            position: position.extend(1.0).to_array(),
+            position: (*position - eye).as_vec3().extend(1.0).to_array(),
             color: color.extend(0.0).to_array(),
             attenuation: attenuation.extend(0.0).to_array(),
         },

@@ -1,6 +1,6 @@
 //! Light sources and the attenuation model used for per-object culling.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 /// A light source. Colours are linear RGB, already multiplied by the
 /// intensity given in the scene file.
@@ -9,8 +9,8 @@ pub enum Light {
     /// A point light whose contribution is scaled by
     /// `1 / (c + l d + q d^2)` at distance `d`.
     Point {
-        /// World-space position.
-        position: Vec3,
+        /// World-space position (f64, like every world position).
+        position: DVec3,
         /// Colour times intensity, every component >= 0.
         color: Vec3,
         /// `(c, l, q)`: constant, linear and quadratic attenuation, each >= 0

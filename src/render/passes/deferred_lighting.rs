@@ -68,7 +68,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         let lights: Vec<GpuLight> = group
             .lights
             .iter()
-            .map(|&l| gpu_light(&setup.scene.lights[l]))
+            .map(|&l| gpu_light(&setup.scene.lights[l], setup.scene.camera.eye))
             .collect();
         blocks.push(bytemuck::cast_slice(&lights).to_vec());
         groups.push(GroupDraw {
