@@ -44,6 +44,8 @@ pub struct GpuLight {
     /// xyz position with w = 1, or unit direction towards the light with w = 0.
     pub position: [f32; 4],
     pub color: [f32; 4],
+    /// x, y, z: constant, linear, quadratic attenuation; w: the window
+    /// subtracted from the attenuation (`Light::window`).
     pub attenuation: [f32; 4],
 }
 

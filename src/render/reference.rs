@@ -143,6 +143,8 @@ enum ReferenceLight {
         color: DVec3,
         /// (constant, linear, quadratic).
         attenuation: DVec3,
+        /// Subtracted from the attenuation (`Light::window`).
+        window: f64,
     },
     Directional {
         /// Unit vector towards the light (the negated travel direction).
@@ -347,6 +349,7 @@ impl ReferenceScene {
                         position,
                         color: color.as_dvec3(),
                         attenuation: attenuation.as_dvec3(),
+                        window: f64::from(light.window(scene.light_cutoff)),
                     },
                     // The scene holds a unit travel direction; the shader
                     // is given its negation and normalizes it again, so the
@@ -577,6 +580,7 @@ impl ReferenceObject {
                     position,
                     color,
                     attenuation: a,
+                    window,
                 } => {
                     let to_light = position - p;
                     let d = to_light.length();
@@ -584,7 +588,7 @@ impl ReferenceObject {
                     // surface: an arbitrary direction and a floor under the
                     // attenuation denominator.
                     let l = if d > 0.0 { to_light / d } else { DVec3::Z };
-                    let att = 1.0 / (a.x + a.y * d + a.z * d * d).max(1e-6);
+                    let att = (1.0 / (a.x + a.y * d + a.z * d * d).max(1e-6) - window).max(0.0);
                     (l, color * att)
                 }
                 ReferenceLight::Directional { to_light, color } => (to_light, color),

@@ -378,7 +378,7 @@ fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
             });
             d.lights
                 .iter()
-                .map(|&l| gpu_light(&scene.lights[l], scene.camera.eye))
+                .map(|&l| gpu_light(&scene.lights[l], scene.camera.eye, scene.light_cutoff))
                 .chain(sun)
                 .collect()
         })
@@ -403,8 +403,9 @@ fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
 }
 
 /// A light as the shaders read it: positions relative to `eye` (the
-/// camera), subtracted in f64 before rounding.
-pub fn gpu_light(light: &Light, eye: glam::DVec3) -> GpuLight {
+/// camera), subtracted in f64 before rounding; the window for the scene's
+/// light cutoff (`Light::window`) in the attenuation's w.
+pub fn gpu_light(light: &Light, eye: glam::DVec3, cutoff: f32) -> GpuLight {
     match light {
         Light::Point {
             position,
@@ -413,7 +414,7 @@ pub fn gpu_light(light: &Light, eye: glam::DVec3) -> GpuLight {
         } => GpuLight {
             position: (*position - eye).as_vec3().extend(1.0).to_array(),
             color: color.extend(0.0).to_array(),
-            attenuation: attenuation.extend(0.0).to_array(),
+            attenuation: attenuation.extend(light.window(cutoff)).to_array(),
         },
         Light::Directional { direction, color } => GpuLight {
             position: (-*direction).extend(0.0).to_array(),

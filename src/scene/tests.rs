@@ -554,3 +554,31 @@ fn attenuation_and_strength() {
     assert_eq!(black.strength_at(0.0), 0.0);
     assert_eq!(black.attenuation_at(0.0), f32::INFINITY);
 }
+
+#[test]
+fn windowed_attenuation_reaches_zero_at_the_culling_range() {
+    let light = Light::Point {
+        position: DVec3::ZERO,
+        color: Vec3::new(2.0, 1.0, 0.0),
+        attenuation: Vec3::new(1.0, 0.5, 0.25),
+    };
+    let cutoff = 0.01;
+    let window = light.window(cutoff);
+    assert_eq!(window, cutoff / 2.0);
+    let LightRange::Within(range) = light.range(cutoff) else {
+        panic!("a point light with fall-off has a finite range");
+    };
+    // Windowed attenuation, as the shaders and the CPU reference compute it.
+    let windowed = |d: f32| (light.attenuation_at(d) - window).max(0.0);
+    assert!(windowed(range) < 1e-7, "{}", windowed(range));
+    assert_eq!(windowed(range * 1.01), 0.0);
+    assert_eq!(windowed(range * 10.0), 0.0);
+    assert!(windowed(range * 0.99) > 0.0);
+    // No cutoff, no window; directional lights have none.
+    assert_eq!(light.window(0.0), 0.0);
+    let sun = Light::Directional {
+        direction: -Vec3::Y,
+        color: Vec3::ONE,
+    };
+    assert_eq!(sun.window(cutoff), 0.0);
+}

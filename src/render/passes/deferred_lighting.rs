@@ -68,7 +68,13 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         let lights: Vec<GpuLight> = group
             .lights
             .iter()
-            .map(|&l| gpu_light(&setup.scene.lights[l], setup.scene.camera.eye))
+            .map(|&l| {
+                gpu_light(
+                    &setup.scene.lights[l],
+                    setup.scene.camera.eye,
+                    setup.scene.light_cutoff,
+                )
+            })
             .collect();
         blocks.push(bytemuck::cast_slice(&lights).to_vec());
         groups.push(GroupDraw {
