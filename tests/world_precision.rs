@@ -54,15 +54,15 @@ fn largest_difference(a: &[u8], b: &[u8]) -> u8 {
         .unwrap_or(0)
 }
 
-fn check(lighting: Lighting, x: f64) {
+fn check(lighting: Lighting, offset: DVec3) {
     let base = common::render(&default_scene(lighting), false).output;
-    let moved_scene = translated(default_scene(lighting), DVec3::new(x, 0.0, 0.0));
+    let moved_scene = translated(default_scene(lighting), offset);
     let moved = common::render(&moved_scene, false).output;
     common::assert_not_blank(&moved, 0.5);
     // For looking at: target/world_precision/<lighting>_<x>.png.
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("world_precision");
     std::fs::create_dir_all(&dir).unwrap();
-    let name = format!("{lighting:?}_{x:e}").to_lowercase();
+    let name = format!("{lighting:?}_{:e}_{:e}_{:e}", offset.x, offset.y, offset.z).to_lowercase();
     for (suffix, image) in [("", &moved), ("_origin", &base)] {
         image::save_buffer(
             dir.join(format!("{name}{suffix}.png")),
@@ -81,7 +81,7 @@ fn check(lighting: Lighting, x: f64) {
             height: HEIGHT,
             rgba: &base.data,
         },
-        &format!("moved by {x:e}"),
+        &format!("moved by {offset}"),
         ImageRef::Srgb8 {
             width: WIDTH,
             height: HEIGHT,
@@ -92,13 +92,13 @@ fn check(lighting: Lighting, x: f64) {
     .unwrap();
     let largest = largest_difference(&base.data, &moved.data);
     eprintln!(
-        "{lighting:?} x = {x:e}: FLIP mean {:.5}, p99 {:.5}, worst window {:.5}; largest \
+        "{lighting:?} moved by {offset}: FLIP mean {:.5}, p99 {:.5}, worst window {:.5}; largest \
          channel difference {largest}/255",
         cmp.mean, cmp.p99, cmp.worst_window
     );
     assert!(
         cmp.passes(&FLIP_DEFAULT_THRESHOLDS),
-        "{lighting:?} moved by {x:e}: FLIP mean {}, p99 {}, worst window {} beyond the \
+        "{lighting:?} moved by {offset}: FLIP mean {}, p99 {}, worst window {} beyond the \
          regression limits",
         cmp.mean,
         cmp.p99,
@@ -106,38 +106,45 @@ fn check(lighting: Lighting, x: f64) {
     );
     assert!(
         largest <= 2,
-        "{lighting:?} moved by {x:e}: a channel differs by {largest}/255"
+        "{lighting:?} moved by {offset}: a channel differs by {largest}/255"
     );
 }
 
 #[test]
 fn forward_scene_moved_by_1e6_renders_as_at_the_origin() {
-    check(Lighting::Forward, 1e6);
+    check(Lighting::Forward, DVec3::new(1e6, 0.0, 0.0));
 }
 
 #[test]
 fn forward_scene_moved_by_1e9_renders_as_at_the_origin() {
-    check(Lighting::Forward, 1e9);
+    check(Lighting::Forward, DVec3::new(1e9, 0.0, 0.0));
 }
 
 #[test]
 fn deferred_scene_moved_by_1e6_renders_as_at_the_origin() {
-    check(Lighting::Deferred, 1e6);
+    check(Lighting::Deferred, DVec3::new(1e6, 0.0, 0.0));
 }
 
 #[test]
 fn deferred_scene_moved_by_1e9_renders_as_at_the_origin() {
-    check(Lighting::Deferred, 1e9);
+    check(Lighting::Deferred, DVec3::new(1e9, 0.0, 0.0));
 }
 
-/// Negative and intermediate offsets.
+/// Negative, intermediate and inexact offsets on every axis; one of them
+/// puts the camera 1 m above the ground of a 6,360 km planet centred at
+/// the origin.
 #[test]
 fn other_offsets_render_as_at_the_origin() {
-    for (x, lighting) in [
-        (-1e9, Lighting::Forward),
-        (3.3e7, Lighting::Deferred),
-        (-1e5, Lighting::Deferred),
+    for (offset, lighting) in [
+        (DVec3::new(-1e9, 0.0, 0.0), Lighting::Forward),
+        (DVec3::new(3.3e7, 0.0, 0.0), Lighting::Deferred),
+        (DVec3::new(-1e5, 0.0, 0.0), Lighting::Deferred),
+        (DVec3::new(0.0, 6_360_000.0 - 1.4, 0.0), Lighting::Forward),
+        (
+            DVec3::new(-999_999_999.37, 123_456_789.1, 5e8 + 0.3),
+            Lighting::Deferred,
+        ),
     ] {
-        check(lighting, x);
+        check(lighting, offset);
     }
 }
