@@ -47,7 +47,7 @@ fn assert_finite_non_negative(label: &str, hdr: &Pixels<f32>) {
 /// misses the atmosphere. Returns (median, max) over probes and channels.
 fn sky_errors(label: &str, scene: &Scene, hdr: &Pixels<f32>) -> (f64, f64) {
     let sky = scene.sky.as_ref().unwrap();
-    let origin = scene.camera.eye.as_dvec3() - sky.atmosphere.center;
+    let origin = scene.camera.eye - sky.atmosphere.center;
     let mut errors = Vec::new();
     let (w, h) = (scene.output.width, scene.output.height);
     for j in 0..6 {
@@ -252,7 +252,7 @@ fn the_hdr_image_stays_finite_from_the_ground_to_space_and_at_night() {
     let exact = reference::radiance(
         &sky.atmosphere,
         &sky.sun,
-        scene.camera.eye.as_dvec3() - sky.atmosphere.center,
+        scene.camera.eye - sky.atmosphere.center,
         common::pixel_ray(&scene, 48, 32),
     );
     println!("1e8 m, centre: {centre} against {exact}");
@@ -324,7 +324,7 @@ fn the_limb_glows_from_orbit() {
     let hdr = common::render(&scene, true).hdr.unwrap();
     assert_finite_non_negative("orbit", &hdr);
     let sky = scene.sky.as_ref().unwrap();
-    let origin = scene.camera.eye.as_dvec3() - sky.atmosphere.center;
+    let origin = scene.camera.eye - sky.atmosphere.center;
     let x = 48;
     let mut limb = 0;
     for y in 0..64 {

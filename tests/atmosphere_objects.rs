@@ -69,7 +69,7 @@ const PROBES: [(u32, u32); 5] = [(16, 16), (10, 10), (22, 10), (10, 22), (22, 22
 fn expected(scene: &Scene, normal: DVec3, x: u32, y: u32) -> DVec3 {
     let sky = scene.sky.as_ref().unwrap();
     let a = &sky.atmosphere;
-    let eye = scene.camera.eye.as_dvec3();
+    let eye = scene.camera.eye;
     let d = common::pixel_ray(scene, x, y);
     let t = (DVec3::from(CENTRE) - eye).dot(normal) / d.dot(normal);
     let point = eye + t * d;
@@ -203,7 +203,7 @@ fn earth_objects_matches_the_cpu_reference() {
     // Each sphere's sun colour is warm (red > green > blue), not black.
     for i in 0..scene.objects.len() {
         let (centre, _) = scene.object_bounds(i).unwrap();
-        let sun = sun_light_at(&sky, centre.as_dvec3());
+        let sun = sun_light_at(&sky, centre);
         assert!(
             sun.x > sun.y && sun.y > sun.z && sun.z > 0.1,
             "{}: {sun}",

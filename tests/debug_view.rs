@@ -32,8 +32,10 @@ fn exact_hit(scene: &Scene, x: u32, y: u32) -> Option<DVec3> {
     let ndc_x = (f64::from(x) + 0.5) / f64::from(SIZE) * 2.0 - 1.0;
     let ndc_y = (f64::from(y) + 0.5) / f64::from(SIZE) * 2.0 - 1.0;
     let far = inverse * DVec4::new(ndc_x, ndc_y, 0.5, 1.0);
-    let eye = scene.camera.eye.as_dvec3();
-    let d = (far.truncate() / far.w - eye).normalize();
+    let eye = scene.camera.eye;
+    // The view-projection is camera-relative: the unprojected point is
+    // already the direction from the eye.
+    let d = (far.truncate() / far.w).normalize();
     // |eye + t d| = 1: t^2 + 2 b t + c = 0.
     let b = eye.dot(d);
     let c = eye.length_squared() - 1.0;

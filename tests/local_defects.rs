@@ -97,14 +97,14 @@ translate = [-1.4, 1.0, 0.0]
 /// that much, as a different rasteriser's sub-pixel rules might move it.
 fn turned(mut scene: Scene, pixels: f32, vertical: bool) -> Scene {
     let c = scene.camera;
-    let forward = (c.look_at - c.eye).normalize();
+    let forward = (c.look_at - c.eye).normalize().as_vec3();
     let right = forward.cross(c.up).normalize();
     let up = right.cross(forward);
-    let distance = (c.look_at - c.eye).length();
+    let distance = (c.look_at - c.eye).length() as f32;
     let pixel =
         2.0 * distance * (c.fov_y_degrees.to_radians() * 0.5).tan() / scene.output.height as f32;
     let direction = if vertical { up } else { right };
-    scene.camera.look_at += direction * pixel * pixels;
+    scene.camera.look_at += (direction * pixel * pixels).as_dvec3();
     scene
 }
 

@@ -321,8 +321,8 @@ fn a_model_scene_frames_any_size_and_offset_alike() {
         // The camera is at the same place relative to the model, up to the
         // spacing of 32-bit floats at the model's offset.
         let spacing = centre.abs().max_element() * f32::EPSILON / size;
-        let offset = (scene.camera.eye - scene.camera.look_at) / size;
-        assert!((scene.camera.look_at - centre).length() / size <= 1e-3 + spacing);
+        let offset = (scene.camera.eye - scene.camera.look_at).as_vec3() / size;
+        assert!((scene.camera.look_at.as_vec3() - centre).length() / size <= 1e-3 + spacing);
         assert!(
             offset.is_finite() && (offset.length() - 2.813).abs() < 0.01 + 2.0 * spacing,
             "{offset}"

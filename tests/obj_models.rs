@@ -706,13 +706,15 @@ fn rendered_shading_normals_per_smoothing_mode() {
         assert_eq!(scene.output.debug_view, Some(DebugView::Normals));
         let hdr = common::render(&scene, true).hdr.unwrap();
         let inverse = scene.camera.view_projection(1.0).as_dmat4().inverse();
-        let eye = scene.camera.eye.as_dvec3();
+        let eye = scene.camera.eye;
         let (mut boundary, mut interior) = (Vec::new(), Vec::new());
         for y in 0..size {
             for x in 0..size {
                 let ndc = |i: u32| (f64::from(i) + 0.5) / f64::from(size) * 2.0 - 1.0;
                 let far = inverse * glam::DVec4::new(ndc(x), ndc(y), 0.5, 1.0);
-                let d = (far.truncate() / far.w - eye).normalize();
+                // The view-projection is camera-relative: the unprojected point is
+                // already the direction from the eye.
+                let d = (far.truncate() / far.w).normalize();
                 let (b, c) = (eye.dot(d), eye.length_squared() - 1.0);
                 let disc = b * b - c;
                 if disc <= 0.0 {

@@ -349,14 +349,14 @@ fn first_frame_equals_render_and_w_moves_the_camera_forward() {
     let with_camera = format!("{SCENE}{camera_toml}");
     let moved_scene = Scene::from_toml(&with_camera, "moved", dir.path()).unwrap();
     let c = moved_scene.camera;
-    let expected = glam::Vec3::new(0.0, 2.0, -1.0);
+    let expected = glam::DVec3::new(0.0, 2.0, -1.0);
     assert!(
         c.eye.distance(expected) < 1e-5,
         "eye {} after 30 frames of W, expected {expected}",
         c.eye
     );
     let direction = (c.look_at - c.eye).normalize();
-    assert!(direction.distance(glam::Vec3::NEG_Z) < 1e-6, "{direction}");
+    assert!(direction.distance(glam::DVec3::NEG_Z) < 1e-6, "{direction}");
     assert_eq!((c.up, c.fov_y_degrees), (glam::Vec3::Y, 45.0));
 
     // The image changed: the objects came closer.
@@ -459,9 +459,9 @@ fn moving_the_view_draws_what_a_new_renderer_draws() {
             Knob::find(name).unwrap().set(&mut scene, value).unwrap();
         }
         let mut moved = scene.clone();
-        let step = glam::Vec3::new(0.3, 0.2, -0.4);
+        let step = glam::DVec3::new(0.3, 0.2, -0.4);
         moved.camera.eye += step;
-        moved.camera.look_at += step + glam::Vec3::new(0.2, 0.0, 0.0);
+        moved.camera.look_at += step + glam::DVec3::new(0.2, 0.0, 0.0);
         if let Some(sky) = &mut moved.sky {
             sky.sun.direction = (sky.sun.direction + glam::DVec3::new(0.0, 0.05, 0.02)).normalize();
         }

@@ -4,7 +4,7 @@
 struct Light {
     vec4 position;     // xyz: position (w = 1) or unit direction towards the light (w = 0)
     vec4 color;        // rgb: emitted colour times intensity
-    vec4 attenuation;  // x: constant, y: linear, z: quadratic (point lights only)
+    vec4 attenuation;  // x: constant, y: linear, z: quadratic, w: window (point lights only)
 };
 
 layout(set = 0, binding = 0) uniform Frame {

@@ -3,6 +3,10 @@
 
 // Direction to the light and the attenuated radiance it brings to `p`.
 // Point lights (w = 1) and directional lights (w = 0) share one formula.
+// A point light's attenuation is windowed: 1 / (c + l d + q d^2) minus
+// cutoff / peak colour, clamped at 0, so it reaches exactly 0 at the
+// culling range (Light::window in src/scene/lights.rs) and culling per
+// object or per tile changes nothing.
 void light_at(Light light, vec3 p, out vec3 l, out vec3 radiance) {
     vec3 to_light = light.position.xyz - p * light.position.w;
     float d = length(to_light);
@@ -10,7 +14,7 @@ void light_at(Light light, vec3 p, out vec3 l, out vec3 radiance) {
     float att = 1.0;
     if (light.position.w > 0.5) {
         vec3 a = light.attenuation.xyz;
-        att = 1.0 / max(a.x + a.y * d + a.z * d * d, 1e-6);
+        att = max(1.0 / max(a.x + a.y * d + a.z * d * d, 1e-6) - light.attenuation.w, 0.0);
     }
     radiance = light.color.rgb * att;
 }

@@ -5,7 +5,6 @@
 use super::RenderError;
 use crate::mesh::Mesh;
 use crate::scene::Scene;
-use glam::Vec3;
 
 /// Every object's mesh (object space) and bounding sphere (world space).
 #[derive(Clone, Debug, Default)]
@@ -13,7 +12,7 @@ pub struct SceneGeometry {
     /// `meshes[i]` is object i.
     pub meshes: Vec<Mesh>,
     /// `bounds[i]` is object i's world-space bounding sphere `(centre, radius)`.
-    pub bounds: Vec<(Vec3, f32)>,
+    pub bounds: Vec<(glam::DVec3, f32)>,
 }
 
 impl SceneGeometry {
@@ -38,8 +37,9 @@ impl SceneGeometry {
                 v.position.iter().all(|x| x.is_finite()) && v.normal.iter().all(|x| x.is_finite())
             });
             let (centre, radius) = scene.world_bounds(i, &mesh);
-            let world_ok =
-                object.transform.matrix().is_finite() && centre.is_finite() && radius.is_finite();
+            let world_ok = object.transform.matrix_f64().is_finite()
+                && centre.is_finite()
+                && radius.is_finite();
             if !finite || !world_ok {
                 return Err(RenderError::Object {
                     object: name(),

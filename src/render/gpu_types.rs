@@ -7,6 +7,8 @@ use bytemuck::{Pod, Zeroable};
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct FrameUniforms {
     pub view_projection: [[f32; 4]; 4],
+    /// The camera's position in the shaders' space: always the origin, since
+    /// every position the GPU sees is relative to the camera (`Camera::view`).
     pub camera_position: [f32; 4],
     pub ambient: [f32; 4],
     /// Clip to world, for positions reconstructed from depth.
@@ -18,14 +20,16 @@ pub struct FrameUniforms {
 impl FrameUniforms {
     pub fn new(scene: &crate::scene::Scene, width: u32, height: u32) -> FrameUniforms {
         let aspect = width as f32 / height as f32;
-        let view_projection = scene.camera.view_projection(aspect);
-        // Inverted in double precision: with a far/near ratio of 1e6 and
-        // more, a float inverse loses most of the depth resolution.
-        let inverse = view_projection.as_dmat4().inverse().as_mat4();
+        // Camera-relative, composed and inverted in double precision: with a
+        // far/near ratio of 1e6 and more, a float inverse loses most of the
+        // depth resolution.
+        let view_projection = scene.camera.view_projection_f64(aspect);
+        let inverse = view_projection.inverse().as_mat4();
+        let view_projection = view_projection.as_mat4();
         let (w, h) = (width as f32, height as f32);
         FrameUniforms {
             view_projection: view_projection.to_cols_array_2d(),
-            camera_position: scene.camera.eye.extend(1.0).to_array(),
+            camera_position: [0.0, 0.0, 0.0, 1.0],
             ambient: scene.ambient.extend(0.0).to_array(),
             inverse_view_projection: inverse.to_cols_array_2d(),
             viewport: [w, h, 1.0 / w, 1.0 / h],
@@ -40,6 +44,8 @@ pub struct GpuLight {
     /// xyz position with w = 1, or unit direction towards the light with w = 0.
     pub position: [f32; 4],
     pub color: [f32; 4],
+    /// x, y, z: constant, linear, quadratic attenuation; w: the window
+    /// subtracted from the attenuation (`Light::window`).
     pub attenuation: [f32; 4],
 }
 

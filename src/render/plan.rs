@@ -284,7 +284,7 @@ impl FramePlan {
             };
             let sun = match &scene.sky {
                 Some(sky) if debug == 0 => {
-                    let centre = geometry.bounds[i].0.as_dvec3();
+                    let centre = geometry.bounds[i].0;
                     Some(
                         crate::atmosphere::sun_light_at(sky, centre)
                             .as_vec3()
@@ -326,7 +326,7 @@ impl FramePlan {
         // Opaque: grouped by pipeline and texture (fewer binds), front to
         // back within a group, so the depth test rejects hidden fragments
         // before they are shaded.
-        let mut keyed: Vec<(f32, Draw)> = opaque.into_iter().map(|d| (distance(&d), d)).collect();
+        let mut keyed: Vec<(f64, Draw)> = opaque.into_iter().map(|d| (distance(&d), d)).collect();
         // The shininess exponent is left out of the grouping: it only
         // changes the specular arithmetic, and materials differing in it
         // alone are better drawn front to back than a bind apart.
@@ -340,7 +340,7 @@ impl FramePlan {
         keyed.sort_by(|a, b| group(&a.1).cmp(&group(&b.1)).then(a.0.total_cmp(&b.0)));
         let opaque: Vec<Draw> = keyed.into_iter().map(|(_, d)| d).collect();
         // Transparent: back to front; ties keep scene order.
-        let mut keyed: Vec<(f32, Draw)> =
+        let mut keyed: Vec<(f64, Draw)> =
             transparent.into_iter().map(|d| (distance(&d), d)).collect();
         keyed.sort_by(|a, b| b.0.total_cmp(&a.0));
         let transparent: Vec<Draw> = keyed.into_iter().map(|(_, d)| d).collect();
@@ -429,11 +429,8 @@ impl FramePlan {
             });
         }
         if deferred {
-            for (name, format) in [
-                (ALBEDO, ALBEDO_FORMAT),
-                (NORMAL, NORMAL_FORMAT),
-                (MATERIAL, MATERIAL_FORMAT),
-            ] {
+            let wide = gbuffer_format(scene);
+            for (name, format) in [(ALBEDO, wide), (NORMAL, NORMAL_FORMAT), (MATERIAL, wide)] {
                 // Written wherever depth is; the lighting pass only reads
                 // pixels that have a surface.
                 attachments.push(AttachmentDecl {
@@ -609,12 +606,52 @@ impl FramePlan {
 /// The 8-bit output: sRGB, so shaders write linear values.
 pub const OUTPUT_FORMAT: Format = Format::R8G8B8A8_SRGB;
 pub const DEPTH_FORMAT: Format = Format::D32_SFLOAT;
-/// kd can exceed 1 (it is only required to be >= 0), so not UNORM.
+/// kd can exceed 1 (it is only required to be >= 0), so not UNORM: the
+/// G-buffer's albedo (kd × texture) and material (ks, shininess) are 16-bit
+/// floats, or 32-bit ones for a scene whose values 16 bits cannot hold
+/// ([`gbuffer_format`]).
 pub const ALBEDO_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 /// Octahedral normal, two signed 16-bit components.
 pub const NORMAL_FORMAT: Format = Format::R16G16_SNORM;
-/// ks (rgb, >= 0, unbounded) and shininess (a).
-pub const MATERIAL_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+/// The G-buffer's material (ks rgb, shininess a) has the albedo's format.
+/// The wide G-buffer format for albedo and material.
+pub const WIDE_GBUFFER_FORMAT: Format = Format::R32G32B32A32_SFLOAT;
+
+/// The largest finite 16-bit float.
+const F16_MAX: f32 = 65504.0;
+/// The smallest normal 16-bit float: below it 16-bit floats lose relative
+/// precision (subnormals), down to 0 below 2^-25.
+const F16_MIN_NORMAL: f32 = 6.103_515_6e-5;
+
+/// Whether a 16-bit float holds `x` (>= 0) to its full relative precision
+/// (2^-11): 0, or a normal 16-bit number.
+fn fits_f16(x: f32) -> bool {
+    x == 0.0 || (F16_MIN_NORMAL..=F16_MAX).contains(&x)
+}
+
+/// The format of the G-buffer's albedo and material attachments for a
+/// scene: [`ALBEDO_FORMAT`] (16-bit floats, half the memory and bandwidth)
+/// when every deferred-lit material's kd, ks and shininess fit 16-bit
+/// floats at full precision, [`WIDE_GBUFFER_FORMAT`] otherwise, so that
+/// deferred lighting reads the material forward lighting uses (kd up to
+/// the scene's 1e6 overflowed 16 bits at 65504 before). A texture only
+/// scales kd down; texels that take it below 2^-14 lose relative precision
+/// but not more than 2^-25 absolute, far below 1/255 of any lit pixel.
+pub fn gbuffer_format(scene: &Scene) -> Format {
+    let narrow = scene.objects.iter().all(|o| {
+        let m = &scene.materials[o.material];
+        let lit_later = m.opacity >= 1.0 && m.shading == ShadingModel::Phong;
+        !lit_later
+            || (m.kd.to_array().into_iter().all(fits_f16)
+                && m.ks.to_array().into_iter().all(fits_f16)
+                && m.shininess <= F16_MAX)
+    });
+    if narrow {
+        ALBEDO_FORMAT
+    } else {
+        WIDE_GBUFFER_FORMAT
+    }
+}
 
 pub fn hdr_format(format: HdrFormat) -> Format {
     match format {
@@ -733,7 +770,7 @@ mod tests {
         let sky = scene.sky.clone().unwrap();
         for d in plan.draws() {
             let (centre, _) = scene.object_bounds(d.object).unwrap();
-            let want = crate::atmosphere::sun_light_at(&sky, centre.as_dvec3()).as_vec3();
+            let want = crate::atmosphere::sun_light_at(&sky, centre).as_vec3();
             assert_eq!(d.sun, Some(want.to_array()));
             assert_eq!(d.pipeline.lights as usize, d.lights.len() + 1);
         }

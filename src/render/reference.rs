@@ -143,6 +143,8 @@ enum ReferenceLight {
         color: DVec3,
         /// (constant, linear, quadratic).
         attenuation: DVec3,
+        /// Subtracted from the attenuation (`Light::window`).
+        window: f64,
     },
     Directional {
         /// Unit vector towards the light (the negated travel direction).
@@ -280,7 +282,7 @@ fn model_matrix(transform: &Transform) -> DMat4 {
     DMat4::from_scale_rotation_translation(
         transform.scale.as_dvec3(),
         rotation,
-        transform.translate.as_dvec3(),
+        transform.translate,
     )
 }
 
@@ -344,9 +346,10 @@ impl ReferenceScene {
                         color,
                         attenuation,
                     } => ReferenceLight::Point {
-                        position: position.as_dvec3(),
+                        position,
                         color: color.as_dvec3(),
                         attenuation: attenuation.as_dvec3(),
+                        window: f64::from(light.window(scene.light_cutoff)),
                     },
                     // The scene holds a unit travel direction; the shader
                     // is given its negation and normalizes it again, so the
@@ -359,9 +362,7 @@ impl ReferenceScene {
                 .chain(scene.sky.as_ref().map(|sky| {
                     // The sun, last, with the colour the GPU gets: the same
                     // f64 function at the same bounding-sphere centre.
-                    let centre = scene
-                        .object_bounds(index)
-                        .map_or(DVec3::ZERO, |(c, _)| c.as_dvec3());
+                    let centre = scene.object_bounds(index).map_or(DVec3::ZERO, |(c, _)| c);
                     ReferenceLight::Directional {
                         to_light: sky.sun.direction,
                         color: crate::atmosphere::sun_light_at(sky, centre)
@@ -382,11 +383,11 @@ impl ReferenceScene {
             });
         }
         let camera = &scene.camera;
-        let eye = camera.eye.as_dvec3();
+        let eye = camera.eye;
         // The basis of Mat4::look_at_rh: forward f, right s = f x up,
         // true up u = s x f. The scene guarantees eye != look_at and an up
         // not parallel to the view direction.
-        let forward = (camera.look_at.as_dvec3() - eye).normalize_or_zero();
+        let forward = (camera.look_at - eye).normalize_or_zero();
         let right = forward.cross(camera.up.as_dvec3()).normalize_or_zero();
         let up = right.cross(forward);
         Ok(ReferenceScene {
@@ -579,6 +580,7 @@ impl ReferenceObject {
                     position,
                     color,
                     attenuation: a,
+                    window,
                 } => {
                     let to_light = position - p;
                     let d = to_light.length();
@@ -586,7 +588,7 @@ impl ReferenceObject {
                     // surface: an arbitrary direction and a floor under the
                     // attenuation denominator.
                     let l = if d > 0.0 { to_light / d } else { DVec3::Z };
-                    let att = 1.0 / (a.x + a.y * d + a.z * d * d).max(1e-6);
+                    let att = (1.0 / (a.x + a.y * d + a.z * d * d).max(1e-6) - window).max(0.0);
                     (l, color * att)
                 }
                 ReferenceLight::Directional { to_light, color } => (to_light, color),

@@ -365,7 +365,9 @@ fn upload_geometry(
 fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
     let object = &scene.objects[index];
     let material = &scene.materials[object.material];
-    let model = object.transform.matrix();
+    // Relative to the camera: composed in f64, then rounded (the shaders
+    // work in camera-relative space, see Camera::view).
+    let model = object.transform.matrix_relative_to(scene.camera.eye);
     let normal = glam::Mat4::from_mat3(object.transform.normal_matrix());
     let lights: Vec<GpuLight> = draw
         .map(|d| {
@@ -376,7 +378,7 @@ fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
             });
             d.lights
                 .iter()
-                .map(|&l| gpu_light(&scene.lights[l]))
+                .map(|&l| gpu_light(&scene.lights[l], scene.camera.eye, scene.light_cutoff))
                 .chain(sun)
                 .collect()
         })
@@ -400,17 +402,19 @@ fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
     bytes
 }
 
-/// A light as the shaders read it.
-pub fn gpu_light(light: &Light) -> GpuLight {
+/// A light as the shaders read it: positions relative to `eye` (the
+/// camera), subtracted in f64 before rounding; the window for the scene's
+/// light cutoff (`Light::window`) in the attenuation's w.
+pub fn gpu_light(light: &Light, eye: glam::DVec3, cutoff: f32) -> GpuLight {
     match light {
         Light::Point {
             position,
             color,
             attenuation,
         } => GpuLight {
-            position: position.extend(1.0).to_array(),
+            position: (*position - eye).as_vec3().extend(1.0).to_array(),
             color: color.extend(0.0).to_array(),
-            attenuation: attenuation.extend(0.0).to_array(),
+            attenuation: attenuation.extend(light.window(cutoff)).to_array(),
         },
         Light::Directional { direction, color } => GpuLight {
             position: (-*direction).extend(0.0).to_array(),

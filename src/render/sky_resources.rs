@@ -55,8 +55,8 @@ fn v4(v: DVec3, w: f64) -> [f32; 4] {
 /// up vectors scaled so that forward + right·x_ndc − up·y_ndc is the ray
 /// through NDC (x, y) at unit view depth. In f64, as the view matrix.
 pub fn ray_basis(camera: &Camera, aspect: f64) -> (DVec3, DVec3, DVec3) {
-    let eye = camera.eye.as_dvec3();
-    let forward = (camera.look_at.as_dvec3() - eye).normalize();
+    let eye = camera.eye;
+    let forward = (camera.look_at - eye).normalize();
     let right = forward.cross(camera.up.as_dvec3()).normalize();
     let up = right.cross(forward);
     let tan = (f64::from(camera.fov_y_degrees).to_radians() * 0.5).tan();
@@ -75,7 +75,7 @@ pub fn uniforms(
     let a = &sky.atmosphere;
     let s = &sky.sun;
     let (forward, right, up) = ray_basis(camera, f64::from(width) / f64::from(height));
-    let origin = camera.eye.as_dvec3() - a.center;
+    let origin = camera.eye - a.center;
     let length = origin.length();
     let c = |radius: f64| (length - radius) * (length + radius);
     // Reversed-Z depth = A + B / view depth (see Camera::projection).

@@ -11,7 +11,7 @@
 //! forward draws are per object.
 
 use crate::scene::{LightRange, Scene};
-use glam::{Vec3, Vec4Swizzles};
+use glam::Vec4Swizzles;
 use std::collections::BTreeMap;
 
 /// Tile edge in pixels.
@@ -64,10 +64,13 @@ pub fn light_screen_rect(
         (crate::scene::Light::Directional { .. }, LightRange::Within(_)) => return Some(full),
     };
     let camera = &scene.camera;
-    if centre.distance(camera.eye) <= radius + camera.near {
+    if centre.distance(camera.eye) <= f64::from(radius + camera.near) {
         return Some(full);
     }
-    let vp = camera.view_projection(scene.output.aspect());
+    // Camera-relative in f64, like the GPU's positions.
+    let centre = camera.relative(centre);
+    let radius = f64::from(radius);
+    let vp = camera.view_projection_f64(scene.output.aspect());
     let (mut lo, mut hi) = (
         glam::Vec2::splat(f32::INFINITY),
         glam::Vec2::splat(f32::NEG_INFINITY),
@@ -75,7 +78,7 @@ pub fn light_screen_rect(
     for i in 0..8 {
         let corner = centre
             + radius
-                * Vec3::new(
+                * glam::DVec3::new(
                     if i & 1 == 0 { -1.0 } else { 1.0 },
                     if i & 2 == 0 { -1.0 } else { 1.0 },
                     if i & 4 == 0 { -1.0 } else { 1.0 },
@@ -83,10 +86,10 @@ pub fn light_screen_rect(
         let clip = vp * corner.extend(1.0);
         // A corner behind (or at) the eye projects nowhere useful; the
         // box then spans the eye plane and may cover any pixel.
-        if clip.w <= camera.near * 0.5 {
+        if clip.w <= f64::from(camera.near) * 0.5 {
             return Some(full);
         }
-        let ndc = clip.xy() / clip.w;
+        let ndc = (clip.xy() / clip.w).as_vec2();
         lo = lo.min(ndc);
         hi = hi.max(ndc);
     }

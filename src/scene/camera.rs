@@ -1,14 +1,15 @@
 //! The pinhole [`Camera`] and its view and reversed-Z projection matrices.
 
-use glam::{DMat4, DVec4, Mat4, Vec3};
+use glam::{DMat4, DVec3, DVec4, Mat4, Vec3};
 
 /// A perspective camera.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
-    /// Position in world space.
-    pub eye: Vec3,
+    /// Position in world space (f64: scenes far from the origin keep their
+    /// metre-scale detail; see [`Camera::view`]).
+    pub eye: DVec3,
     /// Point the camera looks at; differs from `eye`.
-    pub look_at: Vec3,
+    pub look_at: DVec3,
     /// Approximate up direction; not parallel to `look_at - eye`.
     pub up: Vec3,
     /// Vertical field of view in degrees, in `(0, 180)`.
@@ -21,17 +22,26 @@ pub struct Camera {
 }
 
 impl Camera {
-    /// World-to-view matrix: right-handed, the camera looks down `-Z` with
-    /// `+Y` up in view space.
+    /// Camera-relative world to view: right-handed, the camera looks down
+    /// `-Z` with `+Y` up in view space. Its input is a world position minus
+    /// [`Camera::eye`] (computed in f64), so the matrix is a pure rotation
+    /// and the GPU never sees a world coordinate: a scene 1e9 m from the
+    /// origin renders like one at the origin.
     pub fn view(&self) -> Mat4 {
+        self.view_f64().as_mat4()
+    }
+
+    /// [`Camera::view`] in f64.
+    pub fn view_f64(&self) -> DMat4 {
         // In f64: the view direction is normalised from a difference that
         // may be tiny (or large) for f32, which would give NaN there.
-        DMat4::look_at_rh(
-            self.eye.as_dvec3(),
-            self.look_at.as_dvec3(),
-            self.up.as_dvec3(),
-        )
-        .as_mat4()
+        DMat4::look_at_rh(DVec3::ZERO, self.look_at - self.eye, self.up.as_dvec3())
+    }
+
+    /// A world position relative to the camera (`p - eye`, in f64), the
+    /// space every GPU position is in.
+    pub fn relative(&self, p: DVec3) -> DVec3 {
+        p - self.eye
     }
 
     /// View-to-clip matrix for Vulkan with reversed Z.
@@ -48,6 +58,11 @@ impl Camera {
     /// that the matrix stays finite; `Scene` output sizes are validated, so
     /// this only guards direct callers.
     pub fn projection(&self, aspect: f32) -> Mat4 {
+        self.projection_f64(aspect).as_mat4()
+    }
+
+    /// [`Camera::projection`] in f64.
+    pub fn projection_f64(&self, aspect: f32) -> DMat4 {
         let aspect = if aspect.is_finite() && aspect > 0.0 {
             f64::from(aspect)
         } else {
@@ -72,16 +87,21 @@ impl Camera {
             DVec4::new(0.0, 0.0, -a, -1.0),
             DVec4::new(0.0, 0.0, b, 0.0),
         )
-        .as_mat4()
     }
 
-    /// `projection(aspect) * view()`: world to clip space.
+    /// `projection(aspect) * view()`: camera-relative world (`p - eye`) to
+    /// clip space, composed in f64 and rounded once.
     pub fn view_projection(&self, aspect: f32) -> Mat4 {
-        self.projection(aspect) * self.view()
+        self.view_projection_f64(aspect).as_mat4()
+    }
+
+    /// [`Camera::view_projection`] in f64.
+    pub fn view_projection_f64(&self, aspect: f32) -> DMat4 {
+        self.projection_f64(aspect) * self.view_f64()
     }
 
     /// Unit vector from `eye` towards `look_at`.
     pub fn forward(&self) -> Vec3 {
-        (self.look_at - self.eye).normalize_or_zero()
+        (self.look_at - self.eye).normalize_or_zero().as_vec3()
     }
 }

@@ -16,7 +16,7 @@ use std::cell::RefCell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use serde::Deserialize;
 
 use super::{
@@ -380,14 +380,15 @@ impl Check<'_> {
     }
 
     /// A position: every component within `MAX_COORDINATE`.
-    fn coordinates(&self, field: &str, v: [f64; 3]) -> Result<Vec3> {
-        let c = self.vec3(field, v)?;
+    fn coordinates(&self, field: &str, v: [f64; 3]) -> Result<DVec3> {
+        self.vec3(field, v)?;
+        let c = DVec3::from_array(v);
         if let Some(i) = v.iter().position(|x| x.abs() > MAX_COORDINATE) {
             return Err(self.invalid(
                 field,
                 format!(
                     "component {i} must be between -{MAX_COORDINATE:e} and {MAX_COORDINATE:e}, \
-                     got {:e} (32-bit GPU coordinates lose precision beyond that)",
+                     got {:e} (the renderer's limit for world positions)",
                     v[i]
                 ),
             ));
@@ -603,15 +604,12 @@ impl Check<'_> {
                 Some(far)
             }
         };
-        // In f64: the difference of two accepted f32 positions is exact.
-        let forward = (look_at.as_dvec3() - eye.as_dvec3())
-            .try_normalize()
-            .ok_or_else(|| {
-                self.invalid(
-                    "camera.look_at",
-                    "equals camera.eye, so there is no view direction",
-                )
-            })?;
+        let forward = (look_at - eye).try_normalize().ok_or_else(|| {
+            self.invalid(
+                "camera.look_at",
+                "equals camera.eye, so there is no view direction",
+            )
+        })?;
         let up_dir = up.as_dvec3();
         // sin of the angle between them; below ~0.06 degrees the look-at
         // basis is numerically meaningless.

@@ -1,6 +1,6 @@
 //! Light sources and the attenuation model used for per-object culling.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 /// A light source. Colours are linear RGB, already multiplied by the
 /// intensity given in the scene file.
@@ -9,8 +9,8 @@ pub enum Light {
     /// A point light whose contribution is scaled by
     /// `1 / (c + l d + q d^2)` at distance `d`.
     Point {
-        /// World-space position.
-        position: Vec3,
+        /// World-space position (f64, like every world position).
+        position: DVec3,
         /// Colour times intensity, every component >= 0.
         color: Vec3,
         /// `(c, l, q)`: constant, linear and quadratic attenuation, each >= 0
@@ -101,8 +101,30 @@ impl Light {
         }
     }
 
+    /// The light's window at `cutoff`: what the renderer subtracts from
+    /// [`Light::attenuation_at`] before clamping at 0, `cutoff / peak` with
+    /// `peak` the largest colour component (0 for a zero cutoff, a black
+    /// light or a directional light).
+    ///
+    /// A point light's colour at distance `d` is
+    /// `color * max(1 / (c + l d + q d^2) - cutoff / peak, 0)`: its strongest
+    /// component reaches exactly 0 where [`Light::strength_at`] falls to
+    /// the cutoff, at the end of [`Light::range`], and stays 0 beyond. So
+    /// culling lights outside their range, per object (forward lighting)
+    /// or per screen tile (deferred), leaves every pixel as it would be
+    /// without culling, whatever the granularity; the cost is that every
+    /// point light is `cutoff / peak` of its colour dimmer everywhere.
+    pub fn window(&self, cutoff: f32) -> f32 {
+        let peak = self.color().max_element();
+        match self {
+            Light::Point { .. } if cutoff > 0.0 && peak > 0.0 => cutoff / peak,
+            _ => 0.0,
+        }
+    }
+
     /// Largest colour component of the light as seen at `distance`: the
-    /// quantity compared with `Scene::light_cutoff` when culling.
+    /// quantity compared with `Scene::light_cutoff` when culling (before
+    /// the window, [`Light::window`]).
     pub fn strength_at(&self, distance: f32) -> f32 {
         let peak = self.color().max_element();
         if peak == 0.0 {

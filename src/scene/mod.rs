@@ -16,7 +16,7 @@ mod sky;
 
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use serde::Deserialize;
 
 pub use crate::mesh::obj::AssetWarning;
@@ -313,8 +313,8 @@ impl Scene {
                 debug_view: None,
             },
             camera: Camera {
-                eye: Vec3::Z,
-                look_at: Vec3::ZERO,
+                eye: DVec3::Z,
+                look_at: DVec3::ZERO,
                 up: Vec3::Y,
                 fov_y_degrees: 45.0,
                 near: 0.1,
@@ -412,18 +412,18 @@ impl Scene {
     ///
     /// This tessellates the object; the renderer builds each mesh once
     /// (`render::SceneGeometry`) and uses [`Scene::world_bounds`].
-    pub fn object_bounds(&self, index: usize) -> Option<(Vec3, f32)> {
+    pub fn object_bounds(&self, index: usize) -> Option<(DVec3, f32)> {
         self.objects.get(index)?;
         Some(self.world_bounds(index, &self.object_mesh(index)))
     }
 
     /// The world-space bounding sphere of object `index` given its mesh in
     /// object space. Panics if `index` is out of range.
-    pub fn world_bounds(&self, index: usize, mesh: &Mesh) -> (Vec3, f32) {
+    pub fn world_bounds(&self, index: usize, mesh: &Mesh) -> (DVec3, f32) {
         let (centre, radius) = mesh.bounding_sphere();
         let transform = &self.objects[index].transform;
         (
-            transform.matrix().transform_point3(centre),
+            transform.matrix_f64().transform_point3(centre.as_dvec3()),
             radius * transform.max_scale(),
         )
     }
@@ -442,14 +442,14 @@ impl Scene {
     }
 
     /// [`Scene::lights_reaching`] for the sphere `(centre, radius)`.
-    pub fn lights_reaching_sphere(&self, centre: Vec3, radius: f32) -> Vec<usize> {
+    pub fn lights_reaching_sphere(&self, centre: DVec3, radius: f32) -> Vec<usize> {
         self.lights
             .iter()
             .enumerate()
             .filter(|(_, light)| match light {
                 Light::Directional { .. } => true,
                 Light::Point { position, .. } => {
-                    let distance = (position.distance(centre) - radius).max(0.0);
+                    let distance = (position.distance(centre) as f32 - radius).max(0.0);
                     // Written as "not below" so that an infinite strength
                     // (c = 0 at d = 0) counts as reaching.
                     light.strength_at(distance) >= self.light_cutoff

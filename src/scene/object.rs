@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use glam::{Mat3, Mat4, Quat, Vec3};
+use glam::{DMat4, DQuat, DVec3, Mat3, Mat4, Quat, Vec3};
 
 use crate::mesh::{
     CylinderSurface, FlagSurface, Mesh, ParametricSurface, PlaneSurface, SphereSurface,
@@ -28,8 +28,8 @@ pub struct Object {
 /// Object-to-world transform: scale, then rotate, then translate.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Transform {
-    /// Translation.
-    pub translate: Vec3,
+    /// Translation (f64, like every world position: see `Camera::view`).
+    pub translate: DVec3,
     /// Rotation axis; unit length after loading.
     pub rotate_axis: Vec3,
     /// Rotation angle in degrees, counter-clockwise looking down the axis
@@ -42,7 +42,7 @@ pub struct Transform {
 impl Default for Transform {
     fn default() -> Self {
         Transform {
-            translate: Vec3::ZERO,
+            translate: DVec3::ZERO,
             rotate_axis: Vec3::Y,
             rotate_degrees: 0.0,
             scale: Vec3::ONE,
@@ -60,9 +60,31 @@ impl Transform {
         }
     }
 
-    /// `T * R * S`.
+    /// `T * R * S` in f64.
+    pub fn matrix_f64(&self) -> DMat4 {
+        let rotation = match self.rotate_axis.as_dvec3().try_normalize() {
+            Some(axis) => DQuat::from_axis_angle(axis, f64::from(self.rotate_degrees).to_radians()),
+            None => DQuat::IDENTITY,
+        };
+        DMat4::from_scale_rotation_translation(self.scale.as_dvec3(), rotation, self.translate)
+    }
+
+    /// `T * R * S` rounded to f32 (exact only near the origin).
     pub fn matrix(&self) -> Mat4 {
-        Mat4::from_scale_rotation_translation(self.scale, self.rotation(), self.translate)
+        self.matrix_f64().as_mat4()
+    }
+
+    /// `T' * R * S` with `T'` the translation relative to `origin` (the
+    /// camera), composed in f64 and only then rounded to f32: what the GPU
+    /// transforms vertices with, so a scene far from the world origin keeps
+    /// its detail near the camera.
+    pub fn matrix_relative_to(&self, origin: DVec3) -> Mat4 {
+        Transform {
+            translate: self.translate - origin,
+            ..*self
+        }
+        .matrix_f64()
+        .as_mat4()
     }
 
     /// Inverse transpose of the upper 3x3 of [`Transform::matrix`], for

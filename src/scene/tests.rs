@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use glam::{DVec4, Mat3, Mat4, Quat, Vec3, Vec4};
+use glam::{DVec3, DVec4, Mat3, Mat4, Quat, Vec3, Vec4};
 
 use super::*;
 
@@ -20,8 +20,8 @@ fn assets() -> PathBuf {
 
 fn camera(near: f32, far: Option<f32>) -> Camera {
     Camera {
-        eye: Vec3::new(0.0, 0.0, 0.0),
-        look_at: Vec3::new(0.0, 0.0, -1.0),
+        eye: DVec3::new(0.0, 0.0, 0.0),
+        look_at: DVec3::new(0.0, 0.0, -1.0),
         up: Vec3::Y,
         fov_y_degrees: 60.0,
         near,
@@ -110,16 +110,17 @@ fn reversed_z_maps_near_to_one_and_far_to_zero() {
 #[test]
 fn projection_keeps_the_image_upright_in_vulkan_ndc() {
     let cam = Camera {
-        eye: Vec3::new(0.0, 1.0, 5.0),
-        look_at: Vec3::new(0.0, 1.0, 0.0),
+        eye: DVec3::new(0.0, 1.0, 5.0),
+        look_at: DVec3::new(0.0, 1.0, 0.0),
         up: Vec3::Y,
         fov_y_degrees: 45.0,
         near: 0.1,
         far: Some(50.0),
     };
     let vp = cam.view_projection(2.0);
-    let ndc = |p: Vec3| vp.project_point3(p);
-    assert!(ndc(cam.look_at).truncate().length() < 1e-6);
+    // The matrix is camera-relative: it takes positions minus the eye.
+    let ndc = |p: Vec3| vp.project_point3(p - cam.eye.as_vec3());
+    assert!(ndc(cam.look_at.as_vec3()).truncate().length() < 1e-6);
     // Above the target is towards the top of the image: negative NDC y.
     assert!(ndc(Vec3::new(0.0, 2.0, 0.0)).y < 0.0);
     // Right (+X, seen from +Z) is positive NDC x.
@@ -143,17 +144,18 @@ fn invalid_aspect_does_not_poison_the_matrix() {
 #[test]
 fn view_is_a_right_handed_look_at() {
     let cam = Camera {
-        eye: Vec3::new(3.0, 2.0, 1.0),
-        look_at: Vec3::new(-1.0, 0.5, -2.0),
+        eye: DVec3::new(3.0, 2.0, 1.0),
+        look_at: DVec3::new(-1.0, 0.5, -2.0),
         up: Vec3::Y,
         fov_y_degrees: 45.0,
         near: 0.1,
         far: None,
     };
     let view = cam.view();
-    assert!(view.transform_point3(cam.eye).length() < 1e-5);
-    let target = view.transform_point3(cam.look_at);
-    let distance = cam.eye.distance(cam.look_at);
+    // Camera-relative: the eye is the origin of its input.
+    assert!(view.transform_point3(Vec3::ZERO).length() < 1e-5);
+    let target = view.transform_point3((cam.look_at - cam.eye).as_vec3());
+    let distance = cam.eye.distance(cam.look_at) as f32;
     assert!((target - Vec3::new(0.0, 0.0, -distance)).length() < 1e-5);
     let up = view.transform_vector3(Vec3::Y);
     assert!(up.y > 0.0 && up.x.abs() < 1e-6);
@@ -162,12 +164,12 @@ fn view_is_a_right_handed_look_at() {
 #[test]
 fn transform_is_t_r_s_and_the_normal_matrix_its_inverse_transpose() {
     let t = Transform {
-        translate: Vec3::new(1.0, -2.0, 3.0),
+        translate: DVec3::new(1.0, -2.0, 3.0),
         rotate_axis: Vec3::new(1.0, 1.0, 0.0).normalize(),
         rotate_degrees: 37.0,
         scale: Vec3::new(2.0, 0.5, 3.0),
     };
-    let expected = Mat4::from_translation(t.translate)
+    let expected = Mat4::from_translation(t.translate.as_vec3())
         * Mat4::from_quat(Quat::from_axis_angle(t.rotate_axis, 37.0_f32.to_radians()))
         * Mat4::from_scale(t.scale);
     assert!(t.matrix().abs_diff_eq(expected, 1e-5));
@@ -341,7 +343,7 @@ fn full_scene_parses_every_field() {
     assert_eq!(
         scene.lights[0],
         Light::Point {
-            position: Vec3::new(1.0, 2.0, 3.0),
+            position: DVec3::new(1.0, 2.0, 3.0),
             color: Vec3::new(4.0, 2.0, 0.0),
             attenuation: Vec3::from(DEFAULT_ATTENUATION),
         }
@@ -468,7 +470,7 @@ fn culling_scene(lights: Vec<Light>, cutoff: f32) -> Scene {
 
 fn point(x: f32, brightness: f32, attenuation: [f32; 3]) -> Light {
     Light::Point {
-        position: Vec3::new(x, 0.0, 0.0),
+        position: DVec3::new(f64::from(x), 0.0, 0.0),
         color: Vec3::new(0.1, brightness, 0.2),
         attenuation: Vec3::from(attenuation),
     }
@@ -496,7 +498,7 @@ fn lights_reaching_follows_the_attenuation_threshold() {
     ];
     let scene = culling_scene(lights.clone(), 1e-3);
     let (centre, radius) = scene.object_bounds(0).expect("object 0");
-    assert!((centre - Vec3::new(10.0, 0.0, 0.0)).length() < 1e-4);
+    assert!((centre - DVec3::new(10.0, 0.0, 0.0)).length() < 1e-4);
     assert!((radius - 2.0).abs() < 1e-4);
     assert_eq!(scene.lights_reaching(0), vec![0, 1, 3, 4, 5, 6, 7, 9]);
     // A cutoff of zero keeps everything; a huge one only directional lights
@@ -525,12 +527,12 @@ fn lights_reaching_uses_the_rotated_and_translated_bounds() {
     scene.lights = vec![
         point(0.0, 1.0, [1.0, 0.0, 1.0]),
         Light::Point {
-            position: Vec3::new(0.0, 0.0, -100.0),
+            position: DVec3::new(0.0, 0.0, -100.0),
             color: Vec3::ONE,
             attenuation: Vec3::new(1.0, 0.0, 1.0),
         },
         Light::Point {
-            position: Vec3::new(0.0, 0.0, 100.0),
+            position: DVec3::new(0.0, 0.0, 100.0),
             color: Vec3::ONE,
             attenuation: Vec3::new(1.0, 0.0, 1.0),
         },
@@ -545,10 +547,38 @@ fn attenuation_and_strength() {
     assert_eq!(light.attenuation_at(-5.0), 1.0);
     assert_eq!(light.strength_at(2.0), 2.0 / 3.0);
     let black = Light::Point {
-        position: Vec3::ZERO,
+        position: DVec3::ZERO,
         color: Vec3::ZERO,
         attenuation: Vec3::new(0.0, 0.0, 1.0),
     };
     assert_eq!(black.strength_at(0.0), 0.0);
     assert_eq!(black.attenuation_at(0.0), f32::INFINITY);
+}
+
+#[test]
+fn windowed_attenuation_reaches_zero_at_the_culling_range() {
+    let light = Light::Point {
+        position: DVec3::ZERO,
+        color: Vec3::new(2.0, 1.0, 0.0),
+        attenuation: Vec3::new(1.0, 0.5, 0.25),
+    };
+    let cutoff = 0.01;
+    let window = light.window(cutoff);
+    assert_eq!(window, cutoff / 2.0);
+    let LightRange::Within(range) = light.range(cutoff) else {
+        panic!("a point light with fall-off has a finite range");
+    };
+    // Windowed attenuation, as the shaders and the CPU reference compute it.
+    let windowed = |d: f32| (light.attenuation_at(d) - window).max(0.0);
+    assert!(windowed(range) < 1e-7, "{}", windowed(range));
+    assert_eq!(windowed(range * 1.01), 0.0);
+    assert_eq!(windowed(range * 10.0), 0.0);
+    assert!(windowed(range * 0.99) > 0.0);
+    // No cutoff, no window; directional lights have none.
+    assert_eq!(light.window(0.0), 0.0);
+    let sun = Light::Directional {
+        direction: -Vec3::Y,
+        color: Vec3::ONE,
+    };
+    assert_eq!(sun.window(cutoff), 0.0);
 }

@@ -54,7 +54,7 @@ impl Surroundings {
                 }
                 // The eight corners of the object-space box, moved: the
                 // world box around them holds the moved mesh.
-                let m = object.transform.matrix().as_dmat4();
+                let m = object.transform.matrix_f64();
                 let mut wlo = DVec3::splat(f64::INFINITY);
                 let mut whi = DVec3::splat(f64::NEG_INFINITY);
                 for i in 0..8 {
@@ -135,8 +135,8 @@ impl FlyCamera {
     pub fn reset(&mut self) {
         let h = self.home;
         self.moved = false;
-        self.eye = h.eye.as_dvec3();
-        let to = h.look_at.as_dvec3() - self.eye;
+        self.eye = h.eye;
+        let to = h.look_at - self.eye;
         self.look_distance = to.length();
         self.forward = to.normalize();
         self.up = h.up.as_dvec3().normalize();
@@ -153,8 +153,8 @@ impl FlyCamera {
         // the coordinate bounds of a scene file.
         let distance = self.look_distance.max(0.5 * self.eye.length()).min(1e8);
         Camera {
-            eye: self.eye.as_vec3(),
-            look_at: (self.eye + self.forward * distance).as_vec3(),
+            eye: self.eye,
+            look_at: (self.eye + self.forward * distance),
             up: self.up.as_vec3(),
             fov_y_degrees: self.fov_y as f32,
             ..self.home
@@ -246,12 +246,12 @@ impl FlyCamera {
     /// The `[camera]` table of a scene file that renders this view.
     pub fn toml(&self) -> String {
         let c = self.camera();
-        let v = |v: glam::Vec3| format!("[{}, {}, {}]", v.x, v.y, v.z);
+        let v = |v: glam::DVec3| format!("[{}, {}, {}]", v.x, v.y, v.z);
         let mut text = format!(
             "[camera]\neye = {}\nlook_at = {}\nup = {}\nfov_y = {}\nnear = {}\n",
             v(c.eye),
             v(c.look_at),
-            v(c.up),
+            v(c.up.as_dvec3()),
             c.fov_y_degrees,
             c.near
         );
@@ -280,8 +280,8 @@ mod tests {
 
     fn home() -> Camera {
         Camera {
-            eye: Vec3::new(0.0, 2.0, 0.0),
-            look_at: Vec3::new(0.0, 2.0, -10.0),
+            eye: glam::DVec3::new(0.0, 2.0, 0.0),
+            look_at: glam::DVec3::new(0.0, 2.0, -10.0),
             up: Vec3::Y,
             fov_y_degrees: 45.0,
             near: 0.1,
@@ -353,7 +353,13 @@ mod tests {
         let angle = c.forward().angle_between(DVec3::Y).to_degrees();
         assert!((angle - 179.0).abs() < 1e-9, "{angle}");
         let cam = c.camera();
-        assert!((cam.look_at - cam.eye).normalize().cross(cam.up).length() > 0.01);
+        assert!(
+            (cam.look_at - cam.eye)
+                .normalize()
+                .cross(cam.up.as_dvec3())
+                .length()
+                > 0.01
+        );
     }
 
     #[test]
@@ -364,8 +370,8 @@ mod tests {
             planet: Some((DVec3::new(0.0, -radius, 0.0), radius)),
         };
         let mut c = FlyCamera::new(Camera {
-            eye: Vec3::new(0.0, 1000.0, 0.0),
-            look_at: Vec3::new(0.0, 1000.0, -1.0),
+            eye: glam::DVec3::new(0.0, 1000.0, 0.0),
+            look_at: glam::DVec3::new(0.0, 1000.0, -1.0),
             ..home()
         });
         // A quarter of the way round, in steps.

@@ -25,6 +25,8 @@ use std::collections::BTreeMap;
 
 /// One draw: a tile group's vertices and lights.
 struct GroupDraw {
+    /// Indices into the scene's lights.
+    lights: Vec<usize>,
     light_count: u32,
     vertex_offset: u64,
     vertex_count: u32,
@@ -42,7 +44,18 @@ pub struct DeferredLightingPass {
     _lights_layout: DescriptorSetLayout,
     inputs: InputAttachments,
     vertices: Buffer,
-    _light_blocks: Buffer,
+    /// Written again when the view moves: light positions are relative to
+    /// the camera.
+    light_blocks: Buffer,
+}
+
+/// A tile group's lights as the shader reads them, for `scene`'s camera.
+fn group_block(scene: &crate::scene::Scene, lights: &[usize]) -> Vec<u8> {
+    let lights: Vec<GpuLight> = lights
+        .iter()
+        .map(|&l| gpu_light(&scene.lights[l], scene.camera.eye, scene.light_cutoff))
+        .collect();
+    bytemuck::cast_slice(&lights).to_vec()
 }
 
 pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
@@ -65,13 +78,9 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
             let y1 = r.y1 as f32 / h * 2.0 - 1.0;
             vertex_data.extend([[x0, y0], [x1, y0], [x1, y1], [x0, y0], [x1, y1], [x0, y1]]);
         }
-        let lights: Vec<GpuLight> = group
-            .lights
-            .iter()
-            .map(|&l| gpu_light(&setup.scene.lights[l]))
-            .collect();
-        blocks.push(bytemuck::cast_slice(&lights).to_vec());
+        blocks.push(group_block(setup.scene, &group.lights));
         groups.push(GroupDraw {
+            lights: group.lights.clone(),
             light_count: group.lights.len() as u32,
             vertex_offset: (first * std::mem::size_of::<[f32; 2]>()) as u64,
             vertex_count: (vertex_data.len() - first) as u32,
@@ -167,11 +176,25 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         _lights_layout: lights_layout,
         inputs,
         vertices,
-        _light_blocks: light_blocks,
+        light_blocks,
     }))
 }
 
 impl RecordPass for DeferredLightingPass {
+    /// Rewrites the tile groups' lights for the new camera (the plan keeps
+    /// the same tile groups, or the renderer is built again).
+    fn set_view(
+        &mut self,
+        scene: &crate::scene::Scene,
+        _plan: &crate::render::FramePlan,
+    ) -> Result<(), RenderError> {
+        for g in &self.groups {
+            let block = group_block(scene, &g.lights);
+            self.light_blocks.write(g.block_offset as usize, &block);
+        }
+        Ok(())
+    }
+
     fn record(&self, cmd: &CommandBuffer, frame: &FrameResources<'_>) -> Result<(), RenderError> {
         let Some(resources) = frame.scene else {
             return Ok(());

@@ -245,7 +245,8 @@ fn shading_is_the_gpu_formula() {
     assert_eq!(&image.data[..4], &[0.0; 4]);
 
     // A point light 2 above the origin with attenuation (1, 0.5, 0.25):
-    // 1 / (1 + 1 + 1) = 1/3 of its colour.
+    // 1 / (1 + 1 + 1) = 1/3 of its colour, less the window of the default
+    // cutoff (0.001 / peak colour 1, as the GPU gets it in f32).
     let point = toml.replace(
         "type = \"directional\"\ndirection = [0.0, -1.0, 0.0]",
         "type = \"point\"\nposition = [0.0, 2.0, 0.0]\nattenuation = [1.0, 0.5, 0.25]",
@@ -253,7 +254,8 @@ fn shading_is_the_gpu_formula() {
     let image = render_reference(&scene(&point)).unwrap();
     let i = 12 * 4;
     let got = f64::from(image.data[i]);
-    let want = 0.2 * 0.1 + (0.5 + 0.5 * spec) / 3.0;
+    let window = f64::from(0.001f32);
+    let want = 0.2 * 0.1 + (0.5 + 0.5 * spec) * (1.0 / 3.0 - window);
     assert!((got - want).abs() < 1e-6, "{got} vs {want}");
 }
 
@@ -278,7 +280,10 @@ fn culled_lights_are_left_out_as_on_the_gpu() {
     let culled = centre("0.1");
     // Ambient only: ka (= kd = 0.5) times La = 0.1.
     assert!((f64::from(culled) - 0.05).abs() < 1e-7, "{culled}");
-    assert!((f64::from(lit) - (0.05 + 0.5 * 0.01)).abs() < 1e-6, "{lit}");
+    // Lit: attenuation 1 less the window 0.001 / 0.01 = 0.1.
+    let window = f64::from(0.001f32 / 0.01f32);
+    let want = 0.05 + 0.5 * 0.01 * (1.0 - window);
+    assert!((f64::from(lit) - want).abs() < 1e-6, "{lit} vs {want}");
 }
 
 #[test]
