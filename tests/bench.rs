@@ -203,7 +203,8 @@ fn compare_fails_against_a_halved_baseline_and_passes_against_itself() {
     let halved = dir.join("halved.json");
     std::fs::write(&halved, serde_json::to_string_pretty(&value).unwrap()).unwrap();
 
-    // The stored run against its halved copy: every ratio is exactly 2.
+    // The stored run against its halved copy: every ratio is exactly 2,
+    // and each interval is 2 times the frames' own spread.
     let gate = |baseline: &Path, max_ratio: &str| {
         aerial()
             .args(["bench", "--from-json"])
@@ -217,11 +218,22 @@ fn compare_fails_against_a_halved_baseline_and_passes_against_itself() {
     let out = gate(&halved, "1.5");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "a 2x slowdown passed: {stderr}");
-    assert!(stderr.contains("above --max-ratio 1.5"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
-    assert!(String::from_utf8_lossy(&out.stdout).contains("2.00"));
-    // Against itself every ratio is exactly 1, which is not above 1.
-    assert_success(&gate(&current, "1"));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("2.0000"));
+    // Three frames on a shared host can spread by more than 25 %, so a
+    // 2x slowdown is a failure (exit 1) or, when every interval reaches
+    // below 1.5, inconclusive (exit 3); never a pass. At a limit of 1.1 a
+    // row's interval (about 2 x [min/max, max/min] of its frames) lies
+    // wholly above it unless its slowest frame took 1.8 times its fastest,
+    // and it fails if any row does.
+    assert!(matches!(out.status.code(), Some(1) | Some(3)), "{stderr}");
+    let out = gate(&halved, "1.1");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("slower than --max-ratio 1.1"), "{stderr}");
+    // Against itself every ratio is exactly 1; its interval is the frames'
+    // spread about 1, within a generous limit.
+    assert_success(&gate(&current, "10"));
 
     // A fresh measurement compared with the stored one: the live path.
     // Ratios are noisy here (a shared machine, three frames), so the limit

@@ -532,7 +532,7 @@ fn the_bench_gate_fails_when_it_compared_nothing_and_exits_1_on_slowdowns() {
         ],
         &[],
     );
-    assert_fails(&gate, 1, &["above --max-ratio 1.5"]);
+    assert_fails(&gate, 1, &["slower than --max-ratio 1.5"]);
     // Against itself: passes.
     let gate = aerial(
         &[

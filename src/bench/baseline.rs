@@ -259,8 +259,10 @@ pub fn compare(
                     None
                 } else if b.samples.is_empty() {
                     ratio_interval(&c.samples, &[b.median])
+                        .map(|i| around(i, &c.samples, &[b.median], c.median / b.median))
                 } else {
                     ratio_interval(&c.samples, &b.samples)
+                        .map(|i| around(i, &c.samples, &b.samples, c.median / b.median))
                 };
                 matched.push(RatioRow {
                     key: c.key.clone(),
@@ -287,6 +289,28 @@ pub fn compare(
         missing,
         new,
         warnings,
+    }
+}
+
+/// The interval `i` of the ratio of the samples' medians, moved to be
+/// about `ratio`, the ratio of the reports' medians: the samples give the
+/// interval's relative width, the medians its place. The two agree in
+/// every report `bench` writes; they differ only in an edited report,
+/// whose stated medians are then what is judged.
+fn around(i: Interval, a: &[f64], b: &[f64], ratio: f64) -> Interval {
+    let median = |x: &[f64]| {
+        let mut v = x.to_vec();
+        v.sort_unstable_by(f64::total_cmp);
+        crate::report::stats::percentile(&v, 50.0)
+    };
+    let sampled = median(a) / median(b);
+    if !(sampled.is_finite() && sampled > 0.0) {
+        return i;
+    }
+    let k = ratio / sampled;
+    Interval {
+        low: i.low * k,
+        high: i.high * k,
     }
 }
 
