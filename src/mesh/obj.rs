@@ -213,13 +213,13 @@ fn read_within_budget(
         },
         None => ObjError::File {
             file: file.to_owned(),
-            reason: budget
-                .check(
-                    format!("reading {what} of more than {limit} bytes"),
-                    (limit + 1).saturating_mul(per_byte),
-                )
-                .err()
-                .map_or_else(|| "too large".to_owned(), |e| e.to_string()),
+            reason: format!(
+                "{what} longer than {} is more than the memory budget of {} allows \
+                 (reading stopped there); set {} higher if the machine has the memory",
+                crate::budget::Bytes(limit),
+                crate::budget::Bytes(budget.bytes),
+                crate::budget::ENV
+            ),
         },
     })
 }
