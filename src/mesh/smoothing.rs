@@ -90,6 +90,26 @@ pub struct SmoothingOptions {
 /// that corner's face contributes: its interior angle, so that how a
 /// surface is cut into triangles does not bias the average.
 fn face_data(positions: &[Vec3]) -> Vec<(DVec3, [f64; 3])> {
+    // Faces are independent: whole triangles split over the cores.
+    let threads = threads_for(positions.len());
+    if threads <= 1 {
+        return face_data_serial(positions);
+    }
+    let chunk = (positions.len() / 3).div_ceil(threads) * 3;
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = positions
+            .chunks(chunk)
+            .map(|part| scope.spawn(move || face_data_serial(part)))
+            .collect();
+        let mut all = Vec::with_capacity(positions.len() / 3);
+        for h in handles {
+            all.extend(h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
+        }
+        all
+    })
+}
+
+fn face_data_serial(positions: &[Vec3]) -> Vec<(DVec3, [f64; 3])> {
     positions
         .chunks_exact(3)
         .map(|t| {
@@ -111,26 +131,64 @@ fn face_data(positions: &[Vec3]) -> Vec<(DVec3, [f64; 3])> {
         .collect()
 }
 
+/// For each of `count` keys, the index of the first key equal to it, by an
+/// open-addressing hash table of indices (twice as many slots as keys,
+/// linear probing): no per-entry allocation, and one flat array to probe.
+pub(crate) fn first_equal<const N: usize>(
+    count: usize,
+    key: impl Fn(usize) -> [u32; N],
+) -> Vec<u32> {
+    let slots = (count * 2).next_power_of_two().max(16);
+    let mask = slots - 1;
+    let mut table = vec![u32::MAX; slots];
+    let mut first = Vec::with_capacity(count);
+    for i in 0..count {
+        let k = key(i);
+        let mut h = 0x9e37_79b9_7f4a_7c15_u64;
+        for word in k {
+            h = (h ^ u64::from(word)).wrapping_mul(0xff51_afd7_ed55_8ccd);
+            h ^= h >> 32;
+        }
+        let mut slot = h as usize & mask;
+        loop {
+            let held = table[slot];
+            if held == u32::MAX {
+                table[slot] = i as u32;
+                first.push(i as u32);
+                break;
+            }
+            if key(held as usize) == k {
+                first.push(held);
+                break;
+            }
+            slot = (slot + 1) & mask;
+        }
+    }
+    first
+}
+
 /// Groups of point indices within `distance` of one another (transitively),
 /// as one group id per point (each id below `points.len()`).
 pub fn weld(points: &[Vec3], distance: f32) -> Vec<usize> {
     // Exact duplicates first: corners of neighbouring triangles repeat the
     // same position many times, and the hash below need see each once.
+    // +0.0 so that -0.0 and 0.0 are one key.
+    let key = |i: usize| (points[i] + Vec3::ZERO).to_array().map(f32::to_bits);
+    let first = first_equal(points.len(), key);
     let mut unique: Vec<Vec3> = Vec::new();
-    // Sized for the usual six corners per position, so it rarely rehashes.
-    let mut exact: FastMap<[u32; 3], usize> =
-        FastMap::with_capacity_and_hasher(points.len() / 4, Default::default());
-    let point_to_unique: Vec<usize> = points
+    let mut unique_of_first = vec![u32::MAX; points.len()];
+    let point_to_unique: Vec<usize> = first
         .iter()
-        .map(|p| {
-            // +0.0 so that -0.0 and 0.0 are one key.
-            let key = (*p + Vec3::ZERO).to_array().map(f32::to_bits);
-            *exact.entry(key).or_insert_with(|| {
-                unique.push(*p);
-                unique.len() - 1
-            })
+        .enumerate()
+        .map(|(i, &f)| {
+            if f as usize == i {
+                unique_of_first[i] = unique.len() as u32;
+                unique.push(points[i]);
+            }
+            unique_of_first[f as usize] as usize
         })
         .collect();
+    drop(unique_of_first);
     let mut parent: Vec<usize> = (0..unique.len()).collect();
     fn find(parent: &mut [usize], mut i: usize) -> usize {
         while parent[i] != i {
