@@ -203,7 +203,12 @@ pub fn weld(points: &[Vec3], distance: f32) -> Vec<usize> {
         // each axis) needs only its own cell along that axis, so on average
         // about 3.4 cells are visited instead of 27.
         let size = 4.0 * distance;
-        let mut grid: FastMap<[i64; 3], Vec<usize>> = FastMap::default();
+        // Each cell's points as a chain through flat arrays (the cell's
+        // last point, then each point's predecessor in its cell): no
+        // allocation per cell.
+        let mut last: FastMap<[i64; 3], u32> =
+            FastMap::with_capacity_and_hasher(unique.len(), Default::default());
+        let mut previous = vec![u32::MAX; unique.len()];
         for (i, p) in unique.iter().enumerate() {
             let scaled = p.as_dvec3() / size;
             let cell = scaled.floor();
@@ -217,19 +222,21 @@ pub fn weld(points: &[Vec3], distance: f32) -> Vec<usize> {
                 for dy in ry.0..=ry.1 {
                     for dz in rz.0..=rz.1 {
                         let key = [cell[0] + dx, cell[1] + dy, cell[2] + dz];
-                        let Some(others) = grid.get(&key) else {
-                            continue;
-                        };
-                        for &j in others {
-                            if unique[j].as_dvec3().distance(p.as_dvec3()) <= distance {
-                                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+                        let mut j = last.get(&key).copied().unwrap_or(u32::MAX);
+                        while j != u32::MAX {
+                            let other = j as usize;
+                            if unique[other].as_dvec3().distance(p.as_dvec3()) <= distance {
+                                let (a, b) = (find(&mut parent, i), find(&mut parent, other));
                                 parent[a.max(b)] = a.min(b);
                             }
+                            j = previous[other];
                         }
                     }
                 }
             }
-            grid.entry(cell).or_default().push(i);
+            if let Some(before) = last.insert(cell, i as u32) {
+                previous[i] = before;
+            }
         }
     }
     point_to_unique
