@@ -340,7 +340,7 @@ fn smooth_scope(points: &[Vec3], options: &SmoothingOptions, cos_crease: f64) ->
     let count = points.len();
     let mut starts = vec![0u32; count + 1];
     for &id in &ids {
-        starts[id as usize + 1] += 1;
+        starts[id + 1] += 1;
     }
     for i in 0..count {
         starts[i + 1] += starts[i];
@@ -349,8 +349,8 @@ fn smooth_scope(points: &[Vec3], options: &SmoothingOptions, cos_crease: f64) ->
     {
         let mut next = starts.clone();
         for (k, &id) in ids.iter().enumerate() {
-            order[next[id as usize] as usize] = k as u32;
-            next[id as usize] += 1;
+            order[next[id] as usize] = k as u32;
+            next[id] += 1;
         }
     }
     drop(ids);
