@@ -70,8 +70,10 @@ fn mesh_reports_counts_known_by_construction() {
     assert_eq!(report["non_finite_attributes"], 0);
     assert!(report["max_orthonormality_error"].as_f64().unwrap() < 1e-5);
     for stage in ["load", "smoothing", "tangents"] {
-        let s = report["seconds"][stage].as_f64().unwrap();
-        assert!((0.0..10.0).contains(&s), "{stage}: {s}");
+        for kind in ["seconds", "cpu_seconds"] {
+            let s = report[kind][stage].as_f64().unwrap();
+            assert!((0.0..10.0).contains(&s), "{kind} {stage}: {s}");
+        }
     }
 
     // A missing file and a bad option are errors (exit 2) naming the cause.
@@ -88,5 +90,49 @@ fn mesh_reports_counts_known_by_construction() {
         let out = common::aerial().arg("mesh").args(&args).output().unwrap();
         assert_eq!(out.status.code(), Some(2));
         assert!(String::from_utf8_lossy(&out.stderr).contains(needle));
+    }
+}
+
+/// Endless inputs stop at the memory budget with a message naming the
+/// file: `/dev/zero` as the model is refused (exit 2), as its MTL library
+/// a warning (the default material), an error under `--strict`.
+#[test]
+fn mesh_reads_of_endless_inputs_stop_at_the_budget() {
+    let out = common::aerial()
+        .args(["mesh", "/dev/zero"])
+        .env("AERIAL_MEMORY_BUDGET", "64M")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("/dev/zero") && stderr.contains("memory budget"),
+        "{stderr}"
+    );
+
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("m.obj");
+    std::fs::write(
+        &model,
+        "mtllib zero.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    std::os::unix::fs::symlink("/dev/zero", dir.path().join("zero.mtl")).unwrap();
+    for (strict, code) in [(false, 0), (true, 2)] {
+        let mut command = common::aerial();
+        command
+            .arg("mesh")
+            .arg(&model)
+            .env("AERIAL_MEMORY_BUDGET", "64M");
+        if strict {
+            command.arg("--strict");
+        }
+        let out = command.output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(code), "{stderr}");
+        assert!(
+            stderr.contains("zero.mtl") && stderr.contains("memory budget"),
+            "{stderr}"
+        );
     }
 }

@@ -98,6 +98,10 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
         "seconds: load {:.4}, smoothing {:.4}, tangents {:.4}",
         report.seconds.load, report.seconds.smoothing, report.seconds.tangents
     );
+    println!(
+        "cpu seconds: load {:.4}, smoothing {:.4}, tangents {:.4}",
+        report.cpu_seconds.load, report.cpu_seconds.smoothing, report.cpu_seconds.tangents
+    );
     if let Some(json) = &args.json {
         let text = serde_json::to_string_pretty(&report).context("encoding the report")?;
         aerial::files::write_bytes(json, text.as_bytes())?;

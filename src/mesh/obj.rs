@@ -155,24 +155,99 @@ impl ObjModel {
     }
 }
 
-/// Peak memory of loading a model, per byte of its OBJ file, an upper
-/// estimate: a face line of about 20 bytes becomes three corners with
-/// position, normal and UV (96 bytes in the corner soup), then indexed
-/// vertices (48 bytes each) and the welding tables.
-pub const MEMORY_PER_FILE_BYTE: u64 = 16;
+/// Memory of reading and parsing a model's text, per byte of the file (the
+/// bytes, their decoded copy, a copy without nameless `usemtl` lines, and
+/// the parser's vertex arrays), an upper bound: the part of
+/// [`memory_needed`] known from the file's size alone.
+pub const MEMORY_PER_FILE_BYTE: u64 = 6;
+
+/// Memory per triangle (after splitting polygons) of parsing, smoothing
+/// and tangent frames, an upper bound: the parser's index arrays, the
+/// corner soup (position, UV, normal), face data, welding and grouping
+/// tables, shading normals, and the indexed mesh with its hash table, each
+/// at its worst (every corner its own vertex, vectors at twice their
+/// length after growth). Measured against the allocator's peak on
+/// adversarial shapes in `tests/obj_memory.rs`.
+pub const MEMORY_PER_TRIANGLE: u64 = 800;
+
+/// Upper bound on the peak memory of loading a model of `file_bytes` bytes
+/// and `triangles` triangles and making its meshes.
+pub fn memory_needed(file_bytes: u64, triangles: u64) -> u64 {
+    file_bytes
+        .saturating_mul(MEMORY_PER_FILE_BYTE)
+        .saturating_add(triangles.saturating_mul(MEMORY_PER_TRIANGLE))
+}
+
+/// Reads at most `limit` bytes of `path`: the file, or `Err(None)` when it
+/// is longer (an endless device such as `/dev/zero` included).
+pub fn read_limited(path: &Path, limit: u64) -> Result<Vec<u8>, Option<std::io::Error>> {
+    use std::io::Read as _;
+    let file = std::fs::File::open(path).map_err(Some)?;
+    let mut bytes = Vec::new();
+    file.take(limit.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(Some)?;
+    if bytes.len() as u64 > limit {
+        return Err(None);
+    }
+    Ok(bytes)
+}
+
+fn budget(file: &str) -> Result<crate::budget::MemoryBudget, ObjError> {
+    crate::budget::MemoryBudget::from_env().map_err(|e| ObjError::File {
+        file: file.to_owned(),
+        reason: e.to_string(),
+    })
+}
+
+/// The bytes of `path` if the memory budget allows reading them at
+/// `per_byte` bytes of memory per file byte; `what` names the file kind.
+fn read_within_budget(
+    path: &Path,
+    file: &str,
+    what: &str,
+    per_byte: u64,
+) -> Result<Vec<u8>, ObjError> {
+    let budget = budget(file)?;
+    let limit = budget.bytes / per_byte;
+    read_limited(path, limit).map_err(|e| match e {
+        Some(reason) => ObjError::Io {
+            file: file.to_owned(),
+            reason,
+        },
+        None => ObjError::File {
+            file: file.to_owned(),
+            reason: format!(
+                "{what} longer than {} is more than the memory budget of {} allows \
+                 (reading stopped there); set {} higher if the machine has the memory",
+                crate::budget::Bytes(limit),
+                crate::budget::Bytes(budget.bytes),
+                crate::budget::ENV
+            ),
+        },
+    })
+}
 
 /// Loads `path`: pre-scan, then `tobj` with triangulation, then the MTL
-/// libraries it names (relative to the OBJ's folder).
+/// libraries it names (relative to the OBJ's folder). Refused before the
+/// work when [`memory_needed`] exceeds the memory budget; reading stops at
+/// the budget, so an endless input is refused too.
 pub fn load_obj(path: &Path) -> Result<ObjModel, ObjError> {
     let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|reason| ObjError::Io {
-        file: file.clone(),
-        reason,
-    })?;
+    let bytes = read_within_budget(path, &file, "a model", MEMORY_PER_FILE_BYTE)?;
     let text = decode_text(&bytes).map_err(|reason| ObjError::File {
         file: file.clone(),
         reason,
     })?;
+    let triangles = prescan(&text, &file)?.triangles;
+    let need = memory_needed(bytes.len() as u64, triangles);
+    drop(bytes);
+    budget(&file)?
+        .check(format!("model {file} ({triangles} triangles)"), need)
+        .map_err(|e| ObjError::File {
+            file: file.clone(),
+            reason: e.to_string(),
+        })?;
     let base_dir = path.parent().unwrap_or_else(|| Path::new(""));
     let mut model = parse_obj(&text, &file, base_dir)?;
     model.files.insert(0, path.to_path_buf());
@@ -227,10 +302,18 @@ fn read_mtl(
         fallback: DEFAULT_MATERIAL_FALLBACK.to_owned(),
     };
     let nothing = || Ok((Vec::new(), Default::default()));
-    let bytes = match std::fs::read(&path) {
+    // Read within the budget: an endless file is refused like an unreadable
+    // one. A library is read, decoded and rewritten once each.
+    let bytes = match read_within_budget(&path, &path.display().to_string(), "an MTL library", 4) {
         Ok(bytes) => bytes,
+        Err(ObjError::Io { reason, .. }) => {
+            warnings.push(failed(reason.to_string()));
+            return nothing();
+        }
         Err(e) => {
-            warnings.push(failed(e.to_string()));
+            let message = e.to_string();
+            let reason = message.split_once(": ").map_or(message.as_str(), |x| x.1);
+            warnings.push(failed(reason.to_owned()));
             return nothing();
         }
     };
@@ -512,6 +595,8 @@ fn material(m: &tobj::Material, file: &str, base_dir: &Path) -> Result<ObjMateri
 /// Which attributes every face corner of a file has, and the materials
 /// its `usemtl` lines name (with their line numbers, each name once).
 struct Corners {
+    /// Triangles after splitting polygons.
+    triangles: u64,
     all_uv: bool,
     all_normal: bool,
     usemtl: Vec<(usize, String)>,
@@ -530,6 +615,7 @@ fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
         all_normal: true,
         usemtl: Vec::new(),
         empty_usemtl: Vec::new(),
+        triangles: 0,
     };
     for (number, line) in text.lines().enumerate() {
         let error = |reason: String| ObjError::Line {
@@ -603,6 +689,7 @@ fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
                     )));
                 }
                 faces += 1;
+                all.triangles += corners as u64 - 2;
                 continue;
             }
             _ => continue,

@@ -13,7 +13,7 @@
 
 use glam::{DVec3, Vec2, Vec3};
 
-use super::smoothing::FastMap;
+use super::smoothing::first_equal;
 use super::{Mesh, Vertex};
 
 /// Statistics of one [`build_mesh`] call, for reports and tests.
@@ -78,8 +78,15 @@ pub fn build_mesh(
     }
 
     // Vertex key: exact bits of position, normal, UV, and the handedness.
-    let mut index_of: FastMap<[u32; 9], u32> =
-        FastMap::with_capacity_and_hasher(corners / 4, Default::default());
+    // + 0: -0.0 is stored (and keyed) as 0.0.
+    let key = |c: usize| {
+        let mut key = [0; 9];
+        key[..8].copy_from_slice(&corner_bits(positions[c], normals[c], uv(c)));
+        key[8] = (triangle[c / 3].2 < 0.0) as u32;
+        key
+    };
+    let first = first_equal(corners, key);
+    let mut vertex_of_first = vec![u32::MAX; corners];
     let mut sums: Vec<(DVec3, DVec3)> = Vec::new();
     let mut vertices: Vec<Vertex> = Vec::new();
     let mut indices = Vec::with_capacity(corners);
@@ -88,16 +95,13 @@ pub fn build_mesh(
             continue;
         }
         let (t, b, sign) = triangle[c / 3];
-        // + 0: -0.0 is stored (and keyed) as 0.0.
-        let (p, n, u) = (
-            positions[c] + Vec3::ZERO,
-            normals[c] + Vec3::ZERO,
-            uv(c) + Vec2::ZERO,
-        );
-        let mut key = [0; 9];
-        key[..8].copy_from_slice(&corner_bits(p, n, u));
-        key[8] = (sign < 0.0) as u32;
-        let index = *index_of.entry(key).or_insert_with(|| {
+        let slot = &mut vertex_of_first[first[c] as usize];
+        if *slot == u32::MAX {
+            let (p, n, u) = (
+                positions[c] + Vec3::ZERO,
+                normals[c] + Vec3::ZERO,
+                uv(c) + Vec2::ZERO,
+            );
             vertices.push(Vertex {
                 position: p.to_array(),
                 normal: n.to_array(),
@@ -105,8 +109,9 @@ pub fn build_mesh(
                 uv: [u.x, u.y],
             });
             sums.push((DVec3::ZERO, DVec3::ZERO));
-            vertices.len() as u32 - 1
-        });
+            *slot = vertices.len() as u32 - 1;
+        }
+        let index = *slot;
         // Weighted by the corner angle, like the normals, so that how the
         // surface is cut into triangles does not bias the frame.
         let [x, y, z] = [0, 1, 2].map(|k| positions[c / 3 * 3 + k].as_dvec3());
