@@ -252,6 +252,7 @@ fn against_runs_both_builds_in_interleaved_rounds() {
     // ABBA: this, other, other, this.
     let order: Vec<&str> = stderr
         .lines()
+        .filter(|l| l.starts_with("round "))
         .filter_map(|l| l.split(": ").nth(1))
         .collect();
     assert_eq!(
