@@ -174,8 +174,17 @@ fn instruction_counts_repeat_and_see_three_percent_more_pixels() {
     );
     assert_eq!(code(&same), Some(0), "{}", show(&same));
     let again = BenchReport::load(&again_json).unwrap();
-    let repeat = tonemap(&again) / tonemap(&base) - 1.0;
-    assert!(repeat.abs() < 1e-3, "tone map moved {repeat}");
+    // Repeats to 0.1 %, or for a count this small to the driver's
+    // frame-to-frame noise: a pass is the difference of two submissions,
+    // each moving by about 2,000 instructions (measured at 192x108: 1.43
+    // million for the tone map, runs 0.03-0.15 % apart).
+    let repeats = |a: f64, b: f64| (a - b).abs() <= (1e-3 * a).max(4_000.0);
+    assert!(
+        repeats(tonemap(&base), tonemap(&again)),
+        "tone map {} then {}",
+        tonemap(&base),
+        tonemap(&again)
+    );
     let frame = |r: &BenchReport| {
         r.scenes[0]
             .gpu_total
@@ -187,8 +196,12 @@ fn instruction_counts_repeat_and_see_three_percent_more_pixels() {
             .summary
             .median
     };
-    let repeat = frame(&again) / frame(&base) - 1.0;
-    assert!(repeat.abs() < 1e-3, "frame moved {repeat}");
+    assert!(
+        repeats(frame(&base), frame(&again)),
+        "frame {} then {}",
+        frame(&base),
+        frame(&again)
+    );
 
     // 198 x 108 is 3.1 % more pixels: the tone map costs at least 2 % more,
     // and the 2 % gate fails on it.
