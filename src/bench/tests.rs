@@ -225,8 +225,8 @@ fn instruction_rows_are_compared_only_when_asked_for() {
     baseline.scenes[0].passes[0].instructions = CountReport::of(vec![10_000_000; 5]);
     current.scenes[0].passes[0].instructions = CountReport::of(vec![10_300_000; 5]);
     // A row too small to judge: its noise is larger than the gate.
-    baseline.scenes[0].passes[1].instructions = CountReport::of(vec![100_000; 5]);
-    current.scenes[0].passes[1].instructions = CountReport::of(vec![110_000; 5]);
+    baseline.scenes[0].passes[1].instructions = CountReport::of(vec![1_000_000; 5]);
+    current.scenes[0].passes[1].instructions = CountReport::of(vec![1_100_000; 5]);
     let time_only = compare(&current, &baseline, &[Metric::Time]);
     assert!(time_only.rows.iter().all(|r| r.metric == Metric::Time));
     let c = compare(&current, &baseline, &[Metric::Instructions]);

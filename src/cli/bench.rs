@@ -500,7 +500,7 @@ fn print_ratios(c: &BaselineComparison, max_ratio: Option<f64>) {
             |i| format!("{:.4}..{:.4}", i.low, i.high),
         );
         let flag = match max_ratio.map(|m| (m, r.verdict(m))) {
-            _ if !r.judged => "  (not judged: under 1e6 instructions)".to_string(),
+            _ if !r.judged => "  (not judged: under 3.5e6 instructions)".to_string(),
             Some((m, Verdict::Fail)) => format!("  > {m}"),
             Some((m, Verdict::Inconclusive)) => format!("  straddles {m}"),
             _ => String::new(),
@@ -557,6 +557,13 @@ fn gate(
     {
         bail!(
             "nothing of the workload was compared: only empty-pass rows of this run are in {}",
+            path.display()
+        );
+    }
+    if !c.rows.iter().any(|r| r.judged) {
+        bail!(
+            "nothing large enough to judge: every matched instruction row of {} is under \
+             3.5 million instructions (render larger images, or gate on time)",
             path.display()
         );
     }
