@@ -236,15 +236,22 @@ fn compare_fails_against_a_halved_baseline_and_passes_against_itself() {
     assert_success(&gate(&current, "10"));
 
     // A fresh measurement compared with the stored one: the live path.
-    // Ratios are noisy here (a shared machine, three frames), so the limit
-    // only checks that the comparison runs and passes.
+    // Ratios are noisy here (a shared machine, three frames; a subpass
+    // whose binned work lands after its closing timestamp can time near 0
+    // in one frame, and its ratio's interval then reaches past any limit),
+    // so this only checks that the comparison runs and never reports a
+    // slowdown at a limit of 1000: a pass, or inconclusive.
     let out = quick_bench(&[
         "--compare",
         current.to_str().unwrap(),
         "--max-ratio",
         "1000",
     ]);
-    assert_success(&out);
+    assert!(
+        matches!(out.status.code(), Some(0) | Some(3)),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(String::from_utf8_lossy(&out.stdout).contains("ratio"));
     std::fs::remove_dir_all(&dir).ok();
 }

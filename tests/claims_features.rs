@@ -446,7 +446,7 @@ fn the_bench_gate_fails_when_no_pass_matched() {
     let current = dir.join("current.json");
     common::succeed(common::tiny_triangle_bench(2).arg("--json").arg(&current));
 
-    // The same report compared with itself passes; with every scene renamed
+    // The same report compared with itself is not a failure; with every scene renamed
     // and no empty pass, nothing matches and the gate fails, whatever the
     // ratio limit.
     let gate = |baseline: &Path| {
@@ -460,9 +460,11 @@ fn the_bench_gate_fails_when_no_pass_matched() {
             .output()
             .unwrap()
     };
+    // (Passes, or is inconclusive when a subpass timed near 0 in one of
+    // the two frames and its ratio's interval reaches past the limit.)
     let same = gate(&current);
     assert!(
-        same.status.success(),
+        matches!(same.status.code(), Some(0) | Some(3)),
         "{}",
         String::from_utf8_lossy(&same.stderr)
     );
