@@ -15,6 +15,7 @@ packages=(
   spirv-tools           # static SPIRV-Tools libraries shaderc links against
   pkg-config
   g++                   # nv-flip builds NVIDIA FLIP from C++ source
+  valgrind              # `bench --metric instructions` counts the driver's instructions under callgrind
   assimp-testmodels     # real OBJ models (multi-group, JPEG textures, odd files) for tests/real_models.rs
   neverball-common      # more OBJ models written by others, for tests/model_corpus.rs
   glmark2-data          # the Stanford bunny and other OBJ models, for tests/model_corpus.rs
