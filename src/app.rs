@@ -286,28 +286,20 @@ fn produce(
         )?,
         FrameSource::EmptyPass { width, height } => {
             let mut pass = EmptyPass::new(ctx, width, height)?;
-            if settings.count_instructions {
-                let (frames, instruction_frames) = count_prefixes(&mut pass, settings, on_frame)?;
-                Produced {
-                    passes: vec![empty_pass::PASS_NAME],
-                    frames,
-                    output: pass.output(),
-                    hdr: None,
-                    setup: Vec::new(),
-                    empty_pass_frames: Vec::new(),
-                    instruction_frames,
-                }
+            let (frames, instruction_frames) = if settings.count_instructions {
+                count_prefixes(&mut pass, settings, on_frame)?
             } else {
                 let frames = submit_frames(settings, on_frame, || pass.render_frame())?;
-                Produced {
-                    passes: vec![empty_pass::PASS_NAME],
-                    frames,
-                    output: pass.output(),
-                    hdr: None,
-                    setup: Vec::new(),
-                    empty_pass_frames: Vec::new(),
-                    instruction_frames: Vec::new(),
-                }
+                (frames, Vec::new())
+            };
+            Produced {
+                passes: vec![empty_pass::PASS_NAME],
+                frames,
+                output: pass.output(),
+                hdr: None,
+                setup: Vec::new(),
+                empty_pass_frames: Vec::new(),
+                instruction_frames,
             }
         }
         FrameSource::ValidationCheck(misuse) => {

@@ -136,12 +136,13 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     };
     // The copy counting instructions under valgrind only hands its report
     // to the run that started it.
-    if Callgrind::from_env()?.is_none() {
+    let counting_copy = Callgrind::from_env()?.is_some();
+    if !counting_copy {
         print_report(&report);
     }
     if let Some(path) = &args.json {
         report.save(path)?;
-        if Callgrind::from_env()?.is_none() {
+        if !counting_copy {
             eprintln!("wrote {}", path.display());
         }
     }
