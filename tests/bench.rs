@@ -232,8 +232,14 @@ fn compare_fails_against_a_halved_baseline_and_passes_against_itself() {
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("slower than --max-ratio 1.1"), "{stderr}");
     // Against itself every ratio is exactly 1; its interval is the frames'
-    // spread about 1, within a generous limit.
-    assert_success(&gate(&current, "10"));
+    // spread about 1: a pass at a generous limit, or inconclusive when a
+    // subpass timed near 0 in one frame. Never a slowdown.
+    let out = gate(&current, "10");
+    assert!(
+        matches!(out.status.code(), Some(0) | Some(3)),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 
     // A fresh measurement compared with the stored one: the live path.
     // Ratios are noisy here (a shared machine, three frames; a subpass
