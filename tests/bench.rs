@@ -278,6 +278,23 @@ fn bad_bench_input_fails_with_a_message_not_a_panic() {
         (vec!["--frames".into(), "0".into()], "--frames"),
         (
             vec![
+                "--knob".into(),
+                "tone_map=none".into(),
+                "--knob".into(),
+                "tone_map=reinhard".into(),
+            ],
+            "knob tone_map is given twice",
+        ),
+        // The same scene file under another spelling of its path.
+        (
+            vec![Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("assets/./bench/../bench/triangle.toml")
+                .display()
+                .to_string()],
+            "given twice",
+        ),
+        (
+            vec![
                 "--compare".into(),
                 not_json.display().to_string(),
                 "--max-ratio".into(),

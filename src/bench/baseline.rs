@@ -14,7 +14,7 @@
 //! another build profile) are reported as warnings, not failures: CI
 //! decides what to do with them. Rows present on one side only are listed.
 
-use super::report::{BenchReport, Metric, PassReport, Resolution};
+use super::report::{BenchReport, Metric, PassReport, Resolution, CPU_FRAME};
 use crate::report::stats::{ratio_interval, Interval};
 use std::fmt;
 
@@ -49,9 +49,31 @@ pub struct RatioRow {
     /// both reports kept them, else over this run's frames against the
     /// baseline's median; `None` without samples on this side.
     pub interval: Option<Interval>,
-    /// Whether the gate judges this row: every time row, and instruction
-    /// rows of at least [`MIN_JUDGED_INSTRUCTIONS`] in the baseline.
-    pub judged: bool,
+    /// Why the gate does not judge this row, if it does not (see
+    /// [`NotJudged`]); `None` for a judged row.
+    pub not_judged: Option<NotJudged>,
+}
+
+/// Why a matched row is printed but not judged: its baseline median is
+/// below what the metric can resolve, so its interval says more about the
+/// measurement's noise than about the build.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NotJudged {
+    /// An instruction row under [`MIN_JUDGED_INSTRUCTIONS`].
+    FewInstructions,
+    /// A scene's time row faster than the baseline's empty pass at that
+    /// resolution: on a binning driver a subpass can time near zero in one
+    /// frame and a whole pass in the next, so its ratio has no bound.
+    BelowEmptyPass,
+}
+
+impl fmt::Display for NotJudged {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            NotJudged::FewInstructions => "under 3.5e6 instructions",
+            NotJudged::BelowEmptyPass => "faster than the empty pass",
+        })
+    }
 }
 
 /// The smallest instruction count a gate judges. The driver's thread
@@ -83,7 +105,7 @@ impl RatioRow {
 
     /// The gate's decision for this row at `max_ratio`.
     pub fn verdict(&self, max_ratio: f64) -> Verdict {
-        let (Some(ratio), true) = (self.ratio, self.judged) else {
+        let (Some(ratio), None) = (self.ratio, self.not_judged) else {
             return Verdict::Pass;
         };
         let interval = self.interval.unwrap_or(Interval::point(ratio));
@@ -250,6 +272,22 @@ pub fn compare(
     let current_rows: Vec<MetricRow> = rows(current).into_iter().filter(wanted).collect();
     let baseline_rows: Vec<MetricRow> = rows(baseline).into_iter().filter(wanted).collect();
     let same = |a: &MetricRow, b: &MetricRow| a.key == b.key && a.metric == b.metric;
+    // The time floor of a scene's rows: the baseline's empty pass at the
+    // scene's resolution (the cheapest pass that timestamps resolve).
+    let time_floor = |scene: &str| -> Option<f64> {
+        let s = baseline.scenes.iter().find(|s| s.file == scene)?;
+        let empty = baseline.empty_pass(s.resolution)?;
+        empty.gpu.as_ref().map(|g| g.ms.median)
+    };
+    let not_judged = |c: &MetricRow, b: &MetricRow| match c.metric {
+        Metric::Instructions if b.median < MIN_JUDGED_INSTRUCTIONS => {
+            Some(NotJudged::FewInstructions)
+        }
+        Metric::Time if c.key.pass != CPU_FRAME => time_floor(&c.key.scene)
+            .filter(|&floor| b.median < floor)
+            .map(|_| NotJudged::BelowEmptyPass),
+        _ => None,
+    };
     let mut matched = Vec::new();
     let mut new = Vec::new();
     for c in &current_rows {
@@ -272,7 +310,7 @@ pub fn compare(
                     current: c.median,
                     ratio: usable.then(|| c.median / b.median),
                     interval,
-                    judged: c.metric != Metric::Instructions || b.median >= MIN_JUDGED_INSTRUCTIONS,
+                    not_judged: not_judged(c, b),
                 })
             }
             None => new.push(c.key.clone()),

@@ -49,8 +49,12 @@ pub enum BenchError {
     },
     #[error("{}: {reason}", .path.display())]
     Json { path: PathBuf, reason: String },
-    #[error("{}: given twice; each scene file may appear once", .0.display())]
-    DuplicateScene(PathBuf),
+    #[error(
+        "{}: given twice (also as {}); each scene file may appear once",
+        .second.display(),
+        .first.display()
+    )]
+    DuplicateScene { first: PathBuf, second: PathBuf },
     #[error("--frames: must be at least 1")]
     NoFrames,
 }
@@ -146,8 +150,16 @@ pub fn run(
         return Err(BenchError::NoFrames);
     }
     for (i, s) in scenes.iter().enumerate() {
-        if scenes[..i].iter().any(|t| t.path == s.path) {
-            return Err(BenchError::DuplicateScene(s.path.clone()));
+        // Compared as files, so `s.toml` and `./s.toml` (or a link to it)
+        // are one scene: the report would list it twice under two names.
+        if let Some(t) = scenes[..i]
+            .iter()
+            .find(|t| crate::files::same_file(&t.path, &s.path))
+        {
+            return Err(BenchError::DuplicateScene {
+                first: t.path.clone(),
+                second: s.path.clone(),
+            });
         }
     }
     let mut resolutions: Vec<Resolution> = Vec::new();

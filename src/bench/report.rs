@@ -287,12 +287,43 @@ impl BenchReport {
         }
         // Parsed again from the text so errors keep their line and column,
         // and through serde_path_to_error so they name the field.
-        serde_path_to_error::deserialize(&mut serde_json::Deserializer::from_str(text)).map_err(
-            |e| BenchError::Json {
-                path: path.to_path_buf(),
-                reason: format!("{}: {}", e.path(), e.inner()),
-            },
-        )
+        let report: BenchReport =
+            serde_path_to_error::deserialize(&mut serde_json::Deserializer::from_str(text))
+                .map_err(|e| BenchError::Json {
+                    path: path.to_path_buf(),
+                    reason: format!("{}: {}", e.path(), e.inner()),
+                })?;
+        report.check_unique().map_err(|reason| BenchError::Json {
+            path: path.to_path_buf(),
+            reason,
+        })?;
+        Ok(report)
+    }
+
+    /// Refuses a scene file, an empty-pass resolution or a scene's pass
+    /// named twice: a comparison matches rows by these names, and would
+    /// judge the first entry and silently drop the second.
+    fn check_unique(&self) -> Result<(), String> {
+        fn first_repeat<T: PartialEq>(items: impl Iterator<Item = T>) -> Option<(usize, T)> {
+            let items: Vec<T> = items.collect();
+            let i = (1..items.len()).find(|&i| items[..i].contains(&items[i]))?;
+            items.into_iter().nth(i).map(|item| (i, item))
+        }
+        if let Some((i, r)) = first_repeat(self.empty_passes.iter().map(|e| e.resolution)) {
+            return Err(format!("empty_passes[{i}]: resolution {r} appears twice"));
+        }
+        if let Some((i, file)) = first_repeat(self.scenes.iter().map(|s| &s.file)) {
+            return Err(format!("scenes[{i}].file: '{file}' appears twice"));
+        }
+        for (s, scene) in self.scenes.iter().enumerate() {
+            if let Some((i, name)) = first_repeat(scene.passes.iter().map(|p| &p.name)) {
+                return Err(format!(
+                    "scenes[{s}].passes[{i}].name: '{name}' appears twice in {}",
+                    scene.file
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Writes the report as pretty-printed JSON.

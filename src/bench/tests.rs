@@ -232,10 +232,13 @@ fn instruction_rows_are_compared_only_when_asked_for() {
     let c = compare(&current, &baseline, &[Metric::Instructions]);
     assert_eq!(c.rows.len(), 2);
     let small = &c.rows[1];
-    assert!(!small.judged);
+    assert_eq!(
+        small.not_judged,
+        Some(crate::bench::baseline::NotJudged::FewInstructions)
+    );
     assert_eq!(small.verdict(1.02), Verdict::Pass);
     let row = &c.rows[0];
-    assert!(row.judged);
+    assert_eq!(row.not_judged, None);
     assert_eq!(row.metric, Metric::Instructions);
     assert!((row.ratio.unwrap() - 1.03).abs() < 1e-12);
     // Exact counts: the interval is the point, so a 2 % gate is decisive.
@@ -271,4 +274,70 @@ fn sha256_matches_a_known_digest() {
         sha256_hex(b"abc"),
         "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
     );
+}
+
+/// A subpass faster than the empty pass is printed but not judged: on a
+/// binning driver its timestamps can put the work in a neighbour, so one
+/// frame times near zero and its ratio is unbounded. Passes at or above
+/// the floor, the totals and the CPU frame are judged.
+#[test]
+fn time_rows_faster_than_the_empty_pass_are_not_judged() {
+    let baseline = report();
+    let mut current = report();
+    current.scenes[0].passes[0] = row("opaque", 2.0);
+    current.scenes[0].passes.push(row("readback", 40.0));
+    let mut base = baseline.clone();
+    base.scenes[0].passes.push(row("readback", 0.2));
+    let c = compare(&current, &base, &[Metric::Time]);
+    let find = |pass: &str| {
+        c.rows
+            .iter()
+            .find(|r| r.key.scene == "a.toml" && r.key.pass == pass)
+            .unwrap()
+    };
+    use crate::bench::baseline::NotJudged;
+    assert_eq!(find("readback").not_judged, Some(NotJudged::BelowEmptyPass));
+    // 200x slower, but under the floor in the baseline: not a verdict.
+    assert_eq!(find("readback").verdict(1.02), Verdict::Pass);
+    for judged in ["opaque", "tonemap", GPU_TOTAL, CPU_FRAME] {
+        assert_eq!(find(judged).not_judged, None, "{judged}");
+    }
+}
+
+/// A report naming a scene, an empty-pass resolution or a scene's pass
+/// twice is refused on loading: a gate would otherwise match the first
+/// entry and silently ignore the second.
+#[test]
+fn reports_with_duplicate_entries_are_refused() {
+    let mut twice = report();
+    twice.scenes.push(twice.scenes[0].clone());
+    let text = serde_json::to_string(&twice).unwrap();
+    let e = BenchReport::from_json(&text, Path::new("b.json"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("b.json") && e.contains("scenes[1]") && e.contains("a.toml"),
+        "{e}"
+    );
+
+    let mut pass_twice = report();
+    pass_twice.scenes[0].passes.push(row("opaque", 2.0));
+    let text = serde_json::to_string(&pass_twice).unwrap();
+    let e = BenchReport::from_json(&text, Path::new("b.json"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("scenes[0].passes[2]") && e.contains("opaque"),
+        "{e}"
+    );
+
+    let mut empty_twice = report();
+    empty_twice
+        .empty_passes
+        .push(empty_twice.empty_passes[0].clone());
+    let text = serde_json::to_string(&empty_twice).unwrap();
+    let e = BenchReport::from_json(&text, Path::new("b.json"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("empty_passes[1]") && e.contains("64x48"), "{e}");
 }

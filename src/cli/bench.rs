@@ -223,6 +223,13 @@ fn measure(args: &BenchArgs) -> anyhow::Result<BenchReport> {
             Ok((Knob::find(name.trim())?, value.trim()))
         })
         .collect::<anyhow::Result<Vec<_>>>()?;
+    // A knob set twice would silently keep the last value, and the report
+    // would not say which was meant.
+    for (i, (knob, _)) in knobs.iter().enumerate() {
+        if knobs[..i].iter().any(|(k, _)| k.name == knob.name) {
+            bail!("--knob: knob {} is given twice; give it once", knob.name);
+        }
+    }
     let mut scenes = Vec::new();
     for path in &args.scenes {
         let mut s = BenchScene::load(path)?;
@@ -501,7 +508,9 @@ fn print_ratios(c: &BaselineComparison, max_ratio: Option<f64>) {
             |i| format!("{:.4}..{:.4}", i.low, i.high),
         );
         let flag = match max_ratio.map(|m| (m, r.verdict(m))) {
-            _ if !r.judged => "  (not judged: under 3.5e6 instructions)".to_string(),
+            _ if r.not_judged.is_some() => {
+                format!("  (not judged: {})", r.not_judged.expect("checked"))
+            }
             Some((m, Verdict::Fail)) => format!("  > {m}"),
             Some((m, Verdict::Inconclusive)) => format!("  straddles {m}"),
             _ => String::new(),
@@ -551,20 +560,23 @@ fn gate(
             path.display()
         );
     }
-    if !c
-        .rows
-        .iter()
-        .any(|r| !r.key.scene.starts_with(bench::baseline::EMPTY_PASS_PREFIX))
-    {
+    let workload =
+        |r: &&bench::RatioRow| !r.key.scene.starts_with(bench::baseline::EMPTY_PASS_PREFIX);
+    if !c.rows.iter().any(|r| workload(&r)) {
         bail!(
             "nothing of the workload was compared: only empty-pass rows of this run are in {}",
             path.display()
         );
     }
-    if !c.rows.iter().any(|r| r.judged) {
+    if !c
+        .rows
+        .iter()
+        .filter(workload)
+        .any(|r| r.not_judged.is_none())
+    {
         bail!(
-            "nothing large enough to judge: every matched instruction row of {} is under \
-             3.5 million instructions (render larger images, or gate on time)",
+            "nothing large enough to judge: every matched scene row of {} is under \
+             3.5 million instructions or faster than the empty pass (render larger images)",
             path.display()
         );
     }
@@ -574,7 +586,7 @@ fn gate(
     let unjudged: Vec<String> = c
         .rows
         .iter()
-        .filter(|r| r.judged && r.ratio.is_none())
+        .filter(|r| r.not_judged.is_none() && r.ratio.is_none())
         .map(|r| format!("{} (baseline {})", r.key, r.baseline))
         .collect();
     if !unjudged.is_empty() {
