@@ -18,6 +18,7 @@
 // feature: NORMAL_MAP
 // feature: DEBUG_VIEW
 // feature: GOURAUD
+#include "variant_rules.glsl"
 #include "scene_data.glsl"
 #include "lighting.glsl"
 #include "object_lighting.glsl"

@@ -344,3 +344,66 @@ fn sixteen_bit_normal_maps_keep_their_precision() {
     assert!(e16 < 2e-4, "16-bit map: {e16}");
     assert!(e16 < e8, "16 bits must beat 8: {e16} vs {e8}");
 }
+
+/// Gouraud lights per vertex, so a normal or height map cannot change its
+/// lighting: the map is left out with a warning naming the field (an error
+/// under `--strict`), the render is clean under validation (no stage
+/// writes a tangent the next does not read), and the image equals the
+/// same Gouraud material without the map, forward and deferred, with and
+/// without a base-colour texture. Set through the `shading` knob, the same
+/// warning names the knob.
+#[test]
+fn gouraud_leaves_maps_out_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_map(&d.join("tilt.png"), [0.5, 0.0, 0.866]);
+    let ramp = image::GrayImage::from_fn(8, 8, |x, _| image::Luma([(x * 30) as u8]));
+    ramp.save(d.join("ramp.png")).unwrap();
+    let checker = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/textures/checker.png");
+    std::fs::copy(checker, d.join("checker.png")).unwrap();
+    let sphere = "{ type = \"sphere\", radius = 1 }";
+    let maps = [
+        ("normal_map", "normal_map = \"tilt.png\""),
+        (
+            "height_map",
+            "height_map = \"ramp.png\"\nheight_scale = 0.2",
+        ),
+    ];
+    for (field, map) in maps {
+        for lighting in ["forward", "deferred"] {
+            for texture in ["", "texture = \"checker.png\"\n"] {
+                let plain = format!("shading = \"gouraud\"\n{texture}");
+                let without = scene(d, lighting, &plain, sphere, 0.0);
+                assert!(without.warnings.is_empty());
+                let with = scene(d, lighting, &format!("{plain}{map}"), sphere, 0.0);
+                let what = format!("{field}, {lighting}, texture {:?}", texture);
+                assert_eq!(with.warnings.len(), 1, "{what}");
+                let w = &with.warnings[0];
+                assert_eq!(w.field, format!("materials[0].{field}"), "{what}");
+                assert!(w.to_string().contains("gouraud"), "{what}: {w}");
+                assert!(with.strict().is_err(), "{what}");
+                let plan_of = |s: &Scene| {
+                    let g = aerial::render::geometry::SceneGeometry::new(s).unwrap();
+                    aerial::render::FramePlan::new(s, &g, false)
+                };
+                assert!(plan_of(&with).normal_maps.is_empty(), "{what}");
+                let a = common::render(&with, false).output;
+                let b = common::render(&without, false).output;
+                common::assert_not_blank(&a, 0.1);
+                assert!(a.data == b.data, "{what}: the map changed a Gouraud image");
+            }
+        }
+    }
+    // The knob sets Gouraud on a Phong material that has a map.
+    let mut phong = scene(d, "forward", maps[0].1, sphere, 0.0);
+    assert!(phong.warnings.is_empty());
+    aerial::scene::Knob::find("shading")
+        .unwrap()
+        .set(&mut phong, "gouraud")
+        .unwrap();
+    assert_eq!(phong.warnings.len(), 1);
+    assert!(phong.warnings[0]
+        .to_string()
+        .contains("--knob shading=gouraud"));
+    common::assert_not_blank(&common::render(&phong, false).output, 0.1);
+}

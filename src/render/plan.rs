@@ -263,17 +263,25 @@ impl FramePlan {
                     textures.len() - 1
                 })
             });
-            let normal_map = material.normal_map.as_ref().map(|path| {
-                let source = NormalMapSource {
-                    path: path.clone(),
-                    height_scale: material.height_scale,
-                };
-                let key = (path.clone(), material.height_scale.map(f32::to_bits));
-                *normal_map_index.entry(key).or_insert_with(|| {
-                    normal_maps.push(source);
-                    normal_maps.len() - 1
-                })
-            });
+            // Per-vertex lighting cannot use a per-pixel normal (the scene
+            // warned): the map is left out, so no variant interpolates
+            // tangents nobody reads. Debug views draw it whatever the shading.
+            let lit_per_vertex = material.shading == ShadingModel::Gouraud && debug == 0;
+            let normal_map = material
+                .normal_map
+                .as_ref()
+                .filter(|_| !lit_per_vertex)
+                .map(|path| {
+                    let source = NormalMapSource {
+                        path: path.clone(),
+                        height_scale: material.height_scale,
+                    };
+                    let key = (path.clone(), material.height_scale.map(f32::to_bits));
+                    *normal_map_index.entry(key).or_insert_with(|| {
+                        normal_maps.push(source);
+                        normal_maps.len() - 1
+                    })
+                });
             let blended = material.opacity < 1.0 && debug == 0;
             let lit_later = deferred && !blended && material.shading == ShadingModel::Phong;
             let lights = if lit_later || debug != 0 {

@@ -529,7 +529,7 @@ impl Check<'_> {
         let mut seen = std::collections::HashSet::new();
         files.retain(|f| seen.insert(f.clone()));
 
-        Ok(Scene {
+        let mut scene = Scene {
             output,
             camera,
             ambient,
@@ -541,7 +541,9 @@ impl Check<'_> {
             sky,
             warnings,
             files,
-        })
+        };
+        scene.warn_unused_maps(self.file);
+        Ok(scene)
     }
 
     fn output(&self, raw: OutputFile) -> Result<Output> {

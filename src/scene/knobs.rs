@@ -70,6 +70,7 @@ pub const KNOBS: &[Knob] = &[
         apply: |s, v| {
             let model = ShadingModel::parse(v)?;
             s.materials.iter_mut().for_each(|m| m.shading = model);
+            s.warn_unused_maps(&format!("--knob shading={v}"));
             Ok(())
         },
         read: |s| {
