@@ -54,11 +54,18 @@ fn a_missing_mtl_library_is_a_warning_naming_it_and_groups_get_the_default_mater
             && error.contains("cannot load its MTL library \"gone.mtl\""),
         "{error}"
     );
-    // An unparsable library is the same kind of warning.
-    write(dir.path(), "gone.mtl", "newmtl m\nNs shiny\n");
+    // A statement that is not a number is left out, naming its line; the
+    // rest of the library loads.
+    write(dir.path(), "gone.mtl", "newmtl m\nNs shiny\nKd 0 0 1\n");
     let scene = scene_of(dir.path(), "").unwrap();
     assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
-    assert!(scene.warnings[0].to_string().contains("cannot parse"));
+    let warning = scene.warnings[0].to_string();
+    assert!(
+        warning.contains("gone.mtl:2: Ns needs a number, got \"shiny\""),
+        "{warning}"
+    );
+    let material = &scene.materials[scene.objects[0].material];
+    assert_eq!(material.kd, Vec3::new(0.0, 0.0, 1.0));
     // A colour with one number is all three; one that is not numbers is
     // left out, with a warning naming the line.
     write(dir.path(), "gone.mtl", "newmtl m\nKd 0.25\nKs 0.1 x 0.2\n");
@@ -456,4 +463,93 @@ fn model_options_with_a_scene_file_are_refused() {
             "{stderr}"
         );
     }
+}
+
+/// MTL values are held to a scene material's bounds, each value out of
+/// them a warning naming the library, the material's line and the value,
+/// with the fallback taken (an error under `--strict`); duplicate
+/// `newmtl`s say which definition is used.
+#[test]
+fn mtl_values_out_of_bounds_are_warnings_with_their_fallback() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "m.obj", &format!("mtllib m.mtl\n{QUAD}"));
+    let cases: &[(&str, &str, &str)] = &[
+        (
+            "Kd 3.4e38 0.5 0.5",
+            "Kd component 0 must be at most 1e6, got 3.4e38",
+            "clamped",
+        ),
+        (
+            "Ks -1 0 0",
+            "Ks component 0 must be finite and at least 0",
+            "Ks 0 is used",
+        ),
+        (
+            "Ka 0 inf 0",
+            "Ka component 1 must be finite and at least 0",
+            "used instead",
+        ),
+        ("d -5", "d must be from 0 to 1, got -5", "drawn opaque"),
+        ("d 1.5", "d must be from 0 to 1, got 1.5", "drawn opaque"),
+        ("Ns -3", "Ns must be finite and at least 0", "Ns 32"),
+        ("Ns 1e30", "Ns must be at most 1e6", "clamped"),
+    ];
+    for (statement, problem, fallback) in cases {
+        write(
+            dir.path(),
+            "m.mtl",
+            &format!("# values\nnewmtl m\n{statement}\n"),
+        );
+        let scene = scene_of(dir.path(), "").unwrap();
+        assert_eq!(scene.warnings.len(), 1, "{statement}: {:?}", scene.warnings);
+        let w = scene.warnings[0].to_string();
+        assert!(w.contains("m.mtl:2: material \"m\""), "{statement}: {w}");
+        assert!(
+            w.contains(problem) && w.contains(fallback),
+            "{statement}: {w}"
+        );
+        let m = &scene.materials[scene.objects[0].material];
+        assert!(m.kd.is_finite() && m.kd.max_element() <= 1e6, "{statement}");
+        assert!(m.ka.is_finite() && m.ks.min_element() >= 0.0, "{statement}");
+        assert!((0.0..=1.0).contains(&m.opacity), "{statement}");
+        assert!(m.shininess >= 1.0 && m.shininess <= 1e6, "{statement}");
+        let e = scene.strict().unwrap_err().to_string();
+        assert!(
+            e.contains("objects[0].shape.path") && e.contains(problem),
+            "{e}"
+        );
+    }
+    // d -5 is drawn (opaque), not invisible.
+    write(dir.path(), "m.mtl", "newmtl m\nKd 1 0 0\nd -5\n");
+    let scene = scene_of(dir.path(), "").unwrap();
+    let run = common::render(&scene, false);
+    let centre = common::pixel(&run.output, 32, 32);
+    assert!(centre[0] > 200 && centre[1] < 30, "{centre:?}");
+    // In-range values give no warning; Ns 0 ("no highlight") becomes 1.
+    write(
+        dir.path(),
+        "m.mtl",
+        "newmtl m\nKd 1e6 0 0\nKs 0 0 0\nNs 0\nd 0\n",
+    );
+    let scene = scene_of(dir.path(), "").unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!(scene.materials[scene.objects[0].material].shininess, 1.0);
+    // The later of two definitions is used, and the warning says so.
+    write(
+        dir.path(),
+        "m.mtl",
+        "newmtl m\nKd 1 0 0\n\nnewmtl m\nKd 0 1 0\n",
+    );
+    let scene = scene_of(dir.path(), "").unwrap();
+    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+    let w = scene.warnings[0].to_string();
+    assert!(
+        w.contains("m.mtl:4: material \"m\" is defined again (first at line 1)")
+            && w.contains("the later definition is used"),
+        "{w}"
+    );
+    assert_eq!(
+        scene.materials[scene.objects[0].material].kd,
+        Vec3::new(0.0, 1.0, 0.0)
+    );
 }

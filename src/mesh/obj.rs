@@ -79,15 +79,19 @@ pub const DEFAULT_MATERIAL_FALLBACK: &str = "the groups using its materials get 
 pub struct ObjMaterial {
     /// Name in the MTL file.
     pub name: String,
+    /// Where it is defined, `library.mtl:line` (of its `newmtl`), for
+    /// messages about its values.
+    pub origin: String,
     /// `Ka`, if given.
     pub ka: Option<Vec3>,
     /// `Kd` (default 0.8 grey, the MTL convention when absent).
     pub kd: Vec3,
     /// `Ks` (default black).
     pub ks: Vec3,
-    /// `Ns` (default 32).
+    /// `Ns` (default 32), as written: [`crate::scene`] checks the values
+    /// against the same bounds as a scene material's.
     pub shininess: f32,
-    /// `d` (default 1, opaque).
+    /// `d` (default 1, opaque), as written.
     pub opacity: f32,
     /// `map_Kd`, resolved against the OBJ's folder (not checked: the file
     /// may be missing).
@@ -291,6 +295,7 @@ fn read_mtl(
     name: &Path,
     base_dir: &Path,
     warnings: &mut Vec<AssetWarning>,
+    origins: &mut Vec<String>,
 ) -> tobj::MTLLoadResult {
     let path = base_dir.join(name.to_string_lossy().replace('\\', "/"));
     let failed = |reason: String| AssetWarning {
@@ -334,6 +339,7 @@ fn read_mtl(
     // another form (`Kd spectral file.rfl`, `Kd xyz x y z`) is left out
     // with a warning.
     let mut fixed = String::with_capacity(text.len());
+    let mut newmtl_lines: Vec<(String, usize)> = Vec::new();
     for (number, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
         let keyword = words.next();
@@ -367,6 +373,49 @@ fn read_mtl(
                 }
             }
         }
+        // Numbers `tobj` would refuse the whole library for: the statement
+        // is left out with a warning naming its line, and the rest loads.
+        if let Some(scalar @ ("Ns" | "Ni" | "d" | "Tr")) = keyword {
+            let value = line
+                .split('#')
+                .next()
+                .unwrap_or("")
+                .split_whitespace()
+                .nth(1);
+            if value.and_then(|v| v.parse::<f32>().ok()).is_none() {
+                warnings.push(AssetWarning {
+                    problem: format!(
+                        "{}:{}: {scalar} needs a number, got \"{}\"",
+                        path.display(),
+                        number + 1,
+                        value.unwrap_or("")
+                    ),
+                    fallback: "the statement is left out".into(),
+                });
+                fixed.push('\n');
+                continue;
+            }
+        }
+        if keyword == Some("newmtl") {
+            origins.push(format!("{}:{}", path.display(), number + 1));
+            let defined = line
+                .split_whitespace()
+                .skip(1)
+                .collect::<Vec<_>>()
+                .join(" ");
+            if let Some(first) = newmtl_lines.iter().find(|(n, _)| *n == defined) {
+                warnings.push(AssetWarning {
+                    problem: format!(
+                        "{}:{}: material \"{defined}\" is defined again (first at line {})",
+                        path.display(),
+                        number + 1,
+                        first.1
+                    ),
+                    fallback: "the later definition is used".into(),
+                });
+            }
+            newmtl_lines.push((defined, number + 1));
+        }
         if keyword == Some("newmtl") && words.next().is_none() {
             let name = format!("unnamed (line {})", number + 1);
             warnings.push(AssetWarning {
@@ -380,9 +429,11 @@ fn read_mtl(
         }
         fixed.push('\n');
     }
+    let first_origin = origins.len() - newmtl_lines.len();
     match tobj::load_mtl_buf(&mut std::io::BufReader::new(fixed.as_bytes())) {
         Ok(loaded) => Ok(loaded),
         Err(e) => {
+            origins.truncate(first_origin);
             warnings.push(failed(format!("cannot parse it: {e}")));
             nothing()
         }
@@ -435,11 +486,20 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
     // materials (see `read_mtl`), so `tobj` never sees a failed load.
     let warnings = std::cell::RefCell::new(warnings);
     let libraries = std::cell::RefCell::new(Vec::new());
+    // Each loaded material's `library:line`, in the order `tobj` appends
+    // the materials (every library's `newmtl`s in file order).
+    let origins = std::cell::RefCell::new(Vec::new());
     let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |mtl| {
         libraries
             .borrow_mut()
             .push(base_dir.join(mtl.to_string_lossy().replace('\\', "/")));
-        read_mtl(file, mtl, base_dir, &mut warnings.borrow_mut())
+        read_mtl(
+            file,
+            mtl,
+            base_dir,
+            &mut warnings.borrow_mut(),
+            &mut origins.borrow_mut(),
+        )
     })
     .map_err(|e| ObjError::File {
         file: file.to_owned(),
@@ -450,10 +510,15 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
         file: file.to_owned(),
         reason: format!("cannot load its MTL library: {e}"),
     })?;
-    let materials = materials
+    let origins = origins.into_inner();
+    let materials: Vec<ObjMaterial> = materials
         .iter()
-        .map(|m| material(m, file, base_dir))
-        .collect::<Result<Vec<_>, _>>()?;
+        .enumerate()
+        .map(|(i, m)| {
+            let origin = origins.get(i).cloned().unwrap_or_else(|| file.to_owned());
+            material(m, origin, base_dir)
+        })
+        .collect();
     // `usemtl` lines naming no loaded material: their groups get the
     // default. One warning for the file, and none when a library that
     // failed to load already explains it.
@@ -548,25 +613,7 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
     })
 }
 
-fn material(m: &tobj::Material, file: &str, base_dir: &Path) -> Result<ObjMaterial, ObjError> {
-    let bad = |what: &str| ObjError::File {
-        file: file.to_owned(),
-        reason: format!("material \"{}\": {what} must be finite and >= 0", m.name),
-    };
-    let colour = |c: Option<[f32; 3]>, what: &str| -> Result<Option<Vec3>, ObjError> {
-        match c.map(Vec3::from) {
-            Some(v) if !v.is_finite() || v.min_element() < 0.0 => Err(bad(what)),
-            other => Ok(other),
-        }
-    };
-    let shininess = m.shininess.unwrap_or(32.0);
-    if !shininess.is_finite() || shininess < 0.0 {
-        return Err(bad("Ns"));
-    }
-    let opacity = m.dissolve.unwrap_or(1.0);
-    if !opacity.is_finite() {
-        return Err(bad("d"));
-    }
+fn material(m: &tobj::Material, origin: String, base_dir: &Path) -> ObjMaterial {
     let texture = |name: &Option<String>| -> Option<PathBuf> {
         // Texture statements may carry options (`-bm 1.0 file.png`); the
         // file name is the last word.
@@ -578,18 +625,17 @@ fn material(m: &tobj::Material, file: &str, base_dir: &Path) -> Result<ObjMateri
         .normal_texture
         .clone()
         .or_else(|| m.unknown_param.get("norm").cloned());
-    Ok(ObjMaterial {
+    ObjMaterial {
         name: m.name.clone(),
-        ka: colour(m.ambient, "Ka")?,
-        kd: colour(m.diffuse, "Kd")?.unwrap_or(Vec3::splat(0.8)),
-        ks: colour(m.specular, "Ks")?.unwrap_or(Vec3::ZERO),
-        // Ns = 0 is common in exported files and means "no highlight";
-        // the shader's pow(0, 0) is undefined, so the smallest exponent is 1.
-        shininess: shininess.max(1.0),
-        opacity: opacity.clamp(0.0, 1.0),
+        origin,
+        ka: m.ambient.map(Vec3::from),
+        kd: m.diffuse.map_or(Vec3::splat(0.8), Vec3::from),
+        ks: m.specular.map_or(Vec3::ZERO, Vec3::from),
+        shininess: m.shininess.unwrap_or(32.0),
+        opacity: m.dissolve.unwrap_or(1.0),
         texture: texture(&m.diffuse_texture),
         normal_map: texture(&normal_name),
-    })
+    }
 }
 
 /// Which attributes every face corner of a file has, and the materials

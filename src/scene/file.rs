@@ -1146,6 +1146,7 @@ impl Check<'_> {
     ) -> Result<usize> {
         let default = obj::ObjMaterial {
             name: "default".into(),
+            origin: model.to_owned(),
             ka: None,
             kd: Vec3::splat(0.8),
             ks: Vec3::ZERO,
@@ -1162,7 +1163,7 @@ impl Check<'_> {
                 format!("the model's material \"{name}\" clashes with a scene material name"),
             ));
         }
-        let bounded = |v: Vec3| v.min(Vec3::splat(MAX_COLOUR as f32));
+        let values = checked_mtl_values(mtl, warn);
         let mut usable = |path: &Option<std::path::PathBuf>, what: &str, fallback: &str| {
             let path = path.as_ref()?;
             let problem = if !path.is_file() {
@@ -1193,12 +1194,12 @@ impl Check<'_> {
         .and_then(|usable| usable.ok());
         materials.push(Material {
             name: name.clone(),
-            ka: bounded(mtl.ka.unwrap_or(mtl.kd)),
-            kd: bounded(mtl.kd),
-            ks: bounded(mtl.ks),
-            shininess: mtl.shininess.min(MAX_COLOUR as f32),
+            ka: values.ka,
+            kd: values.kd,
+            ks: values.ks,
+            shininess: values.shininess,
             texture,
-            opacity: mtl.opacity,
+            opacity: values.opacity,
             normal_map,
             normal_map_green_down: false,
             height_scale: None,
@@ -1288,5 +1289,98 @@ impl Check<'_> {
                 },
             },
         })
+    }
+}
+
+/// An MTL material's colours, exponent and opacity after the checks.
+struct MtlValues {
+    ka: Vec3,
+    kd: Vec3,
+    ks: Vec3,
+    shininess: f32,
+    opacity: f32,
+}
+
+/// Checks an MTL material's values against the bounds of a scene
+/// material (colours finite, at least 0 and at most [`MAX_COLOUR`];
+/// `d` from 0 to 1), with one warning for each value out of them and the
+/// fallback taken: a colour that is not a finite non-negative number gets
+/// the MTL default (Kd 0.8 grey, Ks black, Ka = Kd), one above the bound
+/// is clamped, `d` outside 0..1 is drawn opaque. `Ns 0` is common in
+/// exported files for "no highlight" and becomes 1 without a warning
+/// (`pow(0, 0)` is undefined in GLSL).
+fn checked_mtl_values(mtl: &obj::ObjMaterial, warn: &mut dyn FnMut(AssetWarning)) -> MtlValues {
+    let max = MAX_COLOUR as f32;
+    let mut warn_value = |what: &str, reason: String, fallback: String| {
+        warn(AssetWarning {
+            problem: format!("{}: material \"{}\": {what} {reason}", mtl.origin, mtl.name),
+            fallback,
+        })
+    };
+    let mut colour = |what: &str, v: Vec3, default: Vec3| -> Vec3 {
+        let c = v.to_array();
+        if let Some(i) = c.iter().position(|x| !x.is_finite() || *x < 0.0) {
+            warn_value(
+                what,
+                format!(
+                    "component {i} must be finite and at least 0, got {:e}",
+                    c[i]
+                ),
+                format!("{what} {} is used instead", default.x),
+            );
+            default
+        } else if let Some(i) = c.iter().position(|&x| x > max) {
+            warn_value(
+                what,
+                format!(
+                    "component {i} must be at most {MAX_COLOUR:e}, got {:e}",
+                    c[i]
+                ),
+                format!("clamped to {MAX_COLOUR:e}"),
+            );
+            v.min(Vec3::splat(max))
+        } else {
+            v
+        }
+    };
+    let kd = colour("Kd", mtl.kd, Vec3::splat(0.8));
+    let ks = colour("Ks", mtl.ks, Vec3::ZERO);
+    let ka = match mtl.ka {
+        Some(ka) => colour("Ka", ka, kd),
+        None => kd,
+    };
+    let shininess = if !mtl.shininess.is_finite() || mtl.shininess < 0.0 {
+        warn_value(
+            "Ns",
+            format!("must be finite and at least 0, got {:e}", mtl.shininess),
+            "Ns 32 is used instead".into(),
+        );
+        32.0
+    } else if mtl.shininess > max {
+        warn_value(
+            "Ns",
+            format!("must be at most {MAX_COLOUR:e}, got {:e}", mtl.shininess),
+            format!("clamped to {MAX_COLOUR:e}"),
+        );
+        max
+    } else {
+        mtl.shininess.max(1.0)
+    };
+    let opacity = if (0.0..=1.0).contains(&mtl.opacity) {
+        mtl.opacity
+    } else {
+        warn_value(
+            "d",
+            format!("must be from 0 to 1, got {:e}", mtl.opacity),
+            "drawn opaque (d 1)".into(),
+        );
+        1.0
+    };
+    MtlValues {
+        ka,
+        kd,
+        ks,
+        shininess,
+        opacity,
     }
 }
