@@ -102,7 +102,10 @@ pub fn parse_size(text: &str) -> Result<u64, String> {
         other => return Err(format!("unknown unit {other:?} (use K, M, G or T)")),
     };
     let bytes = number * (1u64 << shift) as f64;
-    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
+    if !(bytes.is_finite() && bytes < u64::MAX as f64) {
+        return Err(format!("too large: at most {}", Bytes(u64::MAX)));
+    }
+    if bytes < 1.0 {
         return Err("must be at least 1 byte".to_string());
     }
     Ok(bytes as u64)

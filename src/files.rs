@@ -147,8 +147,13 @@ pub fn check_destination(path: &Path) -> Result<PathBuf, FileError> {
     let mut dest = path.to_path_buf();
     if let Ok(meta) = std::fs::symlink_metadata(path) {
         if meta.file_type().is_symlink() {
-            dest = std::fs::canonicalize(path)
-                .map_err(|e| refuse(format!("symbolic link to a missing target ({e})")))?;
+            dest = std::fs::canonicalize(path).map_err(|e| match anonymous_link(path) {
+                Some(target) => refuse(format!(
+                    "it is a pipe ({target}), not a file; outputs are written to a \
+                     temporary file and renamed into place, so name a file"
+                )),
+                None => refuse(format!("symbolic link to a missing target ({e})")),
+            })?;
         }
         let meta = std::fs::metadata(&dest).map_err(|error| FileError::Io {
             path: path.to_path_buf(),
@@ -158,11 +163,10 @@ pub fn check_destination(path: &Path) -> Result<PathBuf, FileError> {
             return Err(refuse("it is a folder".into()));
         }
         if !meta.is_file() {
-            return Err(refuse(
-                "it exists and is not a regular file (a device, FIFO or socket); \
-                 refusing to replace it"
-                    .into(),
-            ));
+            return Err(refuse(format!(
+                "it exists and is not a regular file ({}); refusing to replace it",
+                kind_of(&meta)
+            )));
         }
         if let Some(input) = protected_input(&dest) {
             let reason = if input == path {
@@ -394,8 +398,22 @@ impl Ready {
             path: self.path.clone(),
             error: e.error,
         })?;
+        WRITTEN
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(self.path.clone());
         Ok(self.path.clone())
     }
+}
+
+/// Every output renamed into place by this process, in order.
+static WRITTEN: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// The outputs this process has written so far (complete files, renamed
+/// into place), as named by the command: what a run stopped by an
+/// interrupt or an error still leaves behind.
+pub fn written() -> Vec<PathBuf> {
+    WRITTEN.lock().unwrap_or_else(|e| e.into_inner()).clone()
 }
 
 impl Drop for Ready {
@@ -471,6 +489,56 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<PathBuf, FileError> {
         .map_err(|e| file.io_error(e))?;
     drop(w);
     file.commit()
+}
+
+/// What a path that exists but is not a regular file is, for messages:
+/// "a folder", "a FIFO (named pipe)", "a device", "a socket".
+fn kind_of(meta: &std::fs::Metadata) -> &'static str {
+    use std::os::unix::fs::FileTypeExt as _;
+    let t = meta.file_type();
+    if t.is_dir() {
+        "a folder"
+    } else if t.is_fifo() {
+        "a FIFO (named pipe)"
+    } else if t.is_char_device() || t.is_block_device() {
+        "a device"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// The target of a symbolic link that names an anonymous pipe or socket
+/// (`/dev/fd/N` of a shell's process substitution links to `pipe:[N]`),
+/// which no path can open again.
+fn anonymous_link(path: &Path) -> Option<String> {
+    let target = std::fs::read_link(path).ok()?;
+    let target = target.to_string_lossy();
+    (target.starts_with("pipe:") || target.starts_with("socket:")).then(|| target.into_owned())
+}
+
+/// Why `path` cannot be read as an input file, or `None` when it is a
+/// regular file (or a link to one): "file not found", "a symbolic link to
+/// a missing target", or "not a regular file (a folder)" and its kind. The
+/// message ends with the path.
+pub fn input_file_problem(path: &Path) -> Option<String> {
+    let Ok(link) = std::fs::symlink_metadata(path) else {
+        return Some(format!("file not found: {}", path.display()));
+    };
+    match std::fs::metadata(path) {
+        Ok(meta) if meta.is_file() => None,
+        Ok(meta) => Some(format!(
+            "not a regular file ({}): {}",
+            kind_of(&meta),
+            path.display()
+        )),
+        Err(_) if link.file_type().is_symlink() => Some(match anonymous_link(path) {
+            Some(target) => format!("a pipe ({target}), not a regular file: {}", path.display()),
+            None => format!("a symbolic link to a missing target: {}", path.display()),
+        }),
+        Err(e) => Some(format!("cannot read {}: {e}", path.display())),
+    }
 }
 
 /// True when `a` and `b` name the same file (or would, once created).

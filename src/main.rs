@@ -66,9 +66,16 @@ fn main() -> std::process::ExitCode {
     // shell's convention for SIGINT): stopped at a safe point, the error is
     // the interrupt itself, not worth showing.
     if aerial::interrupt::requested() {
-        match result {
-            Ok(_) => eprintln!("interrupted after the work was done"),
-            Err(_) => eprintln!("interrupted; no output written"),
+        // Outputs completed before the interrupt stay (each is whole); say
+        // which, so a script's earlier screenshots are not taken for lost.
+        let written: Vec<String> = aerial::files::written()
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect();
+        match (result.is_ok(), written.is_empty()) {
+            (true, true) => eprintln!("interrupted after the work was done"),
+            (false, true) => eprintln!("interrupted; no output written"),
+            (_, false) => eprintln!("interrupted; written before it: {}", written.join(", ")),
         }
         return std::process::ExitCode::from(aerial::interrupt::EXIT_INTERRUPTED);
     }

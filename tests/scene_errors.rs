@@ -167,3 +167,177 @@ fn allowed_edge_cases_load() {
         .unwrap_or_else(|e| panic!("empty scene rejected: {e}"));
     assert!(scene.objects.is_empty());
 }
+
+fn aerial(args: &[&std::ffi::OsStr]) -> (Option<i32>, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Messages say what is really wrong, where: a folder, FIFO or device
+/// given as a map is "not a regular file" of its kind (not "not found"),
+/// a pipe is a pipe, an oversized memory budget is "too large", a
+/// non-UTF-8 scene gives the byte offset and line, an endless input stops
+/// at a bound, a coordinate overflow is blamed on the model file, and OBJ
+/// statements the parser would refuse carry their line.
+#[test]
+#[cfg(target_os = "linux")]
+fn messages_name_the_real_problem_and_where() {
+    use std::ffi::OsStr;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let os = |s: &str| OsStr::new(s).to_owned();
+    let scene_with = |name: &str, map: &str| {
+        let path = d.join(name);
+        std::fs::write(
+            &path,
+            format!(
+                "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
+                 [[materials]]\nname = \"m\"\nkd = [1, 1, 1]\nnormal_map = \"{map}\"\n\
+                 [[objects]]\nname = \"s\"\nmaterial = \"m\"\nshape = {{ type = \"sphere\", radius = 1 }}\n"
+            ),
+        )
+        .unwrap();
+        path
+    };
+    std::fs::create_dir(d.join("folder.png")).unwrap();
+    let fifo = d.join("fifo.png");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    // SAFETY: mkfifo(3) with a valid NUL-terminated path.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let out = d.join("o.png");
+    for (map, expected) in [
+        ("folder.png", "not a regular file (a folder)"),
+        ("fifo.png", "not a regular file (a FIFO (named pipe))"),
+        ("/dev/null", "not a regular file (a device)"),
+        ("gone.png", "file not found"),
+    ] {
+        let scene = scene_with("s.toml", map);
+        let (code, err) = aerial(&[
+            &os("render"),
+            scene.as_os_str(),
+            &os("--out"),
+            out.as_os_str(),
+        ]);
+        assert_eq!(code, Some(2), "{map}: {err}");
+        assert!(
+            err.contains("materials[0].normal_map") && err.contains(expected),
+            "{map}: {err}"
+        );
+    }
+
+    // An oversized budget is too large, not too small.
+    let out_big = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
+        .args(["mesh", "whatever.obj"])
+        .env("AERIAL_MEMORY_BUDGET", "99999999999999999999999")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out_big.stderr);
+    assert!(
+        err.contains("AERIAL_MEMORY_BUDGET") && err.contains("too large"),
+        "{err}"
+    );
+
+    // Not UTF-8: the byte offset and line.
+    let latin1 = d.join("latin1.toml");
+    std::fs::write(&latin1, b"# ok\n# caf\xe9\n[camera]\n").unwrap();
+    let (code, err) = aerial(&[
+        &os("render"),
+        latin1.as_os_str(),
+        &os("--out"),
+        out.as_os_str(),
+    ]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("byte 0xe9 at byte offset 10 (line 2)"),
+        "{err}"
+    );
+
+    // An endless input stops at the bound.
+    let started = std::time::Instant::now();
+    let (code, err) = aerial(&[
+        &os("render"),
+        &os("/dev/zero"),
+        &os("--out"),
+        out.as_os_str(),
+    ]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("/dev/zero") && err.contains("reading stopped"),
+        "{err}"
+    );
+    assert!(started.elapsed() < std::time::Duration::from_secs(60));
+
+    // A scene read from a pipe is read once (process substitution).
+    let piped = d.join("piped");
+    let c = std::ffi::CString::new(piped.to_str().unwrap()).unwrap();
+    // SAFETY: as above.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let text =
+        "[output]\nwidth = 16\nheight = 16\n[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n";
+    let writer = {
+        let piped = piped.clone();
+        std::thread::spawn(move || std::fs::write(piped, text).unwrap())
+    };
+    let (code, err) = aerial(&[
+        &os("render"),
+        piped.as_os_str(),
+        &os("--out"),
+        out.as_os_str(),
+    ]);
+    writer.join().unwrap();
+    assert_eq!(code, Some(0), "{err}");
+    assert!(out.exists());
+
+    // An output that is a pipe says so.
+    let (code, err) = aerial(&[&os("render"), &os("--out"), fifo.as_os_str()]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("a FIFO (named pipe)"), "{err}");
+
+    // Overflowing coordinates are the model file's fault.
+    std::fs::write(
+        d.join("big.obj"),
+        "v 3e38 0 0\nv -3e38 0 0\nv 0 3e38 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let big = d.join("big.toml");
+    std::fs::write(
+        &big,
+        "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
+         [[objects]]\nname = \"b\"\nshape = { type = \"obj\", path = \"big.obj\" }\n",
+    )
+    .unwrap();
+    let e = Scene::load(&big).unwrap_err().to_string();
+    assert!(
+        e.contains("objects[0].shape.path") && e.contains("big.obj"),
+        "{e}"
+    );
+    assert!(!e.contains("smoothing"), "{e}");
+
+    // OBJ statements the parser refuses carry their line.
+    for (body, expected) in [
+        (
+            "v 0 0 0 1 1 1 1\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            "m.obj:1: vertex needs 3 numbers",
+        ),
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0\nf 1/1 2/1 3/1\n",
+            "m.obj:4: texture coordinate",
+        ),
+        (
+            "v 0 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            "m.obj:1: vertex weight w is 0",
+        ),
+    ] {
+        let model = d.join("m.obj");
+        std::fs::write(&model, body).unwrap();
+        let (code, err) = aerial(&[&os("mesh"), model.as_os_str()]);
+        assert_eq!(code, Some(2), "{err}");
+        assert!(err.contains(expected), "{err}");
+    }
+}

@@ -732,3 +732,42 @@ fn a_model_is_viewed_in_the_scene_render_builds_around_it() {
     assert!(lit > 160 * 90 / 10, "only {lit} pixels drawn");
     assert_eq!(differing_pixels(&read_png(&shot), &reference), 0);
 }
+
+/// An interrupt stops the viewer at a safe point with status 130, and the
+/// message names the screenshots written before it (they stay, whole).
+#[test]
+fn an_interrupted_viewer_names_the_screenshots_it_wrote() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path());
+    let shot = dir.path().join("before.png");
+    let script = dir.path().join("stay.txt");
+    std::fs::write(&script, format!("2 screenshot {}\n", shot.display())).unwrap();
+    let x = Xvfb::start();
+    let viewer = common::aerial()
+        .arg("view")
+        .arg(&scene)
+        .args(["--script", script.to_str().unwrap()])
+        .args(["--validate", "--present-mode", "immediate"])
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while !shot.exists() {
+        assert!(Instant::now() < deadline, "the viewer drew no frame");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    // SAFETY: kill(2) on our own child, not yet waited for.
+    unsafe { libc::kill(viewer.id() as libc::pid_t, libc::SIGINT) };
+    let out = viewer.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(
+        stderr.contains("written before it") && stderr.contains(&shot.display().to_string()),
+        "{stderr}"
+    );
+    assert!(read_png(&shot).width > 0);
+}

@@ -52,6 +52,16 @@ pub enum ObjError {
         /// What is wrong.
         reason: String,
     },
+    /// The smoothing mode asked for does not suit the file (`file`
+    /// normals where faces have none): the option is at fault, not the
+    /// file.
+    #[error("{file}: {reason}")]
+    Smoothing {
+        /// The model file.
+        file: String,
+        /// What is wrong.
+        reason: String,
+    },
 }
 
 /// A problem with a model's assets that loading worked around. `problem`
@@ -297,6 +307,13 @@ fn read_mtl(
     warnings: &mut Vec<AssetWarning>,
     origins: &mut Vec<String>,
 ) -> tobj::MTLLoadResult {
+    if name.as_os_str().is_empty() {
+        warnings.push(AssetWarning {
+            problem: format!("{file}: mtllib without a file name"),
+            fallback: DEFAULT_MATERIAL_FALLBACK.to_owned(),
+        });
+        return Ok((Vec::new(), Default::default()));
+    }
     let path = base_dir.join(name.to_string_lossy().replace('\\', "/"));
     let failed = |reason: String| AssetWarning {
         problem: format!(
@@ -688,7 +705,9 @@ fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
                 continue;
             }
             "v" => (0, 3),
-            "vt" => (1, 1),
+            // The parser reads two (`vt u` alone, which the format allows,
+            // is refused here with its line rather than by the parser without).
+            "vt" => (1, 2),
             "vn" => (2, 3),
             "f" => {
                 let mut corners = 0;
@@ -741,7 +760,7 @@ fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
             _ => continue,
         };
         let name = ["vertex", "texture coordinate", "normal"][slot];
-        let mut n = 0;
+        let mut values = Vec::new();
         for word in words {
             let x: f64 = word
                 .parse()
@@ -749,12 +768,25 @@ fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
             if !x.is_finite() || (x as f32).is_infinite() {
                 return Err(error(format!("{name}: \"{word}\" is not a finite number")));
             }
-            n += 1;
+            values.push(x);
         }
+        let n = values.len();
         if n < least {
             return Err(error(format!(
                 "{name} needs at least {least} numbers, got {n}"
             )));
+        }
+        // A position is x y z, then either a weight w or a colour r g b.
+        if slot == 0 && !matches!(n, 3 | 4 | 6) {
+            return Err(error(format!(
+                "vertex needs 3 numbers (x y z), 4 (with a weight w) or 6 (with a colour \
+                 r g b), got {n}"
+            )));
+        }
+        if slot == 0 && n == 4 && values[3] == 0.0 {
+            return Err(error(
+                "vertex weight w is 0 (the position is x/w, y/w, z/w)".into(),
+            ));
         }
         counts[slot] += 1;
     }
@@ -838,7 +870,7 @@ pub fn model_normals(
     });
     if mode == Smoothing::File && !model.has_all_normals() {
         let part = model.parts.iter().find(|p| p.normals.is_none());
-        return Err(ObjError::File {
+        return Err(ObjError::Smoothing {
             file: file.to_owned(),
             reason: format!(
                 "smoothing = \"file\" but object \"{}\" has faces without normals \

@@ -750,18 +750,10 @@ impl Check<'_> {
         let file_at = |name: &str, given: Option<PathBuf>| -> Result<Option<PathBuf>> {
             let Some(given) = given else { return Ok(None) };
             let resolved = self.base_dir.join(&given);
-            if !resolved.exists() {
-                return Err(self.invalid(
-                    field(name),
-                    format!("file not found: {}", resolved.display()),
-                ));
+            match crate::files::input_file_problem(&resolved) {
+                Some(problem) => Err(self.invalid(field(name), problem)),
+                None => Ok(Some(resolved)),
             }
-            if !resolved.is_file() {
-                return Err(
-                    self.invalid(field(name), format!("not a file: {}", resolved.display()))
-                );
-            }
-            Ok(Some(resolved))
         };
         let texture = file_at("texture", raw.texture)?.map(Texture::File);
         let mut normal_map = file_at("normal_map", raw.normal_map)?;
@@ -1041,8 +1033,16 @@ impl Check<'_> {
                 Some(TangentsFile::Mikktspace) => obj::TangentMethod::Mikktspace,
             },
         };
-        let meshes = obj::model_meshes(&model, &options, &resolved.display().to_string())
-            .map_err(|e| self.invalid(field("smoothing"), e.to_string()))?;
+        let meshes =
+            obj::model_meshes(&model, &options, &resolved.display().to_string()).map_err(|e| {
+                // Only a smoothing mode the file cannot satisfy is the
+                // option's fault; anything else is the model's.
+                let at = match e {
+                    obj::ObjError::Smoothing { .. } => "smoothing",
+                    _ => "shape.path",
+                };
+                self.invalid(field(at), e.to_string())
+            })?;
         let transform = self.transform(path, &raw)?;
         let over = match &raw.material {
             Some(name) => {
@@ -1166,8 +1166,8 @@ impl Check<'_> {
         let values = checked_mtl_values(mtl, warn);
         let mut usable = |path: &Option<std::path::PathBuf>, what: &str, fallback: &str| {
             let path = path.as_ref()?;
-            let problem = if !path.is_file() {
-                format!("file not found: {}", path.display())
+            let problem = if let Some(problem) = crate::files::input_file_problem(path) {
+                problem
             } else {
                 match crate::render::preflight::inspect_texture(path) {
                     Ok(_) => return Some(Ok(path.clone())),

@@ -83,10 +83,20 @@ pub fn is_model_file(path: &Path) -> bool {
         Some(e) if e.eq_ignore_ascii_case("toml") => return false,
         _ => {}
     }
-    let Ok(bytes) = std::fs::read(path) else {
+    // Only a regular file is looked into: reading a pipe would consume
+    // what the loader must read, and a device may never end. Others are
+    // scene files unless their extension says otherwise.
+    if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
         return false;
-    };
-    let head = &bytes[..bytes.len().min(64 * 1024)];
+    }
+    let mut head = Vec::new();
+    let read = std::fs::File::open(path).and_then(|f| {
+        std::io::Read::read_to_end(&mut std::io::Read::take(f, 64 * 1024), &mut head)
+    });
+    if read.is_err() {
+        return false;
+    }
+    let head = &head[..];
     let Ok(text) = obj::decode_text(head) else {
         // UTF-16: only OBJ files are written that way here; the loader
         // reports it.
