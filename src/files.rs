@@ -180,6 +180,7 @@ pub fn check_destination(path: &Path) -> Result<PathBuf, FileError> {
             return Err(refuse(reason));
         }
     }
+    check_writable(&dest).map_err(refuse)?;
     let dir = parent(&dest);
     match std::fs::metadata(dir) {
         Ok(m) if m.is_dir() => Ok(dest),
@@ -254,6 +255,7 @@ pub fn check_output_dir(dir: &Path) -> Result<(), FileError> {
         path: dir.to_path_buf(),
         reason,
     };
+    check_writable(dir).map_err(refuse)?;
     let mut probe = dir;
     loop {
         match std::fs::metadata(probe) {
@@ -273,6 +275,64 @@ pub fn check_output_dir(dir: &Path) -> Result<(), FileError> {
             },
         }
     }
+}
+
+/// The longest path the kernel accepts (`PATH_MAX`, with its NUL).
+const PATH_MAX: usize = 4095;
+
+/// Whether `path` (a file or folder to be created or replaced) can be
+/// written, as far as can be known before the work: every name within the
+/// file system's limit (`NAME_MAX`, usually 255 bytes), the whole path
+/// within `PATH_MAX`, and the nearest existing folder on the way writable
+/// by this process (permissions, a read-only mount) and not on a full
+/// file system.
+pub fn check_writable(path: &Path) -> Result<(), String> {
+    use std::os::unix::ffi::OsStrExt as _;
+    let length = path.as_os_str().len();
+    if length > PATH_MAX {
+        return Err(format!(
+            "the path is {length} bytes long; the system allows at most {PATH_MAX}"
+        ));
+    }
+    let mut existing = parent(path);
+    while std::fs::metadata(existing).is_err() {
+        existing = parent(existing);
+        if existing == Path::new(".") {
+            break;
+        }
+    }
+    let c = std::ffi::CString::new(existing.as_os_str().as_bytes())
+        .map_err(|_| "the path contains a NUL byte".to_string())?;
+    // SAFETY: pathconf(3) reads the NUL-terminated path and returns a
+    // number; -1 (no limit or an error) is handled below.
+    let name_max = unsafe { libc::pathconf(c.as_ptr(), libc::_PC_NAME_MAX) };
+    let name_max = if name_max > 0 { name_max as usize } else { 255 };
+    if let Some(name) = path
+        .components()
+        .map(|c| c.as_os_str())
+        .find(|n| n.len() > name_max)
+    {
+        let shown: String = name.to_string_lossy().chars().take(24).collect();
+        return Err(format!(
+            "the name \"{shown}...\" is {} bytes long; this file system allows at most {name_max}",
+            name.len()
+        ));
+    }
+    // SAFETY: access(2) only reads the NUL-terminated path.
+    if unsafe { libc::access(c.as_ptr(), libc::W_OK | libc::X_OK) } != 0 {
+        let e = std::io::Error::last_os_error();
+        return Err(format!(
+            "folder {} is not writable: {e}",
+            existing.display()
+        ));
+    }
+    // SAFETY: statvfs(3) fills the zeroed struct for the NUL-terminated
+    // path; it is read only when the call succeeds.
+    let mut fs: libc::statvfs = unsafe { std::mem::zeroed() };
+    if unsafe { libc::statvfs(c.as_ptr(), &mut fs) } == 0 && fs.f_bavail == 0 && fs.f_blocks > 0 {
+        return Err(format!("the file system of {} is full", existing.display()));
+    }
+    Ok(())
 }
 
 fn parent(path: &Path) -> &Path {

@@ -414,3 +414,50 @@ fn outputs_are_named_by_their_format() {
         .unwrap()
         .starts_with(&[0x76, 0x2f, 0x31, 0x01]));
 }
+
+/// An output whose name the file system cannot hold is refused before any
+/// work (no device is created, nothing is rendered), naming the limit; a
+/// sweep whose output folder cannot be made is refused before rendering
+/// and leaves no folder behind.
+#[test]
+fn unwritable_outputs_are_refused_before_the_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let long = "a".repeat(300);
+    let out = dir.path().join(format!("{long}.png"));
+    let started = std::time::Instant::now();
+    let result = run(&[os("render"), os("--out"), out.as_os_str()]);
+    let err = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("304 bytes long") && err.contains("at most 255"),
+        "{err}"
+    );
+    assert!(!err.contains("device:"), "the work started: {err}");
+    let deep = dir
+        .path()
+        .join(std::iter::repeat_n("d", 2100).collect::<Vec<_>>().join("/"))
+        .join("x.png");
+    let result = run(&[os("render"), os("--out"), deep.as_os_str()]);
+    let err = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(2), "{err}");
+    assert!(err.contains("at most 4095"), "{err}");
+
+    let sweep_dir = dir.path().join("made").join(&long);
+    let scene = assets().join("scenes/default.toml");
+    let result = run(&[
+        os("sweep"),
+        scene.as_os_str(),
+        os("--knob"),
+        os("lights=1,2"),
+        os("--out-dir"),
+        sweep_dir.as_os_str(),
+    ]);
+    let err = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(2), "{err}");
+    assert!(err.contains("at most 255"), "{err}");
+    assert!(
+        !dir.path().join("made").exists(),
+        "a folder was left behind"
+    );
+    assert!(started.elapsed() < std::time::Duration::from_secs(30));
+}

@@ -291,19 +291,33 @@ pub fn write_outputs(result: &SweepResult, dir: &Path) -> Result<Vec<PathBuf>, S
         ("sweep.json", json),
         ("sweep.svg", to_svg(result)?),
     ];
-    std::fs::create_dir_all(dir).map_err(|error| SweepError::CreateDir {
-        path: dir.to_path_buf(),
-        error,
-    })?;
-    // All three are written before any is renamed into place, so a failure
-    // leaves none of them.
-    let mut pending = Vec::new();
-    for (name, text) in files {
-        let path = dir.join(name);
-        let file = crate::files::PendingFile::create(&path).map_err(SweepError::File)?;
-        std::io::Write::write_all(&mut file.file(), text.as_bytes())
-            .map_err(|e| SweepError::File(file.io_error(e)))?;
-        pending.push(file);
+    // The folders this creates, deepest first, removed again if the files
+    // cannot be written: a failed sweep leaves no empty folder behind.
+    let mut created: Vec<&Path> = dir
+        .ancestors()
+        .take_while(|a| !a.as_os_str().is_empty() && !a.exists())
+        .collect();
+    let result = std::fs::create_dir_all(dir)
+        .map_err(|error| SweepError::CreateDir {
+            path: dir.to_path_buf(),
+            error,
+        })
+        .and_then(|()| {
+            // All three are written before any is renamed into place, so a
+            // failure leaves none of them.
+            let mut pending = Vec::new();
+            for (name, text) in files {
+                let path = dir.join(name);
+                let file = crate::files::PendingFile::create(&path).map_err(SweepError::File)?;
+                std::io::Write::write_all(&mut file.file(), text.as_bytes())
+                    .map_err(|e| SweepError::File(file.io_error(e)))?;
+                pending.push(file);
+            }
+            crate::files::commit_all(pending).map_err(SweepError::File)
+        });
+    if result.is_err() {
+        // remove_dir only removes empty folders: nothing else is touched.
+        created.drain(..).for_each(|d| drop(std::fs::remove_dir(d)));
     }
-    crate::files::commit_all(pending).map_err(SweepError::File)
+    result
 }
