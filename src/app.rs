@@ -86,7 +86,49 @@ pub fn png_metadata(device: &DeviceInfo) -> Vec<(&'static str, String)> {
         ),
         ("aerial:vulkan", device.api_version.clone()),
         ("aerial:host_cpu", host_cpu()),
+        ("aerial:codegen", host_codegen()),
     ]
+}
+
+/// What of the host CPU changes a CPU driver's pixels, for keying
+/// bit-exact references: the vendor and whether `fma` and `avx512f` are
+/// present, from `/proc/cpuinfo` (`unknown` elsewhere).
+///
+/// lavapipe compiles shaders with LLVM for the host. Fused multiply-add
+/// changes the rounding of `a * b + c`, and AVX-512 brings other
+/// approximate reciprocal instructions; the vendor is kept because
+/// approximate reciprocals differ between vendors. The vector width LLVM
+/// uses is already in the device name (`llvmpipe (LLVM 15.0.6, 256
+/// bits)`). Other extensions (SSE4.1, AVX2, F16C, ...) select different
+/// instructions computing the same IEEE results, so a machine with one
+/// more unrelated flag renders bit-identically and keeps the strict check.
+pub fn host_codegen() -> String {
+    match std::fs::read_to_string("/proc/cpuinfo") {
+        Ok(info) => codegen_key(&info),
+        Err(_) => "unknown".into(),
+    }
+}
+
+/// [`host_codegen`] of the text of a `/proc/cpuinfo`.
+pub fn codegen_key(cpuinfo: &str) -> String {
+    let field = |name: &str| {
+        cpuinfo
+            .lines()
+            .find(|l| l.split(':').next().is_some_and(|k| k.trim() == name))
+            .and_then(|l| l.split_once(':'))
+            .map(|(_, v)| v.trim().to_string())
+    };
+    let vendor = field("vendor_id").unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    let flags = field("flags").unwrap_or_default();
+    let has = |f: &str| flags.split_whitespace().any(|x| x == f);
+    let sign = |f: &str| {
+        if has(f) {
+            format!("+{f}")
+        } else {
+            format!("-{f}")
+        }
+    };
+    format!("{vendor} {} {}", sign("fma"), sign("avx512f"))
 }
 
 /// A run that failed, with what the validation layer said before and

@@ -85,10 +85,13 @@ fn updating() -> bool {
     std::env::var_os(UPDATE_VAR).is_some_and(|v| !v.is_empty() && v != "0")
 }
 
-/// "device; driver ...; host CPU ..." from PNG text chunks or from a run's
-/// metadata. The host CPU is part of it because a CPU driver (lavapipe)
-/// compiles shaders for the host's instruction set, and the same device
-/// and driver strings give different pixels on different CPUs.
+/// "device; driver ...; code generation ..." from PNG text chunks or from
+/// a run's metadata. The CPU features that change a CPU driver's code
+/// (`aerial::app::host_codegen`: vendor, FMA, AVX-512) are part of it,
+/// because lavapipe compiles shaders for the host and the same device and
+/// driver strings give different pixels on CPUs that differ in those; the
+/// rest of the CPU's flag list is not, so an unrelated extra flag keeps the
+/// bit-exact check.
 fn origin<K: AsRef<str>>(text: &[(K, String)]) -> Option<String> {
     let get = |key: &str| {
         text.iter()
@@ -96,11 +99,21 @@ fn origin<K: AsRef<str>>(text: &[(K, String)]) -> Option<String> {
             .map(|(_, v)| v.as_str())
     };
     Some(format!(
-        "{}; driver {}; host CPU {}",
+        "{}; driver {}; code generation {}",
         get("aerial:device")?,
         get("aerial:driver")?,
-        get("aerial:host_cpu")?
+        get("aerial:codegen")?
     ))
+}
+
+/// The rule: bit-identical on the reference's device, driver and code
+/// generation; within the FLIP limits elsewhere.
+fn accepted(same_driver: bool, identical: bool, cmp: &ImageDiff) -> bool {
+    if same_driver {
+        identical
+    } else {
+        cmp.passes(&FLIP_DEFAULT_THRESHOLDS)
+    }
 }
 
 /// Whether the render equals the reference bit for bit, and a description
@@ -263,11 +276,7 @@ fn check_scene(path: &Path) -> (Row, Option<String>) {
         );
         return (row(stem, Some(cmp), "updated"), None);
     }
-    let passes = if same_driver {
-        identical
-    } else {
-        cmp.passes(&FLIP_DEFAULT_THRESHOLDS)
-    };
+    let passes = accepted(same_driver, identical, &cmp);
     if passes {
         // Leave nothing behind from this or an earlier failed run.
         remove_if_present(&new);
@@ -368,4 +377,75 @@ fn every_scene_matches_its_reference() {
         failures.len(),
         failures.join("\n\n")
     );
+}
+
+/// A machine whose CPU has one more flag that does not change lavapipe's
+/// code (here `avx512_vnni` and `sha_ni`, without `avx512f`) has the same
+/// key as the reference's, so the check stays bit-exact there: a reference
+/// pixel changed by one LSB fails, where the FLIP limits alone would pass
+/// it. A CPU without FMA has another key (FLIP limits apply).
+#[test]
+fn an_unrelated_cpu_flag_keeps_the_bit_exact_check() {
+    use aerial::app::codegen_key;
+    let cpuinfo = "processor\t: 0\nvendor_id\t: GenuineIntel\nmodel name\t: Some CPU\n\
+                   flags\t\t: fpu sse sse2 ssse3 sse4_1 sse4_2 avx avx2 fma f16c\n";
+    let extra = cpuinfo.replace("f16c", "f16c avx512_vnni sha_ni");
+    let no_fma = cpuinfo.replace(" fma", "");
+    assert_eq!(codegen_key(cpuinfo), codegen_key(&extra));
+    assert_ne!(codegen_key(cpuinfo), codegen_key(&no_fma));
+    assert_ne!(
+        codegen_key(cpuinfo),
+        codegen_key(&cpuinfo.replace("f16c", "f16c avx512f"))
+    );
+
+    // The reference's metadata, and a run's on the machine with the extra
+    // flags (its full flag list differs).
+    let reference = reference_dir().join("default.png");
+    let mut text: Vec<(String, String)> = output::read_png_text(&reference).unwrap();
+    let set = |text: &mut Vec<(String, String)>, key: &str, value: String| {
+        text.retain(|(k, _)| k != key);
+        text.push((key.to_string(), value));
+    };
+    set(&mut text, "aerial:codegen", codegen_key(cpuinfo));
+    let mut there = text.clone();
+    set(
+        &mut there,
+        "aerial:host_cpu",
+        "Some CPU [avx avx2 avx512_vnni fma sha_ni]".into(),
+    );
+    set(&mut there, "aerial:codegen", codegen_key(&extra));
+    let same_driver = origin(&text).is_some() && origin(&text) == origin(&there);
+    assert!(same_driver, "{:?} vs {:?}", origin(&text), origin(&there));
+
+    // One pixel of the reference off by one LSB.
+    let img = image::open(&reference).unwrap().to_rgba8();
+    let (width, height) = img.dimensions();
+    let mut data = img.into_raw();
+    data[4 * (width as usize * 45 + 80)] ^= 1;
+    let changed = aerial::render::Pixels {
+        width,
+        height,
+        data,
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let new = dir.path().join("changed.png");
+    image::RgbaImage::from_raw(width, height, changed.data.clone())
+        .unwrap()
+        .save(&new)
+        .unwrap();
+    let cmp = compare_files(&reference, &new, Metric::Flip).unwrap();
+    let (identical, _) = bit_exactness(&reference, &changed);
+    assert!(!identical);
+    assert!(
+        cmp.passes(&FLIP_DEFAULT_THRESHOLDS),
+        "a 1-LSB change is within the FLIP limits"
+    );
+    assert!(
+        !accepted(same_driver, identical, &cmp),
+        "the 1-LSB change passed"
+    );
+    // Keyed on another CPU, only the FLIP limits would apply.
+    let mut other = there.clone();
+    set(&mut other, "aerial:codegen", codegen_key(&no_fma));
+    assert_ne!(origin(&text), origin(&other));
 }
