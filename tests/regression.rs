@@ -449,3 +449,32 @@ fn an_unrelated_cpu_flag_keeps_the_bit_exact_check() {
     set(&mut other, "aerial:codegen", codegen_key(&no_fma));
     assert_ne!(origin(&text), origin(&other));
 }
+
+/// The default scene moved 10^6 and 10^9 m from the origin along every
+/// axis is held to its reference with the same FLIP limits as a render on
+/// another driver (translation changes rounding, so not bit-exactness).
+#[test]
+fn the_default_scene_far_from_the_origin_matches_its_reference() {
+    let reference = reference_dir().join("default.png");
+    let dir = tempfile::tempdir().unwrap();
+    for x in [1e6, 1e9] {
+        let mut scene = Scene::load(&manifest_dir().join("assets/scenes/default.toml")).unwrap();
+        scene.set_output_size(Some(WIDTH), Some(HEIGHT)).unwrap();
+        let scene = common::translated(scene, glam::DVec3::splat(x));
+        let run = common::render(&scene, false);
+        let new = dir.path().join(format!("default_at_{x:e}.png"));
+        image::RgbaImage::from_raw(WIDTH, HEIGHT, run.output.data.clone())
+            .unwrap()
+            .save(&new)
+            .unwrap();
+        let cmp = compare_files(&reference, &new, Metric::Flip).unwrap();
+        eprintln!(
+            "default moved by {x:e}: FLIP mean {:.6}, p99 {:.6}, worst window {:.6}",
+            cmp.mean, cmp.p99, cmp.worst_window
+        );
+        assert!(
+            cmp.passes(&FLIP_DEFAULT_THRESHOLDS),
+            "moved by {x:e}: {cmp:?}"
+        );
+    }
+}

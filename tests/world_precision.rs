@@ -14,7 +14,7 @@
 mod common;
 
 use aerial::report::{compare_images, ImageRef, Metric, FLIP_DEFAULT_THRESHOLDS};
-use aerial::scene::{Light, Lighting, Scene};
+use aerial::scene::{Lighting, Scene};
 use glam::DVec3;
 use std::path::Path;
 
@@ -31,21 +31,6 @@ fn default_scene(lighting: Lighting) -> Scene {
     scene
 }
 
-/// The whole scene moved by `offset`: camera, point lights and objects.
-fn translated(mut scene: Scene, offset: DVec3) -> Scene {
-    scene.camera.eye += offset;
-    scene.camera.look_at += offset;
-    for light in &mut scene.lights {
-        if let Light::Point { position, .. } = light {
-            *position += offset;
-        }
-    }
-    for object in &mut scene.objects {
-        object.transform.translate += offset;
-    }
-    scene
-}
-
 fn largest_difference(a: &[u8], b: &[u8]) -> u8 {
     a.iter()
         .zip(b)
@@ -56,7 +41,7 @@ fn largest_difference(a: &[u8], b: &[u8]) -> u8 {
 
 fn check(lighting: Lighting, offset: DVec3) {
     let base = common::render(&default_scene(lighting), false).output;
-    let moved_scene = translated(default_scene(lighting), offset);
+    let moved_scene = common::translated(default_scene(lighting), offset);
     let moved = common::render(&moved_scene, false).output;
     common::assert_not_blank(&moved, 0.5);
     // For looking at: target/world_precision/<lighting>_<x>.png.

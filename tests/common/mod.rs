@@ -171,3 +171,20 @@ pub fn hdr_pixel(p: &Pixels<f32>, x: u32, y: u32) -> DVec3 {
     let c = pixel(p, x, y);
     DVec3::new(c[0].into(), c[1].into(), c[2].into())
 }
+
+/// The whole scene moved by `offset`: camera, point lights and objects
+/// (what the camera sees is unchanged, up to rounding).
+#[allow(dead_code)]
+pub fn translated(mut scene: Scene, offset: DVec3) -> Scene {
+    scene.camera.eye += offset;
+    scene.camera.look_at += offset;
+    for light in &mut scene.lights {
+        if let aerial::scene::Light::Point { position, .. } = light {
+            *position += offset;
+        }
+    }
+    for object in &mut scene.objects {
+        object.transform.translate += offset;
+    }
+    scene
+}
