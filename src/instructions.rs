@@ -189,8 +189,13 @@ pub fn parse_dump_total(text: &str) -> Option<u64> {
 
 /// Runs this binary again under callgrind with `args` (a `bench` command
 /// line that writes its report with `--json`), callgrind's files in `dir`.
-/// llvmpipe's thread count is fixed at 2 unless `LP_NUM_THREADS` is set, so
-/// counts from hosts with different core counts compare.
+/// llvmpipe rasterises on the submitting thread (`LP_NUM_THREADS=0`)
+/// unless `LP_NUM_THREADS` is set: with rasteriser threads, which thread
+/// takes which tile, and when the threads wake, varies from run to run,
+/// and so does the work around it (measured at 160x90: a pass of 10⁶
+/// instructions moved by up to 0.9 % between runs with 2 threads, by
+/// 0.07 % with none). It also makes counts from hosts with different core
+/// counts compare.
 pub fn spawn_counting_run(args: &[std::ffi::OsString], dir: &Path) -> Result<(), CountError> {
     let exe = std::env::current_exe().map_err(CountError::NoValgrind)?;
     let out = dir.join("callgrind.out");
@@ -208,7 +213,7 @@ pub fn spawn_counting_run(args: &[std::ffi::OsString], dir: &Path) -> Result<(),
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::piped());
     if std::env::var_os("LP_NUM_THREADS").is_none() {
-        command.env("LP_NUM_THREADS", "2");
+        command.env("LP_NUM_THREADS", "0");
     }
     let output = command.output().map_err(CountError::NoValgrind)?;
     if !output.status.success() {
