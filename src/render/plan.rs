@@ -10,7 +10,6 @@
 //! tone-map subpass when the scene asks for LDR output.
 
 use super::geometry::SceneGeometry;
-use super::passes::{self, PassCreate};
 use super::tiles::{self, TileGroup};
 use crate::scene::{HdrFormat, Lighting, Scene, ShadingModel, Texture, ToneMapOperator};
 use crate::vk::{DepthUse, Format};
@@ -157,45 +156,95 @@ pub enum PassIo {
     },
 }
 
-/// One pass of the frame: its name (in timing tables), what it reads and
-/// writes, and the function that creates its GPU objects.
-#[derive(Clone)]
-pub struct PassDecl {
-    pub name: &'static str,
-    pub io: PassIo,
-    pub create: PassCreate,
+/// Which pass: each kind is one file in `render/passes`, which creates its
+/// GPU objects from the declaration (`passes::create`). The plan names
+/// passes by kind, never by string, so it needs nothing from the pass files.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PassKind {
+    /// The atmosphere marched for a grid of view directions (compute).
+    SkyView,
+    /// Deferred: surfaces into the G-buffer.
+    GBuffer,
+    /// Deferred: the G-buffer lit per screen tile.
+    Lighting,
+    /// Forward: opaque surfaces lit as drawn.
+    Opaque,
+    /// Blended surfaces, back to front.
+    Transparent,
+    /// Sky, aerial perspective and the planet, over the surfaces.
+    Atmosphere,
+    /// HDR to the display output.
+    ToneMap,
+    /// An HDR image copied in (`aerial tonemap`).
+    HdrUpload,
+    /// Attachments copied out.
+    Readback,
 }
 
-impl std::fmt::Debug for PassDecl {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("PassDecl")
-            .field("name", &self.name)
-            .field("io", &self.io)
-            .finish()
+impl PassKind {
+    /// The pass's name in timing tables, reports and the viewer.
+    pub fn name(self) -> &'static str {
+        match self {
+            PassKind::SkyView => "sky view",
+            PassKind::GBuffer => "gbuffer",
+            PassKind::Lighting => "lighting",
+            PassKind::Opaque => "opaque",
+            PassKind::Transparent => "transparent",
+            PassKind::Atmosphere => "atmosphere",
+            PassKind::ToneMap => "tonemap",
+            PassKind::HdrUpload => "hdr upload",
+            PassKind::Readback => "readback",
+        }
     }
+}
+
+/// One pass of the frame: which pass, and what it reads and writes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PassDecl {
+    pub kind: PassKind,
+    pub io: PassIo,
 }
 
 impl PassDecl {
     fn subpass(
-        name: &'static str,
+        kind: PassKind,
         colour: Vec<&'static str>,
         depth: Option<(&'static str, DepthUse)>,
         inputs: Vec<&'static str>,
-        create: PassCreate,
     ) -> PassDecl {
         PassDecl {
-            name,
+            kind,
             io: PassIo::Subpass {
                 colour,
                 depth,
                 inputs,
             },
-            create,
         }
+    }
+
+    fn transfer(kind: PassKind, reads: Vec<&'static str>, writes: Vec<&'static str>) -> PassDecl {
+        PassDecl {
+            kind,
+            io: PassIo::Transfer { reads, writes },
+        }
+    }
+
+    /// The pass's name in timing tables.
+    pub fn name(&self) -> &'static str {
+        self.kind.name()
     }
 
     pub fn is_subpass(&self) -> bool {
         matches!(self.io, PassIo::Subpass { .. })
+    }
+
+    /// The input attachments, in `input_attachment_index` order (none
+    /// outside subpasses).
+    pub fn inputs(&self) -> &[&'static str] {
+        match &self.io {
+            PassIo::Subpass { inputs, .. } => inputs,
+            _ => &[],
+        }
     }
 }
 
@@ -431,9 +480,8 @@ impl FramePlan {
             // Marched for a grid of directions before the render pass;
             // the atmosphere subpass reads it for pixels without a surface.
             passes.push(PassDecl {
-                name: "sky view",
+                kind: PassKind::SkyView,
                 io: PassIo::Compute,
-                create: passes::sky_view::create,
             });
         }
         if deferred {
@@ -448,53 +496,47 @@ impl FramePlan {
                 });
             }
             passes.push(PassDecl::subpass(
-                "gbuffer",
+                PassKind::GBuffer,
                 vec![target, ALBEDO, NORMAL, MATERIAL],
                 Some((DEPTH, DepthUse::Write)),
                 vec![],
-                passes::surface::create_gbuffer,
             ));
             passes.push(PassDecl::subpass(
-                "lighting",
+                PassKind::Lighting,
                 vec![target],
                 Some((DEPTH, DepthUse::Test)),
                 vec![ALBEDO, NORMAL, MATERIAL, DEPTH],
-                passes::deferred_lighting::create,
             ));
         } else {
             passes.push(PassDecl::subpass(
-                "opaque",
+                PassKind::Opaque,
                 vec![target],
                 Some((DEPTH, DepthUse::Write)),
                 vec![],
-                passes::surface::create_opaque,
             ));
         }
         if !transparent.is_empty() {
             passes.push(PassDecl::subpass(
-                "transparent",
+                PassKind::Transparent,
                 vec![target],
                 Some((DEPTH, DepthUse::Test)),
                 vec![],
-                passes::surface::create_transparent,
             ));
         }
         if sky {
             passes.push(PassDecl::subpass(
-                "atmosphere",
+                PassKind::Atmosphere,
                 vec![HDR],
                 Some((DEPTH, DepthUse::Test)),
                 vec![SURFACE, DEPTH],
-                passes::atmosphere::create,
             ));
         }
         if !direct {
             passes.push(PassDecl::subpass(
-                "tonemap",
+                PassKind::ToneMap,
                 vec![OUTPUT],
                 None,
                 vec![HDR],
-                passes::tonemap::create,
             ));
         }
         // Cleared attachments first, so the render pass needs no clear
@@ -504,14 +546,7 @@ impl FramePlan {
         if keep_hdr {
             reads.push(HDR);
         }
-        passes.push(PassDecl {
-            name: "readback",
-            io: PassIo::Transfer {
-                reads,
-                writes: vec![],
-            },
-            create: passes::transfer::create,
-        });
+        passes.push(PassDecl::transfer(PassKind::Readback, reads, vec![]));
         FramePlan {
             width: scene.output.width,
             height: scene.output.height,
@@ -559,41 +594,21 @@ impl FramePlan {
                 },
             ],
             passes: vec![
-                PassDecl {
-                    name: "hdr upload",
-                    io: PassIo::Transfer {
-                        reads: vec![],
-                        writes: vec![HDR],
-                    },
-                    create: passes::transfer::create,
-                },
-                PassDecl::subpass(
-                    "tonemap",
-                    vec![OUTPUT],
-                    None,
-                    vec![HDR],
-                    passes::tonemap::create,
-                ),
-                PassDecl {
-                    name: "readback",
-                    io: PassIo::Transfer {
-                        reads,
-                        writes: vec![],
-                    },
-                    create: passes::transfer::create,
-                },
+                PassDecl::transfer(PassKind::HdrUpload, vec![], vec![HDR]),
+                PassDecl::subpass(PassKind::ToneMap, vec![OUTPUT], None, vec![HDR]),
+                PassDecl::transfer(PassKind::Readback, reads, vec![]),
             ],
         }
     }
 
     /// The pass names, in order.
     pub fn pass_names(&self) -> Vec<&'static str> {
-        self.passes.iter().map(|p| p.name).collect()
+        self.passes.iter().map(PassDecl::name).collect()
     }
 
-    /// Whether a pass of this name is in the frame.
-    pub fn has_pass(&self, name: &str) -> bool {
-        self.passes.iter().any(|p| p.name == name)
+    /// Whether a pass of this kind is in the frame.
+    pub fn has(&self, kind: PassKind) -> bool {
+        self.passes.iter().any(|p| p.kind == kind)
     }
 
     /// Whether an attachment of this name exists.

@@ -9,7 +9,7 @@
 use super::frame::TimedFrame;
 use super::geometry::SceneGeometry;
 use super::passes::{Attachments, FrameResources, PassSetup, RecordPass};
-use super::plan::{attachment, FramePlan, PassIo};
+use super::plan::{attachment, FramePlan, PassIo, PassKind};
 use super::scene_resources::SceneResources;
 use super::sky_resources::SkyResources;
 use super::RenderError;
@@ -136,7 +136,7 @@ impl Renderer {
             None
         };
         let sky_resources = match &scene.sky {
-            Some(sky) if plan.has_pass("atmosphere") => {
+            Some(sky) if plan.has(PassKind::Atmosphere) => {
                 Some(SkyResources::new(ctx, sky, &scene.camera, &plan)?)
             }
             _ => None,
@@ -164,7 +164,7 @@ impl Renderer {
                 frame: &frame_resources,
                 hdr_input,
             };
-            passes.push((decl.create)(&setup)?);
+            passes.push(super::passes::create(&setup)?);
             if decl.is_subpass() {
                 subpass += 1;
             }
@@ -514,7 +514,7 @@ fn build_render_pass(
         } = &decl.io
         {
             subpasses.push(SubpassSpec {
-                name: decl.name,
+                name: decl.name(),
                 colour: colour.iter().map(|n| index(n)).collect::<Result<_, _>>()?,
                 depth: depth
                     .map(|(n, how)| index(n).map(|i| (i, how)))

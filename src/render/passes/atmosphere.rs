@@ -14,7 +14,6 @@
 
 use super::{fullscreen_pipeline, FrameResources, InputAttachments, PassSetup, RecordPass};
 use crate::atmosphere::TableMapping;
-use crate::render::plan::attachment;
 use crate::render::sky_resources::SkyResources;
 use crate::render::RenderError;
 use crate::scene::{OzoneDepth, TableFilter};
@@ -52,7 +51,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     let sky = setup.scene.sky.as_ref().ok_or_else(|| {
         RenderError::Frame("the atmosphere pass needs a scene with [atmosphere]".into())
     })?;
-    let inputs = InputAttachments::new(setup, &[attachment::SURFACE, attachment::DEPTH])?;
+    let inputs = InputAttachments::declared(setup)?;
     let layout = PipelineLayout::new(setup.ctx, &[&resources.layout, &inputs.layout])?;
     let constants = table_constants(sky);
     // (shader features, depth test) per draw.

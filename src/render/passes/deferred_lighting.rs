@@ -11,7 +11,6 @@
 
 use super::{FrameResources, InputAttachments, PassSetup, RecordPass};
 use crate::render::gpu_types::GpuLight;
-use crate::render::plan::attachment;
 use crate::render::scene_resources::{gpu_light, pack_blocks};
 use crate::render::RenderError;
 use crate::shaders;
@@ -112,15 +111,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
             stages: ShaderStageFlags::FRAGMENT,
         }],
     )?;
-    let inputs = InputAttachments::new(
-        setup,
-        &[
-            attachment::ALBEDO,
-            attachment::NORMAL,
-            attachment::MATERIAL,
-            attachment::DEPTH,
-        ],
-    )?;
+    let inputs = InputAttachments::declared(setup)?;
     let pool = DescriptorPool::for_layouts(ctx, &[&lights_layout])?;
     let lights_set = pool.allocate(&lights_layout)?;
     lights_set.write_buffer(

@@ -2,12 +2,14 @@
 //! `create` (its pipelines, descriptor sets and own resources, from what the
 //! plan declared) and a `record` (its commands, recorded once).
 //!
-//! The plan names each pass's `create` function in its [`PassDecl`]
-//! (`crate::render::plan::PassDecl`); the renderer begins the render pass
-//! before the first subpass, moves to the next subpass between subpasses
-//! and ends it after the last, so no pass knows its subpass index or its
-//! neighbours. Adding a pass is a new file here and one entry in
-//! `FramePlan::new`.
+//! The plan declares each pass by its [`PassKind`] and what it reads and
+//! writes ([`PassDecl`]); [`create`] picks the pass's file from the kind,
+//! and each pass takes its attachments (input attachments in their
+//! declared order) from its declaration. The renderer begins the render
+//! pass before the first subpass, moves to the next subpass between
+//! subpasses and ends it after the last, so no pass knows its subpass
+//! index or its neighbours. Adding a pass is a new file here, a
+//! [`PassKind`] and one entry in `FramePlan::new`.
 
 pub mod atmosphere;
 pub mod deferred_lighting;
@@ -16,7 +18,7 @@ pub mod surface;
 pub mod tonemap;
 pub mod transfer;
 
-use super::plan::{FramePlan, PassDecl};
+use super::plan::{FramePlan, PassDecl, PassKind};
 use super::scene_resources::SceneResources;
 use super::sky_resources::SkyResources;
 use super::{Pixels, RenderError};
@@ -29,8 +31,19 @@ use crate::vk::{
 };
 use std::sync::Arc;
 
-/// Creates a pass's GPU objects.
-pub type PassCreate = fn(&PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>;
+/// Creates the GPU objects of the pass `setup.decl` declares.
+pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+    match setup.decl.kind {
+        PassKind::SkyView => sky_view::create(setup),
+        PassKind::GBuffer => surface::create_gbuffer(setup),
+        PassKind::Lighting => deferred_lighting::create(setup),
+        PassKind::Opaque => surface::create_opaque(setup),
+        PassKind::Transparent => surface::create_transparent(setup),
+        PassKind::Atmosphere => atmosphere::create(setup),
+        PassKind::ToneMap => tonemap::create(setup),
+        PassKind::HdrUpload | PassKind::Readback => transfer::create(setup),
+    }
+}
 
 /// A created pass.
 pub trait RecordPass {
@@ -107,7 +120,7 @@ impl PassSetup<'_> {
     /// The render pass, for subpasses.
     pub fn render_pass(&self) -> Result<&GraphRenderPass, RenderError> {
         self.render_pass.ok_or_else(|| {
-            RenderError::Frame(format!("pass '{}' is not a subpass", self.decl.name))
+            RenderError::Frame(format!("pass '{}' is not a subpass", self.decl.name()))
         })
     }
 
@@ -121,15 +134,16 @@ impl PassSetup<'_> {
         self.frame.scene.ok_or_else(|| {
             RenderError::Frame(format!(
                 "pass '{}' draws objects but the frame has no scene resources",
-                self.decl.name
+                self.decl.name()
             ))
         })
     }
 }
 
-/// A descriptor set whose binding i is the input attachment `names[i]`,
-/// with its own layout and pool. Fields drop in order: the set before its
-/// pool, the layout last.
+/// A descriptor set whose binding i is the pass's declared input
+/// attachment i (`input_attachment_index` i in its shader), with its own
+/// layout and pool. Fields drop in order: the set before its pool, the
+/// layout last.
 pub struct InputAttachments {
     pub set: DescriptorSet,
     _pool: DescriptorPool,
@@ -137,7 +151,8 @@ pub struct InputAttachments {
 }
 
 impl InputAttachments {
-    pub fn new(setup: &PassSetup<'_>, names: &[&str]) -> Result<InputAttachments, RenderError> {
+    pub fn declared(setup: &PassSetup<'_>) -> Result<InputAttachments, RenderError> {
+        let names = setup.decl.inputs();
         let bindings: Vec<DescriptorBinding> = (0..names.len() as u32)
             .map(|binding| DescriptorBinding {
                 binding,

@@ -4,7 +4,6 @@
 //! `--hdr`). Operator and exposure are specialization constants.
 
 use super::{fullscreen_pipeline, FrameResources, InputAttachments, PassSetup, RecordPass};
-use crate::render::plan::attachment;
 use crate::render::RenderError;
 use crate::scene::ToneMapOperator;
 use crate::shaders;
@@ -18,7 +17,7 @@ pub struct ToneMapPass {
 }
 
 pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
-    let input = InputAttachments::new(setup, &[attachment::HDR])?;
+    let input = InputAttachments::declared(setup)?;
     let layout = PipelineLayout::new(setup.ctx, &[&input.layout])?;
     let tone_map = setup.scene.tone_map;
     let operator = match tone_map.operator {

@@ -19,7 +19,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     let PassIo::Transfer { reads, writes } = &setup.decl.io else {
         return Err(RenderError::Frame(format!(
             "pass '{}' is not a transfer",
-            setup.decl.name
+            setup.decl.name()
         )));
     };
     let mut uploads = Vec::new();
