@@ -404,7 +404,7 @@ fn print_report(report: &BenchReport) {
     println!(
         "times in ms; x empty = median / median of the empty pass timed between the scene's frames (its row 'empty')"
     );
-    println!("note: {}", aerial::render::SUBPASS_TIMING_NOTE);
+    println!("note: {}", aerial::render::subpass_timing_note());
     for e in &report.empty_passes {
         println!();
         println!("empty pass {}", e.resolution);

@@ -133,5 +133,5 @@ fn print_timings(run: &app::RenderRun) {
     if let Some(s) = Summary::of(&cpu) {
         row(CPU_FRAME, &s);
     }
-    println!("note: {}", aerial::render::SUBPASS_TIMING_NOTE);
+    println!("note: {}", aerial::render::subpass_timing_note());
 }

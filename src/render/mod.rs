@@ -24,7 +24,7 @@ pub mod tiles;
 pub use empty_pass::EmptyPass;
 pub use frame::PrefixFrames;
 pub use geometry::SceneGeometry;
-pub use plan::{FramePlan, SUBPASS_TIMING_NOTE};
+pub use plan::{subpass_timing_note, FramePlan, PassKind};
 pub use reference::{render_reference, ReferenceError};
 pub use renderer::{FrameTiming, Pixels, Renderer, ViewChange};
 

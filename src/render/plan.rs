@@ -182,6 +182,28 @@ pub enum PassKind {
 }
 
 impl PassKind {
+    /// Every kind, in the order a frame runs them.
+    pub const ALL: [PassKind; 9] = [
+        PassKind::HdrUpload,
+        PassKind::SkyView,
+        PassKind::GBuffer,
+        PassKind::Lighting,
+        PassKind::Opaque,
+        PassKind::Transparent,
+        PassKind::Atmosphere,
+        PassKind::ToneMap,
+        PassKind::Readback,
+    ];
+
+    /// Whether passes of this kind are subpasses of the frame's render
+    /// pass (the others are compute or copies outside it).
+    pub fn is_subpass(self) -> bool {
+        !matches!(
+            self,
+            PassKind::SkyView | PassKind::HdrUpload | PassKind::Readback
+        )
+    }
+
     /// The pass's name in timing tables, reports and the viewer.
     pub fn name(self) -> &'static str {
         match self {
@@ -248,13 +270,23 @@ impl PassDecl {
     }
 }
 
-/// Why the split between subpasses is approximate: printed under timing
-/// tables.
-pub const SUBPASS_TIMING_NOTE: &str =
-    "the gbuffer, lighting, opaque, transparent, atmosphere and tonemap passes are subpasses of \
-one render pass: a binning rasterizer (lavapipe, tile-based GPUs) may do a draw's work after a \
-later timestamp, so their time split is approximate; the sum over the render pass is exact, and \
-so is each pass's instruction count (--metric instructions counts frame prefixes)";
+/// Why the split between subpasses is approximate, naming the subpass
+/// kinds: printed under timing tables.
+pub fn subpass_timing_note() -> String {
+    let names: Vec<&str> = PassKind::ALL
+        .iter()
+        .filter(|k| k.is_subpass())
+        .map(|k| k.name())
+        .collect();
+    let (last, rest) = names.split_last().expect("there are subpass kinds");
+    format!(
+        "the {} and {last} passes are subpasses of one render pass: a binning rasterizer \
+         (lavapipe, tile-based GPUs) may do a draw's work after a later timestamp, so their time \
+         split is approximate; the sum over the render pass is exact, and so is each pass's \
+         instruction count (--metric instructions counts frame prefixes)",
+        rest.join(", ")
+    )
+}
 
 /// The frame a scene needs.
 #[derive(Clone, Debug)]
@@ -696,6 +728,39 @@ mod tests {
         let scene = Scene::load(&path).unwrap();
         let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);
         (scene, plan)
+    }
+
+    /// A kind's subpass-ness matches how every plan declares it, every
+    /// kind appears in `ALL` once, and the timing note names exactly the
+    /// subpass kinds.
+    #[test]
+    fn pass_kinds_agree_with_their_declarations_and_the_note() {
+        let mut plans: Vec<FramePlan> = ["default.toml", "earth_noon.toml", "transparency.toml"]
+            .iter()
+            .map(|f| load(f).1)
+            .collect();
+        let (mut scene, _) = load("many_lights.toml");
+        scene.output.lighting = Lighting::Deferred;
+        plans.push(FramePlan::new(
+            &scene,
+            &SceneGeometry::new(&scene).unwrap(),
+            true,
+        ));
+        plans.push(FramePlan::for_hdr_image(8, 8, true));
+        let mut seen = std::collections::HashSet::new();
+        for decl in plans.iter().flat_map(|p| &p.passes) {
+            assert_eq!(decl.kind.is_subpass(), decl.is_subpass(), "{decl:?}");
+            seen.insert(decl.kind);
+        }
+        assert_eq!(
+            seen.len(),
+            PassKind::ALL.len(),
+            "a kind no plan declares: {seen:?}"
+        );
+        let note = subpass_timing_note();
+        for kind in PassKind::ALL {
+            assert_eq!(note.contains(kind.name()), kind.is_subpass(), "{note}");
+        }
     }
 
     #[test]
