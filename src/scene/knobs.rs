@@ -2,8 +2,10 @@
 //! loaded scene.
 //!
 //! Benchmarks record every knob's setting, and sweeps render the cartesian
-//! product of knob values, so adding an approximation to the renderer means
-//! adding one entry to [`KNOBS`] and nothing else.
+//! product of knob values. Adding an approximation to the renderer means
+//! one entry in [`KNOBS`], its value names in the `named!` table below
+//! when its values are an enum, and, for the viewer to cycle it, an entry
+//! in `viewer::knobs`.
 
 use super::{
     HdrFormat, Lighting, OzoneDepth, Scene, ShadingModel, TableFilter, TableMapping, TextureFilter,

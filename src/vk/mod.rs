@@ -17,7 +17,7 @@ mod swapchain;
 pub mod validation;
 
 pub use ash::vk::{
-    AccessFlags, CullModeFlags, DescriptorType, Format, ImageAspectFlags, ImageLayout,
+    AccessFlags, CompareOp, CullModeFlags, DescriptorType, Format, ImageAspectFlags, ImageLayout,
     ImageUsageFlags, PipelineStageFlags, ShaderStageFlags,
 };
 pub use buffer::{Buffer, BufferUsage};

@@ -18,8 +18,8 @@ use crate::render::sky_resources::SkyResources;
 use crate::render::RenderError;
 use crate::scene::{OzoneDepth, TableFilter};
 use crate::shaders;
+use crate::vk::CompareOp;
 use crate::vk::{CommandBuffer, GraphicsPipeline, PipelineLayout};
-use ash::vk::CompareOp;
 
 /// Fields drop in order: the pipelines before their layout and the sets.
 pub struct AtmospherePass {

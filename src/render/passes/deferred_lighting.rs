@@ -14,12 +14,12 @@ use crate::render::gpu_types::GpuLight;
 use crate::render::scene_resources::{gpu_light, pack_blocks};
 use crate::render::RenderError;
 use crate::shaders;
+use crate::vk::CompareOp;
 use crate::vk::{
     Blend, Buffer, BufferUsage, CommandBuffer, CullModeFlags, DescriptorBinding, DescriptorPool,
     DescriptorSet, DescriptorSetLayout, DescriptorType, Format, GraphicsPipeline,
     GraphicsPipelineDesc, PipelineLayout, ShaderModule, ShaderStageFlags, VertexAttribute,
 };
-use ash::vk::CompareOp;
 use std::collections::BTreeMap;
 
 /// One draw: a tile group's vertices and lights.

@@ -188,7 +188,7 @@ pub(crate) fn fullscreen_pipeline(
     subpass: u32,
     fragment: &[u8],
     specialization: &[(u32, u32)],
-    depth_test: Option<ash::vk::CompareOp>,
+    depth_test: Option<crate::vk::CompareOp>,
 ) -> Result<GraphicsPipeline, RenderError> {
     let vertex = ShaderModule::new(ctx, shaders::FULLSCREEN_VERT.base())?;
     let fragment = ShaderModule::new(ctx, fragment)?;

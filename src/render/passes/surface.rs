@@ -14,11 +14,11 @@ use crate::render::plan::{Draw, FramePlan, PipelineKey, ShadingKey};
 use crate::render::RenderError;
 use crate::scene::Scene;
 use crate::shaders;
+use crate::vk::CompareOp;
 use crate::vk::{
     Blend, CommandBuffer, CullModeFlags, Format, GraphicsPipeline, GraphicsPipelineDesc,
     ShaderModule, VertexAttribute,
 };
-use ash::vk::CompareOp;
 use std::collections::BTreeMap;
 
 /// Which form of the pass.
