@@ -225,29 +225,17 @@ pub enum Misuse {
     LeakThenFail,
 }
 
-/// Renders `scene`; see [`run`].
+/// Renders `scene` with no progress callback; see [`run`].
 pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderRun, RunError> {
-    run_with_progress(FrameSource::Scene(scene), settings, &mut || {})
+    run(FrameSource::Scene(scene), settings, &mut || {})
 }
 
-/// [`render`], calling `on_frame` after every submitted frame (warm-up
-/// frames included), e.g. to drive a progress bar.
-pub fn render_with_progress(
-    scene: &Scene,
-    settings: &RenderSettings,
-    on_frame: &mut dyn FnMut(),
-) -> Result<RenderRun, RunError> {
-    run_with_progress(FrameSource::Scene(scene), settings, on_frame)
-}
-
-/// Renders `source` `warmup + frames` times with the device and validation
-/// the settings ask for.
-pub fn run(source: FrameSource<'_>, settings: &RenderSettings) -> Result<RenderRun, RunError> {
-    run_with_progress(source, settings, &mut || {})
-}
-
-/// [`run`], calling `on_frame` after every submitted frame.
-pub fn run_with_progress(
+/// The one way a run is made: renders `source` `warmup + frames` times with
+/// the device and validation the settings ask for, calling `on_frame`
+/// after every submitted frame (warm-up frames included), e.g. to drive a
+/// progress bar. The validation log is read after the device is torn
+/// down, on the error path too.
+pub fn run(
     source: FrameSource<'_>,
     settings: &RenderSettings,
     on_frame: &mut dyn FnMut(),
@@ -303,8 +291,7 @@ fn produce(
     crate::interrupt::check()?;
     Ok(match source {
         FrameSource::Scene(scene) => {
-            preflight::scene_on_device(scene, ctx)?;
-            let renderer = Renderer::new(ctx, scene, settings.keep_hdr)?;
+            let renderer = Renderer::prepare(ctx, scene, None, settings.keep_hdr)?;
             let empty = if settings.empty_pass_between_frames {
                 Some(EmptyPass::new(
                     ctx,
@@ -367,18 +354,6 @@ fn produce(
             }
         }
     })
-}
-
-/// Runs the empty pass at `width` x `height` like [`render_with_progress`]
-/// runs a scene: own device, warm-up and measured frames, validation log
-/// read after teardown.
-pub fn render_empty_pass(
-    width: u32,
-    height: u32,
-    settings: &RenderSettings,
-    on_frame: &mut dyn FnMut(),
-) -> Result<RenderRun, RunError> {
-    run_with_progress(FrameSource::EmptyPass { width, height }, settings, on_frame)
 }
 
 /// What one run's frames produced, before the validation log is read: pass

@@ -333,9 +333,11 @@ fn bad_bench_input_fails_with_a_message_not_a_panic() {
 
 #[test]
 fn empty_pass_is_clean_under_validation_and_takes_time() {
-    let run = app::render_empty_pass(
-        96,
-        64,
+    let run = app::run(
+        app::FrameSource::EmptyPass {
+            width: 96,
+            height: 64,
+        },
         &RenderSettings {
             validate: aerial::vk::validation::Validation::All,
             device: None,
@@ -370,10 +372,17 @@ fn empty_pass_is_clean_under_validation_and_takes_time() {
 
 #[test]
 fn empty_pass_rejects_a_zero_size() {
-    let e = app::render_empty_pass(0, 64, &RenderSettings::default(), &mut || {})
-        .err()
-        .expect("a 0x64 pass was accepted")
-        .to_string();
+    let e = app::run(
+        app::FrameSource::EmptyPass {
+            width: 0,
+            height: 64,
+        },
+        &RenderSettings::default(),
+        &mut || {},
+    )
+    .err()
+    .expect("a 0x64 pass was accepted")
+    .to_string();
     assert!(e.contains("0x64"), "{e}");
 }
 

@@ -262,6 +262,7 @@ fn both_operators_apply_the_exposure() {
                     validate: aerial::vk::validation::Validation::All,
                     ..Default::default()
                 },
+                &mut || {},
             )
             .unwrap();
             common::assert_no_validation_messages(&run);

@@ -20,7 +20,11 @@ fn settings(validate: Validation) -> RenderSettings {
 }
 
 fn messages_of(misuse: Misuse, validate: Validation) -> Vec<ValidationMessage> {
-    match app::run(FrameSource::ValidationCheck(misuse), &settings(validate)) {
+    match app::run(
+        FrameSource::ValidationCheck(misuse),
+        &settings(validate),
+        &mut || {},
+    ) {
         Ok(run) => run.validation,
         Err(e) => panic!("the check itself failed: {e}"),
     }
@@ -93,6 +97,7 @@ fn a_failed_run_still_returns_the_validation_log() {
     let err = app::run(
         FrameSource::ValidationCheck(Misuse::LeakThenFail),
         &settings(Validation::All),
+        &mut || {},
     )
     .err()
     .expect("the run fails on purpose");
@@ -110,6 +115,7 @@ fn without_validation_nothing_is_recorded() {
     let run = app::run(
         FrameSource::ValidationCheck(Misuse::SyncHazard),
         &settings(Validation::Off),
+        &mut || {},
     )
     .unwrap();
     assert!(run.validation.is_empty());
@@ -144,7 +150,15 @@ fn every_allow_list_entry_has_an_id_and_a_reason() {
 #[test]
 fn every_scene_is_clean_under_every_mode() {
     for mode in [Validation::Core, Validation::BestPractices, Validation::All] {
-        let run = app::render_empty_pass(64, 36, &settings(mode), &mut || {}).unwrap();
+        let run = app::run(
+            FrameSource::EmptyPass {
+                width: 64,
+                height: 36,
+            },
+            &settings(mode),
+            &mut || {},
+        )
+        .unwrap();
         assert!(
             run.validation.is_empty(),
             "empty pass under {mode:?}:\n{}",
@@ -164,6 +178,7 @@ fn every_scene_is_clean_under_every_mode() {
                 },
             ),
             &settings(mode),
+            &mut || {},
         )
         .unwrap();
         assert!(

@@ -658,6 +658,7 @@ fn tone_map(values: &[f32], operator: ToneMapOperator, exposure: f32) -> Vec<u8>
             empty_pass_between_frames: false,
             ..Default::default()
         },
+        &mut || {},
     )
     .expect("tone map runs");
     common::assert_no_validation_messages(&run);

@@ -29,6 +29,7 @@ fn tone_map_on_gpu(values: &[[f32; 4]], operator: ToneMapOperator, exposure: f32
             empty_pass_between_frames: false,
             ..Default::default()
         },
+        &mut || {},
     )
     .expect("tone map runs");
     common::assert_no_validation_messages(&run);
@@ -130,6 +131,7 @@ fn tone_mapping_the_hdr_output_reproduces_the_render() {
             validate: aerial::vk::validation::Validation::All,
             ..Default::default()
         },
+        &mut || {},
     )
     .unwrap();
     common::assert_no_validation_messages(&again);
@@ -152,6 +154,7 @@ fn a_mis_sized_image_is_an_error_not_a_crash() {
             },
         ),
         &RenderSettings::default(),
+        &mut || {},
     );
     let err = result.err().expect("rejected").to_string();
     assert!(err.contains("4x4"), "{err}");

@@ -16,7 +16,7 @@ pub use report::{
     SceneReport, CPU_FRAME, FORMAT, GPU_TOTAL,
 };
 
-use crate::app::{self, RenderRun, RenderSettings, RunError};
+use crate::app::{self, FrameSource, RenderRun, RenderSettings, RunError};
 use crate::render::empty_pass;
 use crate::report::stats::{summarise_passes, PassTimesError, Summary};
 use crate::scene::{knob_settings, Scene, SceneError};
@@ -188,9 +188,11 @@ pub fn run(
     for resolution in resolutions {
         let label = baseline::empty_pass_scene(resolution);
         progress.run(&label);
-        let run = app::render_empty_pass(
-            resolution.width,
-            resolution.height,
+        let run = app::run(
+            FrameSource::EmptyPass {
+                width: resolution.width,
+                height: resolution.height,
+            },
             &render_settings,
             &mut || progress.frame(),
         )
@@ -215,8 +217,10 @@ pub fn run(
     for s in scenes {
         let label = s.path.display().to_string();
         progress.run(&label);
-        let run = app::render_with_progress(&s.scene, &render_settings, &mut || progress.frame())
-            .map_err(|error| BenchError::Render {
+        let run = app::run(FrameSource::Scene(&s.scene), &render_settings, &mut || {
+            progress.frame()
+        })
+        .map_err(|error| BenchError::Render {
             run: label.clone(),
             error,
         })?;

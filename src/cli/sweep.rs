@@ -185,6 +185,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                 let run = app::run(
                     FrameSource::HdrImage(&hdr, scene.tone_map),
                     &settings(0, 1, false, false),
+                    &mut || {},
                 )?;
                 validation::check(&run.validation)?;
                 return Ok(Rendered {

@@ -58,6 +58,7 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
             empty_pass_between_frames: false,
             ..Default::default()
         },
+        &mut || {},
     )
     .context("tone mapping failed")?;
     validation::check(&run.validation).context("no output written")?;

@@ -114,6 +114,14 @@ fn texture_bytes(info: TextureInfo) -> (u64, u64) {
     (base, base + base / 3)
 }
 
+/// [`scene_memory`] against the budget this process runs under
+/// (`AERIAL_MEMORY_BUDGET`, or half the machine's limit): called before
+/// the device exists, so nothing is allocated for a scene that does not fit.
+pub fn scene_fits(scene: &Scene, keep_hdr: bool) -> Result<(), RenderError> {
+    let budget = crate::budget::MemoryBudget::from_env().map_err(RenderError::from)?;
+    scene_memory(scene, keep_hdr, &budget)
+}
+
 /// Estimated peak memory of rendering `scene`, with the largest item named
 /// when over `budget`.
 pub fn scene_memory(

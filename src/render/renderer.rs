@@ -81,6 +81,27 @@ impl Renderer {
         Renderer::with_geometry(ctx, scene, Arc::new(SceneGeometry::new(scene)?), keep_hdr)
     }
 
+    /// The renderer for `scene` after the device checks (texture and
+    /// attachment sizes against the device's limits, see
+    /// `preflight::scene_on_device`): the one way `render`, `bench`,
+    /// `sweep` and the viewer build one. `geometry`, when given, must be
+    /// `SceneGeometry::new(scene)` (the viewer keeps it across rebuilds).
+    /// The memory budget is checked before the device exists, with
+    /// `preflight::scene_fits`.
+    pub fn prepare(
+        ctx: &Arc<Context>,
+        scene: &Scene,
+        geometry: Option<Arc<SceneGeometry>>,
+        keep_hdr: bool,
+    ) -> Result<Renderer, RenderError> {
+        super::preflight::scene_on_device(scene, ctx)?;
+        let geometry = match geometry {
+            Some(g) => g,
+            None => Arc::new(SceneGeometry::new(scene)?),
+        };
+        Renderer::with_geometry(ctx, scene, geometry, keep_hdr)
+    }
+
     /// [`Renderer::new`] with the scene's meshes already built (they must
     /// be `SceneGeometry::new(scene)`), for callers that use them too.
     pub fn with_geometry(

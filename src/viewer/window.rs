@@ -12,7 +12,6 @@ use super::knobs;
 use super::script::{Script, ScriptAction};
 use super::timing::TimingWindow;
 use super::{ViewOptions, ViewOutcome, ViewerError, SCRIPT_STEP_SECONDS};
-use crate::budget::MemoryBudget;
 use crate::files;
 use crate::render::{output, preflight, RenderError, Renderer, SceneGeometry, ViewChange};
 use crate::scene::Scene;
@@ -259,8 +258,7 @@ impl App {
                 .as_raw()
         };
         // Refuse what does not fit before the device allocates anything.
-        let budget = MemoryBudget::from_env().map_err(RenderError::from)?;
-        preflight::scene_memory(&scene, false, &budget)?;
+        preflight::scene_fits(&scene, false)?;
         let ctx = Context::new(&ContextOptions {
             validate: self.options.validate,
             device: self.options.device.clone(),
@@ -268,7 +266,6 @@ impl App {
             ..Default::default()
         })?;
         self.log = ctx.validation_log();
-        preflight::scene_on_device(&scene, &ctx)?;
         let surface = Arc::new(Surface::new(&ctx, window.clone())?);
         let size = window.inner_size();
         let swapchain = Swapchain::new(
@@ -285,7 +282,7 @@ impl App {
             .set_output_size(Some(sw), Some(sh))
             .map_err(|e| ViewerError::Render(RenderError::Frame(format!("window size: {e}"))))?;
         let geometry = Arc::new(SceneGeometry::new(&scene)?);
-        let renderer = Renderer::with_geometry(&ctx, &scene, geometry.clone(), false)?;
+        let renderer = Renderer::prepare(&ctx, &scene, Some(geometry.clone()), false)?;
         let mut timings = TimingWindow::default();
         timings.set_passes(renderer.plan().pass_names());
         Ok(Live {
@@ -371,12 +368,9 @@ impl Live {
         };
         let before = self.scene.clone();
         let value = cycle.advance(&mut self.scene)?;
-        let budget = MemoryBudget::from_env().map_err(RenderError::from)?;
-        let built = preflight::scene_memory(&self.scene, false, &budget)
-            .and_then(|()| preflight::scene_on_device(&self.scene, &self.ctx))
-            .and_then(|()| {
-                Renderer::with_geometry(&self.ctx, &self.scene, self.geometry.clone(), false)
-            });
+        let built = preflight::scene_fits(&self.scene, false).and_then(|()| {
+            Renderer::prepare(&self.ctx, &self.scene, Some(self.geometry.clone()), false)
+        });
         match built {
             Ok(renderer) => {
                 self.renderer = renderer;
