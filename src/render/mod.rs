@@ -6,6 +6,7 @@
 //! is the driver's floor that benchmarks divide by; `reference` is the
 //! exact CPU image that sweeps can measure against.
 
+pub mod draw_list;
 pub mod empty_pass;
 mod frame;
 pub mod geometry;

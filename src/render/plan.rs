@@ -9,98 +9,14 @@
 //! transparent pass without transparent objects, no HDR attachment or
 //! tone-map subpass when the scene asks for LDR output.
 
+pub use super::draw_list::{
+    shininess_exponent, Draw, DrawList, NormalMapSource, PipelineKey, ShadingKey,
+    MAX_SHININESS_EXPONENT,
+};
 use super::geometry::SceneGeometry;
 use super::tiles::{self, TileGroup};
 use crate::scene::{HdrFormat, Lighting, Scene, ShadingModel, Texture, ToneMapOperator};
 use crate::vk::{DepthUse, Format};
-use std::collections::BTreeMap;
-use std::path::PathBuf;
-
-/// A pipeline variant: shading model, light count and whole-number
-/// shininess (specialization constants), base colour texture (a shader variant with its own
-/// descriptor set) and alpha blending (the transparent pass).
-///
-/// The light count is a constant so the driver compiles the light loop with
-/// a fixed trip count (unrolled, with constant offsets into the light
-/// block); on lavapipe that is about twice as fast as a loop bounded by a
-/// value read from the buffer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct PipelineKey {
-    pub shading: ShadingKey,
-    pub textured: bool,
-    /// Tangent-space normal map (shader feature `NORMAL_MAP`, the tangent
-    /// attribute and one more descriptor set).
-    pub normal_mapped: bool,
-    pub blended: bool,
-    /// Lights in the object's block.
-    pub lights: u32,
-    /// The attribute a debug view draws (`DebugView as u32`), 0 for none
-    /// (shader feature `DEBUG_VIEW`, specialization constant 3).
-    pub debug: u32,
-    /// The material's shininess when it is a whole number from 1 to
-    /// [`MAX_SHININESS_EXPONENT`], else 0 (specialization constant 4): the
-    /// shader then raises to that power by multiplying instead of `pow`.
-    pub shininess_exponent: u32,
-}
-
-/// The largest shininess the shaders raise to by squaring (nine squarings).
-pub const MAX_SHININESS_EXPONENT: u32 = 1023;
-
-/// [`PipelineKey::shininess_exponent`] for `shininess`.
-pub fn shininess_exponent(shininess: f32) -> u32 {
-    if shininess.fract() == 0.0 && (1.0..=MAX_SHININESS_EXPONENT as f32).contains(&shininess) {
-        shininess as u32
-    } else {
-        0
-    }
-}
-
-/// `ShadingModel` as an ordered key (the GLSL specialization value).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum ShadingKey {
-    Phong = 0,
-    Gouraud = 1,
-    Toon = 2,
-}
-
-impl From<ShadingModel> for ShadingKey {
-    fn from(m: ShadingModel) -> Self {
-        match m {
-            ShadingModel::Phong => ShadingKey::Phong,
-            ShadingModel::Gouraud => ShadingKey::Gouraud,
-            ShadingModel::Toon => ShadingKey::Toon,
-        }
-    }
-}
-
-/// One object draw.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Draw {
-    pub object: usize,
-    pub pipeline: PipelineKey,
-    /// Index into `FramePlan::textures`.
-    pub texture: Option<usize>,
-    /// Index into `FramePlan::normal_maps`.
-    pub normal_map: Option<usize>,
-    /// Indices into `Scene::lights` evaluated while drawing the object
-    /// (empty for surfaces lit later by the deferred lighting pass).
-    pub lights: Vec<usize>,
-    /// With `[sun]` and `[atmosphere]`: the sun's colour on this object
-    /// (irradiance times the transmittance to the top of the atmosphere at
-    /// its bounding sphere's centre, [`crate::atmosphere::sun_light_at`]),
-    /// evaluated after `lights` while drawing it, also for surfaces lit
-    /// later: one directional light per object, it gains nothing from tile
-    /// culling, and the G-buffer has no room for a per-object colour.
-    pub sun: Option<[f32; 3]>,
-}
-
-/// Where a normal map comes from: a normal-map file, or a height map
-/// converted when the textures are loaded (`height_scale` set).
-#[derive(Clone, Debug, PartialEq)]
-pub struct NormalMapSource {
-    pub path: PathBuf,
-    pub height_scale: Option<f32>,
-}
 
 /// The attachment names passes refer to.
 pub mod attachment {
@@ -317,134 +233,103 @@ pub struct FramePlan {
 
 impl FramePlan {
     /// The frame for `scene`, whose meshes and bounds are `geometry`;
-    /// `keep_hdr` reads the linear HDR image back too.
+    /// `keep_hdr` reads the linear HDR image back too: its draw list and
+    /// its frame graph.
     pub fn new(scene: &Scene, geometry: &SceneGeometry, keep_hdr: bool) -> FramePlan {
-        let mut textures: Vec<Texture> = Vec::new();
-        let mut texture_index = BTreeMap::new();
-        let mut normal_maps: Vec<NormalMapSource> = Vec::new();
-        let mut normal_map_index = BTreeMap::new();
-        let mut opaque = Vec::new();
-        let mut transparent = Vec::new();
-        // Deferred lighting applies to opaque Phong surfaces; Gouraud and
-        // toon keep their forward form (drawn in the same subpass).
-        // A debug view draws attributes, not light: forward, every surface
-        // opaque, no lights.
-        let debug = scene.output.debug_view.map_or(0, |v| v as u32);
-        let deferred = debug == 0
-            && scene.output.lighting == Lighting::Deferred
-            && scene.objects.iter().any(|o| {
-                let m = &scene.materials[o.material];
-                m.opacity >= 1.0 && m.shading == ShadingModel::Phong
-            });
-        for (i, object) in scene.objects.iter().enumerate() {
-            let material = &scene.materials[object.material];
-            let texture = material.texture.as_ref().map(|source| {
-                *texture_index.entry(source.clone()).or_insert_with(|| {
-                    textures.push(source.clone());
-                    textures.len() - 1
-                })
-            });
-            // Per-vertex lighting cannot use a per-pixel normal (the scene
-            // warned): the map is left out, so no variant interpolates
-            // tangents nobody reads. Debug views draw it whatever the shading.
-            let lit_per_vertex = material.shading == ShadingModel::Gouraud && debug == 0;
-            let normal_map = material
-                .normal_map
-                .as_ref()
-                .filter(|_| !lit_per_vertex)
-                .map(|path| {
-                    let source = NormalMapSource {
-                        path: path.clone(),
-                        height_scale: material.height_scale,
-                    };
-                    let key = (path.clone(), material.height_scale.map(f32::to_bits));
-                    *normal_map_index.entry(key).or_insert_with(|| {
-                        normal_maps.push(source);
-                        normal_maps.len() - 1
-                    })
-                });
-            let blended = material.opacity < 1.0 && debug == 0;
-            let lit_later = deferred && !blended && material.shading == ShadingModel::Phong;
-            let lights = if lit_later || debug != 0 {
-                Vec::new()
-            } else {
-                let (centre, radius) = geometry.bounds[i];
-                scene.lights_reaching_sphere(centre, radius)
-            };
-            let sun = match &scene.sky {
-                Some(sky) if debug == 0 => {
-                    let centre = geometry.bounds[i].0;
-                    Some(
-                        crate::atmosphere::sun_light_at(sky, centre)
-                            .as_vec3()
-                            .to_array(),
-                    )
-                }
-                _ => None,
-            };
-            let draw = Draw {
-                object: i,
-                pipeline: PipelineKey {
-                    shading: material.shading.into(),
-                    textured: texture.is_some(),
-                    normal_mapped: normal_map.is_some(),
-                    blended,
-                    lights: (lights.len() + usize::from(sun.is_some())) as u32,
-                    debug,
-                    // The G-buffer form leaves lighting to the lighting
-                    // pass; only the forward shaders use it.
-                    shininess_exponent: if lit_later {
-                        0
-                    } else {
-                        shininess_exponent(material.shininess)
-                    },
-                },
-                texture,
-                normal_map,
-                lights,
-                sun,
-            };
-            if blended {
-                transparent.push(draw);
-            } else {
-                opaque.push(draw);
-            }
-        }
-        let eye = scene.camera.eye;
-        let distance = |d: &Draw| geometry.bounds[d.object].0.distance(eye);
-        // Opaque: grouped by pipeline and texture (fewer binds), front to
-        // back within a group, so the depth test rejects hidden fragments
-        // before they are shaded.
-        let mut keyed: Vec<(f64, Draw)> = opaque.into_iter().map(|d| (distance(&d), d)).collect();
-        // The shininess exponent is left out of the grouping: it only
-        // changes the specular arithmetic, and materials differing in it
-        // alone are better drawn front to back than a bind apart.
-        let group = |d: &Draw| {
-            let pipeline = PipelineKey {
-                shininess_exponent: 0,
-                ..d.pipeline
-            };
-            (pipeline, d.texture, d.normal_map)
-        };
-        keyed.sort_by(|a, b| group(&a.1).cmp(&group(&b.1)).then(a.0.total_cmp(&b.0)));
-        let opaque: Vec<Draw> = keyed.into_iter().map(|(_, d)| d).collect();
-        // Transparent: back to front; ties keep scene order.
-        let mut keyed: Vec<(f64, Draw)> =
-            transparent.into_iter().map(|d| (distance(&d), d)).collect();
-        keyed.sort_by(|a, b| b.0.total_cmp(&a.0));
-        let transparent: Vec<Draw> = keyed.into_iter().map(|(_, d)| d).collect();
-
-        let tile_groups = if deferred {
+        let graph = FrameGraph::new(scene, keep_hdr);
+        let draws = DrawList::new(scene, geometry, graph.lighting == Lighting::Deferred);
+        let tile_groups = if graph.lighting == Lighting::Deferred {
             tiles::group_lights(scene, scene.output.width, scene.output.height)
         } else {
             Vec::new()
         };
+        FramePlan {
+            width: scene.output.width,
+            height: scene.output.height,
+            hdr_format: scene.output.hdr_format,
+            lighting: graph.lighting,
+            opaque: draws.opaque,
+            transparent: draws.transparent,
+            textures: draws.textures,
+            normal_maps: draws.normal_maps,
+            tile_groups,
+            attachments: graph.attachments,
+            passes: graph.passes,
+        }
+    }
+
+    /// The frame that only tone-maps a given `width`×`height` HDR image:
+    /// no draws, the image copied into a 32-bit float HDR attachment;
+    /// `keep_hdr` reads that attachment back too.
+    pub fn for_hdr_image(width: u32, height: u32, keep_hdr: bool) -> FramePlan {
+        let graph = FrameGraph::for_hdr_image(keep_hdr);
+        FramePlan {
+            width,
+            height,
+            hdr_format: HdrFormat::Rgba32F,
+            lighting: graph.lighting,
+            opaque: Vec::new(),
+            transparent: Vec::new(),
+            textures: Vec::new(),
+            normal_maps: Vec::new(),
+            tile_groups: Vec::new(),
+            attachments: graph.attachments,
+            passes: graph.passes,
+        }
+    }
+
+    /// The pass names, in order.
+    pub fn pass_names(&self) -> Vec<&'static str> {
+        self.passes.iter().map(PassDecl::name).collect()
+    }
+
+    /// Whether a pass of this kind is in the frame.
+    pub fn has(&self, kind: PassKind) -> bool {
+        self.passes.iter().any(|p| p.kind == kind)
+    }
+
+    /// Whether an attachment of this name exists.
+    pub fn has_attachment(&self, name: &str) -> bool {
+        self.attachments.iter().any(|a| a.name == name)
+    }
+
+    /// The attachment called `name`.
+    pub fn attachment(&self, name: &str) -> Option<&AttachmentDecl> {
+        self.attachments.iter().find(|a| a.name == name)
+    }
+
+    pub fn draws(&self) -> impl Iterator<Item = &Draw> {
+        self.opaque.iter().chain(&self.transparent)
+    }
+}
+
+/// The frame's attachments and passes: what a scene needs, from the scene
+/// alone (no meshes), so `preflight` sizes memory from the same graph the
+/// renderer builds.
+#[derive(Clone, Debug)]
+pub struct FrameGraph {
+    pub lighting: Lighting,
+    pub attachments: Vec<AttachmentDecl>,
+    pub passes: Vec<PassDecl>,
+}
+
+impl FrameGraph {
+    /// The graph for `scene`; `keep_hdr` reads the linear HDR image back too.
+    pub fn new(scene: &Scene, keep_hdr: bool) -> FrameGraph {
+        let debug = scene.output.debug_view.map_or(0, |v| v as u32);
+        let deferred = uses_deferred_lighting(scene);
         let lighting = if deferred {
             Lighting::Deferred
         } else {
             Lighting::Forward
         };
-
+        // Drawn in the transparent pass: every object whose material is
+        // not opaque, outside the debug views (see `DrawList`).
+        let any_transparent = debug == 0
+            && scene
+                .objects
+                .iter()
+                .any(|o| scene.materials[o.material].opacity < 1.0);
         use attachment::*;
         // LDR output without --hdr: draw straight into the sRGB output when
         // that gives exactly clamp(exposure * HDR): exposure 1, each pixel
@@ -464,7 +349,7 @@ impl FramePlan {
             && scene.tone_map.operator == ToneMapOperator::None
             && scene.tone_map.exposure == 1.0
             && scene.output.hdr_format == HdrFormat::Rgba32F
-            && transparent.is_empty()
+            && !any_transparent
             && !keep_hdr
             && !deferred
             && !sky;
@@ -547,7 +432,7 @@ impl FramePlan {
                 vec![],
             ));
         }
-        if !transparent.is_empty() {
+        if any_transparent {
             passes.push(PassDecl::subpass(
                 PassKind::Transparent,
                 vec![target],
@@ -579,40 +464,26 @@ impl FramePlan {
             reads.push(HDR);
         }
         passes.push(PassDecl::transfer(PassKind::Readback, reads, vec![]));
-        FramePlan {
-            width: scene.output.width,
-            height: scene.output.height,
-            hdr_format: scene.output.hdr_format,
+        FrameGraph {
             lighting,
-            opaque,
-            transparent,
-            textures,
-            normal_maps,
-            tile_groups,
             attachments,
             passes,
         }
     }
+}
 
-    /// The frame that only tone-maps a given `width`×`height` HDR image:
-    /// no draws, the image copied into a 32-bit float HDR attachment;
-    /// `keep_hdr` reads that attachment back too.
-    pub fn for_hdr_image(width: u32, height: u32, keep_hdr: bool) -> FramePlan {
+impl FrameGraph {
+    /// The graph that only tone-maps an HDR image: the image copied into a
+    /// 32-bit float HDR attachment, tone-mapped, read back (`keep_hdr`: the
+    /// HDR attachment too).
+    pub fn for_hdr_image(keep_hdr: bool) -> FrameGraph {
         use attachment::*;
         let mut reads = vec![OUTPUT];
         if keep_hdr {
             reads.push(HDR);
         }
-        FramePlan {
-            width,
-            height,
-            hdr_format: HdrFormat::Rgba32F,
+        FrameGraph {
             lighting: Lighting::Forward,
-            opaque: Vec::new(),
-            transparent: Vec::new(),
-            textures: Vec::new(),
-            normal_maps: Vec::new(),
-            tile_groups: Vec::new(),
             attachments: vec![
                 AttachmentDecl {
                     name: OUTPUT,
@@ -632,30 +503,19 @@ impl FramePlan {
             ],
         }
     }
+}
 
-    /// The pass names, in order.
-    pub fn pass_names(&self) -> Vec<&'static str> {
-        self.passes.iter().map(PassDecl::name).collect()
-    }
-
-    /// Whether a pass of this kind is in the frame.
-    pub fn has(&self, kind: PassKind) -> bool {
-        self.passes.iter().any(|p| p.kind == kind)
-    }
-
-    /// Whether an attachment of this name exists.
-    pub fn has_attachment(&self, name: &str) -> bool {
-        self.attachments.iter().any(|a| a.name == name)
-    }
-
-    /// The attachment called `name`.
-    pub fn attachment(&self, name: &str) -> Option<&AttachmentDecl> {
-        self.attachments.iter().find(|a| a.name == name)
-    }
-
-    pub fn draws(&self) -> impl Iterator<Item = &Draw> {
-        self.opaque.iter().chain(&self.transparent)
-    }
+/// Whether `scene` is lit in a deferred lighting pass: asked for, outside
+/// the debug views (which draw attributes, not light), and with an opaque
+/// Phong surface to light (Gouraud and toon keep their forward form, drawn
+/// in the same subpass).
+pub fn uses_deferred_lighting(scene: &Scene) -> bool {
+    scene.output.debug_view.is_none()
+        && scene.output.lighting == Lighting::Deferred
+        && scene.objects.iter().any(|o| {
+            let m = &scene.materials[o.material];
+            m.opacity >= 1.0 && m.shading == ShadingModel::Phong
+        })
 }
 
 /// The 8-bit output: sRGB, so shaders write linear values.

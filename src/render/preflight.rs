@@ -11,10 +11,11 @@
 //!   once (`SceneGeometry::new`), and the lights each object's uniform
 //!   block must hold where the blocks are laid out (`scene_resources`).
 
+use super::plan::{attachment, FrameGraph, PassIo};
 use super::RenderError;
 use crate::budget::{Bytes, MemoryBudget};
-use crate::scene::{HdrFormat, Scene};
-use crate::vk::Context;
+use crate::scene::Scene;
+use crate::vk::{bytes_per_texel, Context};
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
 
@@ -161,17 +162,9 @@ pub fn scene_memory(
     }
     total = total.saturating_add(largest_transient);
     let (w, h) = (scene.output.width as u64, scene.output.height as u64);
-    let mut attachments = attachment_bytes(w, h, scene.output.hdr_format, keep_hdr);
-    if scene.sky.is_some() {
-        // The atmosphere pass reads the surfaces from a second HDR
-        // attachment, `surface`.
-        attachments += w
-            * h
-            * match scene.output.hdr_format {
-                HdrFormat::Rgba16F => 8,
-                HdrFormat::Rgba32F => 16,
-            };
-    }
+    // Every attachment the renderer will create (the G-buffer and the
+    // atmosphere's surface copy included), from the same graph.
+    let attachments = attachment_bytes(w, h, &FrameGraph::new(scene, keep_hdr));
     let size_what = format!("output size {w}x{h}");
     budget.check(&size_what, attachments)?;
     total = total.saturating_add(attachments);
@@ -253,19 +246,35 @@ pub fn scene_memory(
     Ok(())
 }
 
-/// Attachments, readback buffers and the CPU copies of the read-back
-/// images for a `w` x `h` frame.
-fn attachment_bytes(w: u64, h: u64, hdr_format: HdrFormat, keep_hdr: bool) -> u64 {
+/// The frame's attachments (sized from the graph the renderer builds),
+/// the read-back buffers and the CPU copies of the read-back images for a
+/// `w` x `h` frame.
+fn attachment_bytes(w: u64, h: u64, graph: &FrameGraph) -> u64 {
     let pixels = w * h;
-    let hdr_texel = match hdr_format {
-        HdrFormat::Rgba16F => 8,
-        HdrFormat::Rgba32F => 16,
+    let texel = |name: &str| {
+        graph
+            .attachments
+            .iter()
+            .find(|a| a.name == name)
+            .map_or(0, |a| bytes_per_texel(a.format))
     };
-    // HDR colour, D32 depth, RGBA8 output; output readback and its copy.
-    let mut bytes = pixels * (hdr_texel + 4 + 4) + pixels * 4 * 2;
-    if keep_hdr {
-        // HDR readback, its f32 copy, and the OpenEXR encoder's buffer.
-        bytes += pixels * (hdr_texel + 16 + 16);
+    let mut bytes: u64 = graph
+        .attachments
+        .iter()
+        .map(|a| pixels * bytes_per_texel(a.format))
+        .sum();
+    for pass in &graph.passes {
+        if let PassIo::Transfer { reads, .. } = &pass.io {
+            for name in reads {
+                // The read-back buffer, its copy on the CPU (as f32 for
+                // HDR), and for HDR the OpenEXR encoder's buffer.
+                bytes += if *name == attachment::OUTPUT {
+                    pixels * texel(name) * 2
+                } else {
+                    pixels * (texel(name) + 16 + 16)
+                };
+            }
+        }
     }
     bytes
 }
@@ -274,7 +283,7 @@ fn attachment_bytes(w: u64, h: u64, hdr_format: HdrFormat, keep_hdr: bool) -> u6
 /// already in memory (upload buffer, rgba32f attachment, output, readback).
 pub fn image_memory(w: u32, h: u32, budget: &MemoryBudget) -> Result<(), RenderError> {
     let (w, h) = (w as u64, h as u64);
-    let need = w * h * 16 + attachment_bytes(w, h, HdrFormat::Rgba32F, false);
+    let need = w * h * 16 + attachment_bytes(w, h, &FrameGraph::for_hdr_image(false));
     budget.check(format!("image size {w}x{h}"), need)?;
     Ok(())
 }

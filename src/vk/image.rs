@@ -326,3 +326,19 @@ impl Drop for Sampler {
         unsafe { self.ctx.device.destroy_sampler(self.handle, None) };
     }
 }
+
+/// Bytes per texel of the colour and depth formats this crate creates
+/// images in (and, for any other, the common 4): the one table that sizes
+/// read-back buffers and memory estimates.
+pub fn bytes_per_texel(format: vk::Format) -> u64 {
+    match format {
+        vk::Format::R32G32B32A32_SFLOAT => 16,
+        vk::Format::R32G32B32_SFLOAT => 12,
+        vk::Format::R16G16B16A16_SFLOAT
+        | vk::Format::R16G16B16A16_UNORM
+        | vk::Format::R32G32_SFLOAT
+        | vk::Format::D32_SFLOAT_S8_UINT => 8,
+        vk::Format::D16_UNORM => 2,
+        _ => 4,
+    }
+}

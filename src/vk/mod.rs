@@ -24,7 +24,7 @@ pub use buffer::{Buffer, BufferUsage};
 pub use commands::{CommandBuffer, Fence, ImageUse};
 pub use context::{Context, ContextOptions, DeviceInfo};
 pub use descriptors::{DescriptorBinding, DescriptorPool, DescriptorSet, DescriptorSetLayout};
-pub use image::{Image, ImageDesc, Sampler, SamplerFilter};
+pub use image::{bytes_per_texel, Image, ImageDesc, Sampler, SamplerFilter};
 pub use pipeline::{
     Blend, ComputePipeline, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, ShaderModule,
     VertexAttribute,

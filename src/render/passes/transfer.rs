@@ -6,7 +6,7 @@
 use super::{FrameResources, PassSetup, RecordPass};
 use crate::render::plan::{attachment, PassIo};
 use crate::render::RenderError;
-use crate::vk::{Buffer, BufferUsage, CommandBuffer, Format};
+use crate::vk::{Buffer, BufferUsage, CommandBuffer};
 
 pub struct TransferPass {
     /// (attachment, buffer) copied into the attachment.
@@ -43,22 +43,13 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     let mut readbacks = Vec::new();
     for &name in reads {
         let image = setup.frame.attachments.get(name)?;
-        let bytes = texel_size(image.desc.format)
+        let bytes = crate::vk::bytes_per_texel(image.desc.format)
             * u64::from(image.desc.width)
             * u64::from(image.desc.height);
         let buffer = Buffer::new(setup.ctx, name, bytes, BufferUsage::Readback)?;
         readbacks.push((name, buffer));
     }
     Ok(Box::new(TransferPass { uploads, readbacks }))
-}
-
-/// Bytes per texel of the formats attachments are read back in.
-fn texel_size(format: Format) -> u64 {
-    match format {
-        Format::R32G32B32A32_SFLOAT => 16,
-        Format::R16G16B16A16_SFLOAT => 8,
-        _ => 4,
-    }
 }
 
 impl RecordPass for TransferPass {
