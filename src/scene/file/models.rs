@@ -1,0 +1,375 @@
+//! OBJ models in a scene: an `obj` shape becomes one object per object or
+//! group of the file, each with its MTL material (checked against a scene
+//! material's bounds) unless the scene names one; missing or broken assets
+//! are warnings with visible fallbacks.
+
+use super::*;
+
+impl Check<'_> {
+    /// An `obj` shape: the model is loaded, smoothed and given tangent
+    /// frames here, once, and becomes one object per object/group of the
+    /// file (named `name/group`), each with its MTL material unless the
+    /// scene object names one (then the MTL's textures are never opened,
+    /// and its problems are no concern of the scene's). Missing MTL
+    /// libraries and textures are `warnings` (see [`Check::mtl_material`]).
+    pub(super) fn obj_object(
+        &self,
+        path: &str,
+        raw: ObjectFile,
+        materials: &mut Vec<Material>,
+        by_name: &mut HashMap<String, usize>,
+        warnings: &mut Vec<SceneWarning>,
+    ) -> Result<Vec<Object>> {
+        let field = |name: &str| format!("{path}.{name}");
+        if raw.name.trim().is_empty() {
+            return Err(self.invalid(field("name"), "must not be empty"));
+        }
+        let shape = &raw.shape;
+        if let Some((name, _)) = shape.sizes().iter().find(|(_, v)| v.is_some()) {
+            return Err(self.invalid(
+                field(&format!("shape.{name}")),
+                format!("an obj has no {name} (it takes path)"),
+            ));
+        }
+        if raw.tessellation.is_some() {
+            return Err(self.invalid(
+                field("tessellation"),
+                "an obj model brings its own triangles; tessellation is for parametric shapes",
+            ));
+        }
+        let model_path = shape
+            .path
+            .as_ref()
+            .ok_or_else(|| self.invalid(field("shape.path"), "required for an obj"))?;
+        let resolved = self.base_dir.join(model_path);
+        // A model is parsed, smoothed and given frames when the scene is
+        // loaded, before the renderer's own memory estimate: refuse here,
+        // from the file's size, what cannot fit the budget.
+        if let Ok(meta) = std::fs::metadata(&resolved) {
+            let budget = crate::budget::MemoryBudget::from_env()
+                .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
+            budget
+                .check(
+                    format!("model {}", resolved.display()),
+                    meta.len().saturating_mul(obj::MEMORY_PER_FILE_BYTE),
+                )
+                .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
+        }
+        let model = obj::load_obj(&resolved)
+            .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
+        self.models.borrow_mut().extend(model.files.iter().cloned());
+        let crease_degrees = match raw.crease_angle {
+            None => obj::DEFAULT_CREASE_DEGREES,
+            Some(x) => {
+                let x = self.finite(&field("crease_angle"), x)?;
+                if !(0.0..=180.0).contains(&x) {
+                    return Err(self.invalid(
+                        field("crease_angle"),
+                        format!("must be between 0 and 180 degrees, got {x}"),
+                    ));
+                }
+                x
+            }
+        };
+        let weld_tolerance = match raw.weld_tolerance {
+            None => obj::DEFAULT_WELD_TOLERANCE,
+            Some(x) => {
+                let x = self.finite(&field("weld_tolerance"), x)?;
+                // Up to 1e-3: welding further apart merges real features,
+                // and the hash cells would hold so many points that welding
+                // turns quadratic.
+                if !(0.0..=1e-3).contains(&x) {
+                    return Err(self.invalid(
+                        field("weld_tolerance"),
+                        format!(
+                            "must be between 0 and 0.001 (a fraction of the model's \
+                             bounding-box diagonal), got {x}"
+                        ),
+                    ));
+                }
+                x
+            }
+        };
+        let options = obj::ModelOptions {
+            smoothing: raw.smoothing.map(|s| match s {
+                SmoothingFile::Face => Smoothing::Face,
+                SmoothingFile::Object => Smoothing::Object,
+                SmoothingFile::Model => Smoothing::Model,
+                SmoothingFile::File => Smoothing::File,
+            }),
+            crease_degrees,
+            weld_tolerance,
+            tangents: match raw.tangents {
+                None | Some(TangentsFile::Aerial) => obj::TangentMethod::Aerial,
+                Some(TangentsFile::Mikktspace) => obj::TangentMethod::Mikktspace,
+            },
+        };
+        let meshes =
+            obj::model_meshes(&model, &options, &resolved.display().to_string()).map_err(|e| {
+                // Only a smoothing mode the file cannot satisfy is the
+                // option's fault; anything else is the model's.
+                let at = match e {
+                    obj::ObjError::Smoothing { .. } => "smoothing",
+                    _ => "shape.path",
+                };
+                self.invalid(field(at), e.to_string())
+            })?;
+        let transform = self.transform(path, &raw)?;
+        let over = match &raw.material {
+            Some(name) => {
+                Some(self.material_index(&field("material"), Some(name), materials, by_name)?)
+            }
+            None => None,
+        };
+        let mut warn = |warning: AssetWarning| {
+            warnings.push(SceneWarning {
+                file: self.file.to_owned(),
+                field: field("shape.path"),
+                warning,
+            })
+        };
+        if over.is_none() {
+            model.warnings.iter().cloned().for_each(&mut warn);
+        }
+        // The model's own materials, added on first use as `name/material`.
+        let mut own: HashMap<Option<usize>, usize> = HashMap::new();
+        let mut objects = Vec::with_capacity(meshes.len());
+        for (i, (part, (mesh, _))) in model.parts.iter().zip(meshes).enumerate() {
+            // A group whose faces all collapsed draws nothing; an empty
+            // vertex buffer is not a valid draw.
+            if mesh.indices.is_empty() {
+                continue;
+            }
+            let material = match over {
+                Some(m) => m,
+                None => match own.get(&part.material) {
+                    Some(&m) => m,
+                    None => {
+                        let m = self.mtl_material(
+                            &field("shape.path"),
+                            &raw.name,
+                            part.material.map(|m| &model.materials[m]),
+                            &resolved.display().to_string(),
+                            materials,
+                            by_name,
+                            &mut warn,
+                        )?;
+                        own.insert(part.material, m);
+                        m
+                    }
+                },
+            };
+            let part_name = if part.name.is_empty() {
+                format!("{i}")
+            } else {
+                part.name.clone()
+            };
+            // Without UVs there is no tangent space to read a map in.
+            if materials[material].normal_map.is_some() && part.uvs.is_none() {
+                return Err(self.invalid(
+                    field("shape.path"),
+                    format!(
+                        "{}: object \"{part_name}\" has faces without texture coordinates, \
+                         but its material \"{}\" has a normal map",
+                        resolved.display(),
+                        materials[material].name
+                    ),
+                ));
+            }
+            objects.push(Object {
+                name: format!("{}/{part_name}", raw.name),
+                shape: Shape::Mesh {
+                    mesh: Arc::new(mesh),
+                },
+                // Unused for a mesh; kept only because every object has one.
+                tessellation: (DEFAULT_TESSELLATION[0], DEFAULT_TESSELLATION[1]),
+                material,
+                transform,
+            });
+        }
+        if objects.is_empty() {
+            return Err(self.invalid(
+                field("shape.path"),
+                format!(
+                    "{}: every triangle is collapsed to a line or a point",
+                    resolved.display()
+                ),
+            ));
+        }
+        Ok(objects)
+    }
+
+    /// Adds the scene material for an MTL material (or the default grey for
+    /// faces without one) and returns its index. A texture that is missing
+    /// or not a readable PNG or JPEG (by its header) is a warning: the base
+    /// colour becomes the magenta/black checker placeholder, a normal map
+    /// the flat normal (0, 0, 1), which is the same as leaving it out.
+    #[allow(clippy::too_many_arguments)]
+    fn mtl_material(
+        &self,
+        field: &str,
+        object: &str,
+        mtl: Option<&obj::ObjMaterial>,
+        model: &str,
+        materials: &mut Vec<Material>,
+        by_name: &mut HashMap<String, usize>,
+        warn: &mut dyn FnMut(AssetWarning),
+    ) -> Result<usize> {
+        let default = obj::ObjMaterial {
+            name: "default".into(),
+            origin: model.to_owned(),
+            ka: None,
+            kd: Vec3::splat(0.8),
+            ks: Vec3::ZERO,
+            shininess: 32.0,
+            opacity: 1.0,
+            texture: None,
+            normal_map: None,
+        };
+        let mtl = mtl.unwrap_or(&default);
+        let name = format!("{object}/{}", mtl.name);
+        if by_name.contains_key(&name) {
+            return Err(self.invalid(
+                field,
+                format!("the model's material \"{name}\" clashes with a scene material name"),
+            ));
+        }
+        let values = checked_mtl_values(mtl, warn);
+        let mut usable = |path: &Option<std::path::PathBuf>, what: &str, fallback: &str| {
+            let path = path.as_ref()?;
+            let problem = if let Some(problem) = crate::files::input_file_problem(path) {
+                problem
+            } else {
+                match crate::render::preflight::inspect_texture(path) {
+                    Ok(_) => return Some(Ok(path.clone())),
+                    Err(e) => format!("is not usable: {e}"),
+                }
+            };
+            warn(AssetWarning {
+                problem: format!("{model}: material \"{}\": {what} {problem}", mtl.name),
+                fallback: fallback.to_owned(),
+            });
+            Some(Err(()))
+        };
+        let texture = usable(
+            &mtl.texture,
+            "map_Kd",
+            "drawn with a magenta/black checker instead",
+        )
+        .map(|t| t.map_or(Texture::Placeholder, Texture::File));
+        let normal_map = usable(
+            &mtl.normal_map,
+            "normal map",
+            "drawn with the flat normal (0, 0, 1) instead (the surface's own normals)",
+        )
+        .and_then(|usable| usable.ok());
+        materials.push(Material {
+            name: name.clone(),
+            ka: values.ka,
+            kd: values.kd,
+            ks: values.ks,
+            shininess: values.shininess,
+            texture,
+            opacity: values.opacity,
+            normal_map,
+            normal_map_green_down: false,
+            height_scale: None,
+            shading: ShadingModel::Phong,
+        });
+        by_name.insert(name, materials.len() - 1);
+        Ok(materials.len() - 1)
+    }
+}
+
+/// An MTL material's colours, exponent and opacity after the checks.
+struct MtlValues {
+    ka: Vec3,
+    kd: Vec3,
+    ks: Vec3,
+    shininess: f32,
+    opacity: f32,
+}
+
+/// Checks an MTL material's values against the bounds of a scene
+/// material (colours finite, at least 0 and at most [`MAX_COLOUR`];
+/// `d` from 0 to 1), with one warning for each value out of them and the
+/// fallback taken: a colour that is not a finite non-negative number gets
+/// the MTL default (Kd 0.8 grey, Ks black, Ka = Kd), one above the bound
+/// is clamped, `d` outside 0..1 is drawn opaque. `Ns 0` is common in
+/// exported files for "no highlight" and becomes 1 without a warning
+/// (`pow(0, 0)` is undefined in GLSL).
+fn checked_mtl_values(mtl: &obj::ObjMaterial, warn: &mut dyn FnMut(AssetWarning)) -> MtlValues {
+    let max = MAX_COLOUR as f32;
+    let mut warn_value = |what: &str, reason: String, fallback: String| {
+        warn(AssetWarning {
+            problem: format!("{}: material \"{}\": {what} {reason}", mtl.origin, mtl.name),
+            fallback,
+        })
+    };
+    let mut colour = |what: &str, v: Vec3, default: Vec3| -> Vec3 {
+        let c = v.to_array();
+        if let Some(i) = c.iter().position(|x| !x.is_finite() || *x < 0.0) {
+            warn_value(
+                what,
+                format!(
+                    "component {i} must be finite and at least 0, got {:e}",
+                    c[i]
+                ),
+                format!("{what} {} is used instead", default.x),
+            );
+            default
+        } else if let Some(i) = c.iter().position(|&x| x > max) {
+            warn_value(
+                what,
+                format!(
+                    "component {i} must be at most {MAX_COLOUR:e}, got {:e}",
+                    c[i]
+                ),
+                format!("clamped to {MAX_COLOUR:e}"),
+            );
+            v.min(Vec3::splat(max))
+        } else {
+            v
+        }
+    };
+    let kd = colour("Kd", mtl.kd, Vec3::splat(0.8));
+    let ks = colour("Ks", mtl.ks, Vec3::ZERO);
+    let ka = match mtl.ka {
+        Some(ka) => colour("Ka", ka, kd),
+        None => kd,
+    };
+    let shininess = if !mtl.shininess.is_finite() || mtl.shininess < 0.0 {
+        warn_value(
+            "Ns",
+            format!("must be finite and at least 0, got {:e}", mtl.shininess),
+            "Ns 32 is used instead".into(),
+        );
+        32.0
+    } else if mtl.shininess > max {
+        warn_value(
+            "Ns",
+            format!("must be at most {MAX_COLOUR:e}, got {:e}", mtl.shininess),
+            format!("clamped to {MAX_COLOUR:e}"),
+        );
+        max
+    } else {
+        mtl.shininess.max(1.0)
+    };
+    let opacity = if (0.0..=1.0).contains(&mtl.opacity) {
+        mtl.opacity
+    } else {
+        warn_value(
+            "d",
+            format!("must be from 0 to 1, got {:e}", mtl.opacity),
+            "drawn opaque (d 1)".into(),
+        );
+        1.0
+    };
+    MtlValues {
+        ka,
+        kd,
+        ks,
+        shininess,
+        opacity,
+    }
+}
