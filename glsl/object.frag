@@ -49,16 +49,12 @@ layout(location = 2) out vec2 out_normal;
 layout(location = 3) out vec4 out_material;
 #endif
 
+// One material set with fixed bindings (see constants.glsl).
 #ifdef BASE_COLOR_TEXTURE
-layout(set = 2, binding = 0) uniform sampler2D base_color;
+layout(set = MATERIAL_SET, binding = BASE_COLOR_BINDING) uniform sampler2D base_color;
 #endif
 #ifdef NORMAL_MAP
-// The next set after the base colour's, if any.
-#ifdef BASE_COLOR_TEXTURE
-layout(set = 3, binding = 0) uniform sampler2D normal_map;
-#else
-layout(set = 2, binding = 0) uniform sampler2D normal_map;
-#endif
+layout(set = MATERIAL_SET, binding = NORMAL_MAP_BINDING) uniform sampler2D normal_map;
 #endif
 
 #ifdef DEBUG_VIEW
@@ -67,7 +63,7 @@ const uint DEBUG_TANGENTS = 2u;
 const uint DEBUG_BITANGENTS = 3u;
 const uint DEBUG_UV = 4u;
 const uint DEBUG_ALBEDO = 5u;
-layout(constant_id = 3) const uint DEBUG_ATTRIBUTE = DEBUG_NORMALS;
+layout(constant_id = SPEC_DEBUG_ATTRIBUTE) const uint DEBUG_ATTRIBUTE = DEBUG_NORMALS;
 #endif
 
 void main() {

@@ -1,4 +1,5 @@
 #version 450
+#include "constants.glsl"
 // Tone-map subpass: reads the HDR colour of this pixel as an input
 // attachment and writes display colour; the sRGB attachment encodes it.
 #include "tonemap.glsl"
@@ -17,8 +18,8 @@ const int TONEMAP_DEBUG = 3;
 vec3 srgb_to_linear(vec3 c) {
     return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
 }
-layout(constant_id = 0) const int OPERATOR = TONEMAP_REINHARD;
-layout(constant_id = 1) const float EXPOSURE = 1.0;
+layout(constant_id = SPEC_TONEMAP_OPERATOR) const int OPERATOR = TONEMAP_REINHARD;
+layout(constant_id = SPEC_TONEMAP_EXPOSURE) const float EXPOSURE = 1.0;
 
 void main() {
     if (OPERATOR == TONEMAP_DEBUG) {

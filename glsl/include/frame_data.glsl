@@ -1,5 +1,6 @@
 // The per-frame block and the light layout, shared by every shader that
 // lights surfaces. Layouts mirror src/render/gpu_types.rs.
+#include "constants.glsl"
 
 struct Light {
     vec4 position;     // xyz: position (w = 1) or unit direction towards the light (w = 0)
@@ -7,7 +8,7 @@ struct Light {
     vec4 attenuation;  // x: constant, y: linear, z: quadratic, w: window (point lights only)
 };
 
-layout(set = 0, binding = 0) uniform Frame {
+layout(set = FRAME_SET, binding = 0) uniform Frame {
     mat4 view_projection;
     vec4 camera_position;  // xyz
     vec4 ambient;          // rgb: La
@@ -18,7 +19,7 @@ layout(set = 0, binding = 0) uniform Frame {
 // The number of lights a draw evaluates, a specialization constant: the
 // light loop then has a fixed trip count the driver can unroll, and every
 // light is read at a constant offset.
-layout(constant_id = 1) const uint LIGHT_COUNT = 0u;
+layout(constant_id = SPEC_LIGHT_COUNT) const uint LIGHT_COUNT = 0u;
 // The declared length of the light array: LIGHT_COUNT, but at least 1, since
 // a GLSL array cannot be empty.
-layout(constant_id = 2) const uint LIGHT_ARRAY_LENGTH = 1u;
+layout(constant_id = SPEC_LIGHT_ARRAY_LENGTH) const uint LIGHT_ARRAY_LENGTH = 1u;

@@ -25,7 +25,7 @@ void light_at(Light light, vec3 p, out vec3 l, out vec3 radiance) {
 // leaves it 0). cos^n is then at most 18 multiplications, where pow is
 // exp2(n * log2(cos)): on lavapipe that cut a full-screen plane lit by six
 // lights by about 15 %.
-layout(constant_id = 4) const uint SHININESS_EXPONENT = 0u;
+layout(constant_id = SPEC_SHININESS_EXPONENT) const uint SHININESS_EXPONENT = 0u;
 
 // x^SHININESS_EXPONENT by squaring, written out: the conditions are
 // constants, so only the multiplications the exponent's bits need remain

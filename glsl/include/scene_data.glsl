@@ -7,13 +7,13 @@
 const int SHADING_PHONG = 0;
 const int SHADING_GOURAUD = 1;
 const int SHADING_TOON = 2;
-layout(constant_id = 0) const int SHADING_MODEL = SHADING_PHONG;
+layout(constant_id = SPEC_SHADING_MODEL) const int SHADING_MODEL = SHADING_PHONG;
 
 // One block per object: its transform, its material and exactly the lights
 // that can reach it (see Scene::lights_reaching), bound with a dynamic offset.
 // A uniform block rather than a storage buffer: with constant offsets the
 // driver reads uniform data once per draw instead of once per invocation.
-layout(std140, set = 1, binding = 0) uniform ObjectBlock {
+layout(std140, set = OBJECT_SET, binding = 0) uniform ObjectBlock {
     mat4 model;
     mat4 normal_matrix;  // inverse transpose of the model matrix
     vec4 ka;             // rgb

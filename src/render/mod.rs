@@ -19,6 +19,7 @@ pub mod preflight;
 pub mod reference;
 mod renderer;
 mod scene_resources;
+pub mod shader_ids;
 pub mod sky_resources;
 pub mod tiles;
 

@@ -1,11 +1,13 @@
 //! GPU resources shared by every pass that draws the scene's objects: one
 //! geometry buffer, the per-frame uniforms, the per-object blocks (a
 //! dynamic uniform buffer, std140) and the base-colour textures, with
-//! their descriptor sets and the two pipeline layouts object pipelines use.
+//! one material descriptor set per (base colour, normal map) pair, and the
+//! one pipeline layout object pipelines use.
 
 use super::geometry::SceneGeometry;
 use super::gpu_types::{FrameUniforms, GpuLight, ObjectHeader};
 use super::plan::{Draw, FramePlan};
+use super::shader_ids::{BASE_COLOR_BINDING, NORMAL_MAP_BINDING};
 use super::RenderError;
 use crate::mesh::height::{encode_normal_map, GreenAxis, HeightEdge, HeightFilter, HeightMap};
 use crate::scene::{placeholder_texels, Light, Scene, Texture, TextureFilter, PLACEHOLDER_TEXTURE};
@@ -30,28 +32,29 @@ pub struct GeometryRange {
     pub index_count: u32,
 }
 
+/// A draw's base-colour texture and normal map, by index into the plan's
+/// lists.
+type ImagePair = (Option<usize>, Option<usize>);
+
 /// Fields drop in declaration order: sets before their pool, layouts after
 /// the pipelines' users are gone.
 pub struct SceneResources {
     pub frame_set: DescriptorSet,
     pub object_set: DescriptorSet,
-    /// One set per texture in `FramePlan::textures`.
-    pub texture_sets: Vec<DescriptorSet>,
-    /// One set per `FramePlan::normal_maps` entry (same layout as a
-    /// base-colour texture's set).
-    pub normal_sets: Vec<DescriptorSet>,
+    /// One material set per distinct (base colour, normal map) pair the
+    /// draws use, by indices into `FramePlan::textures` and
+    /// `FramePlan::normal_maps`.
+    material_sets: Vec<(ImagePair, DescriptorSet)>,
     _pool: DescriptorPool,
-    /// Sets 0 (frame) and 1 (object).
-    pub plain_layout: PipelineLayout,
-    /// Sets 0, 1 and 2 (texture); only when a draw is textured.
-    pub textured_layout: Option<PipelineLayout>,
-    /// Base colour at set 2 and normal map at set 3.
-    pub textured_normal_layout: Option<PipelineLayout>,
+    /// The one layout of object pipelines: frame, object and (when some
+    /// draw samples an image) material sets, at the numbers in
+    /// `shader_ids`.
+    pub layout: PipelineLayout,
     pub frame_layout: DescriptorSetLayout,
     pub object_layout: DescriptorSetLayout,
-    _texture_layout: Option<DescriptorSetLayout>,
-    _textures: Vec<Image>,
-    _normal_maps: Vec<Image>,
+    _material_layout: Option<DescriptorSetLayout>,
+    /// Textures, normal maps and the 1x1 defaults the sets point at.
+    _images: Vec<Image>,
     _sampler: Option<Sampler>,
     pub geometry: Buffer,
     pub ranges: Vec<GeometryRange>,
@@ -160,21 +163,48 @@ impl SceneResources {
                 stages: all_stages,
             }],
         )?;
-        let texture_layout = if textures.is_empty() && normal_maps.is_empty() {
+        // One material layout with fixed bindings (base colour, normal
+        // map), only when some draw samples an image. Each distinct pair a
+        // draw uses gets one set; a slot the pair leaves empty holds a 1x1
+        // default (white, or the flat normal) that no variant reads.
+        let material_layout = if textures.is_empty() && normal_maps.is_empty() {
             None
         } else {
             Some(DescriptorSetLayout::new(
                 ctx,
-                &[DescriptorBinding {
-                    binding: 0,
+                &[BASE_COLOR_BINDING, NORMAL_MAP_BINDING].map(|binding| DescriptorBinding {
+                    binding,
                     kind: DescriptorType::COMBINED_IMAGE_SAMPLER,
                     stages: ShaderStageFlags::FRAGMENT,
-                }],
+                }),
             )?)
         };
+        let mut pairs: Vec<ImagePair> = plan
+            .draws()
+            .map(|d| (d.texture, d.normal_map))
+            .filter(|pair| *pair != (None, None))
+            .collect();
+        pairs.sort_unstable();
+        pairs.dedup();
+        let default_colour = if pairs.iter().any(|p| p.0.is_none()) {
+            Some(upload_texture(ctx, 1, 1, &[255; 4], TEXTURE_FORMAT)?)
+        } else {
+            None
+        };
+        let default_normal = if pairs.iter().any(|p| p.1.is_none()) {
+            Some(upload_texture(
+                ctx,
+                1,
+                1,
+                &[128, 128, 255, 255],
+                NORMAL_MAP_FORMAT,
+            )?)
+        } else {
+            None
+        };
         let mut pool_layouts = vec![&frame_layout, &object_layout];
-        if let Some(t) = &texture_layout {
-            pool_layouts.extend(std::iter::repeat_n(t, textures.len() + normal_maps.len()));
+        if let Some(m) = &material_layout {
+            pool_layouts.extend(std::iter::repeat_n(m, pairs.len()));
         }
         let pool = DescriptorPool::for_layouts(ctx, &pool_layouts)?;
         let frame_set = pool.allocate(&frame_layout)?;
@@ -191,50 +221,37 @@ impl SceneResources {
             &object_buffer,
             block_range,
         );
-        let mut texture_sets = Vec::new();
-        if let (Some(layout), Some(sampler)) = (&texture_layout, &sampler) {
-            for t in &textures {
+        let mut material_sets = Vec::new();
+        if let (Some(layout), Some(sampler)) = (&material_layout, &sampler) {
+            for &(t, n) in &pairs {
                 let set = pool.allocate(layout)?;
-                set.write_sampled_image(0, t, sampler);
-                texture_sets.push(set);
+                let colour = t.map(|t| &textures[t]).or(default_colour.as_ref());
+                let normal = n.map(|n| &normal_maps[n]).or(default_normal.as_ref());
+                let (Some(colour), Some(normal)) = (colour, normal) else {
+                    unreachable!("a default exists for every empty slot of a pair");
+                };
+                set.write_sampled_image(BASE_COLOR_BINDING, colour, sampler);
+                set.write_sampled_image(NORMAL_MAP_BINDING, normal, sampler);
+                material_sets.push(((t, n), set));
             }
         }
-        let mut normal_sets = Vec::new();
-        if let (Some(layout), Some(sampler)) = (&texture_layout, &sampler) {
-            for t in &normal_maps {
-                let set = pool.allocate(layout)?;
-                set.write_sampled_image(0, t, sampler);
-                normal_sets.push(set);
-            }
-        }
-        let plain_layout = PipelineLayout::new(ctx, &[&frame_layout, &object_layout])?;
-        let textured_layout = match &texture_layout {
-            Some(t) => Some(PipelineLayout::new(
-                ctx,
-                &[&frame_layout, &object_layout, t],
-            )?),
-            None => None,
-        };
-        let textured_normal_layout = match &texture_layout {
-            Some(t) if !textures.is_empty() && !normal_maps.is_empty() => Some(
-                PipelineLayout::new(ctx, &[&frame_layout, &object_layout, t, t])?,
-            ),
-            _ => None,
-        };
+        let mut set_layouts = vec![&frame_layout, &object_layout];
+        set_layouts.extend(&material_layout);
+        let layout = PipelineLayout::new(ctx, &set_layouts)?;
+        let mut images = textures;
+        images.extend(normal_maps);
+        images.extend(default_colour);
+        images.extend(default_normal);
         Ok(SceneResources {
             frame_set,
             object_set,
-            texture_sets,
-            normal_sets,
+            material_sets,
             _pool: pool,
-            plain_layout,
-            textured_layout,
-            textured_normal_layout,
+            layout,
             frame_layout,
             object_layout,
-            _texture_layout: texture_layout,
-            _textures: textures,
-            _normal_maps: normal_maps,
+            _material_layout: material_layout,
+            _images: images,
             _sampler: sampler,
             geometry: geometry_buffer,
             ranges,
@@ -258,30 +275,17 @@ impl SceneResources {
         }
     }
 
-    /// The pipeline layout for a draw with these image sets: a normal map
-    /// alone takes set 2 (the textured layout), after a base colour set 3.
-    pub fn layout_for_images(
+    /// The material set of a draw with this base-colour texture and normal
+    /// map (indices into the plan's lists), `None` for a draw with neither.
+    pub fn material_set(
         &self,
-        textured: bool,
-        normal_mapped: bool,
-    ) -> Result<&PipelineLayout, RenderError> {
-        if textured && normal_mapped {
-            self.textured_normal_layout.as_ref().ok_or_else(|| {
-                RenderError::Frame("a textured, normal-mapped draw without its layout".into())
-            })
-        } else {
-            self.layout_for(textured || normal_mapped)
-        }
-    }
-
-    pub fn layout_for(&self, textured: bool) -> Result<&PipelineLayout, RenderError> {
-        if textured {
-            self.textured_layout.as_ref().ok_or_else(|| {
-                RenderError::Frame("a textured draw without a texture layout".into())
-            })
-        } else {
-            Ok(&self.plain_layout)
-        }
+        texture: Option<usize>,
+        normal_map: Option<usize>,
+    ) -> Option<&DescriptorSet> {
+        self.material_sets
+            .iter()
+            .find(|(pair, _)| *pair == (texture, normal_map))
+            .map(|(_, set)| set)
     }
 }
 

@@ -12,6 +12,7 @@
 use super::{FrameResources, InputAttachments, PassSetup, RecordPass};
 use crate::render::gpu_types::GpuLight;
 use crate::render::scene_resources::{gpu_light, pack_blocks};
+use crate::render::shader_ids::{SPEC_LIGHT_ARRAY_LENGTH, SPEC_LIGHT_COUNT};
 use crate::render::RenderError;
 use crate::shaders;
 use crate::vk::CompareOp;
@@ -144,7 +145,10 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
             &GraphicsPipelineDesc {
                 vertex_shader: &vert,
                 fragment_shader: &frag,
-                specialization: &[(1, g.light_count), (2, g.light_count.max(1))],
+                specialization: &[
+                    (SPEC_LIGHT_COUNT, g.light_count),
+                    (SPEC_LIGHT_ARRAY_LENGTH, g.light_count.max(1)),
+                ],
                 vertex_stride: std::mem::size_of::<[f32; 2]>() as u32,
                 vertex_attributes: &attributes,
                 cull_mode: CullModeFlags::NONE,

@@ -11,6 +11,7 @@
 use super::{FrameResources, PassSetup, RecordPass};
 use crate::mesh::Vertex;
 use crate::render::plan::{Draw, FramePlan, PipelineKey, ShadingKey};
+use crate::render::shader_ids::*;
 use crate::render::RenderError;
 use crate::scene::Scene;
 use crate::shaders;
@@ -93,17 +94,17 @@ impl SurfacePass {
                 let attributes = vertex_attributes(key.textured, key.normal_mapped, key.debug != 0);
                 let pipeline = GraphicsPipeline::new(
                     setup.ctx,
-                    resources.layout_for_images(key.textured, key.normal_mapped)?,
+                    &resources.layout,
                     &render_pass.render_pass,
                     &GraphicsPipelineDesc {
                         vertex_shader: vert,
                         fragment_shader: frag,
                         specialization: &[
-                            (0, key.shading as u32),
-                            (1, key.lights),
-                            (2, key.lights.max(1)),
-                            (3, key.debug),
-                            (4, key.shininess_exponent),
+                            (SPEC_SHADING_MODEL, key.shading as u32),
+                            (SPEC_LIGHT_COUNT, key.lights),
+                            (SPEC_LIGHT_ARRAY_LENGTH, key.lights.max(1)),
+                            (SPEC_DEBUG_ATTRIBUTE, key.debug),
+                            (SPEC_SHININESS_EXPONENT, key.shininess_exponent),
                         ],
                         vertex_stride: std::mem::size_of::<Vertex>() as u32,
                         vertex_attributes: &attributes,
@@ -136,12 +137,11 @@ impl RecordPass for SurfacePass {
         let mut bound: Option<PipelineKey> = None;
         for d in &self.draws {
             let pipeline = &self.pipelines[&d.pipeline];
-            let layout =
-                resources.layout_for_images(d.pipeline.textured, d.pipeline.normal_mapped)?;
+            let layout = &resources.layout;
             if bound != Some(d.pipeline) {
                 cmd.bind_pipeline(pipeline);
                 if bound.is_none() {
-                    cmd.bind_descriptor_set(layout, 0, &resources.frame_set, &[]);
+                    cmd.bind_descriptor_set(layout, FRAME_SET, &resources.frame_set, &[]);
                 }
                 bound = Some(d.pipeline);
             }
@@ -151,16 +151,12 @@ impl RecordPass for SurfacePass {
             }
             cmd.bind_descriptor_set(
                 layout,
-                1,
+                OBJECT_SET,
                 &resources.object_set,
                 &[resources.block_offsets[d.object]],
             );
-            if let Some(t) = d.texture {
-                cmd.bind_descriptor_set(layout, 2, &resources.texture_sets[t], &[]);
-            }
-            if let Some(n) = d.normal_map {
-                let set = if d.texture.is_some() { 3 } else { 2 };
-                cmd.bind_descriptor_set(layout, set, &resources.normal_sets[n], &[]);
+            if let Some(set) = resources.material_set(d.texture, d.normal_map) {
+                cmd.bind_descriptor_set(layout, MATERIAL_SET, set, &[]);
             }
             cmd.bind_geometry(&resources.geometry, range.vertex_offset, range.index_offset);
             cmd.draw_indexed(range.index_count);

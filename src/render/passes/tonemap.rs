@@ -4,6 +4,7 @@
 //! `--hdr`). Operator and exposure are specialization constants.
 
 use super::{fullscreen_pipeline, FrameResources, InputAttachments, PassSetup, RecordPass};
+use crate::render::shader_ids::{SPEC_TONEMAP_EXPOSURE, SPEC_TONEMAP_OPERATOR};
 use crate::render::RenderError;
 use crate::scene::ToneMapOperator;
 use crate::shaders;
@@ -33,7 +34,10 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         &setup.render_pass()?.render_pass,
         setup.subpass,
         shaders::TONEMAP_FRAG.base(),
-        &[(0, operator), (1, tone_map.exposure.to_bits())],
+        &[
+            (SPEC_TONEMAP_OPERATOR, operator),
+            (SPEC_TONEMAP_EXPOSURE, tone_map.exposure.to_bits()),
+        ],
         None,
     )?;
     Ok(Box::new(ToneMapPass {

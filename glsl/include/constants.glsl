@@ -1,0 +1,25 @@
+// Descriptor set and binding numbers and specialization-constant ids that
+// the Rust side names too (`render::shader_ids`, whose test checks that the
+// two lists agree). Included first by the shaders that use them.
+#ifndef CONSTANTS_GLSL
+#define CONSTANTS_GLSL
+
+// Object pipelines: the frame block, the object's block (dynamic offset),
+// the material's images (fixed bindings; 1x1 defaults for a missing one).
+#define FRAME_SET 0
+#define OBJECT_SET 1
+#define MATERIAL_SET 2
+#define BASE_COLOR_BINDING 0
+#define NORMAL_MAP_BINDING 1
+
+// Object and lighting pipelines' specialization constants.
+#define SPEC_SHADING_MODEL 0
+#define SPEC_LIGHT_COUNT 1
+#define SPEC_LIGHT_ARRAY_LENGTH 2
+#define SPEC_DEBUG_ATTRIBUTE 3
+#define SPEC_SHININESS_EXPONENT 4
+
+// The tone map's specialization constants.
+#define SPEC_TONEMAP_OPERATOR 0
+#define SPEC_TONEMAP_EXPOSURE 1
+#endif

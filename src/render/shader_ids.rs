@@ -1,0 +1,67 @@
+//! Descriptor set and binding numbers and specialization-constant ids the
+//! shaders declare, named once: `glsl/include/constants.glsl` holds the
+//! same list as `#define`s, and the test below checks that they agree, so
+//! a renumbering cannot leave one side behind.
+
+/// The frame block (camera, ambient), set 0 of object pipelines.
+pub const FRAME_SET: u32 = 0;
+/// The object's block, bound with a dynamic offset.
+pub const OBJECT_SET: u32 = 1;
+/// The material's images, with fixed bindings.
+pub const MATERIAL_SET: u32 = 2;
+pub const BASE_COLOR_BINDING: u32 = 0;
+pub const NORMAL_MAP_BINDING: u32 = 1;
+
+/// Object and lighting pipelines' specialization constants.
+pub const SPEC_SHADING_MODEL: u32 = 0;
+pub const SPEC_LIGHT_COUNT: u32 = 1;
+pub const SPEC_LIGHT_ARRAY_LENGTH: u32 = 2;
+pub const SPEC_DEBUG_ATTRIBUTE: u32 = 3;
+pub const SPEC_SHININESS_EXPONENT: u32 = 4;
+
+/// The tone map's specialization constants.
+pub const SPEC_TONEMAP_OPERATOR: u32 = 0;
+pub const SPEC_TONEMAP_EXPOSURE: u32 = 1;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every `#define NAME N` of constants.glsl is a constant here with the
+    /// same value, and every constant here is defined there.
+    #[test]
+    fn the_glsl_constants_agree() {
+        let ours = [
+            ("FRAME_SET", FRAME_SET),
+            ("OBJECT_SET", OBJECT_SET),
+            ("MATERIAL_SET", MATERIAL_SET),
+            ("BASE_COLOR_BINDING", BASE_COLOR_BINDING),
+            ("NORMAL_MAP_BINDING", NORMAL_MAP_BINDING),
+            ("SPEC_SHADING_MODEL", SPEC_SHADING_MODEL),
+            ("SPEC_LIGHT_COUNT", SPEC_LIGHT_COUNT),
+            ("SPEC_LIGHT_ARRAY_LENGTH", SPEC_LIGHT_ARRAY_LENGTH),
+            ("SPEC_DEBUG_ATTRIBUTE", SPEC_DEBUG_ATTRIBUTE),
+            ("SPEC_SHININESS_EXPONENT", SPEC_SHININESS_EXPONENT),
+            ("SPEC_TONEMAP_OPERATOR", SPEC_TONEMAP_OPERATOR),
+            ("SPEC_TONEMAP_EXPOSURE", SPEC_TONEMAP_EXPOSURE),
+        ];
+        let glsl = include_str!("../../glsl/include/constants.glsl");
+        let defined: Vec<(&str, u32)> = glsl
+            .lines()
+            .filter_map(|l| l.trim().strip_prefix("#define "))
+            .filter_map(|rest| {
+                let mut words = rest.split_whitespace();
+                let name = words.next()?;
+                let value = words.next()?.parse().ok()?;
+                Some((name, value))
+            })
+            .collect();
+        assert_eq!(defined.len(), ours.len(), "{defined:?}");
+        for (name, value) in ours {
+            assert!(
+                defined.contains(&(name, value)),
+                "{name} = {value} is not in constants.glsl: {defined:?}"
+            );
+        }
+    }
+}
