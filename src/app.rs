@@ -198,7 +198,7 @@ pub fn host_cpu() -> String {
 
 /// What a run draws.
 #[derive(Clone, Copy)]
-pub enum FrameSource<'a> {
+pub enum RunSource<'a> {
     /// A scene, drawn and tone-mapped.
     Scene(&'a Scene),
     /// An existing linear HDR image, only tone-mapped.
@@ -213,7 +213,7 @@ pub enum FrameSource<'a> {
     ValidationCheck(Misuse),
 }
 
-/// The deliberate mistakes of [`FrameSource::ValidationCheck`].
+/// The deliberate mistakes of [`RunSource::ValidationCheck`].
 #[doc(hidden)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Misuse {
@@ -227,7 +227,7 @@ pub enum Misuse {
 
 /// Renders `scene` with no progress callback; see [`run`].
 pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderRun, RunError> {
-    run(FrameSource::Scene(scene), settings, &mut || {})
+    run(RunSource::Scene(scene), settings, &mut || {})
 }
 
 /// The one way a run is made: renders `source` `warmup + frames` times with
@@ -236,21 +236,19 @@ pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderRun, Run
 /// progress bar. The validation log is read after the device is torn
 /// down, on the error path too.
 pub fn run(
-    source: FrameSource<'_>,
+    source: RunSource<'_>,
     settings: &RenderSettings,
     on_frame: &mut dyn FnMut(),
 ) -> Result<RenderRun, RunError> {
     // Refuse what does not fit before the device allocates anything.
     let budget = MemoryBudget::from_env().map_err(RenderError::from)?;
     match source {
-        FrameSource::Scene(scene) => preflight::scene_memory(scene, settings.keep_hdr, &budget)?,
-        FrameSource::HdrImage(image, _) => {
+        RunSource::Scene(scene) => preflight::scene_memory(scene, settings.keep_hdr, &budget)?,
+        RunSource::HdrImage(image, _) => {
             preflight::image_memory(image.width, image.height, &budget)?
         }
-        FrameSource::EmptyPass { width, height } => {
-            preflight::image_memory(width, height, &budget)?
-        }
-        FrameSource::ValidationCheck(_) => {}
+        RunSource::EmptyPass { width, height } => preflight::image_memory(width, height, &budget)?,
+        RunSource::ValidationCheck(_) => {}
     }
     // Safe points (see `crate::interrupt`): before the device is created,
     // and in `produce` between the phases and before every frame.
@@ -284,13 +282,13 @@ pub fn run(
 /// Builds the frame for `source` on `ctx` and submits it.
 fn produce(
     ctx: &std::sync::Arc<Context>,
-    source: FrameSource<'_>,
+    source: RunSource<'_>,
     settings: &RenderSettings,
     on_frame: &mut dyn FnMut(),
 ) -> Result<Produced, RenderError> {
     crate::interrupt::check()?;
     Ok(match source {
-        FrameSource::Scene(scene) => {
+        RunSource::Scene(scene) => {
             let renderer = Renderer::prepare(ctx, scene, None, settings.keep_hdr)?;
             let empty = if settings.empty_pass_between_frames {
                 Some(EmptyPass::new(
@@ -307,13 +305,13 @@ fn produce(
                 drive(renderer, empty, settings, on_frame)?
             }
         }
-        FrameSource::HdrImage(image, tone_map) => drive(
+        RunSource::HdrImage(image, tone_map) => drive(
             Renderer::for_hdr_image(ctx, tone_map, image)?,
             None,
             settings,
             on_frame,
         )?,
-        FrameSource::EmptyPass { width, height } => {
+        RunSource::EmptyPass { width, height } => {
             let mut pass = EmptyPass::new(ctx, width, height)?;
             let (frames, instruction_frames) = if settings.count_instructions {
                 count_prefixes(&mut pass, settings, on_frame)?
@@ -331,7 +329,7 @@ fn produce(
                 instruction_frames,
             }
         }
-        FrameSource::ValidationCheck(misuse) => {
+        RunSource::ValidationCheck(misuse) => {
             match misuse {
                 Misuse::SyncHazard => ctx.record_sync_hazard_for_validation_check()?,
                 Misuse::Leak | Misuse::LeakThenFail => ctx.leak_object_for_validation_check()?,

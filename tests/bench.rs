@@ -334,7 +334,7 @@ fn bad_bench_input_fails_with_a_message_not_a_panic() {
 #[test]
 fn empty_pass_is_clean_under_validation_and_takes_time() {
     let run = app::run(
-        app::FrameSource::EmptyPass {
+        app::RunSource::EmptyPass {
             width: 96,
             height: 64,
         },
@@ -373,7 +373,7 @@ fn empty_pass_is_clean_under_validation_and_takes_time() {
 #[test]
 fn empty_pass_rejects_a_zero_size() {
     let e = app::run(
-        app::FrameSource::EmptyPass {
+        app::RunSource::EmptyPass {
             width: 0,
             height: 64,
         },

@@ -248,7 +248,7 @@ fn assert_tone_mapped(
 
 #[test]
 fn both_operators_apply_the_exposure() {
-    use aerial::app::{self, FrameSource, RenderSettings};
+    use aerial::app::{self, RenderSettings, RunSource};
     use aerial::scene::{ToneMap, ToneMapOperator};
     let input = hdr_ramp();
     for (operator, curve) in [
@@ -257,7 +257,7 @@ fn both_operators_apply_the_exposure() {
     ] {
         for exposure in [0.3f32, 3.0] {
             let run = app::run(
-                FrameSource::HdrImage(&input, ToneMap { operator, exposure }),
+                RunSource::HdrImage(&input, ToneMap { operator, exposure }),
                 &RenderSettings {
                     validate: aerial::vk::validation::Validation::All,
                     ..Default::default()

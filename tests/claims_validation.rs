@@ -5,7 +5,7 @@
 
 mod common;
 
-use aerial::app::{self, FrameSource, Misuse, RenderSettings};
+use aerial::app::{self, Misuse, RenderSettings, RunSource};
 use aerial::vk::validation::{self, Validation, ValidationMessage, ALLOWED_MESSAGES};
 use aerial::vk::{Context, ContextOptions};
 use std::path::{Path, PathBuf};
@@ -21,7 +21,7 @@ fn settings(validate: Validation) -> RenderSettings {
 
 fn messages_of(misuse: Misuse, validate: Validation) -> Vec<ValidationMessage> {
     match app::run(
-        FrameSource::ValidationCheck(misuse),
+        RunSource::ValidationCheck(misuse),
         &settings(validate),
         &mut || {},
     ) {
@@ -95,7 +95,7 @@ fn a_leaked_object_is_counted_on_a_context_dropped_by_hand() {
 #[test]
 fn a_failed_run_still_returns_the_validation_log() {
     let err = app::run(
-        FrameSource::ValidationCheck(Misuse::LeakThenFail),
+        RunSource::ValidationCheck(Misuse::LeakThenFail),
         &settings(Validation::All),
         &mut || {},
     )
@@ -113,7 +113,7 @@ fn a_failed_run_still_returns_the_validation_log() {
 #[test]
 fn without_validation_nothing_is_recorded() {
     let run = app::run(
-        FrameSource::ValidationCheck(Misuse::SyncHazard),
+        RunSource::ValidationCheck(Misuse::SyncHazard),
         &settings(Validation::Off),
         &mut || {},
     )
@@ -151,7 +151,7 @@ fn every_allow_list_entry_has_an_id_and_a_reason() {
 fn every_scene_is_clean_under_every_mode() {
     for mode in [Validation::Core, Validation::BestPractices, Validation::All] {
         let run = app::run(
-            FrameSource::EmptyPass {
+            RunSource::EmptyPass {
                 width: 64,
                 height: 36,
             },
@@ -170,7 +170,7 @@ fn every_scene_is_clean_under_every_mode() {
             data: (0..8 * 4 * 4).map(|i| i as f32 * 0.05).collect(),
         };
         let run = app::run(
-            FrameSource::HdrImage(
+            RunSource::HdrImage(
                 &hdr,
                 aerial::scene::ToneMap {
                     operator: aerial::scene::ToneMapOperator::Reinhard,

@@ -9,7 +9,7 @@
 
 mod common;
 
-use aerial::app::{self, FrameSource, RenderSettings};
+use aerial::app::{self, RenderSettings, RunSource};
 use aerial::render::Pixels;
 use aerial::scene::{ToneMap, ToneMapOperator};
 use std::path::{Path, PathBuf};
@@ -648,7 +648,7 @@ fn tone_map(values: &[f32], operator: ToneMapOperator, exposure: f32) -> Vec<u8>
         data: values.iter().flat_map(|&v| [v, v, v, 1.0]).collect(),
     };
     let run = app::run(
-        FrameSource::HdrImage(&image, ToneMap { operator, exposure }),
+        RunSource::HdrImage(&image, ToneMap { operator, exposure }),
         &RenderSettings {
             validate: aerial::vk::validation::Validation::All,
             device: None,

@@ -8,7 +8,7 @@
 
 mod common;
 
-use aerial::app::{self, FrameSource, RenderSettings};
+use aerial::app::{self, RenderSettings, RunSource};
 use aerial::render::Pixels;
 use aerial::scene::{ToneMap, ToneMapOperator};
 
@@ -19,7 +19,7 @@ fn tone_map_on_gpu(values: &[[f32; 4]], operator: ToneMapOperator, exposure: f32
         data: values.iter().flatten().copied().collect(),
     };
     let run = app::run(
-        FrameSource::HdrImage(&image, ToneMap { operator, exposure }),
+        RunSource::HdrImage(&image, ToneMap { operator, exposure }),
         &RenderSettings {
             validate: aerial::vk::validation::Validation::All,
             device: None,
@@ -126,7 +126,7 @@ fn tone_mapping_the_hdr_output_reproduces_the_render() {
     let rendered = common::render(&scene, true);
     let hdr = rendered.hdr.as_ref().unwrap();
     let again = app::run(
-        FrameSource::HdrImage(hdr, scene.tone_map),
+        RunSource::HdrImage(hdr, scene.tone_map),
         &RenderSettings {
             validate: aerial::vk::validation::Validation::All,
             ..Default::default()
@@ -146,7 +146,7 @@ fn a_mis_sized_image_is_an_error_not_a_crash() {
         data: vec![0.0; 10],
     };
     let result = app::run(
-        FrameSource::HdrImage(
+        RunSource::HdrImage(
             &image,
             ToneMap {
                 operator: ToneMapOperator::Reinhard,

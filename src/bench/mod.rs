@@ -16,7 +16,7 @@ pub use report::{
     SceneReport, CPU_FRAME, FORMAT, GPU_TOTAL,
 };
 
-use crate::app::{self, FrameSource, RenderRun, RenderSettings, RunError};
+use crate::app::{self, RenderRun, RenderSettings, RunError, RunSource};
 use crate::render::empty_pass;
 use crate::report::stats::{summarise_passes, PassTimesError, Summary};
 use crate::scene::{knob_settings, Scene, SceneError};
@@ -189,7 +189,7 @@ pub fn run(
         let label = baseline::empty_pass_scene(resolution);
         progress.run(&label);
         let run = app::run(
-            FrameSource::EmptyPass {
+            RunSource::EmptyPass {
                 width: resolution.width,
                 height: resolution.height,
             },
@@ -217,7 +217,7 @@ pub fn run(
     for s in scenes {
         let label = s.path.display().to_string();
         progress.run(&label);
-        let run = app::run(FrameSource::Scene(&s.scene), &render_settings, &mut || {
+        let run = app::run(RunSource::Scene(&s.scene), &render_settings, &mut || {
             progress.frame()
         })
         .map_err(|error| BenchError::Render {

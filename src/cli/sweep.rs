@@ -1,7 +1,7 @@
 //! `aerial sweep`: render every combination of some knob settings, and
 //! write error against GPU time as CSV, JSON and an SVG plot.
 
-use aerial::app::{self, FrameSource, RenderSettings};
+use aerial::app::{self, RenderSettings, RunSource};
 use aerial::render::render_reference;
 use aerial::scene::Scene;
 use aerial::sweep::{
@@ -183,7 +183,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                 // The sRGB output through the renderer's own tone-map
                 // pass, as the GPU images get theirs.
                 let run = app::run(
-                    FrameSource::HdrImage(&hdr, scene.tone_map),
+                    RunSource::HdrImage(&hdr, scene.tone_map),
                     &settings(0, 1, false, false),
                     &mut || {},
                 )?;

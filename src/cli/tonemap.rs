@@ -2,7 +2,7 @@
 //! the renderer's own tone-map subpass, e.g. to try another operator or
 //! exposure on a `render --hdr` output without rendering again.
 
-use aerial::app::{self, FrameSource, RenderSettings};
+use aerial::app::{self, RenderSettings, RunSource};
 use aerial::files;
 use aerial::render::output;
 use aerial::scene::{ToneMap, ToneMapOperator};
@@ -48,7 +48,7 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
         exposure: args.exposure,
     };
     let run = app::run(
-        FrameSource::HdrImage(&image, tone_map),
+        RunSource::HdrImage(&image, tone_map),
         &RenderSettings {
             validate: args.gpu.validate.unwrap_or_default(),
             device: args.gpu.device,

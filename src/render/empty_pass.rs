@@ -11,12 +11,12 @@
 //! The attachment is copied to a host buffer after the timed interval so
 //! tests can check that the pass really wrote every pixel.
 
-use super::frame::TimedFrame;
+use super::frame::TimedCommands;
 use super::{FrameTiming, Pixels, RenderError};
 use crate::shaders;
 use crate::vk::{
-    AttachmentSpec, AttachmentStart, Buffer, BufferUsage, Context, Format, GraphRenderPass,
-    GraphicsPipeline, PipelineLayout, SubpassSpec,
+    AttachmentSpec, AttachmentStart, Buffer, BufferUsage, Context, Format, GraphicsPipeline,
+    PipelineLayout, RenderTargets, SubpassSpec,
 };
 use std::sync::Arc;
 
@@ -33,14 +33,14 @@ pub const CONSTANT_RGBA8: [u8; 4] = [64, 128, 191, 255];
 /// The empty pass's GPU objects and its recorded command buffer. Fields
 /// drop in declaration order: command buffer first, context last.
 pub struct EmptyPass {
-    frame: TimedFrame,
+    frame: TimedCommands,
     /// The same frame without the draw, recorded on first use by
     /// `PrefixFrames::render_prefix`.
-    without_draw: Option<TimedFrame>,
+    without_draw: Option<TimedCommands>,
     readback: Buffer,
     pipeline: GraphicsPipeline,
     _layout: PipelineLayout,
-    render_pass: GraphRenderPass,
+    render_pass: RenderTargets,
     width: u32,
     height: u32,
     ctx: Arc<Context>,
@@ -58,7 +58,7 @@ impl EmptyPass {
         // One attachment, written at every pixel (nothing loaded) and read
         // back after the pass; built by the same render-graph builder as
         // scene frames.
-        let render_pass = GraphRenderPass::new(
+        let render_pass = RenderTargets::new(
             ctx,
             width,
             height,
@@ -160,12 +160,12 @@ impl Drop for EmptyPass {
 /// without `draw`, none), timed, then copied out.
 fn record(
     ctx: &Arc<Context>,
-    render_pass: &GraphRenderPass,
+    render_pass: &RenderTargets,
     pipeline: &GraphicsPipeline,
     readback: &Buffer,
     draw: bool,
-) -> Result<TimedFrame, RenderError> {
-    let frame = TimedFrame::begin(ctx, 1)?;
+) -> Result<TimedCommands, RenderError> {
+    let frame = TimedCommands::begin(ctx, 1)?;
     let cmd = frame.cmd();
     cmd.begin_render_pass(render_pass);
     frame.begin_pass();

@@ -24,7 +24,7 @@ pub trait PrefixFrames {
 }
 
 /// The command buffer of a frame, its fence and its timestamp queries.
-pub(crate) struct TimedFrame {
+pub(crate) struct TimedCommands {
     command_buffer: CommandBuffer,
     fence: Fence,
     queries: Option<TimestampQueries>,
@@ -34,12 +34,12 @@ pub(crate) struct TimedFrame {
     next_stamp: Cell<u32>,
 }
 
-impl TimedFrame {
+impl TimedCommands {
     /// Begins recording a frame of `passes` timed passes: resets the
     /// queries, orders this submission's copies into readback buffers after
     /// the previous submission's, and writes the first timestamp.
-    pub(crate) fn begin(ctx: &Arc<Context>, passes: u32) -> Result<TimedFrame, RenderError> {
-        let frame = TimedFrame {
+    pub(crate) fn begin(ctx: &Arc<Context>, passes: u32) -> Result<TimedCommands, RenderError> {
+        let frame = TimedCommands {
             command_buffer: CommandBuffer::new(ctx)?,
             fence: Fence::new(ctx)?,
             queries: TimestampQueries::new(ctx, passes + 1)?,
@@ -102,7 +102,7 @@ impl TimedFrame {
 
     /// Makes the readback buffers' copies visible to the host and ends
     /// recording.
-    pub(crate) fn finish(self) -> Result<TimedFrame, RenderError> {
+    pub(crate) fn finish(self) -> Result<TimedCommands, RenderError> {
         self.command_buffer.memory_barrier(
             PipelineStageFlags::TRANSFER,
             AccessFlags::TRANSFER_WRITE,

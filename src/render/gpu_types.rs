@@ -5,7 +5,7 @@ use bytemuck::{Pod, Zeroable};
 /// The per-frame uniform block (std140).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct FrameUniforms {
+pub struct ViewUniforms {
     pub view_projection: [[f32; 4]; 4],
     /// The camera's position in the shaders' space: always the origin, since
     /// every position the GPU sees is relative to the camera (`Camera::view`).
@@ -17,8 +17,8 @@ pub struct FrameUniforms {
     pub viewport: [f32; 4],
 }
 
-impl FrameUniforms {
-    pub fn new(scene: &crate::scene::Scene, width: u32, height: u32) -> FrameUniforms {
+impl ViewUniforms {
+    pub fn new(scene: &crate::scene::Scene, width: u32, height: u32) -> ViewUniforms {
         let aspect = width as f32 / height as f32;
         // Camera-relative, composed and inverted in double precision: with a
         // far/near ratio of 1e6 and more, a float inverse loses most of the
@@ -27,7 +27,7 @@ impl FrameUniforms {
         let inverse = view_projection.inverse().as_mat4();
         let view_projection = view_projection.as_mat4();
         let (w, h) = (width as f32, height as f32);
-        FrameUniforms {
+        ViewUniforms {
             view_projection: view_projection.to_cols_array_2d(),
             camera_position: [0.0, 0.0, 0.0, 1.0],
             ambient: scene.ambient.extend(0.0).to_array(),
@@ -72,7 +72,7 @@ mod tests {
     // Sizes the GLSL layouts imply; a mismatch would shift every field.
     #[test]
     fn layouts_match_glsl() {
-        assert_eq!(std::mem::size_of::<FrameUniforms>(), 176);
+        assert_eq!(std::mem::size_of::<ViewUniforms>(), 176);
         assert_eq!(std::mem::size_of::<GpuLight>(), 48);
         assert_eq!(std::mem::size_of::<ObjectHeader>(), 192);
     }

@@ -6,15 +6,15 @@
 //! one command buffer recorded once → submitted per frame → images read
 //! back.
 
-use super::frame::TimedFrame;
+use super::frame::TimedCommands;
 use super::geometry::SceneGeometry;
-use super::passes::{Attachments, FrameResources, PassSetup, RecordPass};
+use super::passes::{Attachments, PassResources, PassSetup, RecordPass};
 use super::plan::{attachment, FramePlan, PassIo, PassKind};
 use super::scene_resources::SceneResources;
 use super::sky_resources::SkyResources;
 use super::RenderError;
 use crate::scene::{HdrFormat, Scene, ToneMap};
-use crate::vk::{AttachmentSpec, AttachmentStart, Context, GraphRenderPass, Image, SubpassSpec};
+use crate::vk::{AttachmentSpec, AttachmentStart, Context, Image, RenderTargets, SubpassSpec};
 use std::sync::Arc;
 
 /// Timing of one submitted frame.
@@ -57,14 +57,14 @@ pub enum ViewChange {
 /// the command buffer first, then the passes, the resources they use, the
 /// attachments, and the context (inside each wrapper) last.
 pub struct Renderer {
-    frame: TimedFrame,
+    frame: TimedCommands,
     /// The frame's prefixes, recorded on first use by
     /// `PrefixFrames::render_prefix`: element k records the first k passes.
-    prefixes: Vec<TimedFrame>,
+    prefixes: Vec<TimedCommands>,
     passes: Vec<Box<dyn RecordPass>>,
     scene_resources: Option<SceneResources>,
     sky_resources: Option<SkyResources>,
-    render_pass: Option<GraphRenderPass>,
+    render_pass: Option<RenderTargets>,
     plan: FramePlan,
     /// The scene's meshes, kept so that a new view can be planned (and,
     /// when the plan changes, built) without tessellating again; `None`
@@ -418,11 +418,11 @@ fn record(
     ctx: &Arc<Context>,
     plan: &FramePlan,
     passes: &[Box<dyn RecordPass>],
-    render_pass: Option<&GraphRenderPass>,
-    frame_resources: &FrameResources<'_>,
+    render_pass: Option<&RenderTargets>,
+    frame_resources: &PassResources<'_>,
     recorded: usize,
-) -> Result<TimedFrame, RenderError> {
-    let frame = TimedFrame::begin(ctx, plan.passes.len() as u32)?;
+) -> Result<TimedCommands, RenderError> {
+    let frame = TimedCommands::begin(ctx, plan.passes.len() as u32)?;
     let cmd = frame.cmd();
     let mut in_render_pass = false;
     for (i, (decl, pass)) in plan.passes.iter().zip(passes).enumerate() {
@@ -452,11 +452,11 @@ fn record(
 /// What the passes record against, from the renderer's parts.
 fn frame_resources<'a>(
     plan: &FramePlan,
-    render_pass: Option<&'a GraphRenderPass>,
+    render_pass: Option<&'a RenderTargets>,
     scene: Option<&'a SceneResources>,
     sky: Option<&'a SkyResources>,
-) -> FrameResources<'a> {
-    FrameResources {
+) -> PassResources<'a> {
+    PassResources {
         attachments: Attachments {
             names: plan.attachments.iter().map(|a| a.name).collect(),
             images: render_pass.map_or(&[], |p| p.images.as_slice()),
@@ -512,7 +512,7 @@ fn same_frame(a: &FramePlan, b: &FramePlan) -> bool {
 fn build_render_pass(
     ctx: &Arc<Context>,
     plan: &FramePlan,
-) -> Result<Option<GraphRenderPass>, RenderError> {
+) -> Result<Option<RenderTargets>, RenderError> {
     let index = |name: &str| {
         plan.attachments
             .iter()
@@ -576,7 +576,7 @@ fn build_render_pass(
             read_after: read_after.contains(&a.name),
         })
         .collect();
-    Ok(Some(GraphRenderPass::new(
+    Ok(Some(RenderTargets::new(
         ctx,
         plan.width,
         plan.height,

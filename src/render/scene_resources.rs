@@ -5,7 +5,7 @@
 //! one pipeline layout object pipelines use.
 
 use super::geometry::SceneGeometry;
-use super::gpu_types::{FrameUniforms, GpuLight, ObjectHeader};
+use super::gpu_types::{GpuLight, ObjectHeader, ViewUniforms};
 use super::plan::{Draw, FramePlan};
 use super::shader_ids::{BASE_COLOR_BINDING, NORMAL_MAP_BINDING};
 use super::RenderError;
@@ -72,7 +72,7 @@ impl SceneResources {
         plan: &FramePlan,
     ) -> Result<SceneResources, RenderError> {
         let (geometry_buffer, ranges) = upload_geometry(ctx, geometry)?;
-        let frame = FrameUniforms::new(scene, plan.width, plan.height);
+        let frame = ViewUniforms::new(scene, plan.width, plan.height);
         let frame_buffer = Buffer::with_data(
             ctx,
             "frame",
@@ -212,7 +212,7 @@ impl SceneResources {
             0,
             DescriptorType::UNIFORM_BUFFER,
             &frame_buffer,
-            std::mem::size_of::<FrameUniforms>() as u64,
+            std::mem::size_of::<ViewUniforms>() as u64,
         );
         let object_set = pool.allocate(&object_layout)?;
         object_set.write_buffer(
@@ -267,7 +267,7 @@ impl SceneResources {
     /// lights as those this was created with (so every block keeps its
     /// size and offset).
     pub fn set_view(&mut self, scene: &Scene, plan: &FramePlan) {
-        let frame = FrameUniforms::new(scene, plan.width, plan.height);
+        let frame = ViewUniforms::new(scene, plan.width, plan.height);
         self.frame_buffer.write(0, bytemuck::bytes_of(&frame));
         for (i, &offset) in self.block_offsets.iter().enumerate() {
             let block = object_block(scene, i, plan.draws().find(|d| d.object == i));

@@ -6,8 +6,8 @@
 use super::descriptors::DescriptorSet;
 use super::image::ImageState;
 use super::{
-    Buffer, ComputePipeline, Context, GraphRenderPass, GraphicsPipeline, Image, PipelineLayout,
-    PipelineStatsQueries, TimestampQueries, VkError,
+    Buffer, ComputePipeline, Context, GraphicsPipeline, Image, PipelineLayout,
+    PipelineStatsQueries, RenderTargets, TimestampQueries, VkError,
 };
 use ash::vk;
 use std::sync::Arc;
@@ -451,7 +451,7 @@ impl CommandBuffer {
     /// Begins `pass` (with a viewport and scissor over the whole
     /// framebuffer). A loaded attachment is first moved to the layout its
     /// first subpass uses, after whatever wrote it.
-    pub fn begin_render_pass(&self, pass: &GraphRenderPass) {
+    pub fn begin_render_pass(&self, pass: &RenderTargets) {
         for (image, initial) in pass.images.iter().zip(&pass.initial_layouts) {
             match *initial {
                 vk::ImageLayout::UNDEFINED => {}
@@ -511,7 +511,7 @@ impl CommandBuffer {
     /// Ends `pass`; its attachments are then in their final layouts. A
     /// stored attachment's writes were made visible to transfer reads by
     /// the pass's own outgoing dependency.
-    pub fn end_render_pass(&self, pass: &GraphRenderPass) {
+    pub fn end_render_pass(&self, pass: &RenderTargets) {
         // SAFETY: inside the last subpass of this render pass.
         unsafe { self.ctx.device.cmd_end_render_pass(self.handle) };
         for (image, layout) in pass.images.iter().zip(&pass.final_layouts) {

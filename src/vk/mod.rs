@@ -31,8 +31,7 @@ pub use pipeline::{
 };
 pub use query::{PipelineStats, PipelineStatsQueries, TimestampQueries};
 pub use render_graph::{
-    AttachmentSpec, AttachmentStart, DepthUse, Framebuffer, GraphRenderPass, RenderPass,
-    SubpassSpec,
+    AttachmentSpec, AttachmentStart, DepthUse, Framebuffer, RenderPass, RenderTargets, SubpassSpec,
 };
 pub use swapchain::{PresentMode, Presented, Surface, Swapchain, WindowHandles};
 

@@ -122,7 +122,7 @@ fn layout_for(depth: bool, uses: &[Access]) -> vk::ImageLayout {
 
 /// A built render pass with its attachments (created here, sized for the
 /// frame) and framebuffer.
-pub struct GraphRenderPass {
+pub struct RenderTargets {
     pub render_pass: RenderPass,
     pub framebuffer: Framebuffer,
     /// One image per [`AttachmentSpec`], in the same order.
@@ -135,7 +135,7 @@ pub struct GraphRenderPass {
     pub initial_layouts: Vec<vk::ImageLayout>,
 }
 
-impl GraphRenderPass {
+impl RenderTargets {
     /// Derives and creates the render pass, the `width`×`height`
     /// attachments and the framebuffer for `subpasses` in order.
     pub fn new(
@@ -144,7 +144,7 @@ impl GraphRenderPass {
         height: u32,
         attachments: &[AttachmentSpec],
         subpasses: &[SubpassSpec],
-    ) -> Result<GraphRenderPass, VkError> {
+    ) -> Result<RenderTargets, VkError> {
         let n = attachments.len();
         // uses[s][a]: what subpass s does with attachment a.
         let uses: Vec<Vec<Vec<Access>>> = subpasses
@@ -348,7 +348,7 @@ impl GraphRenderPass {
                 }
             })
             .collect();
-        Ok(GraphRenderPass {
+        Ok(RenderTargets {
             render_pass,
             framebuffer,
             images,

@@ -12,7 +12,7 @@
 //! frame measured about 20 % more CPU time). The uniforms and tables are
 //! the frame's [`SkyResources`].
 
-use super::{fullscreen_pipeline, FrameResources, InputAttachments, PassSetup, RecordPass};
+use super::{fullscreen_pipeline, InputAttachments, PassResources, PassSetup, RecordPass};
 use crate::atmosphere::TableMapping;
 use crate::render::sky_resources::SkyResources;
 use crate::render::RenderError;
@@ -85,7 +85,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
 }
 
 impl RecordPass for AtmospherePass {
-    fn record(&self, cmd: &CommandBuffer, frame: &FrameResources<'_>) -> Result<(), RenderError> {
+    fn record(&self, cmd: &CommandBuffer, frame: &PassResources<'_>) -> Result<(), RenderError> {
         let sky: &SkyResources = frame.sky()?;
         // Both pipelines share the layout, so the sets stay bound across
         // the pipeline switch.

@@ -9,7 +9,7 @@
 //! The tiles are drawn at the far plane with a LESS test against the
 //! stored (reversed-Z) depth, so pixels without a surface are never shaded.
 
-use super::{FrameResources, InputAttachments, PassSetup, RecordPass};
+use super::{InputAttachments, PassResources, PassSetup, RecordPass};
 use crate::render::gpu_types::GpuLight;
 use crate::render::scene_resources::{gpu_light, pack_blocks};
 use crate::render::shader_ids::{SPEC_LIGHT_ARRAY_LENGTH, SPEC_LIGHT_COUNT};
@@ -190,7 +190,7 @@ impl RecordPass for DeferredLightingPass {
         Ok(())
     }
 
-    fn record(&self, cmd: &CommandBuffer, frame: &FrameResources<'_>) -> Result<(), RenderError> {
+    fn record(&self, cmd: &CommandBuffer, frame: &PassResources<'_>) -> Result<(), RenderError> {
         let Some(resources) = frame.scene else {
             return Ok(());
         };

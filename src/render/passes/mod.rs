@@ -26,8 +26,8 @@ use crate::scene::Scene;
 use crate::shaders;
 use crate::vk::{
     Blend, Buffer, CommandBuffer, Context, CullModeFlags, DescriptorBinding, DescriptorPool,
-    DescriptorSet, DescriptorSetLayout, DescriptorType, GraphRenderPass, GraphicsPipeline,
-    GraphicsPipelineDesc, Image, PipelineLayout, RenderPass, ShaderModule, ShaderStageFlags,
+    DescriptorSet, DescriptorSetLayout, DescriptorType, GraphicsPipeline, GraphicsPipelineDesc,
+    Image, PipelineLayout, RenderPass, RenderTargets, ShaderModule, ShaderStageFlags,
 };
 use std::sync::Arc;
 
@@ -48,7 +48,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
 /// A created pass.
 pub trait RecordPass {
     /// Records the pass's commands (inside its subpass for subpasses).
-    fn record(&self, cmd: &CommandBuffer, frame: &FrameResources<'_>) -> Result<(), RenderError>;
+    fn record(&self, cmd: &CommandBuffer, frame: &PassResources<'_>) -> Result<(), RenderError>;
 
     /// The buffer an attachment is read back into, for passes that copy
     /// attachments out.
@@ -84,7 +84,7 @@ impl Attachments<'_> {
 }
 
 /// What a pass records against: resources shared by several passes.
-pub struct FrameResources<'a> {
+pub struct PassResources<'a> {
     pub attachments: Attachments<'a>,
     /// Geometry, per-frame and per-object uniforms and textures; present
     /// when the plan draws objects.
@@ -94,7 +94,7 @@ pub struct FrameResources<'a> {
     pub sky: Option<&'a SkyResources>,
 }
 
-impl FrameResources<'_> {
+impl PassResources<'_> {
     pub fn sky(&self) -> Result<&SkyResources, RenderError> {
         self.sky
             .ok_or_else(|| RenderError::Frame("the frame has no atmosphere resources".into()))
@@ -109,16 +109,16 @@ pub struct PassSetup<'a> {
     /// This pass's declaration.
     pub decl: &'a PassDecl,
     /// The frame's render pass, and this pass's subpass index in it.
-    pub render_pass: Option<&'a GraphRenderPass>,
+    pub render_pass: Option<&'a RenderTargets>,
     pub subpass: u32,
-    pub frame: &'a FrameResources<'a>,
+    pub frame: &'a PassResources<'a>,
     /// The image an upload pass copies into the HDR attachment.
     pub hdr_input: Option<&'a Pixels<f32>>,
 }
 
 impl PassSetup<'_> {
     /// The render pass, for subpasses.
-    pub fn render_pass(&self) -> Result<&GraphRenderPass, RenderError> {
+    pub fn render_pass(&self) -> Result<&RenderTargets, RenderError> {
         self.render_pass.ok_or_else(|| {
             RenderError::Frame(format!("pass '{}' is not a subpass", self.decl.name()))
         })

@@ -11,7 +11,7 @@
 //! ground and the sky at the horizon so no filter mixes them.
 
 use super::atmosphere::table_constants;
-use super::{FrameResources, PassSetup, RecordPass};
+use super::{PassResources, PassSetup, RecordPass};
 use crate::render::RenderError;
 use crate::shaders;
 use crate::vk::{CommandBuffer, ComputePipeline, ImageUse, PipelineLayout, ShaderModule};
@@ -47,7 +47,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
 }
 
 impl RecordPass for SkyViewPass {
-    fn record(&self, cmd: &CommandBuffer, frame: &FrameResources<'_>) -> Result<(), RenderError> {
+    fn record(&self, cmd: &CommandBuffer, frame: &PassResources<'_>) -> Result<(), RenderError> {
         let sky = frame.sky()?;
         let image = sky
             .sky_view_image

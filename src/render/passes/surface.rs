@@ -8,7 +8,7 @@
 //!   term to the colour target and the G-buffer targets (shader feature
 //!   `GBUFFER`).
 
-use super::{FrameResources, PassSetup, RecordPass};
+use super::{PassResources, PassSetup, RecordPass};
 use crate::mesh::Vertex;
 use crate::render::plan::{Draw, FramePlan, PipelineKey, ShadingKey};
 use crate::render::shader_ids::*;
@@ -130,7 +130,7 @@ impl SurfacePass {
 }
 
 impl RecordPass for SurfacePass {
-    fn record(&self, cmd: &CommandBuffer, frame: &FrameResources<'_>) -> Result<(), RenderError> {
+    fn record(&self, cmd: &CommandBuffer, frame: &PassResources<'_>) -> Result<(), RenderError> {
         let Some(resources) = frame.scene else {
             return Ok(());
         };

@@ -3,7 +3,7 @@
 //! or ACES after exposure, or a clamp for LDR scenes read back with
 //! `--hdr`). Operator and exposure are specialization constants.
 
-use super::{fullscreen_pipeline, FrameResources, InputAttachments, PassSetup, RecordPass};
+use super::{fullscreen_pipeline, InputAttachments, PassResources, PassSetup, RecordPass};
 use crate::render::shader_ids::{SPEC_TONEMAP_EXPOSURE, SPEC_TONEMAP_OPERATOR};
 use crate::render::RenderError;
 use crate::scene::ToneMapOperator;
@@ -48,7 +48,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
 }
 
 impl RecordPass for ToneMapPass {
-    fn record(&self, cmd: &CommandBuffer, _frame: &FrameResources<'_>) -> Result<(), RenderError> {
+    fn record(&self, cmd: &CommandBuffer, _frame: &PassResources<'_>) -> Result<(), RenderError> {
         cmd.bind_pipeline(&self.pipeline);
         cmd.bind_descriptor_set(&self.layout, 0, &self.input.set, &[]);
         cmd.draw(3);

@@ -3,7 +3,7 @@
 //! it (tone-mapping an existing image), a readback copies attachments out
 //! after it. What to copy comes from the pass's declaration.
 
-use super::{FrameResources, PassSetup, RecordPass};
+use super::{PassResources, PassSetup, RecordPass};
 use crate::render::plan::{attachment, PassIo};
 use crate::render::RenderError;
 use crate::vk::{Buffer, BufferUsage, CommandBuffer};
@@ -53,7 +53,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
 }
 
 impl RecordPass for TransferPass {
-    fn record(&self, cmd: &CommandBuffer, frame: &FrameResources<'_>) -> Result<(), RenderError> {
+    fn record(&self, cmd: &CommandBuffer, frame: &PassResources<'_>) -> Result<(), RenderError> {
         for (name, buffer) in &self.uploads {
             cmd.copy_buffer_to_image(buffer, frame.attachments.get(name)?);
         }
