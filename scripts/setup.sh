@@ -16,16 +16,16 @@ packages=(
   pkg-config
   g++                   # nv-flip builds NVIDIA FLIP from C++ source
   valgrind              # `bench --metric instructions` counts the driver's instructions under callgrind
-  assimp-testmodels     # real OBJ models (multi-group, JPEG textures, odd files) for tests/real_models.rs
-  neverball-common      # more OBJ models written by others, for tests/model_corpus.rs
-  glmark2-data          # the Stanford bunny and other OBJ models, for tests/model_corpus.rs
+  assimp-testmodels     # real OBJ models (multi-group, JPEG textures, odd files) for tests/suite/real_models.rs
+  neverball-common      # more OBJ models written by others, for tests/suite/model_corpus.rs
+  glmark2-data          # the Stanford bunny and other OBJ models, for tests/suite/model_corpus.rs
   libx11-6              # `aerial view`: winit opens X11 windows through these, loaded at run time
   libx11-xcb1
   libxcursor1
   libxrandr2
   libxi6
   libxkbcommon-x11-0
-  xvfb                  # a virtual X server: tests/viewer.rs runs the viewer in it
+  xvfb                  # a virtual X server: tests/suite/viewer.rs runs the viewer in it
   xauth
 )
 

@@ -1,0 +1,50 @@
+//! The integration tests, one binary with a module per area: rendering
+//! features, the commands, the scene and model formats, robustness, the
+//! benchmarks and the regression references. Shared helpers live only in
+//! `common`. One binary links once, where one per file linked forty times.
+//!
+//! Run one area with `cargo test --test suite AREA::`, e.g.
+//! `cargo test --test suite regression:: -- --nocapture`.
+
+mod common;
+
+mod atmosphere;
+mod atmosphere_objects;
+mod bench;
+mod bench_metrics;
+mod bounds;
+mod claims_features;
+mod claims_validation;
+mod cli;
+mod cli_compare;
+mod cpu_reference;
+mod debug_view;
+mod docs_links;
+mod examples;
+mod frame_graph;
+mod fuzz;
+mod gbuffer_range;
+mod height_maps;
+mod hostile;
+mod interrupt;
+mod limits;
+mod local_defects;
+mod mesh_command;
+mod mikktspace;
+mod missing_assets;
+mod model_corpus;
+mod normal_maps;
+mod obj_memory;
+mod obj_models;
+mod outputs;
+mod pixel_oracle;
+mod real_models;
+mod regression;
+mod scene_errors;
+mod shading;
+mod sweep;
+mod sweep_shards;
+mod tonemap;
+mod validation;
+mod viewer;
+mod world_precision;

@@ -1,0 +1,161 @@
+//! The GPU tone-map subpass against the operators' formulas, and its
+//! behaviour on values a renderer can produce by accident (Inf, NaN,
+//! negatives). Every run is under validation with zero messages.
+//!
+//! The subpass writes an sRGB attachment, so the CPU side applies the sRGB
+//! transfer function and the tolerance is one 8-bit step (the hardware's
+//! rounding of the encode may differ from ours by one).
+
+use crate::common;
+
+use aerial::app::{self, RenderSettings, RunSource};
+use aerial::render::Pixels;
+use aerial::scene::{ToneMap, ToneMapOperator};
+
+fn tone_map_on_gpu(values: &[[f32; 4]], operator: ToneMapOperator, exposure: f32) -> Vec<[u8; 4]> {
+    let image = Pixels {
+        width: values.len() as u32,
+        height: 1,
+        data: values.iter().flatten().copied().collect(),
+    };
+    let run = app::run(
+        RunSource::HdrImage(&image, ToneMap { operator, exposure }),
+        &RenderSettings {
+            validate: aerial::vk::validation::Validation::All,
+            device: None,
+            warmup: 0,
+            frames: 1,
+            keep_hdr: false,
+            empty_pass_between_frames: false,
+            ..Default::default()
+        },
+        &mut || {},
+    )
+    .expect("tone map runs");
+    common::assert_no_validation_messages(&run);
+    run.output
+        .data
+        .chunks_exact(4)
+        .map(|c| [c[0], c[1], c[2], c[3]])
+        .collect()
+}
+
+fn srgb_encode(linear: f64) -> f64 {
+    let c = linear.clamp(0.0, 1.0);
+    if c <= 0.0031308 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+fn reinhard(x: f64) -> f64 {
+    x / (1.0 + x)
+}
+
+fn aces(x: f64) -> f64 {
+    ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
+}
+
+/// 0, then log-spaced values from 1e-4 to 1e4.
+fn ramp() -> Vec<f32> {
+    let mut v = vec![0.0f32];
+    v.extend((0..=160).map(|i| 10f32.powf(-4.0 + i as f32 * 0.05)));
+    v
+}
+
+fn check_operator(operator: ToneMapOperator, exposure: f32, curve: fn(f64) -> f64) {
+    let ramp = ramp();
+    // Each channel gets a different scale of the ramp, to catch channel mix-ups.
+    let input: Vec<[f32; 4]> = ramp.iter().map(|&x| [x, 0.5 * x, 2.0 * x, 1.0]).collect();
+    let out = tone_map_on_gpu(&input, operator, exposure);
+    for (px, (inp, got)) in input.iter().zip(&out).enumerate() {
+        for c in 0..3 {
+            let expected = 255.0 * srgb_encode(curve(inp[c] as f64 * exposure as f64));
+            assert!(
+                (got[c] as f64 - expected).abs() <= 1.0,
+                "{operator:?} pixel {px} channel {c}: input {}, gpu {}, expected {expected:.2}",
+                inp[c],
+                got[c]
+            );
+        }
+    }
+    assert_eq!(out[0], [0, 0, 0, 255], "0 must map to 0");
+    for c in 0..3 {
+        assert!(
+            out.windows(2).all(|w| w[1][c] >= w[0][c]),
+            "{operator:?} not monotonic in channel {c}"
+        );
+    }
+}
+
+#[test]
+fn reinhard_matches_its_formula_and_is_monotonic() {
+    check_operator(ToneMapOperator::Reinhard, 1.0, reinhard);
+    check_operator(ToneMapOperator::Reinhard, 2.5, reinhard);
+}
+
+#[test]
+fn aces_matches_its_formula_and_is_monotonic() {
+    check_operator(ToneMapOperator::Aces, 1.0, aces);
+}
+
+#[test]
+fn inf_nan_and_negative_inputs_give_defined_output() {
+    let special = [
+        [f32::INFINITY, f32::NAN, -1.0, 1.0],
+        [f32::NEG_INFINITY, -f32::NAN, -1e30, 1.0],
+        [f32::MAX, 0.0, -0.0, f32::NAN],
+    ];
+    for operator in [ToneMapOperator::Reinhard, ToneMapOperator::Aces] {
+        let out = tone_map_on_gpu(&special, operator, 1.0);
+        // +Inf and the largest float saturate to white; NaN, -Inf and
+        // negatives become black; alpha is always opaque.
+        assert_eq!(out[0], [255, 0, 0, 255], "{operator:?}");
+        assert_eq!(out[1], [0, 0, 0, 255], "{operator:?}");
+        assert_eq!(out[2], [255, 0, 0, 255], "{operator:?}");
+    }
+}
+
+#[test]
+fn tone_mapping_the_hdr_output_reproduces_the_render() {
+    // The render's own tone-map subpass and `tonemap` on its HDR output
+    // must agree bit for bit (the HDR image round-trips exactly).
+    let mut scene = aerial::scene::Scene::default_scene();
+    scene.set_output_size(Some(160), Some(90)).unwrap();
+    let rendered = common::render(&scene, true);
+    let hdr = rendered.hdr.as_ref().unwrap();
+    let again = app::run(
+        RunSource::HdrImage(hdr, scene.tone_map),
+        &RenderSettings {
+            validate: aerial::vk::validation::Validation::All,
+            ..Default::default()
+        },
+        &mut || {},
+    )
+    .unwrap();
+    common::assert_no_validation_messages(&again);
+    assert_eq!(rendered.output.data, again.output.data);
+}
+
+#[test]
+fn a_mis_sized_image_is_an_error_not_a_crash() {
+    let image = Pixels {
+        width: 4,
+        height: 4,
+        data: vec![0.0; 10],
+    };
+    let result = app::run(
+        RunSource::HdrImage(
+            &image,
+            ToneMap {
+                operator: ToneMapOperator::Reinhard,
+                exposure: 1.0,
+            },
+        ),
+        &RenderSettings::default(),
+        &mut || {},
+    );
+    let err = result.err().expect("rejected").to_string();
+    assert!(err.contains("4x4"), "{err}");
+}
