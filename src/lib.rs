@@ -10,7 +10,7 @@ pub mod atmosphere;
 pub mod bench;
 pub mod budget;
 pub mod files;
-pub mod image_file;
+pub mod image_io;
 pub mod instructions;
 pub mod interrupt;
 pub mod mesh;

@@ -5,7 +5,7 @@
 //! can gate on it.
 
 use aerial::files;
-use aerial::render::output;
+use aerial::image_io;
 use aerial::report::image_diff::{
     compare_files, write_diff_png, ImageDiff, Metric, Thresholds, WINDOW,
 };
@@ -186,7 +186,7 @@ fn thresholds(
 /// images without the chunks (or OpenEXR files) are silently skipped.
 fn print_provenance(reference: &Path, test: &Path) {
     let origin = |path: &Path| -> Option<String> {
-        let text = output::read_png_text(path).ok()?;
+        let text = image_io::read_png_text(path).ok()?;
         let get = |key: &str| text.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str());
         match (get("aerial:device"), get("aerial:driver")) {
             (Some(device), Some(driver)) => Some(format!("{device}; driver {driver}")),

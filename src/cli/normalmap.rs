@@ -4,8 +4,9 @@
 
 use aerial::budget::MemoryBudget;
 use aerial::files;
+use aerial::image_io;
 use aerial::mesh::height::{encode_normal_map, GreenAxis, HeightEdge, HeightFilter, HeightMap};
-use aerial::render::{output, preflight, Pixels};
+use aerial::render::{preflight, Pixels};
 use anyhow::{bail, Context as _};
 use std::path::PathBuf;
 
@@ -57,7 +58,7 @@ pub fn run(args: NormalMapArgs) -> anyhow::Result<()> {
         height: heights.height,
         data: encode_normal_map(&normals, args.green),
     };
-    output::write_png(&args.out, &pixels, &[])?;
+    image_io::write_png(&args.out, &pixels, &[])?;
     eprintln!("wrote {}", args.out.display());
     Ok(())
 }

@@ -3,7 +3,7 @@
 use aerial::app::{self, RenderSettings};
 use aerial::bench::{CPU_FRAME, GPU_TOTAL};
 use aerial::files;
-use aerial::render::output;
+use aerial::image_io;
 use aerial::report::stats::{summarise_passes, Summary};
 use aerial::vk::validation;
 use anyhow::{bail, Context as _};
@@ -90,13 +90,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     validation::check(&run.validation).context("no output written")?;
     // Both files are encoded before either is renamed into place, so a
     // failure leaves neither.
-    let mut outputs = vec![output::png_file(
+    let mut outputs = vec![image_io::png_file(
         &args.out,
         &run.output,
         &run.png_metadata(),
     )?];
     if let (Some(path), Some(hdr)) = (&args.hdr, &run.hdr) {
-        outputs.push(output::exr_file(path, hdr)?);
+        outputs.push(image_io::exr_file(path, hdr)?);
     }
     for path in files::commit_all(outputs)? {
         eprintln!("wrote {}", path.display());

@@ -4,7 +4,7 @@
 
 use aerial::app::{self, RenderSettings, RunSource};
 use aerial::files;
-use aerial::render::output;
+use aerial::image_io;
 use aerial::scene::{ToneMap, ToneMapOperator};
 use aerial::vk::validation;
 use anyhow::{bail, Context as _};
@@ -39,7 +39,7 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
     }
     files::protect_inputs([&args.input]);
     files::check_output(&args.out, files::Format::Png).context("--out")?;
-    let image = output::read_exr(&args.input)?;
+    let image = image_io::read_exr(&args.input)?;
     let tone_map = ToneMap {
         operator: match args.operator {
             Operator::Reinhard => ToneMapOperator::Reinhard,
@@ -62,7 +62,7 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
     )
     .context("tone mapping failed")?;
     validation::check(&run.validation).context("no output written")?;
-    output::write_png(&args.out, &run.output, &run.png_metadata())?;
+    image_io::write_png(&args.out, &run.output, &run.png_metadata())?;
     eprintln!("wrote {}", args.out.display());
     Ok(())
 }

@@ -63,7 +63,7 @@ impl HeightMap {
             path: path.display().to_string(),
             reason,
         };
-        let image = crate::image_file::decode(path).map_err(err)?;
+        let image = crate::image_io::decode(path).map_err(err)?;
         let grey = image.to_luma16();
         let (width, height) = grey.dimensions();
         if width == 0 || height == 0 {

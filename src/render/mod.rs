@@ -1,7 +1,7 @@
 //! The frame: the scene's meshes built once (`geometry`), the frame as data
 //! (`plan`: attachments and passes), one type per pass (`passes`), the GPU
-//! resources and the recorded command buffer (`renderer`), and writing the
-//! images out (`output`). `tiles` culls lights per screen tile for deferred
+//! resources and the recorded command buffer (`renderer`); the images are
+//! written by `crate::image_io`. `tiles` culls lights per screen tile for deferred
 //! lighting; `octahedral` is the G-buffer's normal encoding. `empty_pass`
 //! is the driver's floor that benchmarks divide by; `reference` is the
 //! exact CPU image that sweeps can measure against.
@@ -12,7 +12,6 @@ mod frame;
 pub mod geometry;
 mod gpu_types;
 pub mod octahedral;
-pub mod output;
 pub mod passes;
 pub mod plan;
 pub mod preflight;

@@ -14,6 +14,7 @@
 use super::plan::{attachment, FrameGraph, PassIo};
 use super::RenderError;
 use crate::budget::{Bytes, MemoryBudget};
+use crate::image_io::FileFormat;
 use crate::scene::Scene;
 use crate::vk::{bytes_per_texel, Context};
 use std::io::Read as _;
@@ -29,15 +30,6 @@ const INDEX_BYTES: u64 = 4;
 /// The f64 copy of each position kept while tessellating one object.
 const EXACT_POSITION_BYTES: u64 = 24;
 
-/// What a texture file is, from its first bytes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TextureFormat {
-    Png,
-    Jpeg,
-    OpenExr,
-    Unknown,
-}
-
 /// A texture file's format and size, read from its header only.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TextureInfo {
@@ -46,19 +38,6 @@ pub struct TextureInfo {
     /// Bytes per RGBA texel once decoded: 8 for 16-bit files (normal maps
     /// keep 16 bits), otherwise 4.
     pub texel_bytes: u64,
-}
-
-/// The format of `bytes`, a file's start, from its signature.
-pub fn sniff(bytes: &[u8]) -> TextureFormat {
-    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
-        TextureFormat::Png
-    } else if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
-        TextureFormat::Jpeg
-    } else if bytes.starts_with(&[0x76, 0x2F, 0x31, 0x01]) {
-        TextureFormat::OpenExr
-    } else {
-        TextureFormat::Unknown
-    }
 }
 
 /// Reads a texture's header: the format from the content (not the file
@@ -71,15 +50,15 @@ pub fn inspect_texture(path: &Path) -> Result<TextureInfo, RenderError> {
     let mut head = [0u8; 8];
     let mut file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
     let n = file.read(&mut head).map_err(|e| err(e.to_string()))?;
-    let kind = match sniff(&head[..n]) {
-        TextureFormat::Png => "PNG",
-        TextureFormat::Jpeg => "JPEG",
-        TextureFormat::OpenExr => {
+    let kind = match crate::image_io::sniff(&head[..n]) {
+        FileFormat::Png => "PNG",
+        FileFormat::Jpeg => "JPEG",
+        FileFormat::OpenExr => {
             return Err(err(
                 "is an OpenEXR file; textures must be 8- or 16-bit PNG or JPEG".into(),
             ))
         }
-        TextureFormat::Unknown => {
+        FileFormat::Unknown => {
             return Err(err(
                 "is neither a PNG nor a JPEG file (unrecognised content; the file name \
                  is not used to decide the format)"
@@ -88,7 +67,7 @@ pub fn inspect_texture(path: &Path) -> Result<TextureInfo, RenderError> {
         }
     };
     // The header alone: the size is known before anything is decoded.
-    let decoder = crate::image_file::open(path)
+    let decoder = crate::image_io::open(path)
         .map_err(err)?
         .into_decoder()
         .map_err(|e| err(format!("not a readable {kind} file: {e}")))?;
@@ -319,15 +298,6 @@ pub fn scene_on_device(scene: &Scene, ctx: &Context) -> Result<(), RenderError> 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn preflight_sniffs_formats_from_content() {
-        assert_eq!(sniff(b"\x89PNG\r\n\x1a\n...."), TextureFormat::Png);
-        assert_eq!(sniff(&[0xFF, 0xD8, 0xFF, 0xE0]), TextureFormat::Jpeg);
-        assert_eq!(sniff(&[0x76, 0x2F, 0x31, 0x01]), TextureFormat::OpenExr);
-        assert_eq!(sniff(b"GIF89a"), TextureFormat::Unknown);
-        assert_eq!(sniff(b""), TextureFormat::Unknown);
-    }
 
     #[test]
     fn preflight_refuses_oversized_scenes_naming_the_object_or_size() {

@@ -430,7 +430,7 @@ pub fn gpu_light(light: &Light, eye: glam::DVec3, cutoff: f32) -> GpuLight {
 
 /// Decodes a texture file (PNG or JPEG, recognised by content).
 fn decode_texture(path: &std::path::Path) -> Result<image::DynamicImage, RenderError> {
-    crate::image_file::decode(path).map_err(|reason| RenderError::Texture {
+    crate::image_io::decode(path).map_err(|reason| RenderError::Texture {
         path: path.to_path_buf(),
         reason,
     })

@@ -78,15 +78,13 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::stats::percentile;
+use crate::image_io::FileFormat;
 
 /// Largest image, in pixels, that we agree to load from an OpenEXR header.
 /// A corrupt or hostile header can claim any size, and allocating for it would
 /// abort the process (not a catchable panic); 2^28 pixels is 16k x 16k, far
 /// beyond any screenshot this renderer makes.
 const MAX_PIXELS: usize = 1 << 28;
-
-const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A];
-const EXR_SIGNATURE: [u8; 4] = [0x76, 0x2F, 0x31, 0x01];
 
 /// How two images are compared; see the module docs for definitions.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -714,14 +712,12 @@ fn load(path: &Path) -> Result<Loaded, CompareError> {
         path: path.to_owned(),
         source,
     })?;
-    if bytes.starts_with(&PNG_SIGNATURE) {
-        load_png(path, &bytes)
-    } else if bytes.starts_with(&EXR_SIGNATURE) {
-        load_exr(path, &bytes)
-    } else {
-        Err(CompareError::UnknownFormat {
+    match crate::image_io::sniff(&bytes) {
+        FileFormat::Png => load_png(path, &bytes),
+        FileFormat::OpenExr => load_exr(path, &bytes),
+        FileFormat::Jpeg | FileFormat::Unknown => Err(CompareError::UnknownFormat {
             path: path.to_owned(),
-        })
+        }),
     }
 }
 
@@ -1359,11 +1355,15 @@ mod tests {
 
         // Valid signatures followed by junk must fail cleanly too.
         let trunc_png = dir.path("trunc.png");
-        fs::write(&trunc_png, [&PNG_SIGNATURE[..], b"junk"].concat()).unwrap();
+        fs::write(&trunc_png, [&b"\x89PNG\r\n\x1a\n"[..], b"junk"].concat()).unwrap();
         let err = compare_files(&good, &trunc_png, Metric::Flip).unwrap_err();
         assert!(err.to_string().contains("trunc.png"), "{err}");
         let trunc_exr = dir.path("trunc.exr");
-        fs::write(&trunc_exr, [&EXR_SIGNATURE[..], b"\x02\0\0\0junk"].concat()).unwrap();
+        fs::write(
+            &trunc_exr,
+            [&[0x76u8, 0x2F, 0x31, 0x01][..], b"\x02\0\0\0junk"].concat(),
+        )
+        .unwrap();
         let err = compare_files(&trunc_exr, &trunc_exr, Metric::Rmse).unwrap_err();
         assert!(err.to_string().contains("trunc.exr"), "{err}");
     }

@@ -13,7 +13,8 @@ use super::script::{Script, ScriptAction};
 use super::timing::TimingWindow;
 use super::{ViewOptions, ViewOutcome, ViewerError, SCRIPT_STEP_SECONDS};
 use crate::files;
-use crate::render::{output, preflight, RenderError, Renderer, SceneGeometry, ViewChange};
+use crate::image_io;
+use crate::render::{preflight, RenderError, Renderer, SceneGeometry, ViewChange};
 use crate::scene::Scene;
 use crate::vk::validation::ValidationLog;
 use crate::vk::{Context, ContextOptions, Presented, Surface, Swapchain};
@@ -635,8 +636,8 @@ impl Live {
             .join(" ");
         metadata.push(("aerial:knobs", knob_line));
         let pending = vec![
-            output::png_file(path, &pixels, &metadata)?,
-            output::exr_file(&exr_path, &hdr)?,
+            image_io::png_file(path, &pixels, &metadata)?,
+            image_io::exr_file(&exr_path, &hdr)?,
         ];
         files::commit_all(pending).map_err(|e| shot_err(e.to_string()))?;
         println!(

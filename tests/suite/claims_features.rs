@@ -282,7 +282,7 @@ fn the_tonemap_command_honours_operator_and_exposure() {
     let dir = temp_dir("tonemap");
     let exr = dir.join("ramp.exr");
     let input = hdr_ramp();
-    aerial::render::output::write_exr(&exr, &input).unwrap();
+    aerial::image_io::write_exr(&exr, &input).unwrap();
     for (operator, curve, exposure) in [
         ("aces", aces as fn(f64) -> f64, 2.5),
         ("reinhard", reinhard as fn(f64) -> f64, 0.4),
@@ -397,8 +397,8 @@ fn two_processes_render_identical_images_and_record_the_device() {
     common::assert_not_blank(&decoded, 0.3);
     assert!(a.as_raw() == b.as_raw(), "the tone-mapped images differ");
     let (ha, hb) = (
-        aerial::render::output::read_exr(&exr_a).unwrap(),
-        aerial::render::output::read_exr(&exr_b).unwrap(),
+        aerial::image_io::read_exr(&exr_a).unwrap(),
+        aerial::image_io::read_exr(&exr_b).unwrap(),
     );
     assert!(
         ha.data
@@ -410,7 +410,7 @@ fn two_processes_render_identical_images_and_record_the_device() {
 
     // The metadata names the device and driver this process rendered on,
     // as the library reports them.
-    let text = aerial::render::output::read_png_text(&png_a).unwrap();
+    let text = aerial::image_io::read_png_text(&png_a).unwrap();
     let get = |key: &str| {
         text.iter()
             .find(|(k, _)| k == key)
@@ -434,7 +434,7 @@ fn two_processes_render_identical_images_and_record_the_device() {
 }
 
 fn read_png_text_of(path: &Path) -> Vec<(String, String)> {
-    aerial::render::output::read_png_text(path).unwrap()
+    aerial::image_io::read_png_text(path).unwrap()
 }
 
 // ---------------------------------------------------------------------------

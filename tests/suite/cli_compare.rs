@@ -2,7 +2,8 @@
 //! exceeded, 2 error), the printed numbers, the diff file and the error
 //! messages. Runs the built binary on small synthetic images; no GPU needed.
 
-use aerial::render::{output, Pixels};
+use aerial::image_io;
+use aerial::render::Pixels;
 use image::{Rgb, RgbImage};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -218,7 +219,7 @@ fn bad_options_and_flip_on_exr_are_errors() {
         height: 4,
         data: vec![0.5f32; 64],
     };
-    output::write_exr(&exr, &hdr).unwrap();
+    image_io::write_exr(&exr, &hdr).unwrap();
     let out = compare(&[&exr, &exr], &[]);
     assert_eq!(out.status.code(), Some(2), "{}", text(&out));
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -246,8 +247,8 @@ fn the_rendering_device_and_driver_are_reported() {
         ]
     };
     let (a, b) = (dir.path("a.png"), dir.path("b.png"));
-    output::write_png(&a, &pixels, &made_by("Mesa 24.0")).unwrap();
-    output::write_png(&b, &pixels, &made_by("Mesa 25.1")).unwrap();
+    image_io::write_png(&a, &pixels, &made_by("Mesa 24.0")).unwrap();
+    image_io::write_png(&b, &pixels, &made_by("Mesa 25.1")).unwrap();
     let out = compare(&[&a, &b], &[]);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out));
     let stdout = String::from_utf8_lossy(&out.stdout);

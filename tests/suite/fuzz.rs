@@ -29,8 +29,8 @@
 //! than a silently wrong value) and saves any input that panicked to
 //! `target/fuzz-crashes/` for replay.
 
+use aerial::image_io::{read_exr, read_png_text, write_exr, write_png};
 use aerial::mesh::obj::{model_meshes, parse_obj, ModelOptions};
-use aerial::render::output::{read_exr, read_png_text, write_exr, write_png};
 use aerial::render::preflight::inspect_texture;
 use aerial::render::Pixels;
 use aerial::report::image_diff::{compare_files, Metric};
@@ -319,7 +319,7 @@ fn run_all(iterations: u64, seed: u64) -> usize {
                 // decode of what is small enough.
                 if let Ok(info) = inspect_texture(&input_path) {
                     if u64::from(info.width) * u64::from(info.height) <= 1 << 20 {
-                        let _ = aerial::image_file::decode(&input_path);
+                        let _ = aerial::image_io::decode(&input_path);
                     }
                 }
                 let _ = read_png_text(&input_path);

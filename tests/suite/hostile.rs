@@ -99,7 +99,7 @@ fn an_unmatched_device_lists_the_devices_and_exits_2() {
         height: 1,
         data: vec![0.5; 8],
     };
-    aerial::render::output::write_exr(&input, &pixels).unwrap();
+    aerial::image_io::write_exr(&input, &pixels).unwrap();
     let tonemap = aerial(
         &[
             "tonemap",
@@ -353,7 +353,7 @@ fn concurrent_renders_to_one_path_leave_one_whole_file() {
         assert_eq!(c.status.code(), Some(0), "{}", stderr(&c));
     }
     // Whole: decodes to the end, and nothing follows the IEND chunk.
-    aerial::render::output::read_png_text(&out).expect("a complete PNG");
+    aerial::image_io::read_png_text(&out).expect("a complete PNG");
     let bytes = std::fs::read(&out).unwrap();
     assert_eq!(&bytes[bytes.len() - 8..bytes.len() - 4], b"IEND");
     assert_eq!(dir.entries(), ["same.png"]);

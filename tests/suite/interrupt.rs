@@ -105,7 +105,7 @@ fn a_stop_signal_at_any_moment_leaves_whole_outputs_or_none() {
                 assert_eq!(files, ["out.exr", "out.png"], "{what}");
                 let png = image::open(dir.path().join("out.png")).unwrap();
                 assert_eq!((png.width(), png.height()), (1536, 1536));
-                aerial::render::output::read_exr(&dir.path().join("out.exr")).unwrap();
+                aerial::image_io::read_exr(&dir.path().join("out.exr")).unwrap();
             }
             _ => panic!("{what}"),
         }

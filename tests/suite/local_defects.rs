@@ -9,7 +9,8 @@
 
 use crate::common;
 
-use aerial::render::{output, Pixels};
+use aerial::image_io;
+use aerial::render::Pixels;
 use aerial::report::{compare_files, ImageDiff, Metric, FLIP_DEFAULT_THRESHOLDS};
 use aerial::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -134,13 +135,13 @@ impl Folder {
 
     fn png(&self, name: &str, pixels: &Pixels<u8>) -> PathBuf {
         let path = self.path.join(name);
-        output::write_png(&path, pixels, &[]).unwrap();
+        image_io::write_png(&path, pixels, &[]).unwrap();
         path
     }
 
     fn exr(&self, name: &str, pixels: &Pixels<f32>) -> PathBuf {
         let path = self.path.join(name);
-        output::write_exr(&path, pixels).unwrap();
+        image_io::write_exr(&path, pixels).unwrap();
         path
     }
 }

@@ -209,7 +209,7 @@ fn the_other_commands_refuse_to_write_over_their_inputs() {
         height: 1,
         data: vec![0.5f32; 8],
     };
-    aerial::render::output::write_exr(&exr, &pixels).unwrap();
+    aerial::image_io::write_exr(&exr, &pixels).unwrap();
     let exr_link = f.symlink("x.exr", "x-link.png");
     for out in [exr.as_path(), exr_link.as_path()] {
         assert_refused(
@@ -349,7 +349,7 @@ fn outputs_are_named_by_their_format() {
         height: 1,
         data: vec![0.5f32; 8],
     };
-    aerial::render::output::write_exr(&exr, &pixels).unwrap();
+    aerial::image_io::write_exr(&exr, &pixels).unwrap();
     let tex = f.path("tex.png");
     let jpg = f.path("o.jpg");
     assert_refused(
@@ -385,14 +385,14 @@ fn outputs_are_named_by_their_format() {
         &["--out", "written as PNG"],
     );
     // The library's writers refuse as well.
-    let err = aerial::render::output::write_exr(&f.path("y.png"), &pixels).unwrap_err();
+    let err = aerial::image_io::write_exr(&f.path("y.png"), &pixels).unwrap_err();
     assert!(err.to_string().contains("written as OpenEXR"), "{err}");
     let png = aerial::render::Pixels {
         width: 1,
         height: 1,
         data: vec![255u8; 4],
     };
-    let err = aerial::render::output::write_png(&f.path("y.exr"), &png, &[]).unwrap_err();
+    let err = aerial::image_io::write_png(&f.path("y.exr"), &png, &[]).unwrap_err();
     assert!(err.to_string().contains("written as PNG"), "{err}");
     assert!(!f.path("y.png").exists() && !f.path("y.exr").exists());
 

@@ -137,8 +137,8 @@ fn check_against_oracle(scene_toml: &str, model: DMat4) {
             .map(|v| v.to_bits())
             .fold(0u64, |a, b| a.rotate_left(7) ^ b)
     ));
-    aerial::render::output::write_exr(&path, hdr).unwrap();
-    let exr = aerial::render::output::read_exr(&path).unwrap();
+    aerial::image_io::write_exr(&path, hdr).unwrap();
+    let exr = aerial::image_io::read_exr(&path).unwrap();
     std::fs::remove_file(&path).ok();
 
     let (w, h) = (exr.width, exr.height);

@@ -51,7 +51,7 @@
 
 use crate::common;
 
-use aerial::render::output;
+use aerial::image_io;
 use aerial::report::{compare_files, write_diff_png, ImageDiff, Metric, FLIP_DEFAULT_THRESHOLDS};
 use aerial::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -200,7 +200,7 @@ fn check_scene(path: &Path) -> (Row, Option<String>) {
     std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
     // The comparison reads files, so the render is written first; it is
     // removed again when the scene passes.
-    output::write_png(&new, &run.output, &meta).unwrap_or_else(|e| panic!("{e}"));
+    image_io::write_png(&new, &run.output, &meta).unwrap_or_else(|e| panic!("{e}"));
 
     if !reference.exists() {
         if updating() {
@@ -240,7 +240,7 @@ fn check_scene(path: &Path) -> (Row, Option<String>) {
             return (row(stem, None, "FAIL: cannot compare"), Some(message));
         }
     };
-    let ref_origin = output::read_png_text(&reference)
+    let ref_origin = image_io::read_png_text(&reference)
         .ok()
         .and_then(|t| origin(&t));
     let same_driver = ref_origin.is_some() && ref_origin == this_origin;
@@ -401,7 +401,7 @@ fn an_unrelated_cpu_flag_keeps_the_bit_exact_check() {
     // The reference's metadata, and a run's on the machine with the extra
     // flags (its full flag list differs).
     let reference = reference_dir().join("default.png");
-    let mut text: Vec<(String, String)> = output::read_png_text(&reference).unwrap();
+    let mut text: Vec<(String, String)> = image_io::read_png_text(&reference).unwrap();
     let set = |text: &mut Vec<(String, String)>, key: &str, value: String| {
         text.retain(|(k, _)| k != key);
         text.push((key.to_string(), value));

@@ -14,7 +14,7 @@
 
 use crate::common;
 
-use aerial::render::output::{read_exr, read_png_text};
+use aerial::image_io::{read_exr, read_png_text};
 use aerial::render::Pixels;
 use aerial::scene::Scene;
 use std::path::{Path, PathBuf};

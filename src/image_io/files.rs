@@ -1,4 +1,5 @@
-//! Writing rendered images: the tone-mapped PNG and the linear HDR EXR.
+//! The rendered images: the tone-mapped PNG (with its metadata text) and
+//! the linear HDR OpenEXR, written and read back.
 //!
 //! Every file goes through [`crate::files`]: written under a unique
 //! temporary name in the destination folder and renamed into place, so a
@@ -6,8 +7,8 @@
 //! prepare a file without committing it, for runs that write several files
 //! and commit them together.
 
-use super::{Pixels, RenderError};
 use crate::files::{self, PendingFile};
+use crate::render::{Pixels, RenderError};
 use std::io::Write as _;
 use std::path::Path;
 

@@ -1,0 +1,63 @@
+//! Image files in one place: recognising a file's format from its content
+//! (never from its name, so a PNG named `.jpg` or a file without an
+//! extension reads as what it is), decoding textures, and reading and
+//! writing the rendered PNG and OpenEXR images (written through
+//! [`crate::files`]: a temporary name, then a rename).
+
+mod files;
+
+pub use files::{exr_file, png_file, read_exr, read_png_text, write_exr, write_png};
+
+use image::{DynamicImage, ImageReader};
+use std::io::BufReader;
+use std::path::Path;
+
+/// Opens `path` with its format guessed from its first bytes. The error is
+/// the reason alone; callers name the file in their own error type.
+pub fn open(path: &Path) -> Result<ImageReader<BufReader<std::fs::File>>, String> {
+    ImageReader::open(path)
+        .map_err(|e| e.to_string())?
+        .with_guessed_format()
+        .map_err(|e| e.to_string())
+}
+
+/// Decodes `path` whole (format from its content).
+pub fn decode(path: &Path) -> Result<DynamicImage, String> {
+    open(path)?.decode().map_err(|e| e.to_string())
+}
+
+/// What an image file is, from its first bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FileFormat {
+    Png,
+    Jpeg,
+    OpenExr,
+    Unknown,
+}
+
+/// The format of `bytes`, a file's start, from its signature.
+pub fn sniff(bytes: &[u8]) -> FileFormat {
+    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
+        FileFormat::Png
+    } else if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
+        FileFormat::Jpeg
+    } else if bytes.starts_with(&[0x76, 0x2F, 0x31, 0x01]) {
+        FileFormat::OpenExr
+    } else {
+        FileFormat::Unknown
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn formats_are_sniffed_from_content() {
+        assert_eq!(sniff(b"\x89PNG\r\n\x1a\n...."), FileFormat::Png);
+        assert_eq!(sniff(&[0xFF, 0xD8, 0xFF, 0xE0]), FileFormat::Jpeg);
+        assert_eq!(sniff(&[0x76, 0x2F, 0x31, 0x01]), FileFormat::OpenExr);
+        assert_eq!(sniff(b"GIF89a"), FileFormat::Unknown);
+        assert_eq!(sniff(b""), FileFormat::Unknown);
+    }
+}
