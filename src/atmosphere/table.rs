@@ -33,6 +33,9 @@
 //! exactly (u = (x·(W−1) + 0.5)/W), so the ground, the top, the zenith
 //! and the horizontal are sampled without extrapolation.
 //!
+//! The table spans the altitudes up to [`Atmosphere::effective_top_radius`]
+//! (the `top_radius`, or where a tall atmosphere's air ends).
+//!
 //! `seed` is the linear altitude × linear cosine mapping over all W × H
 //! texels, for comparison (rays below the horizon are clamped to it).
 //!
@@ -72,10 +75,14 @@ struct Frame {
 }
 
 impl Frame {
+    /// The frame spans the atmosphere up to its effective top: a tall
+    /// atmosphere's rows and columns then sample the air rather than the
+    /// empty shell above it (the column from above the cut is below
+    /// [`super::CUT_TOLERANCE`]; lookups there clamp to the top row).
     fn new(a: &Atmosphere) -> Frame {
         Frame {
             bottom: a.bottom_radius,
-            top: a.top_radius,
+            top: a.effective_top_radius(),
         }
     }
 
