@@ -57,9 +57,9 @@ pub const REFERENCE_CUT: f64 = 1e-12;
 /// relative to the planet centre, direction unit) that the integrals
 /// cover: all of it when the atmosphere's top lies below the altitude
 /// where its air is negligible at [`REFERENCE_CUT`]; otherwise the part
-/// inside that sphere, split where the ray crosses the spheres where each
-/// profile's air ends, so that each stretch's initial grid of
-/// [`Precision::panels`] resolves the profiles alive on it.
+/// inside that sphere, split where the ray crosses the spheres where a
+/// profile's air ends far below it, so that each stretch's initial grid
+/// of [`Precision::panels`] resolves the profiles alive on it.
 pub fn pieces(
     atmosphere: &Atmosphere,
     origin: DVec3,
@@ -85,7 +85,11 @@ pub fn pieces(
     }
     let mut breaks = vec![a, b];
     for &h in &cuts {
-        if h > 0.0 && h < outer {
+        // A profile whose air ends above an eighth of the outer cut has
+        // eight or more of the initial panels on a vertical ray through
+        // it, more on a slanted one: splitting there would only add
+        // panels (Earth's Mie and ozone, at about 40 km of 270, are not).
+        if h > 0.0 && h < outer / 8.0 {
             if let Some((c0, c1)) = ray_sphere(origin, direction, radius(h)) {
                 breaks.extend([c0, c1].into_iter().filter(|&t| t > a && t < b));
             }

@@ -444,11 +444,21 @@ mod tall {
                 "H {scale}: {value:e} against {exact:e}"
             );
         }
-        // The cut integrates only the stretch near the planet, in pieces
-        // split where the Mie and the ozone end.
+        // The cut integrates only the stretch near the planet; a Mie
+        // scale height of 1 m under 100 km Rayleigh is split apart.
         let parts = pieces(&a, start, DVec3::X, 0.0, 1.8e9);
         let covered: f64 = parts.iter().map(|(t0, t1)| t1 - t0).sum();
-        assert!(parts.len() >= 3 && covered < 5e6, "{parts:?}");
+        assert!(covered < 5e6, "{parts:?}");
+        let mut thin_mie = a.clone();
+        thin_mie.rayleigh_scale_height = 1e5;
+        thin_mie.mie_scale_height = 1.0;
+        thin_mie.ozone_absorption = DVec3::ZERO;
+        let ground = DVec3::new(0.0, a.bottom_radius, 0.0);
+        let parts = pieces(&thin_mie, ground, DVec3::Y, 0.0, 1e9);
+        assert!(parts.len() == 2 && parts[0].1 < 100.0, "{parts:?}");
+        let d = densities_to_top(&thin_mie, ground, DVec3::Y).unwrap();
+        assert!((d.mie - 1.0).abs() < 1e-7, "{}", d.mie);
+        assert!((d.rayleigh - 1e5).abs() < 1e-7 * 1e5, "{}", d.rayleigh);
         // Earth's default is integrated in one piece, as before the cut.
         let earth = earth();
         let p = DVec3::new(0.0, earth.bottom_radius, 0.0);
