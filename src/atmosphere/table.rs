@@ -194,6 +194,12 @@ impl OpticalDepthTable {
         let started = std::time::Instant::now();
         let (w, h) = (width.max(2) as usize, height.max(3) as usize);
         let frame = Frame::new(atmosphere);
+        // Texels integrate up to the effective top, as the pass sees the
+        // atmosphere: what lies above it is below CUT_TOLERANCE, and a
+        // tall atmosphere's texels then cost what a default one's do
+        // (integrated to the nominal top, the reference's own cut at
+        // 1e-12 took them 280 km up and the bake 1.5 times as long).
+        let effective = atmosphere.effective();
         // The ray (altitude, cosine) of texel (x, y).
         let ray = |x: usize, y: usize| -> (f64, f64) {
             let u = x as f64 / (w - 1) as f64;
@@ -223,9 +229,9 @@ impl OpticalDepthTable {
                     let dir = DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), mu, 0.0);
                     // Exactly on the horizon the ground test may round either
                     // way; the grazing integral is finite, so take it.
-                    let d = densities_to_top(atmosphere, p, dir).unwrap_or_else(|| {
+                    let d = densities_to_top(&effective, p, dir).unwrap_or_else(|| {
                         let d = frame.distance_to_top(r, mu);
-                        super::reference::densities_between(atmosphere, p, p + d * dir)
+                        super::reference::densities_between(&effective, p, p + d * dir)
                     });
                     encode(atmosphere, alt, d)
                 })
