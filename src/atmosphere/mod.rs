@@ -102,8 +102,8 @@ impl Atmosphere {
     /// (≈ H, so of the in-scattering a ray through the air collects) and
     /// below an optical depth of `tolerance` (so of any transmittance);
     /// the ozone tent at its end, where it is exactly zero (0 when it
-    /// absorbs nothing). Unbounded (infinite) for a profile that matters
-    /// up to the top; the callers take the minimum with it.
+    /// absorbs nothing). An altitude may lie above the top (a profile
+    /// that matters all the way up); the callers take the minimum.
     pub fn negligible_altitudes(&self, tolerance: f64) -> [f64; 3] {
         let top = self.top_radius;
         let exponential = |scale_height: f64, extinction: DVec3| {
@@ -186,8 +186,8 @@ pub const MIN_CUT_THICKNESS: f64 = 1e-5;
 /// column ≤ e^(−h/H)·(√(π·top·H) + 2H). Any stretch of a ray that lies
 /// above an altitude is one such climb or two (split at its lowest point,
 /// each half a climb from there), hence the factor 2 of
-/// [`Atmosphere::negligible_altitudes`]. Tested against the reference's
-/// Chapman limit (the bound is about √2 above the horizontal column).
+/// [`Atmosphere::negligible_altitudes`]. Tested against a brute-force
+/// integral of the horizontal column (the bound is about √2 above it).
 pub fn column_above(h: f64, scale_height: f64, top: f64) -> f64 {
     (-h / scale_height).exp()
         * ((std::f64::consts::PI * top * scale_height).sqrt() + 2.0 * scale_height)
