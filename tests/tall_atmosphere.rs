@@ -156,6 +156,20 @@ fn earths_noon_sky_matches_the_reference_for_every_top_up_to_the_maximum() {
 }
 
 #[test]
+fn a_sunset_under_the_tallest_top_matches_the_reference() {
+    // The sun 1° up, looking towards its side of the sky: sun rays graze
+    // the ground through the whole cut atmosphere.
+    let scene = scene(
+        [0.0, 2.0, 0.0],
+        [-1.0, 2.4, 0.0],
+        80.0,
+        [-1.0, 0.0175, 0.0],
+        "top_radius = 1e9\n",
+    );
+    check("sunset, top 1e9", &scene, Probes::Sky);
+}
+
+#[test]
 fn other_planets_with_tall_atmospheres_match_the_reference() {
     for (label, atmosphere) in [
         // A 100 km moon under a 1e8 m atmosphere of Earth's air.
