@@ -1,6 +1,7 @@
 //! Tall atmospheres (`top_radius` far above the air, up to the accepted
 //! 1e9 m) against the CPU double-precision reference: the sky from the
-//! ground of Earth's noon at several tops, a small planet, large scale
+//! ground of Earth's noon at several tops and its sunset under the
+//! tallest, a small planet, large scale
 //! heights and an ozone layer far above the air, the planet and its limb
 //! seen from space inside the nominal top, and a camera above the air but
 //! inside the nominal top. The sky is held to the default scene's bound
