@@ -376,12 +376,23 @@ Path march(vec3 d, float t_surface, int ground_rule) {
     float previous_t = 0.0;
     float h_start = c_bottom / (sqrt(rb * rb + c_bottom) + rb);
     vec3 previous_extinction = extinction(densities(h_start));
+    // From space, a ray that ends on the ground crowds its samples towards
+    // it, where the air is densest (t = L (1 - (1 - u)^2)): uniform samples
+    // spread over a tall atmosphere's empty shell left the ground seen
+    // from space 1.5 % dark. Other rays from space stay uniform: along a
+    // limb ray the density is a smooth bump around its lowest point, which
+    // the midpoint rule on uniform samples integrates best (crowding
+    // towards that point cost the orbit's grazing row 1.3 % instead of
+    // 0.6 %).
+    bool crowd_ground = path.end == END_GROUND;
     for (int i = 0; i < n; ++i) {
         float u = (float(i) + 0.5) / float(n);
         // Inside the atmosphere samples crowd near the camera (t = L u^2),
-        // where the density is highest; from space they are uniform.
-        float t = inside ? t_end * u * u : t_end * u;
-        float dt = inside ? t_end * 2.0 * u / float(n) : t_end / float(n);
+        // where the density is highest.
+        float t_space = crowd_ground ? t_end * (1.0 - (1.0 - u) * (1.0 - u)) : t_end * u;
+        float dt_space = crowd_ground ? t_end * 2.0 * (1.0 - u) / float(n) : t_end / float(n);
+        float t = inside ? t_end * u * u : t_space;
+        float dt = inside ? t_end * 2.0 * u / float(n) : dt_space;
         float r;
         float h = altitude(c_bottom, b, t, r);
         vec3 rho = densities(h);

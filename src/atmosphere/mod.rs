@@ -12,6 +12,11 @@
 //! [`ozone`] integrates the ozone layer along a ray in closed form;
 //! [`coefficients`] derives scattering coefficients from physical
 //! quantities (the seed's optional Rayleigh and Mie formulas).
+//!
+//! A tall atmosphere (`top_radius` far above the air, up to 1e9 m) is cut
+//! at the altitude where the air it could still hold is negligible
+//! ([`Atmosphere::negligible_altitude`]): the GPU pass, its tables and the
+//! reference then spend their samples where the air is.
 
 pub mod coefficients;
 pub mod ozone;
@@ -88,6 +93,104 @@ impl Atmosphere {
     pub fn altitude(&self, p: DVec3) -> f64 {
         p.length() - self.bottom_radius
     }
+
+    /// The altitude of each density profile (Rayleigh, Mie, ozone) above
+    /// which what it holds along any ray is negligible at `tolerance`:
+    /// the exponentials where the bound of [`column_above`] on both
+    /// stretches of a ray above it is at most `tolerance` × min(H,
+    /// 1/β_max): below `tolerance` of the vertical column from the ground
+    /// (≈ H, so of the in-scattering a ray through the air collects) and
+    /// below an optical depth of `tolerance` (so of any transmittance);
+    /// the ozone tent at its end, where it is exactly zero (0 when it
+    /// absorbs nothing). An altitude may lie above the top (a profile
+    /// that matters all the way up); the callers take the minimum.
+    pub fn negligible_altitudes(&self, tolerance: f64) -> [f64; 3] {
+        let top = self.top_radius;
+        let exponential = |scale_height: f64, extinction: DVec3| {
+            let beta = extinction.max_element();
+            let allowed = if beta > 0.0 {
+                tolerance * scale_height.min(1.0 / beta)
+            } else {
+                tolerance * scale_height
+            };
+            // 2·e^(−h/H)·(√(π R_top H) + 2H) ≤ allowed.
+            let bound_at_ground =
+                2.0 * ((std::f64::consts::PI * top * scale_height).sqrt() + 2.0 * scale_height);
+            scale_height * (bound_at_ground / allowed).ln().max(0.0)
+        };
+        let ozone = if self.ozone_absorption.max_element() > 0.0 {
+            self.ozone_layer[2]
+        } else {
+            0.0
+        };
+        [
+            exponential(self.rayleigh_scale_height, self.rayleigh_scattering),
+            exponential(self.mie_scale_height, self.mie_extinction),
+            ozone,
+        ]
+    }
+
+    /// The highest of [`Atmosphere::negligible_altitudes`]: above it the
+    /// atmosphere holds nothing that matters at `tolerance`.
+    pub fn negligible_altitude(&self, tolerance: f64) -> f64 {
+        let [r, m, o] = self.negligible_altitudes(tolerance);
+        r.max(m).max(o)
+    }
+
+    /// The radius the GPU pass and its tables treat as the top of the
+    /// atmosphere: `top_radius`, or lower where the air above is
+    /// negligible at [`CUT_TOLERANCE`]. Never thinner than
+    /// [`MIN_CUT_THICKNESS`] of the planet's radius, which float32
+    /// altitudes resolve. For Earth's default 60 km it is `top_radius`
+    /// (the cut is at 168 km for `top_radius` = 1e9 m).
+    pub fn effective_top_radius(&self) -> f64 {
+        self.cut_top_radius(CUT_TOLERANCE)
+    }
+
+    /// `top_radius` lowered to the negligible altitude at `tolerance`.
+    pub fn cut_top_radius(&self, tolerance: f64) -> f64 {
+        let floor = self.bottom_radius * MIN_CUT_THICKNESS;
+        let cut = self.negligible_altitude(tolerance).max(floor);
+        self.top_radius.min(self.bottom_radius + cut)
+    }
+
+    /// This atmosphere with its top at [`Atmosphere::effective_top_radius`]:
+    /// what the GPU pass draws.
+    pub fn effective(&self) -> Atmosphere {
+        Atmosphere {
+            top_radius: self.effective_top_radius(),
+            ..self.clone()
+        }
+    }
+}
+
+/// The error target of the cut of [`Atmosphere::effective_top_radius`]:
+/// the air it leaves out is below a millionth of the vertical column and
+/// of an optical depth of one, a thousandth of the pass's own 1e-3 median
+/// error bound.
+pub const CUT_TOLERANCE: f64 = 1e-6;
+
+/// The thinnest cut atmosphere, as a fraction of the planet's radius: ten
+/// times the thinnest shell the scene accepts.
+pub const MIN_CUT_THICKNESS: f64 = 1e-5;
+
+/// A bound on ∫ e^(−h/H) ds along a ray that starts at altitude `h` (at
+/// most `top` from the centre) and climbs or runs horizontally: the
+/// density column of an exponential profile the ray can still meet.
+///
+/// Why it holds: from radius r₀ ≥ R + h along cosine μ ≥ 0 the radius at
+/// distance s is at least √(r₀² + s²) = r₀ + s²/(√(r₀² + s²) + r₀) ≥
+/// r₀ + s²/(2r₀ + s). For s ≤ 2r₀ the gain is at least s²/(4r₀), a
+/// Gaussian whose half-line integral is √(π r₀ H); beyond 2r₀ it is at
+/// least s/2, whose tail integral is 2H·e^(−r₀/H) ≤ 2H. With r₀ ≤ `top`:
+/// column ≤ e^(−h/H)·(√(π·top·H) + 2H). Any stretch of a ray that lies
+/// above an altitude is one such climb or two (split at its lowest point,
+/// each half a climb from there), hence the factor 2 of
+/// [`Atmosphere::negligible_altitudes`]. Tested against a brute-force
+/// integral of the horizontal column (the bound is about √2 above it).
+pub fn column_above(h: f64, scale_height: f64, top: f64) -> f64 {
+    (-h / scale_height).exp()
+        * ((std::f64::consts::PI * top * scale_height).sqrt() + 2.0 * scale_height)
 }
 
 /// The sun's light on an object at `point` (world space): a directional

@@ -90,7 +90,9 @@ impl Ray {
 /// along cosine `mu` to the top of the atmosphere. The ray must miss the
 /// ground (the caller shadows rays into the planet).
 pub fn ozone_to_top(atmosphere: &Atmosphere, alt: f64, mu: f64) -> f64 {
-    let top = atmosphere.top_radius - atmosphere.bottom_radius;
+    // The effective top, as the pass's: it never cuts the layer while the
+    // layer absorbs (see Atmosphere::negligible_altitudes).
+    let top = atmosphere.effective_top_radius() - atmosphere.bottom_radius;
     let ray = Ray::new(atmosphere.bottom_radius, alt.clamp(0.0, top), mu);
     let Some((_, end)) = ray.crossings(top) else {
         return 0.0;

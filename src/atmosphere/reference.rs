@@ -47,6 +47,58 @@ pub const IMAGE: Precision = Precision {
 /// Deepest bisection.
 pub const MAX_DEPTH: u32 = 24;
 
+/// The reference's own cut of a tall atmosphere: what it leaves out is
+/// below 1e-12 of the vertical column and of an optical depth of one, far
+/// below its integrals' 1e-7 tolerance (and a million times below the GPU
+/// pass's cut, [`super::CUT_TOLERANCE`], which it is the oracle for).
+pub const REFERENCE_CUT: f64 = 1e-12;
+
+/// The stretches of `[t0, t1]` along `origin + t·direction` (origin
+/// relative to the planet centre, direction unit) that the integrals
+/// cover: all of it when the atmosphere's top lies below the altitude
+/// where its air is negligible at [`REFERENCE_CUT`]; otherwise the part
+/// inside that sphere, split where the ray crosses the spheres where a
+/// profile's air ends far below it, so that each stretch's initial grid
+/// of [`Precision::panels`] resolves the profiles alive on it.
+pub fn pieces(
+    atmosphere: &Atmosphere,
+    origin: DVec3,
+    direction: DVec3,
+    t0: f64,
+    t1: f64,
+) -> Vec<(f64, f64)> {
+    if t1 <= t0 {
+        return Vec::new();
+    }
+    let cuts = atmosphere.negligible_altitudes(REFERENCE_CUT);
+    let outer = cuts.iter().copied().fold(0.0, f64::max);
+    let radius = |h: f64| atmosphere.bottom_radius + h;
+    if radius(outer) >= atmosphere.top_radius {
+        return vec![(t0, t1)];
+    }
+    let Some((enter, leave)) = ray_sphere(origin, direction, radius(outer)) else {
+        return Vec::new();
+    };
+    let (a, b) = (t0.max(enter), t1.min(leave));
+    if b <= a {
+        return Vec::new();
+    }
+    let mut breaks = vec![a, b];
+    for &h in &cuts {
+        // A profile whose air ends above an eighth of the outer cut has
+        // eight or more of the initial panels on a vertical ray through
+        // it, more on a slanted one: splitting there would only add
+        // panels (Earth's Mie and ozone, at about 40 km of 270, are not).
+        if h > 0.0 && h < outer / 8.0 {
+            if let Some((c0, c1)) = ray_sphere(origin, direction, radius(h)) {
+                breaks.extend([c0, c1].into_iter().filter(|&t| t > a && t < b));
+            }
+        }
+    }
+    breaks.sort_by(f64::total_cmp);
+    breaks.windows(2).map(|w| (w[0], w[1])).collect()
+}
+
 /// Adaptive Simpson over `[a, b]` of a function with several outputs
 /// (`N` of them), each controlled to `tol` absolute.
 fn adaptive<const N: usize>(
@@ -133,19 +185,25 @@ pub fn densities_between_with(
         return Densities::default();
     }
     let direction = (b - a) / length;
-    let [rayleigh, mie, ozone] = adaptive(
-        &mut |t| {
-            let d = atmosphere.densities(atmosphere.altitude(a + t * direction));
-            [d.rayleigh, d.mie, d.ozone]
-        },
-        0.0,
-        length,
-        precision,
-    );
+    let mut sum = [0.0; 3];
+    for (t0, t1) in pieces(atmosphere, a, direction, 0.0, length) {
+        let part = adaptive(
+            &mut |t| {
+                let d = atmosphere.densities(atmosphere.altitude(a + t * direction));
+                [d.rayleigh, d.mie, d.ozone]
+            },
+            t0,
+            t1,
+            precision,
+        );
+        for (s, p) in sum.iter_mut().zip(part) {
+            *s += p;
+        }
+    }
     Densities {
-        rayleigh,
-        mie,
-        ozone,
+        rayleigh: sum[0],
+        mie: sum[1],
+        ozone: sum[2],
     }
 }
 
@@ -305,14 +363,18 @@ fn scattering(
         rel_tol: precision.rel_tol * 10.0,
         ..precision
     };
-    let [r, g, b] = adaptive(&mut { integrand }, start, end, outer);
+    let mut integrand = integrand;
+    let mut sum = DVec3::ZERO;
+    for (t0, t1) in pieces(atmosphere, origin, direction, start, end) {
+        sum += DVec3::from_array(adaptive(&mut integrand, t0, t1, outer));
+    }
     let view = atmosphere.transmittance(densities_between_with(
         atmosphere,
         entry,
         origin + end * direction,
         precision,
     ));
-    (DVec3::new(r, g, b), view)
+    (sum, view)
 }
 
 /// Transmittance per channel of sunlight reaching `point` (relative to the

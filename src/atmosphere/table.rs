@@ -33,6 +33,9 @@
 //! exactly (u = (x·(W−1) + 0.5)/W), so the ground, the top, the zenith
 //! and the horizontal are sampled without extrapolation.
 //!
+//! The table spans the altitudes up to [`Atmosphere::effective_top_radius`]
+//! (the `top_radius`, or where a tall atmosphere's air ends).
+//!
 //! `seed` is the linear altitude × linear cosine mapping over all W × H
 //! texels, for comparison (rays below the horizon are clamped to it).
 //!
@@ -72,10 +75,14 @@ struct Frame {
 }
 
 impl Frame {
+    /// The frame spans the atmosphere up to its effective top: a tall
+    /// atmosphere's rows and columns then sample the air rather than the
+    /// empty shell above it (the column from above the cut is below
+    /// [`super::CUT_TOLERANCE`]; lookups there clamp to the top row).
     fn new(a: &Atmosphere) -> Frame {
         Frame {
             bottom: a.bottom_radius,
-            top: a.top_radius,
+            top: a.effective_top_radius(),
         }
     }
 
@@ -187,6 +194,12 @@ impl OpticalDepthTable {
         let started = std::time::Instant::now();
         let (w, h) = (width.max(2) as usize, height.max(3) as usize);
         let frame = Frame::new(atmosphere);
+        // Texels integrate up to the effective top, as the pass sees the
+        // atmosphere: what lies above it is below CUT_TOLERANCE, and a
+        // tall atmosphere's texels then cost what a default one's do
+        // (integrated to the nominal top, the reference's own cut at
+        // 1e-12 took them 280 km up and the bake 1.5 times as long).
+        let effective = atmosphere.effective();
         // The ray (altitude, cosine) of texel (x, y).
         let ray = |x: usize, y: usize| -> (f64, f64) {
             let u = x as f64 / (w - 1) as f64;
@@ -216,9 +229,9 @@ impl OpticalDepthTable {
                     let dir = DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), mu, 0.0);
                     // Exactly on the horizon the ground test may round either
                     // way; the grazing integral is finite, so take it.
-                    let d = densities_to_top(atmosphere, p, dir).unwrap_or_else(|| {
+                    let d = densities_to_top(&effective, p, dir).unwrap_or_else(|| {
                         let d = frame.distance_to_top(r, mu);
-                        super::reference::densities_between(atmosphere, p, p + d * dir)
+                        super::reference::densities_between(&effective, p, p + d * dir)
                     });
                     encode(atmosphere, alt, d)
                 })

@@ -311,3 +311,214 @@ fn ozone_in_closed_form_matches_the_reference() {
         );
     }
 }
+
+/// Tall atmospheres: the cut of [`Atmosphere::effective_top_radius`] and
+/// the reference's own cut ([`super::reference::pieces`]).
+mod tall {
+    use super::*;
+    use crate::atmosphere::reference::{pieces, REFERENCE_CUT};
+
+    fn tall(top: f64) -> Atmosphere {
+        Atmosphere {
+            top_radius: top,
+            ..earth()
+        }
+    }
+
+    /// ∫ e^(−h/H) ds along the horizontal ray from radius `r`, outwards,
+    /// by the composite Simpson rule on a grid far finer than the
+    /// Gaussian of width √(rH) it integrates (brute force, no adaptivity).
+    fn horizontal_column(bottom: f64, r: f64, scale_height: f64) -> f64 {
+        let width = (r * scale_height).sqrt().max(scale_height);
+        let length = 60.0 * width;
+        let n = 200_000;
+        let h = length / n as f64;
+        let f = |s: f64| (-((r * r + s * s).sqrt() - bottom) / scale_height).exp();
+        (0..n)
+            .map(|i| {
+                let (a, b) = (i as f64 * h, (i + 1) as f64 * h);
+                h / 6.0 * (f(a) + 4.0 * f(0.5 * (a + b)) + f(b))
+            })
+            .sum()
+    }
+
+    #[test]
+    fn column_above_bounds_the_horizontal_column_within_a_factor_of_two() {
+        for (bottom, h, scale_height, top) in [
+            (6.36e6, 0.0, 8000.0, 6.42e6),
+            (6.36e6, 150_000.0, 8000.0, 1e9),
+            (6.36e6, 40_000.0, 1200.0, 1e9),
+            (1e5, 2_000.0, 500.0, 1e8),
+            (1e6, 1e6, 1e5, 1e9),
+        ] {
+            let exact = horizontal_column(bottom, bottom + h, scale_height);
+            let bound = column_above(h, scale_height, bottom + h).max(0.0);
+            let loose = column_above(h, scale_height, top);
+            println!("R {bottom:e} h {h:e} H {scale_height:e}: {exact:.4e} <= {bound:.4e}");
+            assert!(
+                exact <= bound && bound <= loose,
+                "{exact:e} {bound:e} {loose:e}"
+            );
+            // Not much of a bound if it were far above: about √2 for a
+            // planet much larger than H (Chapman's √(π r H / 2)).
+            assert!(bound <= 2.0 * exact, "{exact:e} {bound:e}");
+        }
+    }
+
+    #[test]
+    fn earth_keeps_its_top_and_tall_atmospheres_are_cut_where_the_air_ends() {
+        assert_eq!(earth().effective_top_radius(), earth().top_radius);
+        for top in [3e7, 1e8, 3e8, 1e9] {
+            let a = tall(top);
+            let cut = a.effective_top_radius() - a.bottom_radius;
+            println!("top {top:e}: cut at {:.1} km", cut / 1000.0);
+            assert!((100e3..200e3).contains(&cut), "{cut}");
+            // What is left above the cut, on the horizontal ray from it
+            // (the largest column a ray above it can meet), is below the
+            // tolerance of the vertical column, for both exponentials.
+            for scale_height in [a.rayleigh_scale_height, a.mie_scale_height] {
+                let left = horizontal_column(a.bottom_radius, a.bottom_radius + cut, scale_height);
+                assert!(
+                    2.0 * left <= CUT_TOLERANCE * scale_height,
+                    "H {scale_height}: {left:e}"
+                );
+            }
+        }
+        // An absorbing ozone layer is never cut; large scale heights push
+        // the cut up to the top; a small planet keeps its cut above
+        // MIN_CUT_THICKNESS.
+        let mut high_ozone = tall(1e9);
+        high_ozone.ozone_layer = [1e6, 2e6, 3e6];
+        assert!(high_ozone.effective_top_radius() >= high_ozone.bottom_radius + 3e6);
+        let mut thick = tall(1e8);
+        thick.rayleigh_scale_height = 1e7;
+        assert_eq!(thick.effective_top_radius(), 1e8);
+        let mut tiny = tall(1e9);
+        tiny.bottom_radius = 1e8;
+        tiny.rayleigh_scale_height = 1.0;
+        tiny.mie_scale_height = 1.0;
+        tiny.ozone_absorption = DVec3::ZERO;
+        assert_eq!(
+            tiny.effective_top_radius(),
+            tiny.bottom_radius + tiny.bottom_radius * MIN_CUT_THICKNESS
+        );
+    }
+
+    /// The reference on a 1e9 m atmosphere: the vertical optical depth
+    /// against its closed form (the top's term e^(−(R_top − R)/H) is 0),
+    /// and a ray from far out in space that grazes the air 5 km above the
+    /// ground against brute force. Before the reference cut its own
+    /// initial grid (64 panels of 3e7 m) stepped over the air.
+    #[test]
+    fn the_reference_stays_exact_in_a_tall_atmosphere() {
+        let a = tall(1e9);
+        for h in [0.0, 1000.0, 30_000.0, 100_000.0] {
+            let p = DVec3::new(0.0, a.bottom_radius + h, 0.0);
+            let d = densities_to_top(&a, p, DVec3::Y).unwrap();
+            for (got, scale) in [
+                (d.rayleigh, a.rayleigh_scale_height),
+                (d.mie, a.mie_scale_height),
+            ] {
+                let exact = scale * (-h / scale).exp();
+                assert!(
+                    (got - exact).abs() <= 1e-7 * exact + REFERENCE_CUT * scale,
+                    "h {h}: {got} against {exact}"
+                );
+            }
+        }
+        // From 9e8 m along the x axis, aimed to pass 5 km above the ground.
+        let low = a.bottom_radius + 5000.0;
+        let start = DVec3::new(-9e8, low, 0.0);
+        let end = DVec3::new(9e8, low, 0.0);
+        let got = densities_between(&a, start, end);
+        // Along y = low the closest point is at x = 0; both halves are the
+        // horizontal column from there.
+        for (value, scale) in [
+            (got.rayleigh, a.rayleigh_scale_height),
+            (got.mie, a.mie_scale_height),
+        ] {
+            let exact = 2.0 * horizontal_column(a.bottom_radius, low, scale);
+            println!("grazing from space, H {scale}: {value:.6e} against {exact:.6e}");
+            assert!(
+                ((value - exact) / exact).abs() < 1e-6,
+                "H {scale}: {value:e} against {exact:e}"
+            );
+        }
+        // The cut integrates only the stretch near the planet; a Mie
+        // scale height of 1 m under 100 km Rayleigh is split apart.
+        let parts = pieces(&a, start, DVec3::X, 0.0, 1.8e9);
+        let covered: f64 = parts.iter().map(|(t0, t1)| t1 - t0).sum();
+        assert!(covered < 5e6, "{parts:?}");
+        let mut thin_mie = a.clone();
+        thin_mie.rayleigh_scale_height = 1e5;
+        thin_mie.mie_scale_height = 1.0;
+        thin_mie.ozone_absorption = DVec3::ZERO;
+        let ground = DVec3::new(0.0, a.bottom_radius, 0.0);
+        let parts = pieces(&thin_mie, ground, DVec3::Y, 0.0, 1e9);
+        assert!(parts.len() == 2 && parts[0].1 < 100.0, "{parts:?}");
+        let d = densities_to_top(&thin_mie, ground, DVec3::Y).unwrap();
+        assert!((d.mie - 1.0).abs() < 1e-7, "{}", d.mie);
+        assert!((d.rayleigh - 1e5).abs() < 1e-7 * 1e5, "{}", d.rayleigh);
+        // Earth's default is integrated in one piece, as before the cut.
+        let earth = earth();
+        let p = DVec3::new(0.0, earth.bottom_radius, 0.0);
+        assert_eq!(pieces(&earth, p, DVec3::X, 0.0, 1e6), vec![(0.0, 1e6)]);
+    }
+
+    /// In a tall atmosphere the sky from the ground is the sky of the same
+    /// air under a top just below the reference's cut (integrated the old
+    /// way, in one piece): the reference's cut changes nothing it can see.
+    #[test]
+    fn the_reference_radiance_does_not_depend_on_an_empty_top() {
+        let high = tall(1e9);
+        let low = tall(earth().bottom_radius + 250_000.0);
+        let eye = DVec3::new(0.0, high.bottom_radius + 2.0, 0.0);
+        let s = sun(DVec3::new(0.3, 0.866, 0.4));
+        for view in [
+            DVec3::Y,
+            DVec3::new(0.0, 0.2, -1.0),
+            DVec3::new(1.0, 0.01, 0.0),
+            DVec3::new(0.3, -0.2, 1.0),
+        ] {
+            let view = view.normalize();
+            let (a, b) = (
+                radiance(&high, &s, eye, view),
+                radiance(&low, &s, eye, view),
+            );
+            assert!(
+                (a - b).abs().max_element() <= 1e-6 * b.max_element(),
+                "{view}: {a} against {b}"
+            );
+        }
+    }
+
+    /// The optical-depth table of a tall atmosphere, spanning its
+    /// effective top, meets the default's 1e-4 transmittance goal over
+    /// rays in the air (looked up in the full atmosphere).
+    #[test]
+    fn a_tall_atmospheres_table_meets_the_transmittance_goal() {
+        for top in [3e7, 1e9] {
+            let a = tall(top);
+            let table = OpticalDepthTable::bake(&a, 256, 64, TableMapping::Horizon);
+            let rays = rays_above_ground(&a.effective(), 61, 149);
+            let mut worst = 0f64;
+            for (alt, mu) in rays {
+                let p = DVec3::new(0.0, a.bottom_radius + alt, 0.0);
+                let dir = DVec3::new((1.0 - mu * mu).sqrt(), mu, 0.0);
+                let Some(exact) = densities_to_top(&a, p, dir) else {
+                    continue;
+                };
+                let got = table.densities(&a, alt, mu, OzoneDepth::Exact);
+                let e = (a.transmittance(exact) - a.transmittance(got))
+                    .abs()
+                    .max_element();
+                worst = worst.max(e);
+            }
+            println!(
+                "top {top:e}: table max transmittance error {worst:.3e}, bake {:.3} s",
+                table.bake_seconds
+            );
+            assert!(worst <= 1e-4, "top {top:e}: {worst:e}");
+        }
+    }
+}

@@ -87,7 +87,12 @@ pub fn uniforms(
         }
         None => (0.0, near),
     };
-    let big_h = ((a.top_radius - a.bottom_radius) * (a.top_radius + a.bottom_radius)).sqrt();
+    // The shaders see the effective top: a tall atmosphere is cut where
+    // its air is negligible (Atmosphere::effective_top_radius), so the
+    // march and the tables sample the air, and a camera above it is in
+    // space.
+    let top = a.effective_top_radius();
+    let big_h = ((top - a.bottom_radius) * (top + a.bottom_radius)).sqrt();
     // The sky-view table's frame: the camera's zenith, the azimuth origin
     // towards the sun, and the nadir angles of the ground's horizon and
     // of the atmosphere's edge, as atan2 of a tangent and a radius, which
@@ -103,8 +108,8 @@ pub fn uniforms(
         let tangent = (length - radius).max(0.0) * (length + radius);
         radius.atan2(tangent.sqrt())
     };
-    let edge = if length >= a.top_radius {
-        tangent_nadir(a.top_radius)
+    let edge = if length >= top {
+        tangent_nadir(top)
     } else {
         std::f64::consts::PI
     };
@@ -121,13 +126,13 @@ pub fn uniforms(
         origin: v4(origin, length),
         terms: [
             c(a.bottom_radius) as f32,
-            c(a.top_radius) as f32,
+            c(top) as f32,
             depth_a as f32,
             depth_b as f32,
         ],
         radii: [
             a.bottom_radius as f32,
-            a.top_radius as f32,
+            top as f32,
             big_h as f32,
             sky.samples as f32,
         ],

@@ -44,6 +44,7 @@ mod scene_errors;
 mod shading;
 mod sweep;
 mod sweep_shards;
+mod tall_atmosphere;
 mod tonemap;
 mod validation;
 mod viewer;
