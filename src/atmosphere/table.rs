@@ -211,7 +211,7 @@ impl OpticalDepthTable {
                     let alt = altitude_of_unit(frame.thickness(), y as f64 / (h - 2) as f64);
                     (alt, frame.upward_cosine(alt, u))
                 }
-                TableMapping::Seed => {
+                TableMapping::Linear => {
                     let alt = y as f64 / (h - 1) as f64 * frame.thickness();
                     // Directions into the ground hold the horizon's value
                     // (the pass shadows them before looking them up).
@@ -290,7 +290,7 @@ impl OpticalDepthTable {
         let (w, h) = (self.width as usize, self.height as usize);
         let last = (w - 1) as f64;
         match self.mapping {
-            TableMapping::Seed => {
+            TableMapping::Linear => {
                 let fx = ((1.0 - mu) * 0.5).clamp(0.0, 1.0) * last;
                 let fy = alt / frame.thickness() * (h - 1) as f64;
                 decode(atmosphere, alt, self.filtered(fx, fy, 0, h - 1))

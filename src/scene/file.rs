@@ -520,7 +520,7 @@ impl Check<'_> {
             }
         }
 
-        let sky = super::sky::check(self.file, raw.sun, raw.atmosphere)?;
+        let sky = super::sky::check(self.file, raw.sun, raw.atmosphere, &mut warnings)?;
 
         let mut files = self.models.take();
         for m in &materials {

@@ -234,9 +234,25 @@ pub const KNOBS: &[Knob] = &[
     Knob {
         name: "od_table_mapping",
         best: Best::Fixed("horizon"),
-        values: "horizon | seed: how altitude and direction map to the optical-depth table",
+        values: "horizon | linear: how altitude and direction map to the optical-depth table",
         apply: |s, v| {
-            sky_mut(s)?.table_mapping = TableMapping::parse(v)?;
+            // "seed" is the old name of "linear": still read, with a warning.
+            let mapping = if v == "seed" {
+                s.warnings.push(super::SceneWarning {
+                    file: "--knob od_table_mapping=seed".into(),
+                    field: "od_table_mapping".into(),
+                    warning: super::AssetWarning {
+                        problem: "--knob od_table_mapping=seed: \"seed\" is the old name of \
+                                  \"linear\""
+                            .into(),
+                        fallback: "read as \"linear\"; write \"linear\"".into(),
+                    },
+                });
+                TableMapping::Linear
+            } else {
+                TableMapping::parse(v)?
+            };
+            sky_mut(s)?.table_mapping = mapping;
             Ok(())
         },
         read: |s| match &s.sky {
@@ -344,7 +360,7 @@ named! {
     TextureFilter { "nearest" => Nearest, "bilinear" => Bilinear, "trilinear" => Trilinear }
     ToneMapOperator { "reinhard" => Reinhard, "aces" => Aces, "none" => None }
     Lighting { "forward" => Forward, "deferred" => Deferred }
-    TableMapping { "horizon" => Horizon, "seed" => Seed }
+    TableMapping { "horizon" => Horizon, "linear" => Linear }
     TableFilter { "manual" => Manual, "nearest" => Nearest, "hardware" => Hardware }
     OzoneDepth { "exact" => Exact, "table" => Table }
 }

@@ -86,7 +86,19 @@ pub enum TableMapping {
     /// Bruneton-style: distance to the top; upward directions in 2D and
     /// the horizontal ray in a row of its own (downward ones from both).
     Horizon,
-    /// The seed's: linear altitude, linear cosine of the zenith angle.
+    /// Linear altitude, linear cosine of the zenith angle (the mapping of
+    /// the original brief; `"seed"` is its old name, still read with a
+    /// warning).
+    Linear,
+}
+
+/// `atmosphere.od_table_mapping` as written: the old name `"seed"` is
+/// read as `"linear"`, with a warning.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum TableMappingField {
+    Horizon,
+    Linear,
     Seed,
 }
 
@@ -201,7 +213,7 @@ pub(super) struct AtmosphereFile {
     wavelengths: Option<[f64; 3]>,
     samples: Option<u32>,
     od_table_size: Option<[u32; 2]>,
-    od_table_mapping: Option<TableMapping>,
+    od_table_mapping: Option<TableMappingField>,
     od_filter: Option<TableFilter>,
     od_ozone: Option<OzoneDepth>,
     sky_view: Option<SkyViewField>,
@@ -252,6 +264,7 @@ pub(super) fn check(
     file: &str,
     sun: Option<SunFile>,
     atmosphere: Option<AtmosphereFile>,
+    warnings: &mut Vec<super::SceneWarning>,
 ) -> Result<Option<Sky>, SceneError> {
     let invalid = |field: &str, reason: String| SceneError::Invalid {
         file: file.to_owned(),
@@ -597,7 +610,24 @@ pub(super) fn check(
     Ok(Some(Sky {
         sky_view,
         table_size,
-        table_mapping: atmosphere.od_table_mapping.unwrap_or(TableMapping::Horizon),
+        table_mapping: match atmosphere.od_table_mapping {
+            None | Some(TableMappingField::Horizon) => TableMapping::Horizon,
+            Some(TableMappingField::Linear) => TableMapping::Linear,
+            Some(TableMappingField::Seed) => {
+                warnings.push(super::SceneWarning {
+                    file: file.to_owned(),
+                    field: "atmosphere.od_table_mapping".into(),
+                    warning: super::AssetWarning {
+                        problem: format!(
+                            "{file}: atmosphere.od_table_mapping: \"seed\" is the old name of \
+                             \"linear\""
+                        ),
+                        fallback: "read as \"linear\"; write \"linear\"".into(),
+                    },
+                });
+                TableMapping::Linear
+            }
+        },
         table_filter: atmosphere.od_filter.unwrap_or(TableFilter::Manual),
         ozone_depth: atmosphere.od_ozone.unwrap_or(OzoneDepth::Exact),
         sun: Sun {

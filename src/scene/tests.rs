@@ -582,3 +582,44 @@ fn windowed_attenuation_reaches_zero_at_the_culling_range() {
     };
     assert_eq!(sun.window(cutoff), 0.0);
 }
+
+/// `"seed"`, the old name of the linear table mapping, is still read, as
+/// `linear`, with a warning naming the field (an error under `--strict`),
+/// in scene files and through the knob.
+#[test]
+fn the_old_name_of_the_linear_mapping_is_read_with_a_warning() {
+    let toml = |mapping: &str| {
+        format!(
+            "[camera]\neye = [0, 1, 0]\nlook_at = [0, 1, 1]\n[sun]\ndirection = [0, 1, 0]\n\
+             [atmosphere]\nod_table_mapping = \"{mapping}\"\n"
+        )
+    };
+    let old = Scene::from_toml(&toml("seed"), "t.toml", Path::new(".")).unwrap();
+    assert_eq!(
+        old.sky.as_ref().unwrap().table_mapping,
+        TableMapping::Linear
+    );
+    assert_eq!(old.warnings.len(), 1);
+    let w = old.warnings[0].to_string();
+    assert!(
+        w.contains("atmosphere.od_table_mapping") && w.contains("\"linear\""),
+        "{w}"
+    );
+    assert!(old.strict().is_err());
+    let new = Scene::from_toml(&toml("linear"), "t.toml", Path::new(".")).unwrap();
+    assert_eq!(
+        new.sky.as_ref().unwrap().table_mapping,
+        TableMapping::Linear
+    );
+    assert!(new.warnings.is_empty());
+    let mut knobbed = Scene::from_toml(&toml("horizon"), "t.toml", Path::new(".")).unwrap();
+    crate::scene::Knob::find("od_table_mapping")
+        .unwrap()
+        .set(&mut knobbed, "seed")
+        .unwrap();
+    assert_eq!(
+        knobbed.sky.as_ref().unwrap().table_mapping,
+        TableMapping::Linear
+    );
+    assert_eq!(knobbed.warnings.len(), 1);
+}

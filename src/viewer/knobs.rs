@@ -66,7 +66,7 @@ const CYCLES: &[Cycle] = &[
     },
     Cycle {
         name: "od_table_mapping",
-        values: &["horizon", "seed"],
+        values: &["horizon", "linear"],
         applies: has_sky,
     },
     Cycle {

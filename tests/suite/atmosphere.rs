@@ -399,7 +399,7 @@ fn extreme_atmospheres_stay_finite() {
 /// The optical-depth table's settings against the reference, at sunset
 /// (sun near the horizon, where the table is read at grazing angles) with
 /// enough samples that the march's own error is small: the default
-/// (horizon mapping, 256×64, manual bilinear) beats the seed's linear
+/// (horizon mapping, 256×64, manual bilinear) beats the linear
 /// mapping, nearest-texel reads and a much smaller table.
 #[test]
 fn table_settings_order_as_their_error_says() {
@@ -424,8 +424,8 @@ fn table_settings_order_as_their_error_says() {
     };
     use aerial::scene::{TableFilter, TableMapping};
     let default = error("horizon 256x64 manual", &|_| {});
-    let seed = error("seed 256x64 manual", &|s| {
-        s.table_mapping = TableMapping::Seed
+    let linear = error("linear 256x64 manual", &|s| {
+        s.table_mapping = TableMapping::Linear
     });
     let nearest = error("horizon 256x64 nearest", &|s| {
         s.table_filter = TableFilter::Nearest
@@ -448,7 +448,7 @@ fn table_settings_order_as_their_error_says() {
         s.table_filter = TableFilter::Hardware
     });
     assert!(hardware.0 <= 1e-3 && hardware.1 <= 1e-2, "{hardware:?}");
-    for (label, e) in [("seed", seed), ("nearest", nearest), ("32x8", small)] {
+    for (label, e) in [("linear", linear), ("nearest", nearest), ("32x8", small)] {
         assert!(
             e.1 > default.1,
             "{label} (max {:.2e}) should be worse than the default (max {:.2e})",

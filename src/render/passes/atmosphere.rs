@@ -35,7 +35,7 @@ pub struct AtmospherePass {
 pub(super) fn table_constants(sky: &crate::scene::Sky) -> [(u32, u32); 3] {
     let mapping = match sky.table_mapping {
         TableMapping::Horizon => 0,
-        TableMapping::Seed => 1,
+        TableMapping::Linear => 1,
     };
     let filter = match sky.table_filter {
         TableFilter::Manual => 0,
