@@ -67,7 +67,7 @@ fn load_png(path: &Path, bytes: &[u8]) -> Result<Loaded, CompareError> {
     Ok(Loaded {
         width,
         height,
-        pixels: Pixels::Srgb(img),
+        pixels: Samples::Srgb(img),
     })
 }
 
@@ -122,7 +122,7 @@ fn load_exr(path: &Path, bytes: &[u8]) -> Result<Loaded, CompareError> {
     Ok(Loaded {
         width,
         height,
-        pixels: Pixels::Linear(data),
+        pixels: Samples::Linear(data),
     })
 }
 
@@ -180,7 +180,7 @@ pub(super) fn from_memory(path: &Path, image: ImageRef<'_>) -> Result<Loaded, Co
                         height,
                     }
                 })?;
-            Pixels::Srgb(DynamicImage::ImageRgba8(img))
+            Samples::Srgb(DynamicImage::ImageRgba8(img))
         }
         ImageRef::Linear { rgba, .. } => {
             let rgb: Vec<f32> = rgba
@@ -188,7 +188,7 @@ pub(super) fn from_memory(path: &Path, image: ImageRef<'_>) -> Result<Loaded, Co
                 .flat_map(|p| [p[0], p[1], p[2]])
                 .collect();
             check_finite(path, &rgb, width as usize)?;
-            Pixels::Linear(rgb)
+            Samples::Linear(rgb)
         }
     };
     Ok(Loaded {

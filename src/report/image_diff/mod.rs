@@ -435,8 +435,9 @@ pub enum CompareError {
     },
 }
 
-/// Pixels as loaded, keeping what each metric needs.
-enum Pixels {
+/// Samples as loaded (display-encoded or linear), keeping what each metric
+/// needs; not `render::Pixels`, which is one renderer image.
+enum Samples {
     /// A PNG, kept decoded at its own bit depth so RMSE/PSNR of 16-bit PNGs
     /// are not quantised, while FLIP gets an 8-bit view.
     Srgb(DynamicImage),
@@ -447,22 +448,22 @@ enum Pixels {
 struct Loaded {
     width: u32,
     height: u32,
-    pixels: Pixels,
+    pixels: Samples,
 }
 
 impl Loaded {
     fn kind(&self) -> &'static str {
         match self.pixels {
-            Pixels::Srgb(_) => "PNG, sRGB",
-            Pixels::Linear(_) => "OpenEXR, linear",
+            Samples::Srgb(_) => "PNG, sRGB",
+            Samples::Linear(_) => "OpenEXR, linear",
         }
     }
 
     /// Interleaved RGB floats: `[0, 1]` for PNG, as stored for OpenEXR.
     fn rgb_f32(&self) -> Vec<f32> {
         match &self.pixels {
-            Pixels::Srgb(img) => img.to_rgb32f().into_raw(),
-            Pixels::Linear(v) => v.clone(),
+            Samples::Srgb(img) => img.to_rgb32f().into_raw(),
+            Samples::Linear(v) => v.clone(),
         }
     }
 }
@@ -527,7 +528,7 @@ fn compare_loaded(
     if matches!(metric, Metric::Flip) {
         // Name whichever input is HDR so the user knows which file to change.
         for (path, img) in [(a, reference), (b, test)] {
-            if matches!(img.pixels, Pixels::Linear(_)) {
+            if matches!(img.pixels, Samples::Linear(_)) {
                 return Err(CompareError::FlipOnHdr {
                     path: path.to_owned(),
                 });
@@ -554,7 +555,7 @@ fn compare_loaded(
     let (width, height) = (reference.width, reference.height);
     match metric {
         Metric::Flip => {
-            let (Pixels::Srgb(ra), Pixels::Srgb(tb)) = (&reference.pixels, &test.pixels) else {
+            let (Samples::Srgb(ra), Samples::Srgb(tb)) = (&reference.pixels, &test.pixels) else {
                 // Unreachable after the checks above; answer with the same
                 // error rather than panicking.
                 return Err(CompareError::FlipOnHdr { path: a.to_owned() });
@@ -600,8 +601,8 @@ fn compare_loaded(
                 mse.sqrt()
             } else {
                 let peak = match reference.pixels {
-                    Pixels::Srgb(_) => 1.0,
-                    Pixels::Linear(_) => ra.iter().fold(0.0f64, |m, &v| m.max(f64::from(v))),
+                    Samples::Srgb(_) => 1.0,
+                    Samples::Linear(_) => ra.iter().fold(0.0f64, |m, &v| m.max(f64::from(v))),
                 };
                 if peak <= 0.0 {
                     return Err(CompareError::NoPsnrPeak { path: a.to_owned() });
@@ -620,7 +621,7 @@ fn compare_loaded(
                 p99,
                 max,
                 worst_window,
-                hdr: matches!(reference.pixels, Pixels::Linear(_)),
+                hdr: matches!(reference.pixels, Samples::Linear(_)),
                 width,
                 height,
                 error_map: map,
