@@ -7,7 +7,9 @@
 //! planet shadow, no partial disc), and a disc of the given angular radius
 //! only when seen directly.
 //!
-//! [`reference`](mod@reference) integrates the model adaptively (the oracle of the tests);
+//! [`model`] holds the types (planet and air, sun, table settings) that
+//! scenes are read into; [`reference`](mod@reference) integrates the model
+//! adaptively (the oracle of the tests);
 //! [`table`] bakes the optical-depth table the GPU pass samples;
 //! [`ozone`] integrates the ozone layer along a ray in closed form;
 //! [`coefficients`] derives scattering coefficients from physical
@@ -19,6 +21,7 @@
 //! reference then spend their samples where the air is.
 
 pub mod coefficients;
+pub mod model;
 pub mod ozone;
 pub mod reference;
 pub mod table;
@@ -26,7 +29,7 @@ pub mod table;
 use glam::DVec3;
 use std::f64::consts::PI;
 
-pub use crate::scene::{Atmosphere, Sky, Sun};
+pub use model::{Atmosphere, Sky, Sun};
 pub use table::{OpticalDepthTable, OzoneDepth, TableMapping};
 
 /// The three density profiles at one point: Rayleigh, Mie and ozone, each

@@ -47,7 +47,7 @@ use super::reference::densities_to_top;
 use super::{Atmosphere, Densities};
 use glam::DVec3;
 
-pub use crate::scene::{OzoneDepth, TableMapping};
+pub use super::model::{OzoneDepth, TableMapping};
 
 /// Added to the Rayleigh and Mie density integrals (metres) before their
 /// logarithm is stored: 1 m of ground-level air is an optical depth of

@@ -222,7 +222,7 @@ pub const KNOBS: &[Knob] = &[
             let (w, h) = v.split_once('x').ok_or("expected WIDTHxHEIGHT")?;
             let parse = |t: &str| t.trim().parse::<u32>().map_err(|e| format!("'{t}': {e}"));
             let (w, h) = (parse(w)?, parse(h)?);
-            super::sky::check_table_size(w, h)?;
+            crate::atmosphere::model::check_table_size(w, h)?;
             sky_mut(s)?.table_size = (w, h);
             Ok(())
         },
@@ -271,7 +271,7 @@ pub const KNOBS: &[Knob] = &[
                 let (w, h) = v.split_once('x').ok_or("expected off or WIDTHxHEIGHT")?;
                 let parse = |t: &str| t.trim().parse::<u32>().map_err(|e| format!("'{t}': {e}"));
                 let (w, h) = (parse(w)?, parse(h)?);
-                super::sky::check_sky_view(w, h)?;
+                crate::atmosphere::model::check_sky_view(w, h)?;
                 Some((w, h))
             };
             sky_mut(s)?.sky_view = size;

@@ -19,6 +19,10 @@ use std::path::Path;
 use glam::{DVec3, Vec3};
 use serde::Deserialize;
 
+pub use crate::atmosphere::model::{
+    Atmosphere, OzoneDepth, Sky, Sun, TableFilter, TableMapping, DEFAULT_ATMOSPHERE_SAMPLES,
+    DEFAULT_TABLE_SIZE, MAX_ATMOSPHERE_SAMPLES, MAX_TABLE_SIDE, MIN_TABLE_SIDE,
+};
 pub use crate::mesh::obj::AssetWarning;
 pub use camera::Camera;
 pub use error::SceneError;
@@ -33,10 +37,6 @@ pub use model_scene::{
     MODEL_VIEW_ELEVATION,
 };
 pub use object::{Object, Shape, Transform};
-pub use sky::{
-    Atmosphere, OzoneDepth, Sky, Sun, TableFilter, TableMapping, DEFAULT_ATMOSPHERE_SAMPLES,
-    DEFAULT_TABLE_SIZE, MAX_ATMOSPHERE_SAMPLES, MAX_TABLE_SIDE, MIN_TABLE_SIDE,
-};
 
 use crate::mesh::{tessellate, Mesh};
 
