@@ -60,16 +60,9 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         Some(path) => path.display().to_string(),
         None => "the default scene".to_string(),
     };
-    // The window title shows that something was drawn with a fallback (the
-    // warnings themselves are on stderr).
-    let title = match scene.warnings.len() {
-        0 => scene_name.clone(),
-        1 => format!("{scene_name} (1 asset warning)"),
-        n => format!("{scene_name} ({n} asset warnings)"),
-    };
     let outcome = viewer::run(ViewOptions {
         scene,
-        scene_name: title,
+        scene_name: scene_name.clone(),
         validate: args.gpu.validate.unwrap_or_default(),
         device: args.gpu.device.clone(),
         present_mode: args.present_mode,

@@ -244,7 +244,11 @@ impl App {
         let scene = self.options.scene.clone();
         let (w, h) = (scene.output.width, scene.output.height);
         let attributes = Window::default_attributes()
-            .with_title(format!("aerial view — {}", self.options.scene_name))
+            .with_title(format!(
+                "aerial view — {}{}",
+                self.options.scene_name,
+                warning_note(scene.warnings.len())
+            ))
             .with_inner_size(PhysicalSize::new(w, h));
         let window = Arc::new(
             event_loop
@@ -499,8 +503,9 @@ impl Live {
         if self.last_title.elapsed() >= TITLE_PERIOD {
             self.last_title = Instant::now();
             self.window.set_title(&format!(
-                "aerial view — {} — {}",
+                "aerial view — {}{} — {}",
                 self.scene_name,
+                warning_note(self.scene.warnings.len()),
                 self.timings.title()
             ));
         }
@@ -660,4 +665,15 @@ fn next_free_screenshot_path() -> PathBuf {
         .map(|n| PathBuf::from(format!("aerial-view-{n:03}.png")))
         .find(|p| !p.exists() && !p.with_extension("exr").exists())
         .expect("some number is free")
+}
+
+/// The title's note that something is drawn with a fallback: the count of
+/// the scene's asset warnings (the warnings themselves are on stderr), kept
+/// current as knobs change the scene.
+fn warning_note(count: usize) -> String {
+    match count {
+        0 => String::new(),
+        1 => " (1 asset warning)".into(),
+        n => format!(" ({n} asset warnings)"),
+    }
 }
