@@ -181,7 +181,7 @@ pub const MEMORY_PER_FILE_BYTE: u64 = 6;
 /// tables, shading normals, and the indexed mesh with its hash table, each
 /// at its worst (every corner its own vertex, vectors at twice their
 /// length after growth). Measured against the allocator's peak on
-/// adversarial shapes in `tests/suite/obj_memory.rs`.
+/// adversarial shapes in `tests/obj_memory.rs`.
 pub const MEMORY_PER_TRIANGLE: u64 = 800;
 
 /// Upper bound on the peak memory of loading a model of `file_bytes` bytes

@@ -1,7 +1,9 @@
 //! The integration tests, one binary with a module per area: rendering
 //! features, the commands, the scene and model formats, robustness, the
 //! benchmarks and the regression references. Shared helpers live only in
-//! `common`. One binary links once, where one per file linked forty times.
+//! `common`. One binary links once, where one per file linked forty times;
+//! only `tests/obj_memory.rs` stays a binary of its own, because it installs
+//! a counting global allocator that would count every other test's memory.
 //!
 //! Run one area with `cargo test --test suite AREA::`, e.g.
 //! `cargo test --test suite regression:: -- --nocapture`.
@@ -34,7 +36,6 @@ mod mikktspace;
 mod missing_assets;
 mod model_corpus;
 mod normal_maps;
-mod obj_memory;
 mod obj_models;
 mod outputs;
 mod pixel_oracle;
