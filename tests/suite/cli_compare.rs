@@ -264,3 +264,83 @@ fn the_rendering_device_and_driver_are_reported() {
         text(&out)
     );
 }
+
+/// Runs `aerial compare` and returns its output and its own peak resident
+/// memory (wait4's rusage of that child alone).
+#[cfg(target_os = "linux")]
+fn compare_with_peak(a: &Path, b: &Path, metric: &str) -> (i32, u64) {
+    use std::os::unix::process::ExitStatusExt as _;
+    let child = Command::new(env!("CARGO_BIN_EXE_aerial"))
+        .args(["compare", "--metric", metric])
+        .arg(a)
+        .arg(b)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut status = 0;
+    // SAFETY: wait4(2) on our own child, not waited for elsewhere; the
+    // zeroed rusage is filled by the call.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    let pid = unsafe { libc::wait4(child.id() as libc::pid_t, &mut status, 0, &mut usage) };
+    assert_eq!(pid, child.id() as libc::pid_t);
+    let code = std::process::ExitStatus::from_raw(status)
+        .code()
+        .unwrap_or(-1);
+    (code, usage.ru_maxrss as u64 * 1024)
+}
+
+/// `compare` sizes its memory from the headers before decoding: the
+/// estimate (`BYTES_PER_PIXEL` per pixel of each image plus the files)
+/// bounds the whole process's measured peak for PNG with FLIP and OpenEXR
+/// with RMSE, and a budget below it refuses the comparison by name.
+#[test]
+#[cfg(target_os = "linux")]
+fn compare_memory_is_estimated_before_decoding_and_bounds_the_peak() {
+    let dir = TempDir::new("memory");
+    let side = 1024u32;
+    let noisy = |seed: u32| {
+        RgbImage::from_fn(side, side, |x, y| {
+            let h = (x.wrapping_mul(73856093) ^ y.wrapping_mul(19349663) ^ seed) % 251;
+            Rgb([(x % 256) as u8, (y % 256) as u8, h as u8])
+        })
+    };
+    let a = save(&dir, "a.png", &noisy(1));
+    let b = save(&dir, "b.png", &noisy(2));
+    let hdr = |seed: u32| Pixels {
+        width: side,
+        height: side,
+        data: (0..side * side * 4)
+            .map(|i| ((i ^ seed) % 97) as f32 / 13.0)
+            .collect(),
+    };
+    let ea = dir.path("a.exr");
+    let eb = dir.path("b.exr");
+    image_io::write_exr(&ea, &hdr(1)).unwrap();
+    image_io::write_exr(&eb, &hdr(2)).unwrap();
+    for (x, y, metric) in [(&a, &b, "flip"), (&ea, &eb, "rmse")] {
+        let files = std::fs::metadata(x).unwrap().len() + std::fs::metadata(y).unwrap().len();
+        let estimate =
+            2 * u64::from(side * side) * aerial::report::image_diff::BYTES_PER_PIXEL + files;
+        let (code, peak) = compare_with_peak(x, y, metric);
+        assert!(code == 0 || code == 1, "{metric}: exit {code}");
+        eprintln!("{metric}: peak {peak} bytes, estimate {estimate}");
+        assert!(
+            peak <= estimate,
+            "{metric}: peak {peak} above the estimate {estimate}"
+        );
+        let out = Command::new(env!("CARGO_BIN_EXE_aerial"))
+            .args(["compare", "--metric", metric])
+            .arg(x)
+            .arg(y)
+            .env("AERIAL_MEMORY_BUDGET", (estimate / 2).to_string())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains("memory budget") && err.contains("comparing"),
+            "{err}"
+        );
+    }
+}

@@ -197,3 +197,52 @@ pub(super) fn from_memory(path: &Path, image: ImageRef<'_>) -> Result<Loaded, Co
         pixels,
     })
 }
+
+/// An image file's width and height from its header alone (PNG or
+/// OpenEXR, by content), for sizing memory before decoding.
+pub(super) fn header_size(path: &Path) -> Result<(usize, usize), CompareError> {
+    let mut head = [0u8; 8];
+    let read = File::open(path)
+        .and_then(|mut f| io::Read::read(&mut f, &mut head))
+        .map_err(|source| CompareError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
+    match crate::image_io::sniff(&head[..read]) {
+        FileFormat::Png => {
+            let reader = guard(path, "PNG", || {
+                image::ImageReader::open(path)
+                    .and_then(|r| r.with_guessed_format())
+                    .map_err(|source| CompareError::Read {
+                        path: path.to_owned(),
+                        source,
+                    })?
+                    .into_dimensions()
+                    .map_err(|source| CompareError::Png {
+                        path: path.to_owned(),
+                        source,
+                    })
+            })?;
+            Ok((reader.0 as usize, reader.1 as usize))
+        }
+        FileFormat::OpenExr => {
+            let meta = guard(path, "OpenEXR", || {
+                exr::meta::MetaData::read_from_file(path, false).map_err(|source| {
+                    CompareError::Exr {
+                        path: path.to_owned(),
+                        source,
+                    }
+                })
+            })?;
+            Ok(meta
+                .headers
+                .iter()
+                .map(|h| (h.layer_size.0, h.layer_size.1))
+                .max_by_key(|&(w, h)| w.saturating_mul(h))
+                .unwrap_or((0, 0)))
+        }
+        FileFormat::Jpeg | FileFormat::Unknown => Err(CompareError::UnknownFormat {
+            path: path.to_owned(),
+        }),
+    }
+}
