@@ -268,6 +268,8 @@ fn the_rendering_device_and_driver_are_reported() {
 /// Runs `aerial compare` and returns its output and its own peak resident
 /// memory (wait4's rusage of that child alone).
 #[cfg(target_os = "linux")]
+// The child is reaped by wait4 below (for its own rusage), not by wait().
+#[allow(clippy::zombie_processes)]
 fn compare_with_peak(a: &Path, b: &Path, metric: &str) -> (i32, u64) {
     use std::os::unix::process::ExitStatusExt as _;
     let child = Command::new(env!("CARGO_BIN_EXE_aerial"))
