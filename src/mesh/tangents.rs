@@ -13,7 +13,7 @@
 
 use glam::{DVec3, Vec2, Vec3};
 
-use super::smoothing::first_equal;
+use super::join::{hash_words, IndexTable};
 use super::{Mesh, Vertex};
 
 /// Statistics of one [`build_mesh`] call, for reports and tests.
@@ -42,96 +42,96 @@ pub fn build_mesh(
     let corners = positions.len() / 3 * 3;
     let uv = |c: usize| uvs.map_or(Vec2::ZERO, |u| u[c]);
 
-    // Per triangle: unit T and B (zero when degenerate), handedness.
-    let mut triangle = Vec::with_capacity(corners / 3);
-    let mut collapsed = Vec::with_capacity(corners / 3);
+    // One pass over the triangles: each triangle's frame, then its corners
+    // joined into vertices (in order of first appearance) and their
+    // weighted frames added to the vertex's sums, in corner order. A
+    // closed mesh has about one vertex per six corners; the table grows
+    // when there are more.
+    let expected = corners / 6 + 16;
+    let mut table = IndexTable::with_capacity(expected);
+    let mut vertices: Vec<Vertex> = Vec::with_capacity(expected);
+    let mut sums: Vec<(DVec3, DVec3)> = Vec::with_capacity(expected);
+    let mut indices = Vec::with_capacity(corners);
     for t in 0..corners / 3 {
-        let [a, b, c] = [0, 1, 2].map(|k| positions[3 * t + k].as_dvec3());
+        let corner_positions = [0, 1, 2].map(|k| positions[3 * t + k]);
+        let [a, b, c] = corner_positions.map(|p| p.as_dvec3());
         let [ta, tb, tc] = [0, 1, 2].map(|k| uv(3 * t + k).as_dvec2());
         let (e1, e2) = (b - a, c - a);
         let (d1, d2) = (tb - ta, tc - ta);
         let det = d1.x * d2.y - d2.x * d1.y;
         let area = e1.cross(e2).length();
-        collapsed.push(is_collapsed(
-            positions[3 * t],
-            positions[3 * t + 1],
-            positions[3 * t + 2],
-        ));
         let uv_scale = d1.length_squared().max(d2.length_squared());
         let valid = area > 0.0 && det.abs() > 1e-12 * uv_scale && det.is_finite();
-        if !valid {
+        // Unit T and B (zero when degenerate), handedness.
+        let (tangent, bitangent, sign) = if valid {
+            let tangent = (e1 * d2.y - e2 * d1.y) / det;
+            let bitangent = (e2 * d1.x - e1 * d2.x) / det;
+            let sign = if det < 0.0 { -1.0 } else { 1.0 };
+            if sign < 0.0 {
+                stats.mirrored += 1;
+            }
+            (
+                tangent.try_normalize().unwrap_or(DVec3::ZERO),
+                bitangent.try_normalize().unwrap_or(DVec3::ZERO),
+                sign,
+            )
+        } else {
             stats.degenerate += 1;
-            triangle.push((DVec3::ZERO, DVec3::ZERO, 1.0));
+            (DVec3::ZERO, DVec3::ZERO, 1.0)
+        };
+        let [pa, pb, pc] = corner_positions;
+        if is_collapsed(pa, pb, pc) {
+            stats.collapsed += 1;
             continue;
         }
-        let tangent = (e1 * d2.y - e2 * d1.y) / det;
-        let bitangent = (e2 * d1.x - e1 * d2.x) / det;
-        let sign = if det < 0.0 { -1.0 } else { 1.0 };
-        if sign < 0.0 {
-            stats.mirrored += 1;
-        }
-        triangle.push((
-            tangent.try_normalize().unwrap_or(DVec3::ZERO),
-            bitangent.try_normalize().unwrap_or(DVec3::ZERO),
-            sign,
-        ));
-    }
-
-    // Vertex key: exact bits of position, normal, UV, and the handedness.
-    // + 0: -0.0 is stored (and keyed) as 0.0.
-    let key = |c: usize| {
-        let mut key = [0; 9];
-        key[..8].copy_from_slice(&corner_bits(positions[c], normals[c], uv(c)));
-        key[8] = (triangle[c / 3].2 < 0.0) as u32;
-        key
-    };
-    let first = first_equal(corners, key);
-    let mut vertex_of_first = vec![u32::MAX; corners];
-    let mut sums: Vec<(DVec3, DVec3)> = Vec::new();
-    let mut vertices: Vec<Vertex> = Vec::new();
-    let mut indices = Vec::with_capacity(corners);
-    for c in 0..corners {
-        if collapsed[c / 3] {
-            continue;
-        }
-        let (t, b, sign) = triangle[c / 3];
-        let slot = &mut vertex_of_first[first[c] as usize];
-        if *slot == u32::MAX {
+        // Weighted by the corner angle, like the normals, so that how the
+        // surface is cut into triangles does not bias the frame.
+        let angle = |here: DVec3, next: DVec3, prev: DVec3| {
+            let angle = f64::from(
+                (next - here)
+                    .as_vec3()
+                    .angle_between((prev - here).as_vec3()),
+            );
+            if angle.is_finite() {
+                angle
+            } else {
+                0.0
+            }
+        };
+        let weights = [angle(a, b, c), angle(b, c, a), angle(c, a, b)];
+        for (k, weight) in weights.into_iter().enumerate() {
+            let c = 3 * t + k;
+            // + 0: -0.0 is stored (and keyed) as 0.0.
             let (p, n, u) = (
                 positions[c] + Vec3::ZERO,
                 normals[c] + Vec3::ZERO,
                 uv(c) + Vec2::ZERO,
             );
-            vertices.push(Vertex {
-                position: p.to_array(),
-                normal: n.to_array(),
-                tangent: [0.0, 0.0, 0.0, sign as f32],
-                uv: [u.x, u.y],
+            // Vertex key: exact bits of position, normal, UV, and the
+            // handedness.
+            let mut key = [0; 9];
+            key[..8].copy_from_slice(&corner_bits(p, n, u));
+            key[8] = u32::from(sign < 0.0);
+            let next = vertices.len() as u32;
+            let index = table.get_or_insert(hash_words(key), next, |v| {
+                vertex_key(&vertices[v as usize]) == key
             });
-            sums.push((DVec3::ZERO, DVec3::ZERO));
-            *slot = vertices.len() as u32 - 1;
+            if index == next {
+                vertices.push(Vertex {
+                    position: p.to_array(),
+                    normal: n.to_array(),
+                    tangent: [0.0, 0.0, 0.0, sign as f32],
+                    uv: [u.x, u.y],
+                });
+                sums.push((DVec3::ZERO, DVec3::ZERO));
+            }
+            let s = &mut sums[index as usize];
+            s.0 += tangent * weight;
+            s.1 += bitangent * weight;
+            indices.push(index);
         }
-        let index = *slot;
-        // Weighted by the corner angle, like the normals, so that how the
-        // surface is cut into triangles does not bias the frame.
-        let [x, y, z] = [0, 1, 2].map(|k| positions[c / 3 * 3 + k].as_dvec3());
-        let corner = c % 3;
-        let (here, next, prev) = match corner {
-            0 => (x, y, z),
-            1 => (y, z, x),
-            _ => (z, x, y),
-        };
-        let angle = f64::from(
-            (next - here)
-                .as_vec3()
-                .angle_between((prev - here).as_vec3()),
-        );
-        let weight = if angle.is_finite() { angle } else { 0.0 };
-        let s = &mut sums[index as usize];
-        s.0 += t * weight;
-        s.1 += b * weight;
-        indices.push(index);
     }
+    drop(table);
 
     for (vertex, (t, b)) in vertices.iter_mut().zip(sums) {
         let n = Vec3::from(vertex.normal).as_dvec3();
@@ -157,8 +157,18 @@ pub fn build_mesh(
             sign as f32,
         ];
     }
-    stats.collapsed = collapsed.iter().filter(|&&c| c).count();
     (Mesh { vertices, indices }, stats)
+}
+
+/// The key [`build_mesh`] joins a vertex's corners by, from the vertex.
+fn vertex_key(v: &Vertex) -> [u32; 9] {
+    let mut key = [0; 9];
+    let [p, n, u] = [&v.position[..], &v.normal[..], &v.uv[..]];
+    for (slot, x) in key.iter_mut().zip(p.iter().chain(n).chain(u)) {
+        *slot = x.to_bits();
+    }
+    key[8] = u32::from(v.tangent[3] < 0.0);
+    key
 }
 
 /// The exact bits of a corner's position, normal and UV, the part of the
