@@ -42,89 +42,101 @@ pub fn build_mesh(
     let corners = positions.len() / 3 * 3;
     let uv = |c: usize| uvs.map_or(Vec2::ZERO, |u| u[c]);
 
-    // One pass over the triangles: each triangle's frame, then its corners
-    // joined into vertices (in order of first appearance) and their
-    // weighted frames added to the vertex's sums, in corner order. A
-    // closed mesh has about one vertex per six corners; the table grows
-    // when there are more.
+    // One pass over the triangles, in batches: each triangle's frame and
+    // corner weights, then its corners joined into vertices (in order of
+    // first appearance) and their weighted frames added to the vertex's
+    // sums, in corner order. A batch's first table slots are read together
+    // before its corners are joined (see `IndexTable::touch`). A closed
+    // mesh has about one vertex per six corners; the table grows when
+    // there are more.
     let expected = corners / 6 + 16;
     let mut table = IndexTable::with_capacity(expected);
     let mut vertices: Vec<Vertex> = Vec::with_capacity(expected);
     let mut sums: Vec<(DVec3, DVec3)> = Vec::with_capacity(expected);
     let mut indices = Vec::with_capacity(corners);
-    for t in 0..corners / 3 {
-        let corner_positions = [0, 1, 2].map(|k| positions[3 * t + k]);
-        let [a, b, c] = corner_positions.map(|p| p.as_dvec3());
-        let [ta, tb, tc] = [0, 1, 2].map(|k| uv(3 * t + k).as_dvec2());
-        let (e1, e2) = (b - a, c - a);
-        let (d1, d2) = (tb - ta, tc - ta);
-        let det = d1.x * d2.y - d2.x * d1.y;
-        let area = e1.cross(e2).length();
-        let uv_scale = d1.length_squared().max(d2.length_squared());
-        let valid = area > 0.0 && det.abs() > 1e-12 * uv_scale && det.is_finite();
-        // Unit T and B (zero when degenerate), handedness.
-        let (tangent, bitangent, sign) = if valid {
-            let tangent = (e1 * d2.y - e2 * d1.y) / det;
-            let bitangent = (e2 * d1.x - e1 * d2.x) / det;
-            let sign = if det < 0.0 { -1.0 } else { 1.0 };
-            if sign < 0.0 {
-                stats.mirrored += 1;
-            }
-            (
-                tangent.try_normalize().unwrap_or(DVec3::ZERO),
-                bitangent.try_normalize().unwrap_or(DVec3::ZERO),
-                sign,
-            )
-        } else {
-            stats.degenerate += 1;
-            (DVec3::ZERO, DVec3::ZERO, 1.0)
-        };
-        let [pa, pb, pc] = corner_positions;
-        if is_collapsed(pa, pb, pc) {
-            stats.collapsed += 1;
-            continue;
-        }
-        // Weighted by the corner angle, like the normals, so that how the
-        // surface is cut into triangles does not bias the frame.
-        let angle = |here: DVec3, next: DVec3, prev: DVec3| {
-            let angle = f64::from(
-                (next - here)
-                    .as_vec3()
-                    .angle_between((prev - here).as_vec3()),
-            );
-            if angle.is_finite() {
-                angle
+    const BATCH: usize = 8;
+    let mut frames = [(DVec3::ZERO, DVec3::ZERO); BATCH];
+    let mut keys = [[0u32; 9]; 3 * BATCH];
+    let mut hashes = [0u64; 3 * BATCH];
+    let mut weights = [(0.0f64, 0usize); 3 * BATCH];
+    for first in (0..corners / 3).step_by(BATCH) {
+        let mut kept = 0;
+        for (slot, t) in (first..(first + BATCH).min(corners / 3)).enumerate() {
+            let corner_positions = [0, 1, 2].map(|k| positions[3 * t + k]);
+            let [a, b, c] = corner_positions.map(|p| p.as_dvec3());
+            let [ta, tb, tc] = [0, 1, 2].map(|k| uv(3 * t + k).as_dvec2());
+            let (e1, e2) = (b - a, c - a);
+            let (d1, d2) = (tb - ta, tc - ta);
+            let det = d1.x * d2.y - d2.x * d1.y;
+            let area = e1.cross(e2).length();
+            let uv_scale = d1.length_squared().max(d2.length_squared());
+            let valid = area > 0.0 && det.abs() > 1e-12 * uv_scale && det.is_finite();
+            // Unit T and B (zero when degenerate), handedness.
+            let (tangent, bitangent, sign) = if valid {
+                let tangent = (e1 * d2.y - e2 * d1.y) / det;
+                let bitangent = (e2 * d1.x - e1 * d2.x) / det;
+                let sign = if det < 0.0 { -1.0 } else { 1.0 };
+                if sign < 0.0 {
+                    stats.mirrored += 1;
+                }
+                (
+                    tangent.try_normalize().unwrap_or(DVec3::ZERO),
+                    bitangent.try_normalize().unwrap_or(DVec3::ZERO),
+                    sign,
+                )
             } else {
-                0.0
+                stats.degenerate += 1;
+                (DVec3::ZERO, DVec3::ZERO, 1.0)
+            };
+            let [pa, pb, pc] = corner_positions;
+            if is_collapsed(pa, pb, pc) {
+                stats.collapsed += 1;
+                continue;
             }
-        };
-        let weights = [angle(a, b, c), angle(b, c, a), angle(c, a, b)];
-        for (k, weight) in weights.into_iter().enumerate() {
-            let c = 3 * t + k;
-            // + 0: -0.0 is stored (and keyed) as 0.0.
-            let (p, n, u) = (
-                positions[c] + Vec3::ZERO,
-                normals[c] + Vec3::ZERO,
-                uv(c) + Vec2::ZERO,
-            );
-            // Vertex key: exact bits of position, normal, UV, and the
-            // handedness.
-            let mut key = [0; 9];
-            key[..8].copy_from_slice(&corner_bits(p, n, u));
-            key[8] = u32::from(sign < 0.0);
+            frames[slot] = (tangent, bitangent);
+            // Weighted by the corner angle, like the normals, so that how
+            // the surface is cut into triangles does not bias the frame.
+            let angle = |here: DVec3, next: DVec3, prev: DVec3| {
+                let angle = f64::from(
+                    (next - here)
+                        .as_vec3()
+                        .angle_between((prev - here).as_vec3()),
+                );
+                if angle.is_finite() {
+                    angle
+                } else {
+                    0.0
+                }
+            };
+            let corner_weights = [angle(a, b, c), angle(b, c, a), angle(c, a, b)];
+            for (k, weight) in corner_weights.into_iter().enumerate() {
+                let c = 3 * t + k;
+                // Vertex key: exact bits of position, normal, UV (+ 0:
+                // -0.0 is stored, and keyed, as 0.0), and the handedness.
+                let key = &mut keys[kept];
+                key[..8].copy_from_slice(&corner_bits(positions[c], normals[c], uv(c)));
+                key[8] = u32::from(sign < 0.0);
+                hashes[kept] = hash_words(*key);
+                weights[kept] = (weight, slot);
+                kept += 1;
+            }
+        }
+        table.touch(&hashes[..kept]);
+        for ((key, &hash), &(weight, slot)) in keys.iter().zip(&hashes).zip(&weights).take(kept) {
             let next = vertices.len() as u32;
-            let index = table.get_or_insert(hash_words(key), next, |v| {
-                vertex_key(&vertices[v as usize]) == key
-            });
+            let index =
+                table.get_or_insert(hash, next, |v| vertex_key(&vertices[v as usize]) == *key);
             if index == next {
+                let word = |i: usize| f32::from_bits(key[i]);
                 vertices.push(Vertex {
-                    position: p.to_array(),
-                    normal: n.to_array(),
-                    tangent: [0.0, 0.0, 0.0, sign as f32],
-                    uv: [u.x, u.y],
+                    position: [word(0), word(1), word(2)],
+                    normal: [word(3), word(4), word(5)],
+                    tangent: [0.0, 0.0, 0.0, if key[8] == 1 { -1.0 } else { 1.0 }],
+                    uv: [word(6), word(7)],
                 });
                 sums.push((DVec3::ZERO, DVec3::ZERO));
             }
+            let (tangent, bitangent) = frames[slot];
             let s = &mut sums[index as usize];
             s.0 += tangent * weight;
             s.1 += bitangent * weight;
