@@ -44,25 +44,6 @@ impl IndexTable {
         }
     }
 
-    /// The index stored under a key equal to the sought one (`same(index)`
-    /// says whether the key behind a stored index is equal), if any.
-    #[inline]
-    pub(crate) fn get(&self, hash: u64, same: impl Fn(u32) -> bool) -> Option<u32> {
-        let tag = tag_of(hash);
-        let mask = self.slots.len() - 1;
-        let mut slot = (tag >> self.shift) as usize;
-        loop {
-            let held = self.slots[slot];
-            if held.index == u32::MAX {
-                return None;
-            }
-            if held.tag == tag && same(held.index) {
-                return Some(held.index);
-            }
-            slot = (slot + 1) & mask;
-        }
-    }
-
     /// Reads the first slot of each hash, so that the lookups that follow
     /// find them in the cache: the reads are independent, so the processor
     /// waits for their cache misses together rather than one by one (a
@@ -76,7 +57,8 @@ impl IndexTable {
         std::hint::black_box(any);
     }
 
-    /// The index stored under a key equal to the sought one, or `new`
+    /// The index stored under a key equal to the sought one (`same(index)`
+    /// says whether the key behind a stored index is equal), or `new`
     /// after storing it there.
     #[inline]
     pub(crate) fn get_or_insert(&mut self, hash: u64, new: u32, same: impl Fn(u32) -> bool) -> u32 {
@@ -163,15 +145,11 @@ mod tests {
             assert_eq!(got, i as u32);
         }
         for (i, k) in keys.iter().enumerate() {
-            assert_eq!(
-                table.get(hash_words(*k), |j| keys[j as usize] == *k),
-                Some(i as u32)
-            );
             let again =
                 table.get_or_insert(hash_words(*k), u32::MAX - 1, |j| keys[j as usize] == *k);
             assert_eq!(again, i as u32);
         }
-        assert_eq!(table.get(hash_words([5, 5, 5]), |_| false), None);
+        assert_eq!(table.get_or_insert(hash_words([5, 5, 5]), 7, |_| false), 7);
     }
 
     /// Keys whose hashes collide (a constant hash) are still told apart by
@@ -183,7 +161,7 @@ mod tests {
             assert_eq!(table.get_or_insert(42, i, |j| j == i), i);
         }
         for i in 0..100u32 {
-            assert_eq!(table.get(42, |j| j == i), Some(i));
+            assert_eq!(table.get_or_insert(42, 1000, |j| j == i), i);
         }
     }
 }

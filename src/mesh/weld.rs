@@ -3,13 +3,13 @@
 //!
 //! Corners are joined in one pass through a table of distinct positions
 //! sized by their number, not by the number of corners (a closed mesh has
-//! about six corners per position), so that it stays in the caches. Only
-//! the distinct positions are then welded by distance, on a grid of cells
-//! four tolerances wide, through a second such table; a bit set of the
-//! occupied cells answers the common question, whether a neighbouring cell
-//! holds anything, without probing the table. The groups are the
-//! connected components of "within the distance": the same whatever the
-//! order of the comparisons.
+//! about six corners per position), so that it stays small. Only the
+//! distinct positions are then welded by distance, on a grid of cells four
+//! tolerances wide, sorted by cell so that every access is sequential: a
+//! hash table of cells, or even a bit set of the occupied ones, costs a
+//! cache miss per lookup once the points outgrow the caches. The groups
+//! are the connected components of "within the distance": the same
+//! whatever the order of the comparisons.
 
 use glam::Vec3;
 
@@ -102,113 +102,87 @@ fn weld_by_distance(points: &[Vec3], distance: f64) -> Vec<u32> {
         .map(|p| p.abs().max_element())
         .fold(0.0_f32, f32::max);
     // Cells four tolerances wide, or wider when the tolerance is below the
-    // coordinates' own precision, so that scaled coordinates stay below
-    // 2^40: their rounding error then stays far below the margin that
+    // coordinates' own precision, so that scaled coordinates stay within
+    // 2^19: a cell's coordinates then pack into one 64-bit key (21 bits
+    // each), and their rounding error stays far below the margin that
     // decides which neighbouring cells to search.
-    let size = (4.0 * distance).max(f64::from(extent) * 2f64.powi(-40));
+    let size = (4.0 * distance).max(f64::from(extent) * 2f64.powi(-19));
     let inv = 1.0 / size;
     // A point whose scaled coordinate is within `reach` of a cell face
     // (plus a margin for the rounding of the scaling) may have partners in
     // the neighbouring cell on that side; otherwise only in its own.
     let reach = distance * inv + 0.05;
-    let cell_of = |p: Vec3| -> [i64; 3] { (p.as_dvec3() * inv).floor().as_i64vec3().to_array() };
-    let cell_hash = |c: [i64; 3]| {
-        let [x, y, z] = c.map(|v| v as u64);
-        let words = [x, x >> 32, y, y >> 32, z, z >> 32];
-        hash_words(words.map(|w| w as u32))
+    // Coordinates offset to be positive (and never at the ends of their 21
+    // bits), so that a neighbour's key is the key plus a constant.
+    const OFFSET: i64 = (1 << 19) + 2;
+    const AXIS: [u64; 3] = [1 << 42, 1 << 21, 1];
+    let key_of = |c: glam::DVec3| -> u64 {
+        let [x, y, z] = c.as_i64vec3().to_array().map(|v| (v + OFFSET) as u64);
+        x * AXIS[0] + y * AXIS[1] + z
     };
 
-    // The cell of a point, and along each axis whether its neighbouring
-    // cells below and above are within reach.
-    let neighbourhood = |p: Vec3| {
-        let scaled = p.as_dvec3() * inv;
-        let base = scaled.floor();
-        let fraction = scaled - base;
-        let span = |f: f64| -> (i64, i64) {
-            (
-                if f < reach { -1 } else { 0 },
-                if f > 1.0 - reach { 1 } else { 0 },
-            )
-        };
-        (
-            base.as_i64vec3().to_array(),
-            [span(fraction.x), span(fraction.y), span(fraction.z)],
-        )
-    };
-    // Most points have no other point within reach. Two bit sets of
-    // hashed cells (32 bits per point: a false "occupied" in about one of
-    // 32 empty cells) find the candidates that may: those whose own cell
-    // holds another point or whose neighbouring cells within reach hold
-    // any. Both points of a pair within the distance are candidates (each
-    // lies within reach of the other's cell), so only candidates need the
-    // table of cells below. The bit sets are small enough for the caches
-    // and are read without a branch per cell; the table is not.
-    let bits = (points.len() * 32).next_power_of_two().max(1024);
-    let bit_shift = 64 - bits.trailing_zeros();
-    // The low bits of the hash choose the bit; the table uses the top ones.
-    let bit_of = |c: [i64; 3]| ((cell_hash(c).rotate_left(32)) >> bit_shift) as usize;
-    let mut once = vec![0u64; bits / 64];
-    let mut twice = vec![0u64; bits / 64];
-    for p in points.iter().filter(|p| finite(p)) {
-        let bit = bit_of(cell_of(*p));
-        let (word, mask) = (bit / 64, 1u64 << (bit % 64));
-        twice[word] |= once[word] & mask;
-        once[word] |= mask;
-    }
-    let mut candidates = Vec::new();
-    for (i, p) in points.iter().enumerate() {
-        if !finite(p) {
-            continue;
+    // The finite points sorted by cell: the grid's cells become runs of one
+    // array, and a neighbouring cell's run is found by a cursor moving
+    // forward through it, so every access is sequential (a table of cells
+    // costs a cache miss per lookup once the points outgrow the caches).
+    let mut sorted: Vec<(u64, u32)> = points
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| finite(p))
+        .map(|(i, p)| (key_of((p.as_dvec3() * inv).floor()), i as u32))
+        .collect();
+    sorted.sort_unstable();
+    // Each pair of points is compared once, from the point whose cell
+    // comes first: within its own cell, the points after it; and the cells
+    // after its own in key order among its neighbours within reach (13 of
+    // the 26). Each of those has a cursor, moving forward as the keys do.
+    let forward: Vec<[i64; 3]> = (-1..=1)
+        .flat_map(|dx| (-1..=1).flat_map(move |dy| (-1..=1).map(move |dz| [dx, dy, dz])))
+        .filter(|&o| o > [0, 0, 0])
+        .collect();
+    let mut cursors = vec![0usize; forward.len()];
+    let join = |i: u32, j: u32, parent: &mut Vec<u32>| {
+        if points[j as usize]
+            .as_dvec3()
+            .distance(points[i as usize].as_dvec3())
+            <= distance
+        {
+            let (a, b) = (find(parent, i), find(parent, j));
+            parent[a.max(b) as usize] = a.min(b);
         }
-        let (base, spans) = neighbourhood(*p);
-        let own = bit_of(base);
-        let mut hit = (twice[own / 64] >> (own % 64)) & 1;
-        each_cell(base, spans, |cell| {
-            if cell != base {
-                let bit = bit_of(cell);
-                hit |= (once[bit / 64] >> (bit % 64)) & 1;
+    };
+    for (s, &(key, i)) in sorted.iter().enumerate() {
+        for &(other, j) in &sorted[s + 1..] {
+            if other != key {
+                break;
             }
-        });
-        if hit != 0 {
-            candidates.push(i as u32);
+            join(i, j, &mut parent);
         }
-    }
-    drop((once, twice));
-
-    // The candidates on the grid: each cell's points as a chain (the table
-    // maps a cell to one of its points, `next` links the rest), each point
-    // compared with the points already in the cells within its reach.
-    let mut cells = IndexTable::with_capacity(candidates.len());
-    let mut next = vec![
-        u32::MAX;
-        if candidates.is_empty() {
-            0
-        } else {
-            points.len()
-        }
-    ];
-    for &i in &candidates {
-        let here = points[i as usize].as_dvec3();
-        let (base, spans) = neighbourhood(points[i as usize]);
-        each_cell(base, spans, |cell| {
-            let h = cell_hash(cell);
-            let Some(mut j) = cells.get(h, |j| cell_of(points[j as usize]) == cell) else {
-                return;
-            };
-            while j != u32::MAX {
-                if points[j as usize].as_dvec3().distance(here) <= distance {
-                    let (a, b) = (find(&mut parent, i), find(&mut parent, j));
-                    parent[a.max(b) as usize] = a.min(b);
+        let scaled = points[i as usize].as_dvec3() * inv;
+        let fraction = scaled - scaled.floor();
+        let below = fraction.to_array().map(|f| f < reach);
+        let above = fraction.to_array().map(|f| f > 1.0 - reach);
+        for (offset, cursor) in forward.iter().zip(&mut cursors) {
+            let within = (0..3).all(|a| match offset[a] {
+                -1 => below[a],
+                1 => above[a],
+                _ => true,
+            });
+            if !within {
+                continue;
+            }
+            let target = offset.iter().zip(AXIS).fold(key, |k, (&o, axis)| {
+                k.wrapping_add((o as u64).wrapping_mul(axis))
+            });
+            while *cursor < sorted.len() && sorted[*cursor].0 < target {
+                *cursor += 1;
+            }
+            for &(other, j) in &sorted[*cursor..] {
+                if other != target {
+                    break;
                 }
-                j = next[j as usize];
+                join(i, j, &mut parent);
             }
-        });
-        // Into its own cell's chain, after the cell's first point.
-        let first =
-            cells.get_or_insert(cell_hash(base), i, |j| cell_of(points[j as usize]) == base);
-        if first != i {
-            next[i as usize] = next[first as usize];
-            next[first as usize] = i;
         }
     }
     // Number the groups in order of their smallest point (the root).
@@ -224,16 +198,4 @@ fn weld_by_distance(points: &[Vec3], distance: f64) -> Vec<u32> {
         };
     }
     group
-}
-
-/// Calls `f` with each cell from `base` offset by `spans` (per axis, the
-/// lowest and highest offset).
-fn each_cell(base: [i64; 3], spans: [(i64, i64); 3], mut f: impl FnMut([i64; 3])) {
-    for dx in spans[0].0..=spans[0].1 {
-        for dy in spans[1].0..=spans[1].1 {
-            for dz in spans[2].0..=spans[2].1 {
-                f([base[0] + dx, base[1] + dy, base[2] + dz]);
-            }
-        }
-    }
 }
