@@ -822,7 +822,7 @@ mod tests {
                     p + Vec3::new(next(9) as f32, next(9) as f32, next(9) as f32) * 2e-6
                 }
             };
-            let mut parts = vec![Vec::new(), Vec::new()];
+            let mut parts = [Vec::new(), Vec::new()];
             for i in 0..8 {
                 let t = [0, 1, 2].map(|_| pool[next(pool.len())]);
                 let part = &mut parts[i % 2];
