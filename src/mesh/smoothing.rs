@@ -268,9 +268,16 @@ fn whole(p: &[Vec3]) -> &[Vec3] {
 
 /// Threads worth starting for `items` units of work.
 pub(crate) fn threads_for(items: usize) -> usize {
+    // Below ~64k items per thread, starting threads costs more than it
+    // saves. Asking the system for the number of cores reads cgroup files
+    // each time, which adds up over thousands of small objects: only ask
+    // when there are enough items for two threads.
+    const PER_THREAD: usize = 65_536;
+    if items < 2 * PER_THREAD {
+        return 1;
+    }
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    // Below ~64k items, starting threads costs more than it saves.
-    cores.min(items / 65_536).max(1)
+    cores.min(items / PER_THREAD).max(1)
 }
 
 /// One weld group's running state in [`smooth_scope`]: 32 bytes, so that
