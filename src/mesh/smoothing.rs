@@ -102,7 +102,7 @@ pub struct SmoothingOptions {
 /// angles are f32 (a weight needs no more, and f32 acos is much cheaper)
 /// and enter the f64 sums exactly.
 #[derive(Clone, Copy, Default)]
-struct Face {
+pub(crate) struct Face {
     normal: DVec3,
     weights: [f32; 3],
 }
@@ -121,6 +121,13 @@ impl Face {
             return Face::default();
         }
         Face { normal, weights }
+    }
+
+    /// The corner angles, when the face has a normal (`None` for a
+    /// degenerate face, whose weights are zero): those the tangent stage
+    /// weighs its frames by, computed the same way.
+    pub(crate) fn angles(&self) -> Option<[f32; 3]> {
+        (self.normal != DVec3::ZERO).then_some(self.weights)
     }
 
     /// The weighted normal corner `corner` (0 to 2) contributes.
@@ -195,9 +202,9 @@ fn each_face(
 /// numbered in the order of their first point).
 pub fn weld(points: &[Vec3], distance: f32) -> Vec<usize> {
     weld_corners(&[points], distance)
-        .group_of
-        .into_iter()
-        .map(|g| g as usize)
+        .group_of()
+        .iter()
+        .map(|&g| g as usize)
         .collect()
 }
 
@@ -215,7 +222,55 @@ pub const WORK_PER_CORNER: u64 = 64;
 /// triangle) takes the average of every face at its position, else `+Y`.
 /// Corners after the last whole triangle of a part take `+Y`.
 pub fn smooth_normals(parts: &[&[Vec3]], options: &SmoothingOptions) -> Vec<Vec<Vec3>> {
-    smooth_normals_counted(parts, options).0
+    smooth_normals_numbered(parts, options).0
+}
+
+/// What smoothing's welding found that the tangent stage needs again: the
+/// exact position numbers of each part's whole triangles' corners (corners
+/// with bit-identical positions, `-0.0` as `0.0`, within one weld scope
+/// share a number, numbered in order of first appearance) and each
+/// triangle's corner angles. Joining corners into vertices starts from
+/// them instead of hashing every corner and measuring every angle again
+/// ([`super::tangents::build_mesh_numbered`]).
+pub struct PositionNumbers {
+    /// One buffer per weld scope (the model, or each object).
+    buffers: Vec<Numbered>,
+    /// Per part: its buffer and the range of its corners there.
+    parts: Vec<(usize, Range<usize>)>,
+}
+
+/// One weld scope's position numbers and face data, back to back.
+type Numbered = (Vec<u32>, Vec<Face>);
+
+/// One part's share of [`PositionNumbers`].
+#[derive(Clone, Copy)]
+pub struct PartNumbers<'a> {
+    /// The position number of each corner.
+    pub(crate) positions: &'a [u32],
+    /// Each triangle's face data.
+    pub(crate) faces: &'a [Face],
+}
+
+impl PositionNumbers {
+    /// Part `part`'s numbers (of its whole triangles), if any.
+    pub fn part(&self, part: usize) -> Option<PartNumbers<'_>> {
+        let (buffer, range) = self.parts.get(part)?;
+        let (positions, faces) = &self.buffers[*buffer];
+        Some(PartNumbers {
+            positions: &positions[range.clone()],
+            faces: &faces[range.start / 3..range.end / 3],
+        })
+    }
+}
+
+/// [`smooth_normals`], and the exact position numbers welding found (in
+/// the object and model modes; `None` in the others, which do not weld).
+pub fn smooth_normals_numbered(
+    parts: &[&[Vec3]],
+    options: &SmoothingOptions,
+) -> (Vec<Vec<Vec3>>, Option<PositionNumbers>) {
+    let (normals, _, numbers) = smooth_normals_all(parts, options);
+    (normals, numbers)
 }
 
 /// [`smooth_normals`], and the number of crease comparisons (one face
@@ -225,10 +280,20 @@ pub fn smooth_normals_counted(
     parts: &[&[Vec3]],
     options: &SmoothingOptions,
 ) -> (Vec<Vec<Vec3>>, u64) {
+    let (normals, comparisons, _) = smooth_normals_all(parts, options);
+    (normals, comparisons)
+}
+
+/// Normals, crease comparisons and position numbers of [`smooth_normals`].
+fn smooth_normals_all(
+    parts: &[&[Vec3]],
+    options: &SmoothingOptions,
+) -> (Vec<Vec<Vec3>>, u64, Option<PositionNumbers>) {
     let cos_crease = f64::from(options.crease_degrees.clamp(0.0, 180.0))
         .to_radians()
         .cos();
     let mut comparisons = 0;
+    let mut numbers = None;
     let mut normals: Vec<Vec<Vec3>> = match options.mode {
         Smoothing::Face | Smoothing::File => parts
             .iter()
@@ -239,26 +304,51 @@ pub fn smooth_normals_counted(
                     .collect()
             })
             .collect(),
-        Smoothing::Object => parts
-            .iter()
-            .map(|p| {
-                let (mut normals, work) = smooth_scope(&[whole(p)], options, cos_crease);
-                comparisons += work;
-                normals.pop().unwrap_or_default()
-            })
-            .collect(),
+        Smoothing::Object => {
+            let mut buffers = Vec::with_capacity(parts.len());
+            let mut ranges = Vec::with_capacity(parts.len());
+            let normals = parts
+                .iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    let (mut normals, work, numbered) =
+                        smooth_scope(&[whole(p)], options, cos_crease);
+                    comparisons += work;
+                    ranges.push((i, 0..numbered.0.len()));
+                    buffers.push(numbered);
+                    normals.pop().unwrap_or_default()
+                })
+                .collect();
+            numbers = Some(PositionNumbers {
+                buffers,
+                parts: ranges,
+            });
+            normals
+        }
         Smoothing::Model => {
             // One scope of every part's whole triangles, back to back.
             let scope: Vec<&[Vec3]> = parts.iter().map(|p| whole(p)).collect();
-            let (normals, work) = smooth_scope(&scope, options, cos_crease);
+            let (normals, work, numbered) = smooth_scope(&scope, options, cos_crease);
             comparisons += work;
+            let mut start = 0;
+            let ranges = scope
+                .iter()
+                .map(|s| {
+                    start += s.len();
+                    (0, start - s.len()..start)
+                })
+                .collect();
+            numbers = Some(PositionNumbers {
+                buffers: vec![numbered],
+                parts: ranges,
+            });
             normals
         }
     };
     for (n, p) in normals.iter_mut().zip(parts) {
         n.resize(p.len(), Vec3::Y);
     }
-    (normals, comparisons)
+    (normals, comparisons, numbers)
 }
 
 /// The whole triangles of a soup (trailing corners left out).
@@ -294,15 +384,18 @@ struct Group {
 }
 
 /// Smooth normals of one weld scope: `slices` hold whole triangles, taken
-/// back to back; one normal per corner of each.
+/// back to back; one normal per corner of each, the crease comparisons
+/// made, and the corners' exact position numbers and the face data (back
+/// to back).
 fn smooth_scope(
     slices: &[&[Vec3]],
     options: &SmoothingOptions,
     cos_crease: f64,
-) -> (Vec<Vec<Vec3>>, u64) {
+) -> (Vec<Vec<Vec3>>, u64, Numbered) {
     let faces = face_data(slices);
     let welded = weld_corners(slices, options.weld_distance);
-    let group_of = &welded.group_of;
+    let groups_of_corners = welded.group_of();
+    let group_of = &*groups_of_corners;
     let count = group_of.len();
 
     // Every group's sum, adding its corners in corner order: the order in
@@ -383,7 +476,8 @@ fn smooth_scope(
     }
     let runs = starts.len() - 1;
     if runs == 0 {
-        return (normals, work);
+        drop(groups_of_corners);
+        return (normals, work, (welded.position_of, faces));
     }
     let mut order = vec![0u32; starts[runs] as usize];
     let mut next = starts.clone();
@@ -412,7 +506,8 @@ fn smooth_scope(
         let s = first.partition_point(|&x| x <= k) - 1;
         normals[s][k - first[s]] = n;
     }
-    (normals, work)
+    drop(groups_of_corners);
+    (normals, work, (welded.position_of, faces))
 }
 
 /// Calls `fill(first corner, run)` over every corner of `outputs` (taken

@@ -10,10 +10,17 @@
 //! out: they cover no pixels and have no normal of their own. `T` is made orthogonal to the normal
 //! (Gram-Schmidt) and `tangent.w` holds the handedness, so that
 //! `B = w * cross(N, T)`.
+//!
+//! After smoothing, which has already numbered the distinct positions and
+//! measured every corner angle, corners are joined among the vertices of
+//! their position ([`build_mesh_numbered`]): neighbouring corners then
+//! read neighbouring entries, where a hash table of every attribute is a
+//! random read per corner, and no angle is measured twice.
 
 use glam::{DVec3, Vec2, Vec3};
 
 use super::join::{hash_words, IndexTable};
+use super::smoothing::PartNumbers;
 use super::{Mesh, Vertex};
 
 /// Statistics of one [`build_mesh`] call, for reports and tests.
@@ -38,9 +45,31 @@ pub fn build_mesh(
     normals: &[Vec3],
     uvs: Option<&[Vec2]>,
 ) -> (Mesh, TangentStats) {
+    build_mesh_numbered(positions, normals, uvs, None)
+}
+
+/// [`build_mesh`], given the exact position number of each corner of the
+/// whole triangles (equal numbers for bit-identical positions, `-0.0` as
+/// `0.0`) and each triangle's corner angles, from smoothing's welding
+/// ([`super::smoothing::PositionNumbers`]): a corner is then joined among
+/// the vertices already made at its position, found through an array
+/// indexed by position number, instead of through a hash table of every
+/// attribute, and the angles are not measured again. Positions are numbered in
+/// order of first appearance, so neighbouring corners read neighbouring
+/// entries, where a hash table's slots are random reads that miss the
+/// caches on a large model. The same mesh, bit for bit.
+pub fn build_mesh_numbered(
+    positions: &[Vec3],
+    normals: &[Vec3],
+    uvs: Option<&[Vec2]>,
+    numbers: Option<PartNumbers>,
+) -> (Mesh, TangentStats) {
     let mut stats = TangentStats::default();
     let corners = positions.len() / 3 * 3;
     let uv = |c: usize| uvs.map_or(Vec2::ZERO, |u| u[c]);
+    let mut by_position = numbers.and_then(|n| ByPosition::new(n.positions, corners));
+    // Smoothing's corner angles, when they cover every triangle.
+    let face_angles = numbers.map(|n| n.faces).filter(|f| f.len() == corners / 3);
 
     // One pass over the triangles, in batches: each triangle's frame and
     // corner weights, then its corners joined into vertices (in order of
@@ -50,7 +79,7 @@ pub fn build_mesh(
     // mesh has about one vertex per six corners; the table grows when
     // there are more.
     let expected = corners / 6 + 16;
-    let mut table = IndexTable::with_capacity(expected);
+    let mut table = IndexTable::with_capacity(if by_position.is_some() { 1 } else { expected });
     let mut vertices: Vec<Vertex> = Vec::with_capacity(expected);
     let mut sums: Vec<(DVec3, DVec3)> = Vec::with_capacity(expected);
     let mut indices = Vec::with_capacity(corners);
@@ -88,8 +117,8 @@ pub fn build_mesh(
                 stats.degenerate += 1;
                 (DVec3::ZERO, DVec3::ZERO, 1.0)
             };
-            let [pa, pb, pc] = corner_positions;
-            if is_collapsed(pa, pb, pc) {
+            // `is_collapsed`, from the edges and area already at hand.
+            if collapsed_edges(e1, e2, c - b, area) {
                 stats.collapsed += 1;
                 continue;
             }
@@ -108,7 +137,12 @@ pub fn build_mesh(
                     0.0
                 }
             };
-            let corner_weights = [angle(a, b, c), angle(b, c, a), angle(c, a, b)];
+            // Smoothing measured the same angles of every face with a
+            // normal (all finite); the others are measured here.
+            let corner_weights = match face_angles.and_then(|f| f[t].angles()) {
+                Some(angles) => angles.map(f64::from),
+                None => [angle(a, b, c), angle(b, c, a), angle(c, a, b)],
+            };
             for (k, weight) in corner_weights.into_iter().enumerate() {
                 let c = 3 * t + k;
                 // Vertex key: exact bits of position, normal, UV (+ 0:
@@ -116,16 +150,23 @@ pub fn build_mesh(
                 let key = &mut keys[kept];
                 key[..8].copy_from_slice(&corner_bits(positions[c], normals[c], uv(c)));
                 key[8] = u32::from(sign < 0.0);
-                hashes[kept] = hash_words(*key);
-                weights[kept] = (weight, slot);
+                if by_position.is_none() {
+                    hashes[kept] = hash_words(*key);
+                }
+                weights[kept] = (weight, c);
                 kept += 1;
             }
         }
-        table.touch(&hashes[..kept]);
-        for ((key, &hash), &(weight, slot)) in keys.iter().zip(&hashes).zip(&weights).take(kept) {
+        if by_position.is_none() {
+            table.touch(&hashes[..kept]);
+        }
+        for ((key, &hash), &(weight, c)) in keys.iter().zip(&hashes).zip(&weights).take(kept) {
             let next = vertices.len() as u32;
-            let index =
-                table.get_or_insert(hash, next, |v| vertex_key(&vertices[v as usize]) == *key);
+            let same = |v: u32| vertex_key(&vertices[v as usize]) == *key;
+            let index = match &mut by_position {
+                Some(by_position) => by_position.get_or_insert(c, next, same),
+                None => table.get_or_insert(hash, next, same),
+            };
             if index == next {
                 let word = |i: usize| f32::from_bits(key[i]);
                 vertices.push(Vertex {
@@ -136,7 +177,7 @@ pub fn build_mesh(
                 });
                 sums.push((DVec3::ZERO, DVec3::ZERO));
             }
-            let (tangent, bitangent) = frames[slot];
+            let (tangent, bitangent) = frames[c / 3 - first];
             let s = &mut sums[index as usize];
             s.0 += tangent * weight;
             s.1 += bitangent * weight;
@@ -172,6 +213,62 @@ pub fn build_mesh(
     (Mesh { vertices, indices }, stats)
 }
 
+/// The vertices of each position, for [`build_mesh_numbered`]: the last
+/// vertex made at each position number (offset by the smallest number in
+/// use), and for each vertex the one made before it at its position.
+struct ByPosition<'a> {
+    numbers: &'a [u32],
+    base: u32,
+    last: Vec<u32>,
+    earlier: Vec<u32>,
+}
+
+impl<'a> ByPosition<'a> {
+    /// `None` when `numbers` does not cover `corners` corners, or spans
+    /// far more numbers than it has corners (a small part of a large
+    /// model whose positions are scattered over the model's numbering:
+    /// an array of them all would cost more than the hash table).
+    fn new(numbers: &'a [u32], corners: usize) -> Option<Self> {
+        if numbers.len() != corners {
+            return None;
+        }
+        let (low, high) = numbers
+            .iter()
+            .fold((u32::MAX, 0), |(l, h), &n| (l.min(n), h.max(n)));
+        if low > high {
+            return None;
+        }
+        let span = (high - low) as usize + 1;
+        if span > 2 * corners + 1024 {
+            return None;
+        }
+        Some(ByPosition {
+            numbers,
+            base: low,
+            last: vec![u32::MAX; span],
+            earlier: Vec::with_capacity(corners / 6 + 16),
+        })
+    }
+
+    /// The vertex at corner `corner`'s position for which `same` holds, or
+    /// `new` after recording it there (the caller makes vertex `new`).
+    #[inline]
+    fn get_or_insert(&mut self, corner: usize, new: u32, same: impl Fn(u32) -> bool) -> u32 {
+        let last = &mut self.last[(self.numbers[corner] - self.base) as usize];
+        let mut v = *last;
+        while v != u32::MAX {
+            if same(v) {
+                return v;
+            }
+            v = self.earlier[v as usize];
+        }
+        debug_assert_eq!(self.earlier.len(), new as usize);
+        self.earlier.push(*last);
+        *last = new;
+        new
+    }
+}
+
 /// The key [`build_mesh`] joins a vertex's corners by, from the vertex.
 fn vertex_key(v: &Vertex) -> [u32; 9] {
     let mut key = [0; 9];
@@ -195,11 +292,17 @@ pub(crate) fn corner_bits(p: Vec3, n: Vec3, u: Vec2) -> [u32; 8] {
 pub fn is_collapsed(a: Vec3, b: Vec3, c: Vec3) -> bool {
     let [a, b, c] = [a, b, c].map(|p| p.as_dvec3());
     let (e1, e2) = (b - a, c - a);
-    let area = e1.cross(e2).length();
+    collapsed_edges(e1, e2, c - b, e1.cross(e2).length())
+}
+
+/// [`is_collapsed`] of a triangle with edges `e1 = b - a`, `e2 = c - a`,
+/// `e3 = c - b` and area `|e1 x e2|` (twice the area).
+#[inline]
+fn collapsed_edges(e1: DVec3, e2: DVec3, e3: DVec3, area: f64) -> bool {
     let longest = e1
         .length_squared()
         .max(e2.length_squared())
-        .max((c - b).length_squared());
+        .max(e3.length_squared());
     area.is_nan() || area <= 1e-10 * longest
 }
 
@@ -227,4 +330,81 @@ pub fn max_orthonormality_error(mesh: &Mesh) -> f32 {
                 .max(w_error)
         })
         .fold(0.0, f32::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::smoothing::{smooth_normals_numbered, Smoothing, SmoothingOptions};
+
+    /// The bits of a mesh and its statistics.
+    fn bits(mesh: &Mesh, stats: TangentStats) -> (Vec<u32>, Vec<u32>, TangentStats) {
+        let words = mesh
+            .vertices
+            .iter()
+            .flat_map(|v| {
+                let all = v.position.iter().chain(&v.normal).chain(&v.tangent);
+                all.chain(&v.uv).map(|x| x.to_bits()).collect::<Vec<_>>()
+            })
+            .collect();
+        (words, mesh.indices.clone(), stats)
+    }
+
+    /// Joining from smoothing's position numbers and angles makes the same
+    /// meshes, bit for bit, as hashing every corner: on soups drawn from
+    /// small pools of points (shared positions, `-0.0` and `0.0`, collapsed
+    /// and degenerate triangles, mirrored UVs, trailing corners), in every
+    /// mode and at several weld distances.
+    #[test]
+    fn numbered_joining_matches_hashing_bit_for_bit() {
+        let mut state = 0x9e37_79b9_u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for round in 0..4 {
+            let mut pool: Vec<Vec3> = (0..(6 << round))
+                .map(|_| Vec3::new(next(), next(), next()) * 2.0 - 1.0)
+                .collect();
+            pool.push(Vec3::new(-0.0, 0.0, 0.0));
+            pool.push(Vec3::ZERO);
+            let uv_pool: Vec<Vec2> = (0..5).map(|_| Vec2::new(next(), next())).collect();
+            let parts: Vec<(Vec<Vec3>, Vec<Vec2>)> = (0..3)
+                .map(|p| {
+                    (0..(60 << round) + p)
+                        .map(|_| {
+                            let point = pool[(next() * pool.len() as f32) as usize % pool.len()];
+                            let uv = uv_pool[(next() * 5.0) as usize % 5];
+                            (point, if next() < 0.3 { -uv } else { uv })
+                        })
+                        .unzip()
+                })
+                .collect();
+            let positions: Vec<&[Vec3]> = parts.iter().map(|p| p.0.as_slice()).collect();
+            for mode in [Smoothing::Face, Smoothing::Object, Smoothing::Model] {
+                for weld_distance in [0.0, 1e-3, 0.2] {
+                    let options = SmoothingOptions {
+                        mode,
+                        crease_degrees: 60.0,
+                        weld_distance,
+                    };
+                    let (normals, numbers) = smooth_normals_numbered(&positions, &options);
+                    assert_eq!(numbers.is_some(), mode != Smoothing::Face);
+                    for (i, ((p, uv), n)) in parts.iter().zip(&normals).enumerate() {
+                        let part = numbers.as_ref().and_then(|x| x.part(i));
+                        for uvs in [Some(uv.as_slice()), None] {
+                            let (hashed, hs) = build_mesh(p, n, uvs);
+                            let (numbered, ns) = build_mesh_numbered(p, n, uvs, part);
+                            assert!(
+                                bits(&hashed, hs) == bits(&numbered, ns),
+                                "round {round}, {mode:?}, weld {weld_distance}, part {i}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
 }

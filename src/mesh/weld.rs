@@ -9,7 +9,8 @@
 //! hash table of cells, or even a bit set of the occupied ones, costs a
 //! cache miss per lookup once the points outgrow the caches. The groups
 //! are the connected components of "within the distance": the same
-//! whatever the order of the comparisons.
+//! whatever the order of the comparisons. The exact position numbers are
+//! kept too: the tangent stage joins vertices from them.
 
 use glam::Vec3;
 
@@ -17,11 +18,31 @@ use super::join::{hash_words, IndexTable};
 
 /// The weld groups of a scope of corners.
 pub(crate) struct Welded {
-    /// The group of each corner (the scope's slices back to back), below
-    /// `groups`. Groups are numbered in the order of their first corner.
-    pub group_of: Vec<u32>,
+    /// The number of each corner's exact position (the scope's slices back
+    /// to back), in order of first appearance: corners with bit-identical
+    /// positions (`-0.0` as `0.0`) share a number. Vertex joining reuses
+    /// these ([`super::tangents`]).
+    pub position_of: Vec<u32>,
+    /// The group of each position, when welding by distance joined some
+    /// (`None`: every position is its own group). Groups are numbered in
+    /// the order of their first corner.
+    pub group_of_position: Option<Vec<u32>>,
     /// The number of groups.
     pub groups: usize,
+}
+
+impl Welded {
+    /// The group of each corner.
+    pub fn group_of(&self) -> std::borrow::Cow<'_, [u32]> {
+        match &self.group_of_position {
+            None => std::borrow::Cow::Borrowed(&self.position_of),
+            Some(group) => self
+                .position_of
+                .iter()
+                .map(|&p| group[p as usize])
+                .collect(),
+        }
+    }
 }
 
 /// Groups of the corners of `slices` (taken back to back) within
@@ -37,7 +58,7 @@ pub(crate) fn weld_corners(slices: &[&[Vec3]], distance: f32) -> Welded {
     // corner starts as its position's number.
     let mut table = IndexTable::with_capacity(count / 6 + 16);
     let mut unique: Vec<Vec3> = Vec::with_capacity(count / 5 + 16);
-    let mut group_of: Vec<u32> = Vec::with_capacity(count);
+    let mut position_of: Vec<u32> = Vec::with_capacity(count);
     // In batches: their first slots are read together first (see
     // `IndexTable::touch`).
     const BATCH: usize = 16;
@@ -58,23 +79,22 @@ pub(crate) fn weld_corners(slices: &[&[Vec3]], distance: f32) -> Welded {
             if id == next {
                 unique.push(Vec3::from_array(key.map(f32::from_bits)));
             }
-            group_of.push(id);
+            position_of.push(id);
         }
     }
     drop(table);
     if distance > 0.0 {
-        let group_of_unique = weld_by_distance(&unique, f64::from(distance));
-        let groups = group_of_unique.iter().map(|&g| g as usize + 1).max();
-        for g in &mut group_of {
-            *g = group_of_unique[*g as usize];
-        }
+        let group_of_position = weld_by_distance(&unique, f64::from(distance));
+        let groups = group_of_position.iter().map(|&g| g as usize + 1).max();
         return Welded {
-            group_of,
+            position_of,
+            group_of_position: Some(group_of_position),
             groups: groups.unwrap_or(0),
         };
     }
     Welded {
-        group_of,
+        position_of,
+        group_of_position: None,
         groups: unique.len(),
     }
 }
