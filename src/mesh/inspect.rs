@@ -80,12 +80,12 @@ pub fn inspect(path: &Path, options: &ModelOptions) -> Result<MeshReport, ObjErr
     let (smoothing, cpu_smoothing) = (start.elapsed().as_secs_f64(), process_cpu_seconds());
 
     let start = Instant::now();
-    let meshes = model_frames_numbered(
-        &model,
-        smoothed.normals,
-        smoothed.positions.as_ref(),
-        options.tangents,
-    );
+    let numbers = smoothed.positions;
+    let meshes =
+        model_frames_numbered(&model, smoothed.normals, numbers.as_ref(), options.tangents);
+    // Smoothing's position numbers and face data are no longer needed:
+    // freed before the boundary count below allocates its own arrays.
+    drop(numbers);
     let (tangents, cpu_tangents) = (start.elapsed().as_secs_f64(), process_cpu_seconds());
 
     // Boundary points: weld groups holding corners of two or more parts.
