@@ -164,7 +164,7 @@ pub fn build_mesh_numbered(
             let next = vertices.len() as u32;
             let same = |v: u32| vertex_key(&vertices[v as usize]) == *key;
             let index = match &mut by_position {
-                Some(by_position) => by_position.get_or_insert(c, next, same),
+                Some(by_position) => by_position.get_or_insert(c, key, next, same),
                 None => table.get_or_insert(hash, next, same),
             };
             if index == next {
@@ -215,13 +215,22 @@ pub fn build_mesh_numbered(
 
 /// The vertices of each position, for [`build_mesh_numbered`]: the last
 /// vertex made at each position number (offset by the smallest number in
-/// use), and for each vertex the one made before it at its position.
+/// use), and for each vertex the one made before it at its position. A
+/// position keeps at most [`CROWDED`] vertices in its list; beyond, they
+/// go into a hash table of every attribute, so that a position shared by
+/// many vertices (the apex of a fan of creased or differently mapped
+/// faces) costs a bounded number of comparisons per corner, not one per
+/// vertex there.
 struct ByPosition<'a> {
     numbers: &'a [u32],
     base: u32,
     last: Vec<u32>,
     earlier: Vec<u32>,
+    crowded: IndexTable,
 }
+
+/// At most this many vertices per position are found by walking its list.
+const CROWDED: usize = 16;
 
 impl<'a> ByPosition<'a> {
     /// `None` when `numbers` does not cover `corners` corners, or spans
@@ -247,22 +256,40 @@ impl<'a> ByPosition<'a> {
             base: low,
             last: vec![u32::MAX; span],
             earlier: Vec::with_capacity(corners / 6 + 16),
+            crowded: IndexTable::with_capacity(1),
         })
     }
 
-    /// The vertex at corner `corner`'s position for which `same` holds, or
-    /// `new` after recording it there (the caller makes vertex `new`).
+    /// The vertex with key `key` at corner `corner`'s position (`same`
+    /// says whether a vertex has it), or `new` after recording it there
+    /// (the caller makes vertex `new`).
     #[inline]
-    fn get_or_insert(&mut self, corner: usize, new: u32, same: impl Fn(u32) -> bool) -> u32 {
+    fn get_or_insert(
+        &mut self,
+        corner: usize,
+        key: &[u32; 9],
+        new: u32,
+        same: impl Fn(u32) -> bool,
+    ) -> u32 {
         let last = &mut self.last[(self.numbers[corner] - self.base) as usize];
-        let mut v = *last;
+        let (mut v, mut listed) = (*last, 0);
         while v != u32::MAX {
             if same(v) {
                 return v;
             }
             v = self.earlier[v as usize];
+            listed += 1;
         }
         debug_assert_eq!(self.earlier.len(), new as usize);
+        if listed >= CROWDED {
+            // A full list never shrinks: every later vertex at this
+            // position, and only those, is in the table.
+            let index = self.crowded.get_or_insert(hash_words(*key), new, same);
+            if index == new {
+                self.earlier.push(u32::MAX);
+            }
+            return index;
+        }
         self.earlier.push(*last);
         *last = new;
         new
@@ -382,6 +409,22 @@ mod tests {
                         .unzip()
                 })
                 .collect();
+            // A fan whose apex has a vertex per triangle (distinct UVs),
+            // more than a position's list holds.
+            let mut parts = parts;
+            parts.push(
+                (0..40 << round)
+                    .flat_map(|i| {
+                        let a = i as f32 * 0.1;
+                        let rim = |a: f32| Vec3::new(a.cos(), a.sin(), 0.3 * (3.0 * a).sin());
+                        [Vec3::Z, rim(a), rim(a + 0.1)].into_iter().zip([
+                            Vec2::new(a, 0.0),
+                            Vec2::new(a, 1.0),
+                            Vec2::new(a + 0.1, 1.0),
+                        ])
+                    })
+                    .unzip(),
+            );
             let positions: Vec<&[Vec3]> = parts.iter().map(|p| p.0.as_slice()).collect();
             for mode in [Smoothing::Face, Smoothing::Object, Smoothing::Model] {
                 for weld_distance in [0.0, 1e-3, 0.2] {
