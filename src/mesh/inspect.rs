@@ -3,7 +3,9 @@
 //! across objects, degenerate and mirrored triangles, non-finite
 //! attributes, the worst tangent-frame error, and the time of each stage.
 
-use super::obj::{load_obj, model_frames, model_normals, AssetWarning, ModelOptions, ObjError};
+use super::obj::{
+    load_obj, model_frames_numbered, model_normals_numbered, AssetWarning, ModelOptions, ObjError,
+};
 use super::smoothing::weld;
 use super::tangents::max_orthonormality_error;
 use std::path::Path;
@@ -73,11 +75,17 @@ pub fn inspect(path: &Path, options: &ModelOptions) -> Result<MeshReport, ObjErr
     let (load, cpu_load) = (start.elapsed().as_secs_f64(), process_cpu_seconds());
 
     let start = Instant::now();
-    let (mode, normals) = model_normals(&model, options, &file)?;
+    let smoothed = model_normals_numbered(&model, options, &file)?;
+    let mode = smoothed.mode;
     let (smoothing, cpu_smoothing) = (start.elapsed().as_secs_f64(), process_cpu_seconds());
 
     let start = Instant::now();
-    let meshes = model_frames(&model, normals, options.tangents);
+    let numbers = smoothed.positions;
+    let meshes =
+        model_frames_numbered(&model, smoothed.normals, numbers.as_ref(), options.tangents);
+    // Smoothing's position numbers and face data are no longer needed:
+    // freed before the boundary count below allocates its own arrays.
+    drop(numbers);
     let (tangents, cpu_tangents) = (start.elapsed().as_secs_f64(), process_cpu_seconds());
 
     // Boundary points: weld groups holding corners of two or more parts.

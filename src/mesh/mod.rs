@@ -8,12 +8,14 @@
 
 pub mod height;
 pub mod inspect;
+mod join;
 pub mod mikktspace;
 pub mod obj;
 mod shapes;
 pub mod smoothing;
 mod surface;
 pub mod tangents;
+mod weld;
 
 pub use shapes::{CylinderSurface, FlagSurface, PlaneSurface, SphereSurface, TorusSurface};
 pub use surface::{derived_normal, derived_tangent, ParametricSurface};

@@ -18,8 +18,8 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 
 use super::mikktspace::build_mesh_mikktspace;
-use super::smoothing::{smooth_normals, Smoothing, SmoothingOptions};
-use super::tangents::{build_mesh, TangentStats};
+use super::smoothing::{smooth_normals_numbered, PositionNumbers, Smoothing, SmoothingOptions};
+use super::tangents::{build_mesh_numbered, TangentStats};
 use super::Mesh;
 
 /// Why a model could not be loaded. The message names the file and, where
@@ -852,8 +852,24 @@ pub fn model_meshes(
     options: &ModelOptions,
     file: &str,
 ) -> Result<Vec<(Mesh, TangentStats)>, ObjError> {
-    let (_, normals) = model_normals(model, options, file)?;
-    Ok(model_frames(model, normals, options.tangents))
+    let smoothed = model_normals_numbered(model, options, file)?;
+    Ok(model_frames_numbered(
+        model,
+        smoothed.normals,
+        smoothed.positions.as_ref(),
+        options.tangents,
+    ))
+}
+
+/// What [`model_normals_numbered`] hands to [`model_frames_numbered`].
+pub struct SmoothedModel {
+    /// The mode used.
+    pub mode: Smoothing,
+    /// Each part's per-corner shading normals (unit length, never NaN).
+    pub normals: Vec<Vec<Vec3>>,
+    /// The exact position numbers smoothing's welding found, when it
+    /// welded: the tangent stage joins corners into vertices from them.
+    pub positions: Option<PositionNumbers>,
 }
 
 /// The smoothing stage: each part's per-corner shading normals (unit
@@ -863,6 +879,17 @@ pub fn model_normals(
     options: &ModelOptions,
     file: &str,
 ) -> Result<(Smoothing, Vec<Vec<Vec3>>), ObjError> {
+    let smoothed = model_normals_numbered(model, options, file)?;
+    Ok((smoothed.mode, smoothed.normals))
+}
+
+/// [`model_normals`], with the position numbers of smoothing's welding,
+/// for [`model_frames_numbered`].
+pub fn model_normals_numbered(
+    model: &ObjModel,
+    options: &ModelOptions,
+    file: &str,
+) -> Result<SmoothedModel, ObjError> {
     let mode = options.smoothing.unwrap_or(if model.has_all_normals() {
         Smoothing::File
     } else {
@@ -889,7 +916,7 @@ pub fn model_normals(
         });
     }
     let positions: Vec<&[Vec3]> = model.parts.iter().map(|p| p.positions.as_slice()).collect();
-    let generated = smooth_normals(
+    let (generated, numbers) = smooth_normals_numbered(
         &positions,
         &SmoothingOptions {
             mode,
@@ -912,7 +939,11 @@ pub fn model_normals(
             _ => generated,
         })
         .collect();
-    Ok((mode, normals))
+    Ok(SmoothedModel {
+        mode,
+        normals,
+        positions: numbers,
+    })
 }
 
 /// The tangent stage: each part as an indexed mesh with tangent frames,
@@ -922,8 +953,24 @@ pub fn model_frames(
     normals: Vec<Vec<Vec3>>,
     method: TangentMethod,
 ) -> Vec<(Mesh, TangentStats)> {
-    let build = |part: &ObjPart, normals: &[Vec3]| match method {
-        TangentMethod::Aerial => build_mesh(&part.positions, normals, part.uvs.as_deref()),
+    model_frames_numbered(model, normals, None, method)
+}
+
+/// [`model_frames`], joining corners into vertices from the position
+/// numbers of [`model_normals_numbered`] when given (the same meshes).
+pub fn model_frames_numbered(
+    model: &ObjModel,
+    normals: Vec<Vec<Vec3>>,
+    numbers: Option<&PositionNumbers>,
+    method: TangentMethod,
+) -> Vec<(Mesh, TangentStats)> {
+    let build = |(i, part): (usize, &ObjPart), normals: &[Vec3]| match method {
+        TangentMethod::Aerial => build_mesh_numbered(
+            &part.positions,
+            normals,
+            part.uvs.as_deref(),
+            numbers.and_then(|n| n.part(i)),
+        ),
         TangentMethod::Mikktspace => {
             build_mesh_mikktspace(&part.positions, normals, part.uvs.as_deref())
         }
@@ -936,11 +983,13 @@ pub fn model_frames(
         return model
             .parts
             .iter()
+            .enumerate()
             .zip(&normals)
             .map(|(part, normals)| build(part, normals))
             .collect();
     }
-    let jobs: Vec<(&ObjPart, &Vec<Vec3>)> = model.parts.iter().zip(&normals).collect();
+    let jobs: Vec<((usize, &ObjPart), &Vec<Vec3>)> =
+        model.parts.iter().enumerate().zip(&normals).collect();
     let chunk = jobs.len().div_ceil(threads);
     std::thread::scope(|scope| {
         let handles: Vec<_> = jobs
@@ -950,7 +999,7 @@ pub fn model_frames(
                 scope.spawn(move || {
                     chunk
                         .iter()
-                        .map(|(part, normals)| build(part, normals))
+                        .map(|&(part, normals)| build(part, normals))
                         .collect::<Vec<_>>()
                 })
             })

@@ -10,10 +10,17 @@
 //! out: they cover no pixels and have no normal of their own. `T` is made orthogonal to the normal
 //! (Gram-Schmidt) and `tangent.w` holds the handedness, so that
 //! `B = w * cross(N, T)`.
+//!
+//! After smoothing, which has already numbered the distinct positions and
+//! measured every corner angle, corners are joined among the vertices of
+//! their position ([`build_mesh_numbered`]): neighbouring corners then
+//! read neighbouring entries, where a hash table of every attribute is a
+//! random read per corner, and no angle is measured twice.
 
 use glam::{DVec3, Vec2, Vec3};
 
-use super::smoothing::first_equal;
+use super::join::{hash_words, IndexTable};
+use super::smoothing::PartNumbers;
 use super::{Mesh, Vertex};
 
 /// Statistics of one [`build_mesh`] call, for reports and tests.
@@ -38,100 +45,146 @@ pub fn build_mesh(
     normals: &[Vec3],
     uvs: Option<&[Vec2]>,
 ) -> (Mesh, TangentStats) {
+    build_mesh_numbered(positions, normals, uvs, None)
+}
+
+/// [`build_mesh`], given the exact position number of each corner of the
+/// whole triangles (equal numbers for bit-identical positions, `-0.0` as
+/// `0.0`) and each triangle's corner angles, from smoothing's welding
+/// ([`super::smoothing::PositionNumbers`]): a corner is then joined among
+/// the vertices already made at its position, found through an array
+/// indexed by position number, instead of through a hash table of every
+/// attribute, and the angles are not measured again. Positions are numbered in
+/// order of first appearance, so neighbouring corners read neighbouring
+/// entries, where a hash table's slots are random reads that miss the
+/// caches on a large model. The same mesh, bit for bit.
+pub fn build_mesh_numbered(
+    positions: &[Vec3],
+    normals: &[Vec3],
+    uvs: Option<&[Vec2]>,
+    numbers: Option<PartNumbers>,
+) -> (Mesh, TangentStats) {
     let mut stats = TangentStats::default();
     let corners = positions.len() / 3 * 3;
     let uv = |c: usize| uvs.map_or(Vec2::ZERO, |u| u[c]);
+    let mut by_position = numbers.and_then(|n| ByPosition::new(n.positions, corners));
+    // Smoothing's corner angles, when they cover every triangle.
+    let face_angles = numbers.map(|n| n.faces).filter(|f| f.len() == corners / 3);
 
-    // Per triangle: unit T and B (zero when degenerate), handedness.
-    let mut triangle = Vec::with_capacity(corners / 3);
-    let mut collapsed = Vec::with_capacity(corners / 3);
-    for t in 0..corners / 3 {
-        let [a, b, c] = [0, 1, 2].map(|k| positions[3 * t + k].as_dvec3());
-        let [ta, tb, tc] = [0, 1, 2].map(|k| uv(3 * t + k).as_dvec2());
-        let (e1, e2) = (b - a, c - a);
-        let (d1, d2) = (tb - ta, tc - ta);
-        let det = d1.x * d2.y - d2.x * d1.y;
-        let area = e1.cross(e2).length();
-        collapsed.push(is_collapsed(
-            positions[3 * t],
-            positions[3 * t + 1],
-            positions[3 * t + 2],
-        ));
-        let uv_scale = d1.length_squared().max(d2.length_squared());
-        let valid = area > 0.0 && det.abs() > 1e-12 * uv_scale && det.is_finite();
-        if !valid {
-            stats.degenerate += 1;
-            triangle.push((DVec3::ZERO, DVec3::ZERO, 1.0));
-            continue;
-        }
-        let tangent = (e1 * d2.y - e2 * d1.y) / det;
-        let bitangent = (e2 * d1.x - e1 * d2.x) / det;
-        let sign = if det < 0.0 { -1.0 } else { 1.0 };
-        if sign < 0.0 {
-            stats.mirrored += 1;
-        }
-        triangle.push((
-            tangent.try_normalize().unwrap_or(DVec3::ZERO),
-            bitangent.try_normalize().unwrap_or(DVec3::ZERO),
-            sign,
-        ));
-    }
-
-    // Vertex key: exact bits of position, normal, UV, and the handedness.
-    // + 0: -0.0 is stored (and keyed) as 0.0.
-    let key = |c: usize| {
-        let mut key = [0; 9];
-        key[..8].copy_from_slice(&corner_bits(positions[c], normals[c], uv(c)));
-        key[8] = (triangle[c / 3].2 < 0.0) as u32;
-        key
-    };
-    let first = first_equal(corners, key);
-    let mut vertex_of_first = vec![u32::MAX; corners];
-    let mut sums: Vec<(DVec3, DVec3)> = Vec::new();
-    let mut vertices: Vec<Vertex> = Vec::new();
+    // One pass over the triangles, in batches: each triangle's frame and
+    // corner weights, then its corners joined into vertices (in order of
+    // first appearance) and their weighted frames added to the vertex's
+    // sums, in corner order. A batch's first table slots are read together
+    // before its corners are joined (see `IndexTable::touch`). A closed
+    // mesh has about one vertex per six corners; the table grows when
+    // there are more.
+    let expected = corners / 6 + 16;
+    let mut table = IndexTable::with_capacity(if by_position.is_some() { 1 } else { expected });
+    let mut vertices: Vec<Vertex> = Vec::with_capacity(expected);
+    let mut sums: Vec<(DVec3, DVec3)> = Vec::with_capacity(expected);
     let mut indices = Vec::with_capacity(corners);
-    for c in 0..corners {
-        if collapsed[c / 3] {
-            continue;
+    const BATCH: usize = 8;
+    let mut frames = [(DVec3::ZERO, DVec3::ZERO); BATCH];
+    let mut keys = [[0u32; 9]; 3 * BATCH];
+    let mut hashes = [0u64; 3 * BATCH];
+    let mut weights = [(0.0f64, 0usize); 3 * BATCH];
+    for first in (0..corners / 3).step_by(BATCH) {
+        let mut kept = 0;
+        for (slot, t) in (first..(first + BATCH).min(corners / 3)).enumerate() {
+            let corner_positions = [0, 1, 2].map(|k| positions[3 * t + k]);
+            let [a, b, c] = corner_positions.map(|p| p.as_dvec3());
+            let [ta, tb, tc] = [0, 1, 2].map(|k| uv(3 * t + k).as_dvec2());
+            let (e1, e2) = (b - a, c - a);
+            let (d1, d2) = (tb - ta, tc - ta);
+            let det = d1.x * d2.y - d2.x * d1.y;
+            let area = e1.cross(e2).length();
+            let uv_scale = d1.length_squared().max(d2.length_squared());
+            let valid = area > 0.0 && det.abs() > 1e-12 * uv_scale && det.is_finite();
+            // Unit T and B (zero when degenerate), handedness.
+            let (tangent, bitangent, sign) = if valid {
+                let tangent = (e1 * d2.y - e2 * d1.y) / det;
+                let bitangent = (e2 * d1.x - e1 * d2.x) / det;
+                let sign = if det < 0.0 { -1.0 } else { 1.0 };
+                if sign < 0.0 {
+                    stats.mirrored += 1;
+                }
+                (
+                    tangent.try_normalize().unwrap_or(DVec3::ZERO),
+                    bitangent.try_normalize().unwrap_or(DVec3::ZERO),
+                    sign,
+                )
+            } else {
+                stats.degenerate += 1;
+                (DVec3::ZERO, DVec3::ZERO, 1.0)
+            };
+            // `is_collapsed`, from the edges and area already at hand.
+            if collapsed_edges(e1, e2, c - b, area) {
+                stats.collapsed += 1;
+                continue;
+            }
+            frames[slot] = (tangent, bitangent);
+            // Weighted by the corner angle, like the normals, so that how
+            // the surface is cut into triangles does not bias the frame.
+            let angle = |here: DVec3, next: DVec3, prev: DVec3| {
+                let angle = f64::from(
+                    (next - here)
+                        .as_vec3()
+                        .angle_between((prev - here).as_vec3()),
+                );
+                if angle.is_finite() {
+                    angle
+                } else {
+                    0.0
+                }
+            };
+            // Smoothing measured the same angles of every face with a
+            // normal (all finite); the others are measured here.
+            let corner_weights = match face_angles.and_then(|f| f[t].angles()) {
+                Some(angles) => angles.map(f64::from),
+                None => [angle(a, b, c), angle(b, c, a), angle(c, a, b)],
+            };
+            for (k, weight) in corner_weights.into_iter().enumerate() {
+                let c = 3 * t + k;
+                // Vertex key: exact bits of position, normal, UV (+ 0:
+                // -0.0 is stored, and keyed, as 0.0), and the handedness.
+                let key = &mut keys[kept];
+                key[..8].copy_from_slice(&corner_bits(positions[c], normals[c], uv(c)));
+                key[8] = u32::from(sign < 0.0);
+                if by_position.is_none() {
+                    hashes[kept] = hash_words(*key);
+                }
+                weights[kept] = (weight, c);
+                kept += 1;
+            }
         }
-        let (t, b, sign) = triangle[c / 3];
-        let slot = &mut vertex_of_first[first[c] as usize];
-        if *slot == u32::MAX {
-            let (p, n, u) = (
-                positions[c] + Vec3::ZERO,
-                normals[c] + Vec3::ZERO,
-                uv(c) + Vec2::ZERO,
-            );
-            vertices.push(Vertex {
-                position: p.to_array(),
-                normal: n.to_array(),
-                tangent: [0.0, 0.0, 0.0, sign as f32],
-                uv: [u.x, u.y],
-            });
-            sums.push((DVec3::ZERO, DVec3::ZERO));
-            *slot = vertices.len() as u32 - 1;
+        if by_position.is_none() {
+            table.touch(&hashes[..kept]);
         }
-        let index = *slot;
-        // Weighted by the corner angle, like the normals, so that how the
-        // surface is cut into triangles does not bias the frame.
-        let [x, y, z] = [0, 1, 2].map(|k| positions[c / 3 * 3 + k].as_dvec3());
-        let corner = c % 3;
-        let (here, next, prev) = match corner {
-            0 => (x, y, z),
-            1 => (y, z, x),
-            _ => (z, x, y),
-        };
-        let angle = f64::from(
-            (next - here)
-                .as_vec3()
-                .angle_between((prev - here).as_vec3()),
-        );
-        let weight = if angle.is_finite() { angle } else { 0.0 };
-        let s = &mut sums[index as usize];
-        s.0 += t * weight;
-        s.1 += b * weight;
-        indices.push(index);
+        for ((key, &hash), &(weight, c)) in keys.iter().zip(&hashes).zip(&weights).take(kept) {
+            let next = vertices.len() as u32;
+            let same = |v: u32| vertex_key(&vertices[v as usize]) == *key;
+            let index = match &mut by_position {
+                Some(by_position) => by_position.get_or_insert(c, key, next, same),
+                None => table.get_or_insert(hash, next, same),
+            };
+            if index == next {
+                let word = |i: usize| f32::from_bits(key[i]);
+                vertices.push(Vertex {
+                    position: [word(0), word(1), word(2)],
+                    normal: [word(3), word(4), word(5)],
+                    tangent: [0.0, 0.0, 0.0, if key[8] == 1 { -1.0 } else { 1.0 }],
+                    uv: [word(6), word(7)],
+                });
+                sums.push((DVec3::ZERO, DVec3::ZERO));
+            }
+            let (tangent, bitangent) = frames[c / 3 - first];
+            let s = &mut sums[index as usize];
+            s.0 += tangent * weight;
+            s.1 += bitangent * weight;
+            indices.push(index);
+        }
     }
+    drop(table);
 
     for (vertex, (t, b)) in vertices.iter_mut().zip(sums) {
         let n = Vec3::from(vertex.normal).as_dvec3();
@@ -157,8 +210,101 @@ pub fn build_mesh(
             sign as f32,
         ];
     }
-    stats.collapsed = collapsed.iter().filter(|&&c| c).count();
     (Mesh { vertices, indices }, stats)
+}
+
+/// The vertices of each position, for [`build_mesh_numbered`]: the last
+/// vertex made at each position number (offset by the smallest number in
+/// use), and for each vertex the one made before it at its position. A
+/// position keeps at most [`CROWDED`] vertices in its list; beyond, they
+/// go into a hash table of every attribute, so that a position shared by
+/// many vertices (the apex of a fan of creased or differently mapped
+/// faces) costs a bounded number of comparisons per corner, not one per
+/// vertex there.
+struct ByPosition<'a> {
+    numbers: &'a [u32],
+    base: u32,
+    last: Vec<u32>,
+    earlier: Vec<u32>,
+    crowded: IndexTable,
+}
+
+/// At most this many vertices per position are found by walking its list.
+const CROWDED: usize = 16;
+
+impl<'a> ByPosition<'a> {
+    /// `None` when `numbers` does not cover `corners` corners, or spans
+    /// far more numbers than it has corners (a small part of a large
+    /// model whose positions are scattered over the model's numbering:
+    /// an array of them all would cost more than the hash table).
+    fn new(numbers: &'a [u32], corners: usize) -> Option<Self> {
+        if numbers.len() != corners {
+            return None;
+        }
+        let (low, high) = numbers
+            .iter()
+            .fold((u32::MAX, 0), |(l, h), &n| (l.min(n), h.max(n)));
+        if low > high {
+            return None;
+        }
+        let span = (high - low) as usize + 1;
+        if span > 2 * corners + 1024 {
+            return None;
+        }
+        Some(ByPosition {
+            numbers,
+            base: low,
+            last: vec![u32::MAX; span],
+            earlier: Vec::with_capacity(corners / 6 + 16),
+            crowded: IndexTable::with_capacity(1),
+        })
+    }
+
+    /// The vertex with key `key` at corner `corner`'s position (`same`
+    /// says whether a vertex has it), or `new` after recording it there
+    /// (the caller makes vertex `new`).
+    #[inline]
+    fn get_or_insert(
+        &mut self,
+        corner: usize,
+        key: &[u32; 9],
+        new: u32,
+        same: impl Fn(u32) -> bool,
+    ) -> u32 {
+        let last = &mut self.last[(self.numbers[corner] - self.base) as usize];
+        let (mut v, mut listed) = (*last, 0);
+        while v != u32::MAX {
+            if same(v) {
+                return v;
+            }
+            v = self.earlier[v as usize];
+            listed += 1;
+        }
+        debug_assert_eq!(self.earlier.len(), new as usize);
+        if listed >= CROWDED {
+            // A full list never shrinks: every later vertex at this
+            // position, and only those, is in the table.
+            let index = self.crowded.get_or_insert(hash_words(*key), new, same);
+            if index == new {
+                self.earlier.push(u32::MAX);
+            }
+            return index;
+        }
+        self.earlier.push(*last);
+        *last = new;
+        new
+    }
+}
+
+/// The key [`build_mesh`] joins a vertex's corners by, from the vertex.
+fn vertex_key(v: &Vertex) -> [u32; 9] {
+    let mut key = [0; 9];
+    let [p, n, u] = [&v.position[..], &v.normal[..], &v.uv[..]];
+    for (slot, x) in key.iter_mut().zip(p.iter().chain(n).chain(u)) {
+        *slot = x.to_bits();
+    }
+    key[8] = u32::from(v.tangent[3] < 0.0);
+    key
 }
 
 /// The exact bits of a corner's position, normal and UV, the part of the
@@ -173,11 +319,17 @@ pub(crate) fn corner_bits(p: Vec3, n: Vec3, u: Vec2) -> [u32; 8] {
 pub fn is_collapsed(a: Vec3, b: Vec3, c: Vec3) -> bool {
     let [a, b, c] = [a, b, c].map(|p| p.as_dvec3());
     let (e1, e2) = (b - a, c - a);
-    let area = e1.cross(e2).length();
+    collapsed_edges(e1, e2, c - b, e1.cross(e2).length())
+}
+
+/// [`is_collapsed`] of a triangle with edges `e1 = b - a`, `e2 = c - a`,
+/// `e3 = c - b` and area `|e1 x e2|` (twice the area).
+#[inline]
+fn collapsed_edges(e1: DVec3, e2: DVec3, e3: DVec3, area: f64) -> bool {
     let longest = e1
         .length_squared()
         .max(e2.length_squared())
-        .max((c - b).length_squared());
+        .max(e3.length_squared());
     area.is_nan() || area <= 1e-10 * longest
 }
 
@@ -205,4 +357,97 @@ pub fn max_orthonormality_error(mesh: &Mesh) -> f32 {
                 .max(w_error)
         })
         .fold(0.0, f32::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::smoothing::{smooth_normals_numbered, Smoothing, SmoothingOptions};
+
+    /// The bits of a mesh and its statistics.
+    fn bits(mesh: &Mesh, stats: TangentStats) -> (Vec<u32>, Vec<u32>, TangentStats) {
+        let words = mesh
+            .vertices
+            .iter()
+            .flat_map(|v| {
+                let all = v.position.iter().chain(&v.normal).chain(&v.tangent);
+                all.chain(&v.uv).map(|x| x.to_bits()).collect::<Vec<_>>()
+            })
+            .collect();
+        (words, mesh.indices.clone(), stats)
+    }
+
+    /// Joining from smoothing's position numbers and angles makes the same
+    /// meshes, bit for bit, as hashing every corner: on soups drawn from
+    /// small pools of points (shared positions, `-0.0` and `0.0`, collapsed
+    /// and degenerate triangles, mirrored UVs, trailing corners), in every
+    /// mode and at several weld distances.
+    #[test]
+    fn numbered_joining_matches_hashing_bit_for_bit() {
+        let mut state = 0x9e37_79b9_u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for round in 0..4 {
+            let mut pool: Vec<Vec3> = (0..(6 << round))
+                .map(|_| Vec3::new(next(), next(), next()) * 2.0 - 1.0)
+                .collect();
+            pool.push(Vec3::new(-0.0, 0.0, 0.0));
+            pool.push(Vec3::ZERO);
+            let uv_pool: Vec<Vec2> = (0..5).map(|_| Vec2::new(next(), next())).collect();
+            let parts: Vec<(Vec<Vec3>, Vec<Vec2>)> = (0..3)
+                .map(|p| {
+                    (0..(60 << round) + p)
+                        .map(|_| {
+                            let point = pool[(next() * pool.len() as f32) as usize % pool.len()];
+                            let uv = uv_pool[(next() * 5.0) as usize % 5];
+                            (point, if next() < 0.3 { -uv } else { uv })
+                        })
+                        .unzip()
+                })
+                .collect();
+            // A fan whose apex has a vertex per triangle (distinct UVs),
+            // more than a position's list holds.
+            let mut parts = parts;
+            parts.push(
+                (0..40 << round)
+                    .flat_map(|i| {
+                        let a = i as f32 * 0.1;
+                        let rim = |a: f32| Vec3::new(a.cos(), a.sin(), 0.3 * (3.0 * a).sin());
+                        [Vec3::Z, rim(a), rim(a + 0.1)].into_iter().zip([
+                            Vec2::new(a, 0.0),
+                            Vec2::new(a, 1.0),
+                            Vec2::new(a + 0.1, 1.0),
+                        ])
+                    })
+                    .unzip(),
+            );
+            let positions: Vec<&[Vec3]> = parts.iter().map(|p| p.0.as_slice()).collect();
+            for mode in [Smoothing::Face, Smoothing::Object, Smoothing::Model] {
+                for weld_distance in [0.0, 1e-3, 0.2] {
+                    let options = SmoothingOptions {
+                        mode,
+                        crease_degrees: 60.0,
+                        weld_distance,
+                    };
+                    let (normals, numbers) = smooth_normals_numbered(&positions, &options);
+                    assert_eq!(numbers.is_some(), mode != Smoothing::Face);
+                    for (i, ((p, uv), n)) in parts.iter().zip(&normals).enumerate() {
+                        let part = numbers.as_ref().and_then(|x| x.part(i));
+                        for uvs in [Some(uv.as_slice()), None] {
+                            let (hashed, hs) = build_mesh(p, n, uvs);
+                            let (numbered, ns) = build_mesh_numbered(p, n, uvs, part);
+                            assert!(
+                                bits(&hashed, hs) == bits(&numbered, ns),
+                                "round {round}, {mode:?}, weld {weld_distance}, part {i}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
 }

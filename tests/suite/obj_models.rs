@@ -12,8 +12,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use aerial::mesh::obj::{load_obj, model_meshes, ModelOptions};
-use aerial::mesh::smoothing::{naive_normals, smooth_normals, Smoothing, SmoothingOptions};
-use aerial::mesh::tangents::{build_mesh, max_orthonormality_error};
+use aerial::mesh::smoothing::{
+    naive_normals, smooth_normals, smooth_normals_numbered, Smoothing, SmoothingOptions,
+};
+use aerial::mesh::tangents::{build_mesh, build_mesh_numbered, max_orthonormality_error};
 use aerial::mesh::Mesh;
 use aerial::scene::Scene;
 use glam::{Vec2, Vec3};
@@ -559,13 +561,17 @@ fn smoothing_and_tangent_time() {
             weld_distance: 1e-5 * 2.8 * 1.4,
         };
         let (start, cpu_start) = (Instant::now(), process_cpu_seconds());
-        let normals = smooth_normals(&positions, &options);
+        // As `aerial mesh` does: the tangent stage reuses the welding.
+        let (normals, numbers) = smooth_normals_numbered(&positions, &options);
         let smoothing = start.elapsed().as_secs_f64();
         let (start, cpu_middle) = (Instant::now(), process_cpu_seconds());
         let meshes: Vec<Mesh> = soup
             .iter()
             .zip(&normals)
-            .map(|((p, t), n)| build_mesh(p, n, Some(t)).0)
+            .enumerate()
+            .map(|(i, ((p, t), n))| {
+                build_mesh_numbered(p, n, Some(t), numbers.as_ref().and_then(|x| x.part(i))).0
+            })
             .collect();
         let tangents = start.elapsed().as_secs_f64();
         let cpu_end = process_cpu_seconds();
