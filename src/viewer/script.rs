@@ -57,6 +57,9 @@ pub enum ScriptError {
     },
 }
 
+/// The longest script read: far beyond any hand-written or generated one.
+const MAX_SCRIPT_BYTES: u64 = 16 << 20;
+
 /// The largest window a script may ask for (the renderer's output limit).
 const MAX_SIDE: u32 = crate::scene::MAX_OUTPUT_SIZE;
 
@@ -64,9 +67,25 @@ impl Script {
     /// Reads and parses the script at `path`; a relative screenshot path
     /// is relative to the current directory, as on the command line.
     pub fn load(path: &Path) -> Result<Script, ScriptError> {
-        let text = std::fs::read_to_string(path).map_err(|e| ScriptError::Read {
+        let read = |reason: String| ScriptError::Read {
             path: path.to_path_buf(),
-            reason: e.to_string(),
+            reason,
+        };
+        // Read at most a bound, so an input that never ends (`/dev/zero`)
+        // is refused instead of filling memory.
+        let bytes =
+            crate::mesh::obj::read_limited(path, MAX_SCRIPT_BYTES).map_err(|e| match e {
+                Some(e) => read(e.to_string()),
+                None => read(format!(
+                    "longer than {} (reading stopped there); a script is a few lines per frame",
+                    crate::budget::Bytes(MAX_SCRIPT_BYTES)
+                )),
+            })?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            read(format!(
+                "not UTF-8 text: invalid byte at byte offset {}",
+                e.utf8_error().valid_up_to()
+            ))
         })?;
         Script::parse(&text, path)
     }

@@ -422,6 +422,18 @@ fn a_bad_script_is_refused_with_file_line_and_reason() {
         "{stderr}"
     );
     assert!(!stderr.contains("panicked"), "{stderr}");
+    // An endless script stops at the bound, with a message naming it.
+    let out = common::aerial()
+        .args(["view", "--script", "/dev/zero"])
+        .env_remove("DISPLAY")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("/dev/zero") && stderr.contains("reading stopped"),
+        "{stderr}"
+    );
 }
 
 /// The viewer moves the view of a live renderer instead of building a new
