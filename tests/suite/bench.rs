@@ -8,17 +8,7 @@ use aerial::bench::{self, BenchReport};
 use aerial::render::empty_pass::{CONSTANT_RGBA8, PASS_NAME};
 use aerial::scene::{Light, Scene, KNOBS};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn aerial() -> Command {
-    common::aerial()
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("aerial-bench-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use std::process::Output;
 
 fn bench_scene(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -29,7 +19,7 @@ fn bench_scene(name: &str) -> PathBuf {
 /// `aerial bench` on the smallest scene, short and small so it is fast,
 /// under validation like every render in the tests (any message fails it).
 fn quick_bench(extra: &[&str]) -> Output {
-    aerial()
+    common::aerial()
         .arg("bench")
         .arg(bench_scene("triangle.toml"))
         .args([
@@ -60,7 +50,7 @@ fn assert_success(out: &Output) {
 
 #[test]
 fn bench_json_has_every_field_and_round_trips() {
-    let dir = temp_dir("json");
+    let dir = common::fresh_dir("bench", "json");
     let json = dir.join("out.json");
     let out = quick_bench(&[
         "--knob",
@@ -194,7 +184,7 @@ fn halve_medians(v: &mut serde_json::Value) {
 
 #[test]
 fn compare_fails_against_a_halved_baseline_and_passes_against_itself() {
-    let dir = temp_dir("compare");
+    let dir = common::fresh_dir("bench", "compare");
     let current = dir.join("current.json");
     assert_success(&quick_bench(&["--json", current.to_str().unwrap()]));
     let mut value: serde_json::Value =
@@ -206,7 +196,7 @@ fn compare_fails_against_a_halved_baseline_and_passes_against_itself() {
     // The stored run against its halved copy: every ratio is exactly 2,
     // and each interval is 2 times the frames' own spread.
     let gate = |baseline: &Path, max_ratio: &str| {
-        aerial()
+        common::aerial()
             .args(["bench", "--from-json"])
             .arg(&current)
             .arg("--compare")
@@ -264,7 +254,7 @@ fn compare_fails_against_a_halved_baseline_and_passes_against_itself() {
 
 #[test]
 fn bad_bench_input_fails_with_a_message_not_a_panic() {
-    let dir = temp_dir("bad");
+    let dir = common::fresh_dir("bench", "bad");
     let not_json = dir.join("not-a-report.json");
     std::fs::write(&not_json, "{\"format\": \"aerial-bench/1\", \"commit\": 3}").unwrap();
     let missing = dir.join("missing.json");

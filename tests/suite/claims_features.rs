@@ -11,15 +11,6 @@ use std::path::{Path, PathBuf};
 
 use common::aerial;
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "aerial-claims-features-{name}-{}",
-        std::process::id()
-    ));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 // ---------------------------------------------------------------------------
 // Mip levels and texture filters
 //
@@ -100,7 +91,7 @@ fn values(p: &Pixels<f32>) -> Vec<f64> {
 
 #[test]
 fn a_strongly_minified_checker_is_the_grey_of_its_mip_levels() {
-    let dir = temp_dir("mip");
+    let dir = common::fresh_dir("claims-features", "mip");
     let texture = checker_texture(&dir);
     // The plane must fill the view, or the background would be counted.
     assert!(plane_width(2.5) > 2.0 * EYE_HEIGHT * (FOV_Y_DEG.to_radians() / 2.0).tan());
@@ -119,7 +110,7 @@ fn a_strongly_minified_checker_is_the_grey_of_its_mip_levels() {
 
 #[test]
 fn nearest_bilinear_and_trilinear_differ_as_their_definitions_say() {
-    let dir = temp_dir("filters");
+    let dir = common::fresh_dir("claims-features", "filters");
     let texture = checker_texture(&dir);
     let lambda = 0.4;
     let nearest = values(&checker_render(&texture, lambda, "nearest"));
@@ -279,7 +270,7 @@ fn both_operators_apply_the_exposure() {
 
 #[test]
 fn the_tonemap_command_honours_operator_and_exposure() {
-    let dir = temp_dir("tonemap");
+    let dir = common::fresh_dir("claims-features", "tonemap");
     let exr = dir.join("ramp.exr");
     let input = hdr_ramp();
     aerial::image_io::write_exr(&exr, &input).unwrap();
@@ -382,7 +373,7 @@ fn render_with_cli(dir: &Path, name: &str) -> (PathBuf, PathBuf) {
 
 #[test]
 fn two_processes_render_identical_images_and_record_the_device() {
-    let dir = temp_dir("determinism");
+    let dir = common::fresh_dir("claims-features", "determinism");
     let (png_a, exr_a) = render_with_cli(&dir, "a");
     let (png_b, exr_b) = render_with_cli(&dir, "b");
 
@@ -443,7 +434,7 @@ fn read_png_text_of(path: &Path) -> Vec<(String, String)> {
 
 #[test]
 fn the_bench_gate_fails_when_no_pass_matched() {
-    let dir = temp_dir("gate");
+    let dir = common::fresh_dir("claims-features", "gate");
     let current = dir.join("current.json");
     common::succeed(common::tiny_triangle_bench(2).arg("--json").arg(&current));
 

@@ -223,15 +223,6 @@ const VENDOR_CHECKS: &str = "VK_VALIDATION_FEATURE_ENABLE_BEST_PRACTICES_EXT:\
 
 use common::aerial;
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "aerial-claims-validation-{name}-{}",
-        std::process::id()
-    ));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 fn assert_refused(out: &Output, what: &str) {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{what}: {stderr}");
@@ -243,7 +234,7 @@ fn assert_refused(out: &Output, what: &str) {
 
 #[test]
 fn render_with_a_message_fails_and_writes_nothing() {
-    let dir = temp_dir("render");
+    let dir = common::fresh_dir("claims-validation", "render");
     let png = dir.join("out.png");
     let run = |env: Option<&str>| {
         let mut cmd = aerial();
@@ -279,7 +270,7 @@ fn render_with_a_message_fails_and_writes_nothing() {
 
 #[test]
 fn bench_and_sweep_with_a_message_fail() {
-    let dir = temp_dir("bench");
+    let dir = common::fresh_dir("claims-validation", "bench");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bench/triangle.toml");
     let out = common::tiny_triangle_bench(1)
         .env("VK_LAYER_ENABLES", VENDOR_CHECKS)

@@ -1,17 +1,7 @@
 //! The command line: exit codes, error messages and output files.
 
+use crate::common;
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn aerial() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_aerial"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("aerial-cli-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 fn bad_scenes() -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad_scenes");
@@ -26,9 +16,9 @@ fn bad_scenes() -> Vec<PathBuf> {
 
 #[test]
 fn default_scene_renders_to_png_and_exr_under_validation() {
-    let dir = temp_dir("default");
+    let dir = common::fresh_dir("cli", "default");
     let (png, exr) = (dir.join("out.png"), dir.join("out.exr"));
-    let out = aerial()
+    let out = common::aerial()
         .args([
             "render",
             "--validate",
@@ -59,9 +49,9 @@ fn every_bad_scene_fails_with_a_message_naming_the_file() {
     let scenes = bad_scenes();
     assert!(!scenes.is_empty());
     for scene in scenes {
-        let dir = temp_dir("bad");
+        let dir = common::fresh_dir("cli", "bad");
         let png = dir.join("out.png");
-        let out = aerial()
+        let out = common::aerial()
             .arg("render")
             .arg(&scene)
             .arg("--out")
@@ -83,7 +73,7 @@ fn every_bad_scene_fails_with_a_message_naming_the_file() {
 
 #[test]
 fn a_missing_scene_file_is_a_clear_error() {
-    let out = aerial()
+    let out = common::aerial()
         .args(["render", "no/such/scene.toml"])
         .output()
         .unwrap();
@@ -93,7 +83,10 @@ fn a_missing_scene_file_is_a_clear_error() {
 
 #[test]
 fn a_zero_size_override_is_rejected() {
-    let out = aerial().args(["render", "--width", "0"]).output().unwrap();
+    let out = common::aerial()
+        .args(["render", "--width", "0"])
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("width"));
 }

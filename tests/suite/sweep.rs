@@ -1,26 +1,17 @@
 //! `aerial sweep` end to end: a tiny sweep under validation, checked through
 //! the files it writes, and the errors for bad knobs.
 
+use crate::common;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn aerial() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_aerial"))
-}
+use std::process::Output;
 
 fn scene() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/shading_models.toml")
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("aerial-sweep-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
-}
-
 fn sweep(out_dir: &Path, knobs: &[&str], extra: &[&str]) -> Output {
-    let mut cmd = aerial();
+    let mut cmd = common::aerial();
     cmd.arg("sweep").arg(scene()).arg("--out-dir").arg(out_dir);
     for k in knobs {
         cmd.args(["--knob", k]);
@@ -78,7 +69,7 @@ fn a_dominated_row_is_off_the_front() {
     // texture_filter changes nothing in a scene without textures, so both
     // rows have error 0 and the faster one dominates the slower one (their
     // medians, kept to 0.1 us, are not equal in practice).
-    let dir = temp_dir("dominated");
+    let dir = common::absent_dir("sweep", "dominated");
     let out = sweep(
         &dir,
         &["size=48x27", "texture_filter=nearest,trilinear"],
@@ -102,7 +93,7 @@ fn a_dominated_row_is_off_the_front() {
 
 #[test]
 fn tiny_sweep_under_validation() {
-    let dir = temp_dir("tiny");
+    let dir = common::absent_dir("sweep", "tiny");
     let out = sweep(
         &dir,
         &[
@@ -192,7 +183,7 @@ fn bad_knobs_fail_naming_the_knob_and_write_nothing() {
             "27 combinations",
         ),
     ] {
-        let dir = temp_dir("bad");
+        let dir = common::absent_dir("sweep", "bad");
         let out = sweep(&dir, knobs, &["--max-combinations", "20"]);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{knobs:?} was accepted");

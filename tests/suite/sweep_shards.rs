@@ -2,6 +2,7 @@
 //! run at once and as 3 shards in separate processes (one per way of
 //! choosing the shard), merged, and compared; and every refusal.
 
+use crate::common;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -30,12 +31,6 @@ fn aerial() -> Command {
 
 fn scene() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/shading_models.toml")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("aerial-shards-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
 }
 
 /// The tiny sweep (with `knobs`) into `out_dir`, one frame, under
@@ -117,7 +112,7 @@ fn num(row: &HashMap<String, String>, column: &str) -> f64 {
 
 #[test]
 fn three_shards_in_separate_processes_merge_into_the_unsharded_sweep() {
-    let root = temp_dir("three");
+    let root = common::absent_dir("shards", "three");
     let whole = root.join("whole");
     assert_ok(&sweep(&whole, |_| {}));
 
@@ -317,7 +312,7 @@ fn bad_shard_values_are_refused_before_rendering() {
         // 4 combinations cannot fill 5 shards.
         ("4/5", &[], "only 4 combinations"),
     ] {
-        let dir = temp_dir("bad");
+        let dir = common::absent_dir("shards", "bad");
         let out = sweep(&dir, |c| {
             c.args(["--shard", spec]).envs(env.iter().copied());
         });

@@ -188,3 +188,22 @@ pub fn translated(mut scene: Scene, offset: DVec3) -> Scene {
     }
     scene
 }
+
+/// A fresh, empty folder for one test, named by its `area`, `name` and
+/// this process (so concurrent runs do not meet); whatever an earlier run
+/// left there is removed first.
+#[allow(dead_code)]
+pub fn fresh_dir(area: &str, name: &str) -> std::path::PathBuf {
+    let dir = absent_dir(area, name);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Like [`fresh_dir`], but the folder does not exist yet: for commands
+/// that must create it themselves.
+#[allow(dead_code)]
+pub fn absent_dir(area: &str, name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("aerial-{area}-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
