@@ -2,34 +2,12 @@
 //! exceeded, 2 error), the printed numbers, the diff file and the error
 //! messages. Runs the built binary on small synthetic images; no GPU needed.
 
+use crate::common::Scratch;
 use aerial::image_io;
 use aerial::render::Pixels;
 use image::{Rgb, RgbImage};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-
-/// A fresh folder for one test, removed when the test is done.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(name: &str) -> TempDir {
-        let dir =
-            std::env::temp_dir().join(format!("aerial-cli-compare-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        TempDir(dir)
-    }
-
-    fn path(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
 
 fn compare(args: &[&Path], options: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_aerial"))
@@ -61,7 +39,7 @@ fn picture() -> RgbImage {
     })
 }
 
-fn save(dir: &TempDir, name: &str, img: &RgbImage) -> PathBuf {
+fn save(dir: &Scratch, name: &str, img: &RgbImage) -> PathBuf {
     let path = dir.path(name);
     img.save(&path).unwrap();
     path
@@ -69,7 +47,7 @@ fn save(dir: &TempDir, name: &str, img: &RgbImage) -> PathBuf {
 
 #[test]
 fn identical_images_pass() {
-    let dir = TempDir::new("identical");
+    let dir = Scratch::new();
     let a = save(&dir, "a.png", &picture());
     let b = save(&dir, "b.png", &picture());
     let out = compare(&[&a, &b], &[]);
@@ -84,7 +62,7 @@ fn identical_images_pass() {
 
 #[test]
 fn a_small_rounding_difference_passes_the_defaults() {
-    let dir = TempDir::new("rounding");
+    let dir = Scratch::new();
     let mut changed = picture();
     for (i, p) in changed.pixels_mut().enumerate() {
         if i % 3 == 0 {
@@ -99,7 +77,7 @@ fn a_small_rounding_difference_passes_the_defaults() {
 
 #[test]
 fn a_modified_image_fails_and_writes_the_diff() {
-    let dir = TempDir::new("modified");
+    let dir = Scratch::new();
     let mut broken = picture();
     // The red disc is gone: a missing object.
     for (x, y, p) in broken.enumerate_pixels_mut() {
@@ -137,7 +115,7 @@ fn a_modified_image_fails_and_writes_the_diff() {
 
 #[test]
 fn psnr_threshold_is_a_minimum() {
-    let dir = TempDir::new("psnr");
+    let dir = Scratch::new();
     let mut changed = picture();
     changed.put_pixel(3, 3, Rgb([255, 255, 255]));
     let a = save(&dir, "a.png", &picture());
@@ -158,7 +136,7 @@ fn psnr_threshold_is_a_minimum() {
 
 #[test]
 fn a_size_mismatch_is_a_clear_error() {
-    let dir = TempDir::new("size");
+    let dir = Scratch::new();
     let a = save(&dir, "ref.png", &picture());
     let b = save(&dir, "small.png", &RgbImage::new(95, 64));
     let diff = dir.path("diff.png");
@@ -181,7 +159,7 @@ fn a_size_mismatch_is_a_clear_error() {
 
 #[test]
 fn a_missing_file_is_a_clear_error_naming_it() {
-    let dir = TempDir::new("missing");
+    let dir = Scratch::new();
     let a = save(&dir, "a.png", &picture());
     let missing = dir.path("no-such-image.png");
     for args in [[a.as_path(), &missing], [&missing, &a]] {
@@ -199,7 +177,7 @@ fn a_missing_file_is_a_clear_error_naming_it() {
 
 #[test]
 fn bad_options_and_flip_on_exr_are_errors() {
-    let dir = TempDir::new("options");
+    let dir = Scratch::new();
     let a = save(&dir, "a.png", &picture());
     for bad in [
         &["--threshold", "nan"][..],
@@ -234,7 +212,7 @@ fn bad_options_and_flip_on_exr_are_errors() {
 
 #[test]
 fn the_rendering_device_and_driver_are_reported() {
-    let dir = TempDir::new("provenance");
+    let dir = Scratch::new();
     let pixels = Pixels {
         width: 8,
         height: 8,
@@ -299,7 +277,7 @@ fn compare_with_peak(a: &Path, b: &Path, metric: &str) -> (i32, u64) {
 #[test]
 #[cfg(target_os = "linux")]
 fn compare_memory_is_estimated_before_decoding_and_bounds_the_peak() {
-    let dir = TempDir::new("memory");
+    let dir = Scratch::new();
     let side = 1024u32;
     let noisy = |seed: u32| {
         RgbImage::from_fn(side, side, |x, y| {

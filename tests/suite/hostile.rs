@@ -8,6 +8,7 @@
 //! start with `# expect: MESSAGE` (must fail with it) or `# renders`.
 
 use crate::common;
+use crate::common::Scratch;
 
 use aerial::app::{self, RenderSettings, RunSource};
 use aerial::render::Pixels;
@@ -19,36 +20,6 @@ fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/hostile")
         .join(name)
-}
-
-/// A fresh empty folder, removed on drop.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(name: &str) -> TempDir {
-        let dir =
-            std::env::temp_dir().join(format!("aerial-hostile-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        TempDir(dir)
-    }
-    fn path(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-    fn entries(&self) -> Vec<String> {
-        let mut v: Vec<String> = std::fs::read_dir(&self.0)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        v.sort();
-        v
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
 }
 
 fn aerial(args: &[&str], env: &[(&str, &str)]) -> Output {
@@ -81,7 +52,7 @@ fn s(p: &Path) -> &str {
 
 #[test]
 fn an_unmatched_device_lists_the_devices_and_exits_2() {
-    let dir = TempDir::new("device");
+    let dir = Scratch::new();
     let out = dir.path("out.png");
     for device in ["99", "-1", "no such device"] {
         let device = format!("--device={device}");
@@ -118,7 +89,7 @@ fn an_unmatched_device_lists_the_devices_and_exits_2() {
 
 #[test]
 fn an_exr_whose_header_claims_a_huge_image_is_refused_before_reading() {
-    let dir = TempDir::new("exr");
+    let dir = Scratch::new();
     let out = dir.path("out.png");
     let result = aerial(
         &["tonemap", s(&fixture("huge_header.exr")), "--out", s(&out)],
@@ -134,7 +105,7 @@ fn an_exr_whose_header_claims_a_huge_image_is_refused_before_reading() {
 
 #[test]
 fn the_memory_budget_refuses_large_outputs_and_meshes_by_name() {
-    let dir = TempDir::new("budget");
+    let dir = Scratch::new();
     let out = dir.path("out.png");
     let budget = [("AERIAL_MEMORY_BUDGET", "64M")];
     let big = aerial(
@@ -204,7 +175,7 @@ fn the_memory_budget_refuses_large_outputs_and_meshes_by_name() {
 /// under a budget below that, before the (minutes long) bake starts.
 #[test]
 fn the_memory_budget_refuses_the_seeds_table_by_name() {
-    let dir = TempDir::new("table");
+    let dir = Scratch::new();
     let scene = dir.path("seed.toml");
     std::fs::write(
         &scene,
@@ -237,7 +208,7 @@ fn the_memory_budget_refuses_the_seeds_table_by_name() {
 
 #[test]
 fn textures_beyond_the_device_limits_are_refused_with_the_limit() {
-    let dir = TempDir::new("texlimit");
+    let dir = Scratch::new();
     let out = dir.path("out.png");
     let wide = aerial(
         &[
@@ -270,7 +241,7 @@ fn textures_beyond_the_device_limits_are_refused_with_the_limit() {
 
 #[test]
 fn texture_formats_are_detected_from_the_content() {
-    let dir = TempDir::new("texformat");
+    let dir = Scratch::new();
     for scene in ["texture_misnamed.toml", "texture_no_extension.toml"] {
         let out = dir.path(&format!("{scene}.png"));
         let run = aerial(
@@ -291,7 +262,7 @@ fn texture_formats_are_detected_from_the_content() {
 
 #[test]
 fn outputs_are_never_renamed_over_non_regular_files() {
-    let dir = TempDir::new("devnull");
+    let dir = Scratch::new();
     let run = aerial(
         &[
             "render",
@@ -331,7 +302,7 @@ fn outputs_are_never_renamed_over_non_regular_files() {
 
 #[test]
 fn concurrent_renders_to_one_path_leave_one_whole_file() {
-    let dir = TempDir::new("concurrent");
+    let dir = Scratch::new();
     let out = dir.path("same.png");
     let children: Vec<_> = (0..4)
         .map(|i| {
@@ -361,7 +332,7 @@ fn concurrent_renders_to_one_path_leave_one_whole_file() {
 
 #[test]
 fn a_failed_run_leaves_none_of_its_outputs_and_keeps_old_files() {
-    let dir = TempDir::new("failed");
+    let dir = Scratch::new();
     let png = dir.path("a.png");
     let missing = dir.path("nodir/x.exr");
     let run = aerial(
@@ -418,7 +389,7 @@ fn a_failed_run_leaves_none_of_its_outputs_and_keeps_old_files() {
 }
 
 /// A tiny benchmark report to gate against.
-fn bench_report(dir: &TempDir) -> PathBuf {
+fn bench_report(dir: &Scratch) -> PathBuf {
     let base = dir.path("base.json");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bench/triangle.toml");
     let run = aerial(
@@ -469,7 +440,7 @@ fn with_medians(from: &Path, to: &Path, f: impl Fn(f64) -> f64 + Copy) {
 
 #[test]
 fn the_bench_gate_fails_when_it_compared_nothing_and_exits_1_on_slowdowns() {
-    let dir = TempDir::new("bench");
+    let dir = Scratch::new();
     let base = bench_report(&dir);
     let before = std::fs::read(&base).unwrap();
 
@@ -552,7 +523,7 @@ fn the_bench_gate_fails_when_it_compared_nothing_and_exits_1_on_slowdowns() {
 
 #[test]
 fn sweeps_check_the_output_folder_and_knob_values_before_rendering() {
-    let dir = TempDir::new("sweep");
+    let dir = Scratch::new();
     let file = dir.path("FILE");
     std::fs::write(&file, b"keep").unwrap();
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/default.toml");
@@ -588,7 +559,7 @@ fn sweeps_check_the_output_folder_and_knob_values_before_rendering() {
 
 #[test]
 fn bad_scene_values_are_rejected_with_the_field_and_reason_or_render() {
-    let dir = TempDir::new("scenes");
+    let dir = Scratch::new();
     let out = dir.path("out.png");
     let mut count = 0;
     for entry in std::fs::read_dir(fixture("bad_scenes")).unwrap() {
@@ -617,7 +588,7 @@ fn bad_scene_values_are_rejected_with_the_field_and_reason_or_render() {
 
 #[test]
 fn too_many_lights_name_the_scene_file_and_the_object() {
-    let dir = TempDir::new("lights");
+    let dir = Scratch::new();
     let mut scene = String::from(
         "light_cutoff = 0.0\n[output]\nwidth = 8\nheight = 8\n[camera]\neye = [0.0, 0.0, 5.0]\n\
          look_at = [0.0, 0.0, 0.0]\n[[materials]]\nname = \"m\"\nkd = [0.5, 0.5, 0.5]\n\

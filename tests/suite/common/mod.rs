@@ -207,3 +207,30 @@ pub fn absent_dir(area: &str, name: &str) -> std::path::PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     dir
 }
+
+/// A temporary folder for one test (`tempfile`'s, removed on drop), with
+/// the path of a file in it and a sorted listing.
+#[allow(dead_code)]
+pub struct Scratch(tempfile::TempDir);
+
+#[allow(dead_code)]
+impl Scratch {
+    pub fn new() -> Scratch {
+        Scratch(tempfile::tempdir().unwrap())
+    }
+
+    /// The path of `name` inside the folder.
+    pub fn path(&self, name: &str) -> std::path::PathBuf {
+        self.0.path().join(name)
+    }
+
+    /// The names in the folder, sorted.
+    pub fn entries(&self) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(self.0.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+}
