@@ -243,14 +243,14 @@ fn the_rendering_device_and_driver_are_reported() {
     );
 }
 
-/// Runs `aerial compare` and returns its output and its own peak resident
-/// memory (wait4's rusage of that child alone).
+/// Runs `aerial compare` and returns its exit code and its own peak
+/// resident memory: `VmHWM` of its process, read while it runs (a high-water
+/// mark, so a late read still holds the peak). Not the child's rusage: a
+/// child spawned from this process starts as a copy of it, and its
+/// `ru_maxrss` keeps this (large) process's peak from before the exec.
 #[cfg(target_os = "linux")]
-// The child is reaped by wait4 below (for its own rusage), not by wait().
-#[allow(clippy::zombie_processes)]
 fn compare_with_peak(a: &Path, b: &Path, metric: &str) -> (i32, u64) {
-    use std::os::unix::process::ExitStatusExt as _;
-    let child = Command::new(env!("CARGO_BIN_EXE_aerial"))
+    let mut child = Command::new(env!("CARGO_BIN_EXE_aerial"))
         .args(["compare", "--metric", metric])
         .arg(a)
         .arg(b)
@@ -258,16 +258,21 @@ fn compare_with_peak(a: &Path, b: &Path, metric: &str) -> (i32, u64) {
         .stderr(std::process::Stdio::null())
         .spawn()
         .unwrap();
-    let mut status = 0;
-    // SAFETY: wait4(2) on our own child, not waited for elsewhere; the
-    // zeroed rusage is filled by the call.
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    let pid = unsafe { libc::wait4(child.id() as libc::pid_t, &mut status, 0, &mut usage) };
-    assert_eq!(pid, child.id() as libc::pid_t);
-    let code = std::process::ExitStatus::from_raw(status)
-        .code()
-        .unwrap_or(-1);
-    (code, usage.ru_maxrss as u64 * 1024)
+    let status_file = format!("/proc/{}/status", child.id());
+    let mut peak = 0u64;
+    let code = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status.code().unwrap_or(-1);
+        }
+        let hwm = std::fs::read_to_string(&status_file).ok().and_then(|s| {
+            let line = s.lines().find(|l| l.starts_with("VmHWM:"))?.to_owned();
+            line.split_whitespace().nth(1)?.parse::<u64>().ok()
+        });
+        peak = peak.max(hwm.unwrap_or(0) * 1024);
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    };
+    assert!(peak > 0, "no reading of the child's memory");
+    (code, peak)
 }
 
 /// `compare` sizes its memory from the headers before decoding: the
