@@ -601,6 +601,55 @@ pub fn input_file_problem(path: &Path) -> Option<String> {
     }
 }
 
+/// Reads at most `limit` bytes of `path`: the file, or `Err(None)` when it
+/// is longer (an endless device such as `/dev/zero` included).
+pub fn read_limited(path: &Path, limit: u64) -> Result<Vec<u8>, Option<std::io::Error>> {
+    use std::io::Read as _;
+    let file = File::open(path).map_err(Some)?;
+    let mut bytes = Vec::new();
+    file.take(limit.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(Some)?;
+    if bytes.len() as u64 > limit {
+        return Err(None);
+    }
+    Ok(bytes)
+}
+
+/// Why a text input (a scene file, a view script) could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum TextReadError {
+    #[error("{0}")]
+    Io(std::io::Error),
+    #[error("longer than {} (reading stopped there)", crate::budget::Bytes(*.0))]
+    TooLong(u64),
+    #[error("not UTF-8 text: byte 0x{byte:02x} at byte offset {offset} (line {line})")]
+    NotUtf8 {
+        byte: u8,
+        offset: usize,
+        line: usize,
+    },
+}
+
+/// The text of `path`, read up to `limit` bytes (so an endless input is
+/// refused instead of filling memory) and checked to be UTF-8, naming the
+/// first bad byte's offset and line.
+pub fn read_text(path: &Path, limit: u64) -> Result<String, TextReadError> {
+    let bytes = read_limited(path, limit).map_err(|e| match e {
+        Some(e) => TextReadError::Io(e),
+        None => TextReadError::TooLong(limit),
+    })?;
+    String::from_utf8(bytes).map_err(|e| {
+        let offset = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        TextReadError::NotUtf8 {
+            byte: bytes[offset],
+            offset,
+            line: 1 + bytes[..offset].iter().filter(|&&b| b == b'\n').count(),
+        }
+    })
+}
+
 /// True when `a` and `b` name the same file (or would, once created).
 pub fn same_file(a: &Path, b: &Path) -> bool {
     let resolve = |p: &Path| {

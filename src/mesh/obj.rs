@@ -192,21 +192,6 @@ pub fn memory_needed(file_bytes: u64, triangles: u64) -> u64 {
         .saturating_add(triangles.saturating_mul(MEMORY_PER_TRIANGLE))
 }
 
-/// Reads at most `limit` bytes of `path`: the file, or `Err(None)` when it
-/// is longer (an endless device such as `/dev/zero` included).
-pub fn read_limited(path: &Path, limit: u64) -> Result<Vec<u8>, Option<std::io::Error>> {
-    use std::io::Read as _;
-    let file = std::fs::File::open(path).map_err(Some)?;
-    let mut bytes = Vec::new();
-    file.take(limit.saturating_add(1))
-        .read_to_end(&mut bytes)
-        .map_err(Some)?;
-    if bytes.len() as u64 > limit {
-        return Err(None);
-    }
-    Ok(bytes)
-}
-
 fn budget(file: &str) -> Result<crate::budget::MemoryBudget, ObjError> {
     crate::budget::MemoryBudget::from_env().map_err(|e| ObjError::File {
         file: file.to_owned(),
@@ -224,7 +209,7 @@ fn read_within_budget(
 ) -> Result<Vec<u8>, ObjError> {
     let budget = budget(file)?;
     let limit = budget.bytes / per_byte;
-    read_limited(path, limit).map_err(|e| match e {
+    crate::files::read_limited(path, limit).map_err(|e| match e {
         Some(reason) => ObjError::Io {
             file: file.to_owned(),
             reason,

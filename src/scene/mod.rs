@@ -217,35 +217,23 @@ impl Scene {
     /// [`Scene::from_toml`].
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
         let file = path.display().to_string();
-        // Read at most a bound, so an input that never ends (a device, a
-        // pipe that keeps writing) is refused instead of filling memory.
-        let bytes =
-            crate::mesh::obj::read_limited(path, MAX_SCENE_FILE_BYTES).map_err(|e| match e {
-                Some(reason) => SceneError::Io {
-                    file: file.clone(),
-                    reason,
-                },
-                None => SceneError::Parse {
-                    file: file.clone(),
-                    message: format!(
-                        "longer than {} (reading stopped there); a scene file is text of a \
-                         few kilobytes, and models go in OBJ files it names",
-                        crate::budget::Bytes(MAX_SCENE_FILE_BYTES)
-                    ),
-                },
-            })?;
-        let text = String::from_utf8(bytes).map_err(|e| {
-            let offset = e.utf8_error().valid_up_to();
-            let bytes = e.as_bytes();
-            let line = 1 + bytes[..offset].iter().filter(|&&b| b == b'\n').count();
-            SceneError::Parse {
+        use crate::files::{read_text, TextReadError};
+        let text = read_text(path, MAX_SCENE_FILE_BYTES).map_err(|e| match e {
+            TextReadError::Io(reason) => SceneError::Io {
+                file: file.clone(),
+                reason,
+            },
+            TextReadError::TooLong(_) => SceneError::Parse {
                 file: file.clone(),
                 message: format!(
-                    "not UTF-8 text: byte 0x{:02x} at byte offset {offset} (line {line}) \
-                     (save the file as UTF-8)",
-                    bytes[offset]
+                    "{e}; a scene file is text of a few kilobytes, and models go in OBJ \
+                     files it names"
                 ),
-            }
+            },
+            TextReadError::NotUtf8 { .. } => SceneError::Parse {
+                file: file.clone(),
+                message: format!("{e} (save the file as UTF-8)"),
+            },
         })?;
         let base_dir = path.parent().unwrap_or_else(|| Path::new(""));
         let mut scene = Scene::from_toml(&text, &file, base_dir)?;

@@ -67,25 +67,15 @@ impl Script {
     /// Reads and parses the script at `path`; a relative screenshot path
     /// is relative to the current directory, as on the command line.
     pub fn load(path: &Path) -> Result<Script, ScriptError> {
-        let read = |reason: String| ScriptError::Read {
-            path: path.to_path_buf(),
-            reason,
-        };
-        // Read at most a bound, so an input that never ends (`/dev/zero`)
-        // is refused instead of filling memory.
-        let bytes =
-            crate::mesh::obj::read_limited(path, MAX_SCRIPT_BYTES).map_err(|e| match e {
-                Some(e) => read(e.to_string()),
-                None => read(format!(
-                    "longer than {} (reading stopped there); a script is a few lines per frame",
-                    crate::budget::Bytes(MAX_SCRIPT_BYTES)
-                )),
-            })?;
-        let text = String::from_utf8(bytes).map_err(|e| {
-            read(format!(
-                "not UTF-8 text: invalid byte at byte offset {}",
-                e.utf8_error().valid_up_to()
-            ))
+        let text = crate::files::read_text(path, MAX_SCRIPT_BYTES).map_err(|e| {
+            let hint = match e {
+                crate::files::TextReadError::TooLong(_) => "; a script is a few lines per frame",
+                _ => "",
+            };
+            ScriptError::Read {
+                path: path.to_path_buf(),
+                reason: format!("{e}{hint}"),
+            }
         })?;
         Script::parse(&text, path)
     }
