@@ -109,15 +109,18 @@ pub fn host_codegen() -> String {
     }
 }
 
+/// The value of the first `name : value` line of a `/proc/cpuinfo` text.
+fn cpuinfo_field(cpuinfo: &str, name: &str) -> Option<String> {
+    cpuinfo
+        .lines()
+        .find(|l| l.split(':').next().is_some_and(|k| k.trim() == name))
+        .and_then(|l| l.split_once(':'))
+        .map(|(_, v)| v.trim().to_string())
+}
+
 /// [`host_codegen`] of the text of a `/proc/cpuinfo`.
 pub fn codegen_key(cpuinfo: &str) -> String {
-    let field = |name: &str| {
-        cpuinfo
-            .lines()
-            .find(|l| l.split(':').next().is_some_and(|k| k.trim() == name))
-            .and_then(|l| l.split_once(':'))
-            .map(|(_, v)| v.trim().to_string())
-    };
+    let field = |name: &str| cpuinfo_field(cpuinfo, name);
     let vendor = field("vendor_id").unwrap_or_else(|| std::env::consts::ARCH.to_string());
     let flags = field("flags").unwrap_or_default();
     let has = |f: &str| flags.split_whitespace().any(|x| x == f);
@@ -174,12 +177,7 @@ pub fn host_cpu() -> String {
     let Ok(info) = std::fs::read_to_string("/proc/cpuinfo") else {
         return "unknown".into();
     };
-    let field = |name: &str| {
-        info.lines()
-            .find(|l| l.split(':').next().is_some_and(|k| k.trim() == name))
-            .and_then(|l| l.split_once(':'))
-            .map(|(_, v)| v.trim().to_string())
-    };
+    let field = |name: &str| cpuinfo_field(&info, name);
     let model = field("model name").unwrap_or_else(|| "unknown".into());
     let mut flags: Vec<&str> = Vec::new();
     let all = field("flags").unwrap_or_default();
