@@ -35,6 +35,14 @@ pub enum FileFormat {
     Unknown,
 }
 
+/// The format of the file at `path`, from its first bytes.
+pub fn sniff_file(path: &Path) -> std::io::Result<FileFormat> {
+    use std::io::Read as _;
+    let mut head = [0u8; 8];
+    let n = std::fs::File::open(path)?.read(&mut head)?;
+    Ok(sniff(&head[..n]))
+}
+
 /// The format of `bytes`, a file's start, from its signature.
 pub fn sniff(bytes: &[u8]) -> FileFormat {
     if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {

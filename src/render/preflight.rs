@@ -17,7 +17,6 @@ use crate::budget::{Bytes, MemoryBudget};
 use crate::image_io::FileFormat;
 use crate::scene::Scene;
 use crate::vk::{bytes_per_texel, Context};
-use std::io::Read as _;
 use std::path::{Path, PathBuf};
 
 /// The largest decoded texture (RGBA, 8 bits per channel) the PNG decoder
@@ -47,10 +46,8 @@ pub fn inspect_texture(path: &Path) -> Result<TextureInfo, RenderError> {
         path: path.to_path_buf(),
         reason,
     };
-    let mut head = [0u8; 8];
-    let mut file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
-    let n = file.read(&mut head).map_err(|e| err(e.to_string()))?;
-    let kind = match crate::image_io::sniff(&head[..n]) {
+    let format = crate::image_io::sniff_file(path).map_err(|e| err(e.to_string()))?;
+    let kind = match format {
         FileFormat::Png => "PNG",
         FileFormat::Jpeg => "JPEG",
         FileFormat::OpenExr => {

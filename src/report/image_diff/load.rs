@@ -201,14 +201,11 @@ pub(super) fn from_memory(path: &Path, image: ImageRef<'_>) -> Result<Loaded, Co
 /// An image file's width and height from its header alone (PNG or
 /// OpenEXR, by content), for sizing memory before decoding.
 pub(super) fn header_size(path: &Path) -> Result<(usize, usize), CompareError> {
-    let mut head = [0u8; 8];
-    let read = File::open(path)
-        .and_then(|mut f| io::Read::read(&mut f, &mut head))
-        .map_err(|source| CompareError::Read {
-            path: path.to_owned(),
-            source,
-        })?;
-    match crate::image_io::sniff(&head[..read]) {
+    let format = crate::image_io::sniff_file(path).map_err(|source| CompareError::Read {
+        path: path.to_owned(),
+        source,
+    })?;
+    match format {
         FileFormat::Png => {
             let reader = guard(path, "PNG", || {
                 image::ImageReader::open(path)
