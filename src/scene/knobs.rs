@@ -238,16 +238,8 @@ pub const KNOBS: &[Knob] = &[
         apply: |s, v| {
             // "seed" is the old name of "linear": still read, with a warning.
             let mapping = if v == "seed" {
-                s.warnings.push(super::SceneWarning {
-                    file: "--knob od_table_mapping=seed".into(),
-                    field: "od_table_mapping".into(),
-                    warning: super::AssetWarning {
-                        problem: "--knob od_table_mapping=seed: \"seed\" is the old name of \
-                                  \"linear\""
-                            .into(),
-                        fallback: "read as \"linear\"; write \"linear\"".into(),
-                    },
-                });
+                s.warnings
+                    .push(super::sky::seed_renamed("--knob", "od_table_mapping"));
                 TableMapping::Linear
             } else {
                 TableMapping::parse(v)?

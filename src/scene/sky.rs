@@ -13,6 +13,19 @@ use super::SceneError;
 use crate::atmosphere::coefficients;
 use crate::atmosphere::model::*;
 
+/// The warning for `"seed"`, the old name of the linear table mapping,
+/// given in `file` (or on the command line) at `field`.
+pub(super) fn seed_renamed(file: &str, field: &str) -> super::SceneWarning {
+    super::SceneWarning {
+        file: file.to_owned(),
+        field: field.to_owned(),
+        warning: super::AssetWarning {
+            problem: format!("{file}: {field}: \"seed\" is the old name of \"linear\""),
+            fallback: "read as \"linear\"; write \"linear\"".into(),
+        },
+    }
+}
+
 /// `atmosphere.od_table_mapping` as written: the old name `"seed"` is
 /// read as `"linear"`, with a warning.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
@@ -456,17 +469,7 @@ pub(super) fn check(
             None | Some(TableMappingField::Horizon) => TableMapping::Horizon,
             Some(TableMappingField::Linear) => TableMapping::Linear,
             Some(TableMappingField::Seed) => {
-                warnings.push(super::SceneWarning {
-                    file: file.to_owned(),
-                    field: "atmosphere.od_table_mapping".into(),
-                    warning: super::AssetWarning {
-                        problem: format!(
-                            "{file}: atmosphere.od_table_mapping: \"seed\" is the old name of \
-                             \"linear\""
-                        ),
-                        fallback: "read as \"linear\"; write \"linear\"".into(),
-                    },
-                });
+                warnings.push(seed_renamed(file, "atmosphere.od_table_mapping"));
                 TableMapping::Linear
             }
         },
