@@ -19,25 +19,6 @@ fn sweep(out_dir: &Path, knobs: &[&str], extra: &[&str]) -> Output {
     cmd.args(extra).output().unwrap()
 }
 
-/// The CSV as one map (column name -> cell) per row. The sweep's values
-/// hold no commas or quotes, so a plain split is enough here.
-fn read_csv(path: &Path) -> Vec<HashMap<String, String>> {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    lines
-        .map(|l| {
-            let cells: Vec<&str> = l.split(',').collect();
-            assert_eq!(cells.len(), header.len(), "{l}");
-            header
-                .iter()
-                .zip(cells)
-                .map(|(h, c)| (h.to_string(), c.to_string()))
-                .collect()
-        })
-        .collect()
-}
-
 fn num(row: &HashMap<String, String>, column: &str) -> f64 {
     row[column]
         .parse()
@@ -80,7 +61,7 @@ fn a_dominated_row_is_off_the_front() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let rows = read_csv(&dir.join("sweep.csv"));
+    let rows = common::read_csv(&dir.join("sweep.csv"));
     assert_eq!(rows.len(), 2);
     assert!(rows.iter().all(|r| num(r, "rmse") == 0.0), "{rows:?}");
     assert_ne!(
@@ -108,7 +89,7 @@ fn tiny_sweep_under_validation() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("(reference)"), "table: {stdout}");
 
-    let rows = read_csv(&dir.join("sweep.csv"));
+    let rows = common::read_csv(&dir.join("sweep.csv"));
     assert_eq!(rows.len(), 4);
     let find = |tess: &str, format: &str| {
         rows.iter()

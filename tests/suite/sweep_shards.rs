@@ -81,25 +81,6 @@ fn assert_refused(out: &Output, expected: &str) {
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
-/// The CSV as one map (column name -> cell) per row; the values here hold
-/// no commas or quotes.
-fn read_csv(path: &Path) -> Vec<HashMap<String, String>> {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    lines
-        .map(|l| {
-            let cells: Vec<&str> = l.split(',').collect();
-            assert_eq!(cells.len(), header.len(), "{l}");
-            header
-                .iter()
-                .zip(cells)
-                .map(|(h, c)| (h.to_string(), c.to_string()))
-                .collect()
-        })
-        .collect()
-}
-
 fn read_json(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("sweep.json")).unwrap()).unwrap()
 }
@@ -162,8 +143,8 @@ fn three_shards_in_separate_processes_merge_into_the_unsharded_sweep() {
         "{table}"
     );
 
-    let w = read_csv(&whole.join("sweep.csv"));
-    let m = read_csv(&merged.join("sweep.csv"));
+    let w = common::read_csv(&whole.join("sweep.csv"));
+    let m = common::read_csv(&merged.join("sweep.csv"));
     assert_eq!(m.len(), 4);
     let header = |dir: &Path| {
         let text = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
