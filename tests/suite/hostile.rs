@@ -10,9 +10,8 @@
 use crate::common;
 use crate::common::Scratch;
 
-use aerial::app::{self, RenderSettings, RunSource};
 use aerial::render::Pixels;
-use aerial::scene::{ToneMap, ToneMapOperator};
+use aerial::scene::ToneMapOperator;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -613,27 +612,11 @@ fn too_many_lights_name_the_scene_file_and_the_object() {
 }
 
 fn tone_map(values: &[f32], operator: ToneMapOperator, exposure: f32) -> Vec<u8> {
-    let image = Pixels {
-        width: values.len() as u32,
-        height: 1,
-        data: values.iter().flat_map(|&v| [v, v, v, 1.0]).collect(),
-    };
-    let run = app::run(
-        RunSource::HdrImage(&image, ToneMap { operator, exposure }),
-        &RenderSettings {
-            validate: aerial::vk::validation::Validation::All,
-            device: None,
-            warmup: 0,
-            frames: 1,
-            keep_hdr: false,
-            empty_pass_between_frames: false,
-            ..Default::default()
-        },
-        &mut || {},
-    )
-    .expect("tone map runs");
-    common::assert_no_validation_messages(&run);
-    run.output.data.chunks_exact(4).map(|c| c[0]).collect()
+    let grey: Vec<[f32; 4]> = values.iter().map(|&v| [v, v, v, 1.0]).collect();
+    common::tone_map_on_gpu(&grey, operator, exposure)
+        .iter()
+        .map(|c| c[0])
+        .collect()
 }
 
 #[test]

@@ -12,34 +12,6 @@ use aerial::app::{self, RenderSettings, RunSource};
 use aerial::render::Pixels;
 use aerial::scene::{ToneMap, ToneMapOperator};
 
-fn tone_map_on_gpu(values: &[[f32; 4]], operator: ToneMapOperator, exposure: f32) -> Vec<[u8; 4]> {
-    let image = Pixels {
-        width: values.len() as u32,
-        height: 1,
-        data: values.iter().flatten().copied().collect(),
-    };
-    let run = app::run(
-        RunSource::HdrImage(&image, ToneMap { operator, exposure }),
-        &RenderSettings {
-            validate: aerial::vk::validation::Validation::All,
-            device: None,
-            warmup: 0,
-            frames: 1,
-            keep_hdr: false,
-            empty_pass_between_frames: false,
-            ..Default::default()
-        },
-        &mut || {},
-    )
-    .expect("tone map runs");
-    common::assert_no_validation_messages(&run);
-    run.output
-        .data
-        .chunks_exact(4)
-        .map(|c| [c[0], c[1], c[2], c[3]])
-        .collect()
-}
-
 fn srgb_encode(linear: f64) -> f64 {
     let c = linear.clamp(0.0, 1.0);
     if c <= 0.0031308 {
@@ -68,7 +40,7 @@ fn check_operator(operator: ToneMapOperator, exposure: f32, curve: fn(f64) -> f6
     let ramp = ramp();
     // Each channel gets a different scale of the ramp, to catch channel mix-ups.
     let input: Vec<[f32; 4]> = ramp.iter().map(|&x| [x, 0.5 * x, 2.0 * x, 1.0]).collect();
-    let out = tone_map_on_gpu(&input, operator, exposure);
+    let out = common::tone_map_on_gpu(&input, operator, exposure);
     for (px, (inp, got)) in input.iter().zip(&out).enumerate() {
         for c in 0..3 {
             let expected = 255.0 * srgb_encode(curve(inp[c] as f64 * exposure as f64));
@@ -108,7 +80,7 @@ fn inf_nan_and_negative_inputs_give_defined_output() {
         [f32::MAX, 0.0, -0.0, f32::NAN],
     ];
     for operator in [ToneMapOperator::Reinhard, ToneMapOperator::Aces] {
-        let out = tone_map_on_gpu(&special, operator, 1.0);
+        let out = common::tone_map_on_gpu(&special, operator, 1.0);
         // +Inf and the largest float saturate to white; NaN, -Inf and
         // negatives become black; alpha is always opaque.
         assert_eq!(out[0], [255, 0, 0, 255], "{operator:?}");

@@ -24,13 +24,8 @@ pub fn render(scene: &Scene, keep_hdr: bool) -> RenderRun {
     let run = app::render(
         scene,
         &RenderSettings {
-            validate: aerial::vk::validation::Validation::All,
-            device: None,
-            warmup: 0,
-            frames: 1,
             keep_hdr,
-            empty_pass_between_frames: false,
-            ..Default::default()
+            ..validated_settings()
         },
     )
     .unwrap_or_else(|e| panic!("render failed: {e}"));
@@ -252,5 +247,46 @@ pub fn read_csv(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
                 .map(|(h, c)| (h.to_string(), c.to_string()))
                 .collect()
         })
+        .collect()
+}
+
+/// One frame, no warm-up, under validation with every check on: the
+/// settings of the suite's renders.
+pub fn validated_settings() -> RenderSettings {
+    RenderSettings {
+        validate: aerial::vk::validation::Validation::All,
+        device: None,
+        warmup: 0,
+        frames: 1,
+        keep_hdr: false,
+        empty_pass_between_frames: false,
+        ..Default::default()
+    }
+}
+
+/// `values` (linear RGBA, one row) tone-mapped on the GPU by the tone-map
+/// subpass, under validation (any message fails), as 8-bit RGBA.
+#[allow(dead_code)]
+pub fn tone_map_on_gpu(
+    values: &[[f32; 4]],
+    operator: aerial::scene::ToneMapOperator,
+    exposure: f32,
+) -> Vec<[u8; 4]> {
+    let image = Pixels {
+        width: values.len() as u32,
+        height: 1,
+        data: values.iter().flatten().copied().collect(),
+    };
+    let run = app::run(
+        aerial::app::RunSource::HdrImage(&image, aerial::scene::ToneMap { operator, exposure }),
+        &validated_settings(),
+        &mut || {},
+    )
+    .expect("tone map runs");
+    assert_no_validation_messages(&run);
+    run.output
+        .data
+        .chunks_exact(4)
+        .map(|c| [c[0], c[1], c[2], c[3]])
         .collect()
 }
