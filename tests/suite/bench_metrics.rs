@@ -13,7 +13,8 @@ fn triangle() -> PathBuf {
 }
 
 /// `aerial bench` of the smallest scene at `width` x 48, 3 frames after 1
-/// warm-up, validated.
+/// warm-up, validated; with a tone-map curve, so the frame has the HDR
+/// target and the full-screen tone-map subpass these tests count.
 fn bench(width: u32, extra: &[&str]) -> Output {
     common::aerial()
         .arg("bench")
@@ -26,6 +27,8 @@ fn bench(width: u32, extra: &[&str]) -> Output {
             "--height",
             "48",
             "--validate",
+            "--knob",
+            "tone_map=reinhard",
         ])
         .arg(format!("--width={width}"))
         .args(extra)
@@ -111,6 +114,8 @@ fn instruction_counts_repeat_and_see_three_percent_more_pixels() {
             .arg(triangle())
             .args(["--frames=3", "--warmup=1", "--height=180", "--validate"])
             .arg(format!("--width={width}"))
+            // A curve brings back the HDR target and the tone map.
+            .args(["--knob", "tone_map=reinhard"])
             .args(["--metric=instructions", "--json", json.to_str().unwrap()])
             .args(extra)
             .output()
