@@ -10,15 +10,18 @@
 //! Shapes and lights are flat tables with a `type` key rather than serde
 //! tagged enums, because serde buffers tagged enums and the `toml` crate then
 //! loses the position of errors inside them; the per-type field checks are
-//! done here instead, with clearer messages.
+//! done here instead, with clearer messages. The checks of single values
+//! (numbers, vectors, colours, lengths, directions) are shared with the
+//! sky's tables in `checks.rs`.
 
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use serde::Deserialize;
 
+use super::checks::{Check, Result, MAX_COLOUR, MAX_LENGTH, MIN_LENGTH};
 use super::{
     AssetWarning, Camera, DebugView, HdrFormat, Light, Lighting, Material, Object, Output, Scene,
     SceneError, SceneWarning, ShadingModel, Shape, Texture, TextureFilter, ToneMap,
@@ -41,20 +44,6 @@ pub const MIN_SEGMENTS: u32 = 3;
 pub const DEFAULT_LIGHT_CUTOFF: f32 = 1e-3;
 /// Default tessellation `[u, v]` when an object does not give one.
 pub const DEFAULT_TESSELLATION: [u32; 2] = [64, 32];
-/// Largest accepted coordinate magnitude (positions, translations): large
-/// enough for planet-scale scenes (the Moon is 3.8e8 m away), small enough
-/// that sums, differences and squares of coordinates stay finite in
-/// 32-bit floats. Precision at this scale is the scene's business: a
-/// 32-bit float places objects 1e9 away to within about 64 units.
-pub const MAX_COORDINATE: f64 = 1e9;
-/// Accepted range of every length (shape sizes, `near`) and scale factor.
-pub const MIN_LENGTH: f64 = 1e-6;
-/// See [`MIN_LENGTH`].
-pub const MAX_LENGTH: f64 = 1e9;
-/// Largest accepted colour, reflectance or light colour times intensity
-/// per channel, and attenuation term: keeps every lighting sum finite in
-/// 32-bit floats.
-pub const MAX_COLOUR: f64 = 1e6;
 /// Smallest accepted field of view in degrees: below it the projection's
 /// focal length overflows 32-bit floats.
 pub const MIN_FOV_Y: f64 = 1e-3;
@@ -308,21 +297,6 @@ fn default_shading() -> ShadingModel {
     ShadingModel::Phong
 }
 
-/// `x` (finite) as an f32, or why it cannot be one.
-fn narrow(x: f64) -> std::result::Result<f32, String> {
-    if x.abs() > f64::from(f32::MAX) {
-        return Err(format!(
-            "is {x:e}, out of range (32-bit floats reach about 3.4e38)"
-        ));
-    }
-    if x != 0.0 && x.abs() < f64::from(f32::MIN_POSITIVE) {
-        return Err(format!(
-            "is {x:e}, too close to 0 for a 32-bit float (the smallest is about 1.2e-38)"
-        ));
-    }
-    Ok(x as f32)
-}
-
 /// Parses and validates a scene. See [`Scene::from_toml`].
 pub(super) fn parse(text: &str, file: &str, base_dir: &Path) -> Result<Scene> {
     let raw: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
@@ -337,139 +311,7 @@ pub(super) fn parse(text: &str, file: &str, base_dir: &Path) -> Result<Scene> {
     .scene(raw)
 }
 
-/// Validation context: where messages say the error is, and where textures
-/// are looked up.
-struct Check<'a> {
-    file: &'a str,
-    base_dir: &'a Path,
-    /// The files of the OBJ models read so far (for [`Scene::files`]).
-    models: RefCell<Vec<PathBuf>>,
-}
-
-type Result<T> = std::result::Result<T, SceneError>;
-
 impl Check<'_> {
-    fn invalid(&self, field: impl Into<String>, reason: impl Into<String>) -> SceneError {
-        SceneError::Invalid {
-            file: self.file.to_owned(),
-            field: field.into(),
-            reason: reason.into(),
-        }
-    }
-
-    /// `x` narrowed to f32: finite, and neither too large for f32 nor so
-    /// small that it would become 0 or lose precision (subnormal).
-    fn finite(&self, field: &str, x: f64) -> Result<f32> {
-        if !x.is_finite() {
-            return Err(self.invalid(field, format!("must be a finite number, got {x}")));
-        }
-        narrow(x).map_err(|reason| self.invalid(field, reason))
-    }
-
-    fn vec3(&self, field: &str, v: [f64; 3]) -> Result<Vec3> {
-        let mut out = [0f32; 3];
-        for (i, x) in v.iter().enumerate() {
-            if !x.is_finite() {
-                return Err(self.invalid(
-                    field,
-                    format!("component {i} must be a finite number, got {x}"),
-                ));
-            }
-            out[i] = narrow(*x)
-                .map_err(|reason| self.invalid(field, format!("component {i} {reason}")))?;
-        }
-        Ok(Vec3::from(out))
-    }
-
-    /// A position: every component within `MAX_COORDINATE`.
-    fn coordinates(&self, field: &str, v: [f64; 3]) -> Result<DVec3> {
-        self.vec3(field, v)?;
-        let c = DVec3::from_array(v);
-        if let Some(i) = v.iter().position(|x| x.abs() > MAX_COORDINATE) {
-            return Err(self.invalid(
-                field,
-                format!(
-                    "component {i} must be between -{MAX_COORDINATE:e} and {MAX_COORDINATE:e}, \
-                     got {:e} (the renderer's limit for world positions)",
-                    v[i]
-                ),
-            ));
-        }
-        Ok(c)
-    }
-
-    /// A colour or other per-channel factor: finite, >= 0 and at most
-    /// `MAX_COLOUR` (> 1 is fine, the pipeline is HDR).
-    fn colour(&self, field: &str, v: [f64; 3]) -> Result<Vec3> {
-        let c = self.vec3(field, v)?;
-        if let Some(i) = v.iter().position(|&x| x < 0.0) {
-            return Err(self.invalid(
-                field,
-                format!("component {i} must not be negative, got {}", v[i]),
-            ));
-        }
-        if let Some(i) = v.iter().position(|&x| x > MAX_COLOUR) {
-            return Err(self.invalid(
-                field,
-                format!(
-                    "component {i} must be at most {MAX_COLOUR:e}, got {:e}",
-                    v[i]
-                ),
-            ));
-        }
-        Ok(c)
-    }
-
-    fn positive(&self, field: &str, x: f64) -> Result<f32> {
-        if x.is_finite() && x <= 0.0 {
-            return Err(self.invalid(field, format!("must be greater than 0, got {x}")));
-        }
-        self.finite(field, x)
-    }
-
-    /// A length or scale factor: within `MIN_LENGTH..=MAX_LENGTH`.
-    fn length(&self, field: &str, x: f64) -> Result<f32> {
-        if !x.is_finite() || x <= 0.0 {
-            return self.positive(field, x);
-        }
-        if !(MIN_LENGTH..=MAX_LENGTH).contains(&x) {
-            return Err(self.invalid(
-                field,
-                format!("must be between {MIN_LENGTH:e} and {MAX_LENGTH:e}, got {x:e}"),
-            ));
-        }
-        self.finite(field, x)
-    }
-
-    fn non_negative(&self, field: &str, x: f64) -> Result<f32> {
-        let v = self.finite(field, x)?;
-        if x >= 0.0 {
-            Ok(v)
-        } else {
-            Err(self.invalid(field, format!("must not be negative, got {x}")))
-        }
-    }
-
-    /// A direction or axis, returned normalised. Normalised in f64 after
-    /// dividing by the largest component, so neither huge nor tiny
-    /// components overflow or underflow on the way.
-    fn direction(&self, field: &str, v: [f64; 3], what: &str) -> Result<Vec3> {
-        for (i, x) in v.iter().enumerate() {
-            if !x.is_finite() {
-                return Err(self.invalid(
-                    field,
-                    format!("component {i} must be a finite number, got {x}"),
-                ));
-            }
-        }
-        let v = glam::DVec3::from(v);
-        let largest = v.abs().max_element();
-        if largest == 0.0 {
-            return Err(self.invalid(field, format!("{what} has zero length")));
-        }
-        Ok((v / largest).normalize().as_vec3())
-    }
-
     fn scene(&self, raw: SceneFile) -> Result<Scene> {
         let ambient = self.colour("ambient", raw.ambient)?;
         let light_cutoff = self.non_negative("light_cutoff", raw.light_cutoff)?;
@@ -520,7 +362,7 @@ impl Check<'_> {
             }
         }
 
-        let sky = super::sky::check(self.file, raw.sun, raw.atmosphere, &mut warnings)?;
+        let sky = self.sky(raw.sun, raw.atmosphere, &mut warnings)?;
 
         let mut files = self.models.take();
         for m in &materials {
@@ -570,7 +412,7 @@ impl Check<'_> {
     fn camera(&self, raw: CameraFile) -> Result<Camera> {
         let eye = self.coordinates("camera.eye", raw.eye)?;
         let look_at = self.coordinates("camera.look_at", raw.look_at)?;
-        let up = self.direction("camera.up", raw.up, "up")?;
+        let up = self.direction("camera.up", raw.up, "up")?.as_vec3();
         if raw.fov_y.is_finite() && !(raw.fov_y > 0.0 && raw.fov_y < 180.0) {
             return Err(self.invalid(
                 "camera.fov_y",
@@ -709,7 +551,9 @@ impl Check<'_> {
                     self.invalid(field("direction"), "required for a directional light")
                 })?;
                 Ok(Light::Directional {
-                    direction: self.direction(&field("direction"), direction, "direction")?,
+                    direction: self
+                        .direction(&field("direction"), direction, "direction")?
+                        .as_vec3(),
                     color,
                 })
             }
@@ -886,7 +730,9 @@ impl Check<'_> {
         let (rotate_axis, rotate_degrees) = match &raw.rotate {
             None => (Vec3::Y, 0.0),
             Some(rotate) => {
-                let axis = self.direction(&field("rotate.axis"), rotate.axis, "axis")?;
+                let axis = self
+                    .direction(&field("rotate.axis"), rotate.axis, "axis")?
+                    .as_vec3();
                 if !rotate.degrees.is_finite() {
                     self.finite(&field("rotate.degrees"), rotate.degrees)?;
                 }

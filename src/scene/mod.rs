@@ -5,6 +5,7 @@
 //! in `assets/scenes/`.
 
 mod camera;
+mod checks;
 mod error;
 mod file;
 mod knobs;
