@@ -7,8 +7,7 @@
 //! the GPU narrow it to f32 and say so when it does not fit; the sky keeps
 //! f64 and uses the checks that do not narrow.
 
-use std::cell::RefCell;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use glam::{DVec3, Vec3};
 
@@ -36,8 +35,6 @@ pub(super) type Result<T> = std::result::Result<T, SceneError>;
 pub(super) struct Check<'a> {
     pub(super) file: &'a str,
     pub(super) base_dir: &'a Path,
-    /// The files of the OBJ models read so far (for `Scene::files`).
-    pub(super) models: RefCell<Vec<PathBuf>>,
 }
 
 /// `x` (finite) as an f32, or why it cannot be one.

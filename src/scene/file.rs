@@ -1,5 +1,8 @@
 //! The TOML scene format: serde mirror types that only describe the syntax,
-//! and the validation that turns them into a [`Scene`].
+//! and the validation that turns them into a [`Description`]: the scene,
+//! with each OBJ model named and its options checked but not yet read.
+//! `models.rs` reads the models afterwards, so parsing never touches a
+//! model file.
 //!
 //! Parsing and validation are separate on purpose: serde (with
 //! `deny_unknown_fields` everywhere) rejects unknown fields and wrong types
@@ -14,24 +17,19 @@
 //! (numbers, vectors, colours, lengths, directions) are shared with the
 //! sky's tables in `checks.rs`.
 
-use std::cell::RefCell;
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use glam::Vec3;
 use serde::Deserialize;
 
 use super::checks::{Check, Result, MAX_COLOUR, MAX_LENGTH, MIN_LENGTH};
 use super::{
-    AssetWarning, Camera, DebugView, HdrFormat, Light, Lighting, Material, Object, Output, Scene,
-    SceneError, SceneWarning, ShadingModel, Shape, Texture, TextureFilter, ToneMap,
-    ToneMapOperator, Transform,
+    Camera, DebugView, HdrFormat, Light, Lighting, Material, Object, Output, Scene, SceneError,
+    ShadingModel, Shape, Texture, TextureFilter, ToneMap, ToneMapOperator, Transform,
 };
-use std::sync::Arc;
 
 use crate::mesh::obj;
-
-mod models;
 use crate::mesh::smoothing::Smoothing;
 use crate::mesh::MAX_SEGMENTS;
 
@@ -297,22 +295,52 @@ fn default_shading() -> ShadingModel {
     ShadingModel::Phong
 }
 
-/// Parses and validates a scene. See [`Scene::from_toml`].
-pub(super) fn parse(text: &str, file: &str, base_dir: &Path) -> Result<Scene> {
-    let raw: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
-        file: file.to_owned(),
-        message: e.to_string().trim_end().to_owned(),
-    })?;
-    Check {
-        file,
-        base_dir,
-        models: RefCell::new(Vec::new()),
-    }
-    .scene(raw)
+/// A parsed and validated scene file: the scene, except that its objects
+/// are still [`ObjectDescription`]s, so OBJ models are named but not read.
+pub(super) struct Description {
+    /// Everything but `objects` (empty) and `files` (empty), final; the
+    /// sky's warnings are in `warnings`.
+    pub(super) scene: Scene,
+    /// The objects in file order.
+    pub(super) objects: Vec<ObjectDescription>,
+}
+
+/// One `[[objects]]` entry after validation.
+pub(super) enum ObjectDescription {
+    /// A parametric shape, complete.
+    Shape(Object),
+    /// An `obj` shape: becomes one object per object or group of the file
+    /// when the model is read.
+    Model(ModelObject),
+}
+
+/// An `obj` object as the scene file describes it, every field checked.
+pub(super) struct ModelObject {
+    /// Where the object is in the file, e.g. `objects[2]`.
+    pub(super) field: String,
+    /// The object's name, the prefix of its parts' names.
+    pub(super) name: String,
+    /// The model file, resolved against the scene file's folder.
+    pub(super) path: PathBuf,
+    /// The scene material that replaces the model's MTL materials.
+    pub(super) material: Option<usize>,
+    /// Smoothing, crease angle, weld tolerance and tangent method.
+    pub(super) options: obj::ModelOptions,
+    /// The transform every part shares.
+    pub(super) transform: Transform,
 }
 
 impl Check<'_> {
-    fn scene(&self, raw: SceneFile) -> Result<Scene> {
+    /// Parses and validates a scene file's text. See [`Scene::from_toml`].
+    pub(super) fn parse(&self, text: &str) -> Result<Description> {
+        let raw: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
+            file: self.file.to_owned(),
+            message: e.to_string().trim_end().to_owned(),
+        })?;
+        self.scene(raw)
+    }
+
+    fn scene(&self, raw: SceneFile) -> Result<Description> {
         let ambient = self.colour("ambient", raw.ambient)?;
         let light_cutoff = self.non_negative("light_cutoff", raw.light_cutoff)?;
         let output = self.output(raw.output)?;
@@ -346,48 +374,34 @@ impl Check<'_> {
         }
 
         let mut objects = Vec::with_capacity(raw.objects.len());
-        let mut warnings = Vec::new();
         for (i, object) in raw.objects.into_iter().enumerate() {
             let path = format!("objects[{i}]");
-            if matches!(object.shape.kind, ShapeKind::Obj) {
-                objects.extend(self.obj_object(
-                    &path,
-                    object,
-                    &mut materials,
-                    &mut by_name,
-                    &mut warnings,
-                )?);
+            objects.push(if matches!(object.shape.kind, ShapeKind::Obj) {
+                ObjectDescription::Model(self.model_object(&path, object, &materials, &by_name)?)
             } else {
-                objects.push(self.object(&path, object, &materials, &by_name)?);
-            }
+                ObjectDescription::Shape(self.object(&path, object, &materials, &by_name)?)
+            });
         }
 
+        let mut warnings = Vec::new();
         let sky = self.sky(raw.sun, raw.atmosphere, &mut warnings)?;
 
-        let mut files = self.models.take();
-        for m in &materials {
-            let texture = m.texture.as_ref().and_then(|t| t.file());
-            files.extend(texture.map(Path::to_path_buf));
-            files.extend(m.normal_map.iter().cloned());
-        }
-        let mut seen = std::collections::HashSet::new();
-        files.retain(|f| seen.insert(f.clone()));
-
-        let mut scene = Scene {
-            output,
-            camera,
-            ambient,
-            tone_map,
-            lights,
-            materials,
+        Ok(Description {
+            scene: Scene {
+                output,
+                camera,
+                ambient,
+                tone_map,
+                lights,
+                materials,
+                objects: Vec::new(),
+                light_cutoff,
+                sky,
+                warnings,
+                files: Vec::new(),
+            },
             objects,
-            light_cutoff,
-            sky,
-            warnings,
-            files,
-        };
-        scene.warn_unused_maps(self.file);
-        Ok(scene)
+        })
     }
 
     fn output(&self, raw: OutputFile) -> Result<Output> {
@@ -697,6 +711,102 @@ impl Check<'_> {
         })
     }
 
+    /// An `obj` object: every field is checked here, and the model is
+    /// read after parsing (`models.rs`). It takes `smoothing`,
+    /// `crease_angle`, `weld_tolerance` and `tangents`, not sizes or a
+    /// tessellation; its `material` is optional (the model's MTL materials
+    /// apply without it).
+    fn model_object(
+        &self,
+        path: &str,
+        raw: ObjectFile,
+        materials: &[Material],
+        by_name: &HashMap<String, usize>,
+    ) -> Result<ModelObject> {
+        let field = |name: &str| format!("{path}.{name}");
+        if raw.name.trim().is_empty() {
+            return Err(self.invalid(field("name"), "must not be empty"));
+        }
+        let shape = &raw.shape;
+        if let Some((name, _)) = shape.sizes().iter().find(|(_, v)| v.is_some()) {
+            return Err(self.invalid(
+                field(&format!("shape.{name}")),
+                format!("an obj has no {name} (it takes path)"),
+            ));
+        }
+        if raw.tessellation.is_some() {
+            return Err(self.invalid(
+                field("tessellation"),
+                "an obj model brings its own triangles; tessellation is for parametric shapes",
+            ));
+        }
+        let model_path = shape
+            .path
+            .as_ref()
+            .ok_or_else(|| self.invalid(field("shape.path"), "required for an obj"))?;
+        let crease_degrees = match raw.crease_angle {
+            None => obj::DEFAULT_CREASE_DEGREES,
+            Some(x) => {
+                let x = self.finite(&field("crease_angle"), x)?;
+                if !(0.0..=180.0).contains(&x) {
+                    return Err(self.invalid(
+                        field("crease_angle"),
+                        format!("must be between 0 and 180 degrees, got {x}"),
+                    ));
+                }
+                x
+            }
+        };
+        let weld_tolerance = match raw.weld_tolerance {
+            None => obj::DEFAULT_WELD_TOLERANCE,
+            Some(x) => {
+                let x = self.finite(&field("weld_tolerance"), x)?;
+                // Up to 1e-3: welding further apart merges real features,
+                // and the hash cells would hold so many points that welding
+                // turns quadratic.
+                if !(0.0..=1e-3).contains(&x) {
+                    return Err(self.invalid(
+                        field("weld_tolerance"),
+                        format!(
+                            "must be between 0 and 0.001 (a fraction of the model's \
+                             bounding-box diagonal), got {x}"
+                        ),
+                    ));
+                }
+                x
+            }
+        };
+        let options = obj::ModelOptions {
+            smoothing: raw.smoothing.map(|s| match s {
+                SmoothingFile::Face => Smoothing::Face,
+                SmoothingFile::Object => Smoothing::Object,
+                SmoothingFile::Model => Smoothing::Model,
+                SmoothingFile::File => Smoothing::File,
+            }),
+            crease_degrees,
+            weld_tolerance,
+            tangents: match raw.tangents {
+                None | Some(TangentsFile::Aerial) => obj::TangentMethod::Aerial,
+                Some(TangentsFile::Mikktspace) => obj::TangentMethod::Mikktspace,
+            },
+        };
+        let transform = self.transform(path, &raw)?;
+        let material = match &raw.material {
+            Some(name) => {
+                Some(self.material_index(&field("material"), Some(name), materials, by_name)?)
+            }
+            None => None,
+        };
+        Ok(ModelObject {
+            field: path.to_owned(),
+            path: self.base_dir.join(model_path),
+            name: raw.name,
+            material,
+            options,
+            transform,
+        })
+    }
+
     /// The index of the material `name` (at `field`), which is required.
     fn material_index(
         &self,
@@ -788,7 +898,7 @@ impl Check<'_> {
             return Err(self.invalid(format!("{path}.path"), "only an obj shape has a path"));
         }
         let (kind, required, optional): (&str, &[&str], &[&str]) = match raw.kind {
-            ShapeKind::Obj => return Err(self.invalid(path, "an obj is loaded by obj_object")),
+            ShapeKind::Obj => return Err(self.invalid(path, "an obj is described by model_object")),
             ShapeKind::Sphere => ("sphere", &["radius"], &[]),
             ShapeKind::Torus => ("torus", &["major_radius", "minor_radius"], &[]),
             ShapeKind::Plane => ("plane", &["width", "depth"], &[]),
@@ -832,7 +942,7 @@ impl Check<'_> {
             Ok(v)
         };
         Ok(match raw.kind {
-            ShapeKind::Obj => return Err(self.invalid(path, "an obj is loaded by obj_object")),
+            ShapeKind::Obj => return Err(self.invalid(path, "an obj is described by model_object")),
             ShapeKind::Sphere => Shape::Sphere {
                 radius: size("radius")?,
             },
