@@ -309,6 +309,10 @@ pub(super) struct Description {
 pub(super) enum ObjectDescription {
     /// A parametric shape, complete.
     Shape(Object),
+    /// A parametric shape whose material is not a scene material: after a
+    /// model it may be one of the model's (`object/material`), known only
+    /// once the model is read. `object.material` is set then.
+    ShapeWithModelMaterial(Object, PendingMaterial),
     /// An `obj` shape: becomes one object per object or group of the file
     /// when the model is read.
     Model(ModelObject),
@@ -322,12 +326,43 @@ pub(super) struct ModelObject {
     pub(super) name: String,
     /// The model file, resolved against the scene file's folder.
     pub(super) path: PathBuf,
-    /// The scene material that replaces the model's MTL materials.
-    pub(super) material: Option<usize>,
+    /// The material that replaces the model's MTL materials.
+    pub(super) material: Option<MaterialRef>,
     /// Smoothing, crease angle, weld tolerance and tangent method.
     pub(super) options: obj::ModelOptions,
     /// The transform every part shares.
     pub(super) transform: Transform,
+}
+
+/// The materials an object can name while the file is checked.
+struct Materials<'a> {
+    /// The scene's materials, in file order.
+    materials: &'a [Material],
+    /// Their indices by name.
+    by_name: &'a HashMap<String, usize>,
+    /// Whether an `obj` object came before: its materials are not known
+    /// yet (see [`PendingMaterial`]).
+    after_model: bool,
+}
+
+/// A material an object names.
+pub(super) enum MaterialRef {
+    /// A scene material, by index.
+    Index(usize),
+    /// Not a scene material, named by an object after a model: see
+    /// [`PendingMaterial`].
+    Pending(PendingMaterial),
+}
+
+/// A material name that is not a scene material's, given after an `obj`
+/// object. The models read before the object add their materials as
+/// `object/material`, so the name is looked up once they are read, and
+/// refused then, with every material known at that point, if it is still
+/// unknown.
+pub(super) struct PendingMaterial {
+    /// Where the name is, e.g. `objects[3].material`.
+    pub(super) field: String,
+    pub(super) name: String,
 }
 
 impl Check<'_> {
@@ -374,12 +409,19 @@ impl Check<'_> {
         }
 
         let mut objects = Vec::with_capacity(raw.objects.len());
+        let mut after_model = false;
         for (i, object) in raw.objects.into_iter().enumerate() {
             let path = format!("objects[{i}]");
+            let models = Materials {
+                materials: &materials,
+                by_name: &by_name,
+                after_model,
+            };
             objects.push(if matches!(object.shape.kind, ShapeKind::Obj) {
-                ObjectDescription::Model(self.model_object(&path, object, &materials, &by_name)?)
+                after_model = true;
+                ObjectDescription::Model(self.model_object(&path, object, &models)?)
             } else {
-                ObjectDescription::Shape(self.object(&path, object, &materials, &by_name)?)
+                self.object(&path, object, &models)?
             });
         }
 
@@ -665,9 +707,8 @@ impl Check<'_> {
         &self,
         path: &str,
         raw: ObjectFile,
-        materials: &[Material],
-        by_name: &HashMap<String, usize>,
-    ) -> Result<Object> {
+        materials: &Materials<'_>,
+    ) -> Result<ObjectDescription> {
         let field = |name: &str| format!("{path}.{name}");
         if raw.name.trim().is_empty() {
             return Err(self.invalid(field("name"), "must not be empty"));
@@ -682,12 +723,7 @@ impl Check<'_> {
                 return Err(self.invalid(field(name), "only an obj shape takes this"));
             }
         }
-        let material = self.material_index(
-            &field("material"),
-            raw.material.as_deref(),
-            materials,
-            by_name,
-        )?;
+        let material = self.material_ref(&field("material"), raw.material.as_deref(), materials)?;
         let shape = self.shape(&field("shape"), &raw.shape)?;
         let tessellation = raw.tessellation.unwrap_or(DEFAULT_TESSELLATION);
         for (direction, segments) in ["u", "v"].into_iter().zip(tessellation) {
@@ -702,12 +738,20 @@ impl Check<'_> {
             }
         }
         let transform = self.transform(path, &raw)?;
-        Ok(Object {
+        let mut object = Object {
             name: raw.name,
             shape,
             tessellation: (tessellation[0], tessellation[1]),
-            material,
+            // Replaced when a pending name is resolved.
+            material: usize::MAX,
             transform,
+        };
+        Ok(match material {
+            MaterialRef::Index(i) => {
+                object.material = i;
+                ObjectDescription::Shape(object)
+            }
+            MaterialRef::Pending(name) => ObjectDescription::ShapeWithModelMaterial(object, name),
         })
     }
 
@@ -720,8 +764,7 @@ impl Check<'_> {
         &self,
         path: &str,
         raw: ObjectFile,
-        materials: &[Material],
-        by_name: &HashMap<String, usize>,
+        materials: &Materials<'_>,
     ) -> Result<ModelObject> {
         let field = |name: &str| format!("{path}.{name}");
         if raw.name.trim().is_empty() {
@@ -792,9 +835,7 @@ impl Check<'_> {
         };
         let transform = self.transform(path, &raw)?;
         let material = match &raw.material {
-            Some(name) => {
-                Some(self.material_index(&field("material"), Some(name), materials, by_name)?)
-            }
+            Some(name) => Some(self.material_ref(&field("material"), Some(name), materials)?),
             None => None,
         };
         Ok(ModelObject {
@@ -807,8 +848,29 @@ impl Check<'_> {
         })
     }
 
+    /// The material `name` (at `field`), which is required: a scene
+    /// material, or, after a model, pending until the model is read.
+    fn material_ref(
+        &self,
+        field: &str,
+        name: Option<&str>,
+        materials: &Materials<'_>,
+    ) -> Result<MaterialRef> {
+        match name {
+            Some(name) if materials.after_model && !materials.by_name.contains_key(name) => {
+                Ok(MaterialRef::Pending(PendingMaterial {
+                    field: field.to_owned(),
+                    name: name.to_owned(),
+                }))
+            }
+            name => self
+                .material_index(field, name, materials.materials, materials.by_name)
+                .map(MaterialRef::Index),
+        }
+    }
+
     /// The index of the material `name` (at `field`), which is required.
-    fn material_index(
+    pub(super) fn material_index(
         &self,
         field: &str,
         name: Option<&str>,

@@ -11,7 +11,9 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::checks::{Check, Result, MAX_COLOUR};
-use super::file::{Description, ModelObject, ObjectDescription, DEFAULT_TESSELLATION};
+use super::file::{
+    Description, MaterialRef, ModelObject, ObjectDescription, PendingMaterial, DEFAULT_TESSELLATION,
+};
 use super::{AssetWarning, Material, Object, Scene, SceneWarning, ShadingModel, Shape, Texture};
 use crate::mesh::obj;
 
@@ -34,6 +36,11 @@ impl Check<'_> {
         for object in objects {
             match object {
                 ObjectDescription::Shape(object) => scene.objects.push(object),
+                ObjectDescription::ShapeWithModelMaterial(mut object, pending) => {
+                    object.material =
+                        self.pending_material(&pending, &scene.materials, &by_name)?;
+                    scene.objects.push(object);
+                }
                 ObjectDescription::Model(model) => {
                     let parts = self.model_objects(
                         model,
@@ -104,7 +111,13 @@ impl Check<'_> {
                 };
                 self.invalid(field(at), e.to_string())
             })?;
-        let over = model.material;
+        let over = match &model.material {
+            None => None,
+            Some(MaterialRef::Index(i)) => Some(*i),
+            Some(MaterialRef::Pending(pending)) => {
+                Some(self.pending_material(pending, materials, by_name)?)
+            }
+        };
         let mut warn = |warning: AssetWarning| {
             warnings.push(SceneWarning {
                 file: self.file.to_owned(),
@@ -181,6 +194,17 @@ impl Check<'_> {
             ));
         }
         Ok(objects)
+    }
+
+    /// The index of a material named after a model, among the materials
+    /// known now (the scene's and those of the models read so far).
+    fn pending_material(
+        &self,
+        pending: &PendingMaterial,
+        materials: &[Material],
+        by_name: &HashMap<String, usize>,
+    ) -> Result<usize> {
+        self.material_index(&pending.field, Some(&pending.name), materials, by_name)
     }
 
     /// Adds the scene material for an MTL material (or the default grey for
