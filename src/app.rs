@@ -206,13 +206,15 @@ pub enum RunSource<'a> {
     EmptyPass { width: u32, height: u32 },
     /// Draws nothing: makes a deliberate mistake on the run's device, so a
     /// test can check that the run reports the layer's message (see
-    /// [`Misuse`]). `output` is empty.
-    #[doc(hidden)]
+    /// [`Misuse`]). `output` is empty. Only with the `validation-checks`
+    /// feature, which the test suite turns on: it is no part of the
+    /// shipped API.
+    #[cfg(feature = "validation-checks")]
     ValidationCheck(Misuse),
 }
 
 /// The deliberate mistakes of [`RunSource::ValidationCheck`].
-#[doc(hidden)]
+#[cfg(feature = "validation-checks")]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Misuse {
     /// Two writes to one image with no barrier between them.
@@ -246,6 +248,7 @@ pub fn run(
             preflight::image_memory(image.width, image.height, &budget)?
         }
         RunSource::EmptyPass { width, height } => preflight::image_memory(width, height, &budget)?,
+        #[cfg(feature = "validation-checks")]
         RunSource::ValidationCheck(_) => {}
     }
     // Safe points (see `crate::interrupt`): before the device is created,
@@ -327,28 +330,34 @@ fn produce(
                 instruction_frames,
             }
         }
-        RunSource::ValidationCheck(misuse) => {
-            match misuse {
-                Misuse::SyncHazard => ctx.record_sync_hazard_for_validation_check()?,
-                Misuse::Leak | Misuse::LeakThenFail => ctx.leak_object_for_validation_check()?,
-            }
-            if misuse == Misuse::LeakThenFail {
-                return Err(Context::deliberate_failure_for_validation_check().into());
-            }
-            Produced {
-                passes: Vec::new(),
-                frames: Vec::new(),
-                output: Pixels {
-                    width: 0,
-                    height: 0,
-                    data: Vec::new(),
-                },
-                hdr: None,
-                setup: Vec::new(),
-                empty_pass_frames: Vec::new(),
-                instruction_frames: Vec::new(),
-            }
-        }
+        #[cfg(feature = "validation-checks")]
+        RunSource::ValidationCheck(misuse) => make_mistake(ctx, misuse)?,
+    })
+}
+
+/// Makes the deliberate mistake `misuse` on `ctx` (see
+/// [`RunSource::ValidationCheck`]); produces nothing.
+#[cfg(feature = "validation-checks")]
+fn make_mistake(ctx: &Context, misuse: Misuse) -> Result<Produced, RenderError> {
+    match misuse {
+        Misuse::SyncHazard => ctx.record_sync_hazard_for_validation_check()?,
+        Misuse::Leak | Misuse::LeakThenFail => ctx.leak_object_for_validation_check()?,
+    }
+    if misuse == Misuse::LeakThenFail {
+        return Err(Context::deliberate_failure_for_validation_check().into());
+    }
+    Ok(Produced {
+        passes: Vec::new(),
+        frames: Vec::new(),
+        output: Pixels {
+            width: 0,
+            height: 0,
+            data: Vec::new(),
+        },
+        hdr: None,
+        setup: Vec::new(),
+        empty_pass_frames: Vec::new(),
+        instruction_frames: Vec::new(),
     })
 }
 

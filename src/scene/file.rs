@@ -1,5 +1,8 @@
 //! The TOML scene format: serde mirror types that only describe the syntax,
-//! and the validation that turns them into a [`Scene`].
+//! and the validation that turns them into a [`Description`]: the scene,
+//! with each OBJ model named and its options checked but not yet read.
+//! `models.rs` reads the models afterwards, so parsing never touches a
+//! model file.
 //!
 //! Parsing and validation are separate on purpose: serde (with
 //! `deny_unknown_fields` everywhere) rejects unknown fields and wrong types
@@ -10,25 +13,23 @@
 //! Shapes and lights are flat tables with a `type` key rather than serde
 //! tagged enums, because serde buffers tagged enums and the `toml` crate then
 //! loses the position of errors inside them; the per-type field checks are
-//! done here instead, with clearer messages.
+//! done here instead, with clearer messages. The checks of single values
+//! (numbers, vectors, colours, lengths, directions) are shared with the
+//! sky's tables in `checks.rs`.
 
-use std::cell::RefCell;
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use serde::Deserialize;
 
+use super::checks::{Check, Result, MAX_COLOUR, MAX_LENGTH, MIN_LENGTH};
 use super::{
-    AssetWarning, Camera, DebugView, HdrFormat, Light, Lighting, Material, Object, Output, Scene,
-    SceneError, SceneWarning, ShadingModel, Shape, Texture, TextureFilter, ToneMap,
-    ToneMapOperator, Transform,
+    Camera, DebugView, HdrFormat, Light, Lighting, Material, Object, Output, Scene, SceneError,
+    ShadingModel, Shape, Texture, TextureFilter, ToneMap, ToneMapOperator, Transform,
 };
-use std::sync::Arc;
 
 use crate::mesh::obj;
-
-mod models;
 use crate::mesh::smoothing::Smoothing;
 use crate::mesh::MAX_SEGMENTS;
 
@@ -41,20 +42,6 @@ pub const MIN_SEGMENTS: u32 = 3;
 pub const DEFAULT_LIGHT_CUTOFF: f32 = 1e-3;
 /// Default tessellation `[u, v]` when an object does not give one.
 pub const DEFAULT_TESSELLATION: [u32; 2] = [64, 32];
-/// Largest accepted coordinate magnitude (positions, translations): large
-/// enough for planet-scale scenes (the Moon is 3.8e8 m away), small enough
-/// that sums, differences and squares of coordinates stay finite in
-/// 32-bit floats. Precision at this scale is the scene's business: a
-/// 32-bit float places objects 1e9 away to within about 64 units.
-pub const MAX_COORDINATE: f64 = 1e9;
-/// Accepted range of every length (shape sizes, `near`) and scale factor.
-pub const MIN_LENGTH: f64 = 1e-6;
-/// See [`MIN_LENGTH`].
-pub const MAX_LENGTH: f64 = 1e9;
-/// Largest accepted colour, reflectance or light colour times intensity
-/// per channel, and attenuation term: keeps every lighting sum finite in
-/// 32-bit floats.
-pub const MAX_COLOUR: f64 = 1e6;
 /// Smallest accepted field of view in degrees: below it the projection's
 /// focal length overflows 32-bit floats.
 pub const MIN_FOV_Y: f64 = 1e-3;
@@ -308,169 +295,87 @@ fn default_shading() -> ShadingModel {
     ShadingModel::Phong
 }
 
-/// `x` (finite) as an f32, or why it cannot be one.
-fn narrow(x: f64) -> std::result::Result<f32, String> {
-    if x.abs() > f64::from(f32::MAX) {
-        return Err(format!(
-            "is {x:e}, out of range (32-bit floats reach about 3.4e38)"
-        ));
-    }
-    if x != 0.0 && x.abs() < f64::from(f32::MIN_POSITIVE) {
-        return Err(format!(
-            "is {x:e}, too close to 0 for a 32-bit float (the smallest is about 1.2e-38)"
-        ));
-    }
-    Ok(x as f32)
+/// A parsed and validated scene file: the scene, except that its objects
+/// are still [`ObjectDescription`]s, so OBJ models are named but not read.
+pub(super) struct Description {
+    /// Everything but `objects` (empty) and `files` (empty), final; the
+    /// sky's warnings are in `warnings`.
+    pub(super) scene: Scene,
+    /// The objects in file order.
+    pub(super) objects: Vec<ObjectDescription>,
 }
 
-/// Parses and validates a scene. See [`Scene::from_toml`].
-pub(super) fn parse(text: &str, file: &str, base_dir: &Path) -> Result<Scene> {
-    let raw: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
-        file: file.to_owned(),
-        message: e.to_string().trim_end().to_owned(),
-    })?;
-    Check {
-        file,
-        base_dir,
-        models: RefCell::new(Vec::new()),
-    }
-    .scene(raw)
+/// One `[[objects]]` entry after validation.
+pub(super) enum ObjectDescription {
+    /// A parametric shape, complete.
+    Shape(Object),
+    /// A parametric shape whose material is not a scene material: after a
+    /// model it may be one of the model's (`object/material`), known only
+    /// once the model is read. `object.material` is set then.
+    ShapeWithModelMaterial(Object, PendingMaterial),
+    /// An `obj` shape: becomes one object per object or group of the file
+    /// when the model is read.
+    Model(ModelObject),
 }
 
-/// Validation context: where messages say the error is, and where textures
-/// are looked up.
-struct Check<'a> {
-    file: &'a str,
-    base_dir: &'a Path,
-    /// The files of the OBJ models read so far (for [`Scene::files`]).
-    models: RefCell<Vec<PathBuf>>,
+/// An `obj` object as the scene file describes it, every field checked.
+pub(super) struct ModelObject {
+    /// Where the object is in the file, e.g. `objects[2]`.
+    pub(super) field: String,
+    /// The object's name, the prefix of its parts' names.
+    pub(super) name: String,
+    /// The model file, resolved against the scene file's folder.
+    pub(super) path: PathBuf,
+    /// The material that replaces the model's MTL materials.
+    pub(super) material: Option<MaterialRef>,
+    /// Smoothing, crease angle, weld tolerance and tangent method.
+    pub(super) options: obj::ModelOptions,
+    /// The transform every part shares.
+    pub(super) transform: Transform,
 }
 
-type Result<T> = std::result::Result<T, SceneError>;
+/// The materials an object can name while the file is checked.
+struct Materials<'a> {
+    /// The scene's materials, in file order.
+    materials: &'a [Material],
+    /// Their indices by name.
+    by_name: &'a HashMap<String, usize>,
+    /// Whether an `obj` object came before: its materials are not known
+    /// yet (see [`PendingMaterial`]).
+    after_model: bool,
+}
+
+/// A material an object names.
+pub(super) enum MaterialRef {
+    /// A scene material, by index.
+    Index(usize),
+    /// Not a scene material, named by an object after a model: see
+    /// [`PendingMaterial`].
+    Pending(PendingMaterial),
+}
+
+/// A material name that is not a scene material's, given after an `obj`
+/// object. The models read before the object add their materials as
+/// `object/material`, so the name is looked up once they are read, and
+/// refused then, with every material known at that point, if it is still
+/// unknown.
+pub(super) struct PendingMaterial {
+    /// Where the name is, e.g. `objects[3].material`.
+    pub(super) field: String,
+    pub(super) name: String,
+}
 
 impl Check<'_> {
-    fn invalid(&self, field: impl Into<String>, reason: impl Into<String>) -> SceneError {
-        SceneError::Invalid {
+    /// Parses and validates a scene file's text. See [`Scene::from_toml`].
+    pub(super) fn parse(&self, text: &str) -> Result<Description> {
+        let raw: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
             file: self.file.to_owned(),
-            field: field.into(),
-            reason: reason.into(),
-        }
+            message: e.to_string().trim_end().to_owned(),
+        })?;
+        self.scene(raw)
     }
 
-    /// `x` narrowed to f32: finite, and neither too large for f32 nor so
-    /// small that it would become 0 or lose precision (subnormal).
-    fn finite(&self, field: &str, x: f64) -> Result<f32> {
-        if !x.is_finite() {
-            return Err(self.invalid(field, format!("must be a finite number, got {x}")));
-        }
-        narrow(x).map_err(|reason| self.invalid(field, reason))
-    }
-
-    fn vec3(&self, field: &str, v: [f64; 3]) -> Result<Vec3> {
-        let mut out = [0f32; 3];
-        for (i, x) in v.iter().enumerate() {
-            if !x.is_finite() {
-                return Err(self.invalid(
-                    field,
-                    format!("component {i} must be a finite number, got {x}"),
-                ));
-            }
-            out[i] = narrow(*x)
-                .map_err(|reason| self.invalid(field, format!("component {i} {reason}")))?;
-        }
-        Ok(Vec3::from(out))
-    }
-
-    /// A position: every component within `MAX_COORDINATE`.
-    fn coordinates(&self, field: &str, v: [f64; 3]) -> Result<DVec3> {
-        self.vec3(field, v)?;
-        let c = DVec3::from_array(v);
-        if let Some(i) = v.iter().position(|x| x.abs() > MAX_COORDINATE) {
-            return Err(self.invalid(
-                field,
-                format!(
-                    "component {i} must be between -{MAX_COORDINATE:e} and {MAX_COORDINATE:e}, \
-                     got {:e} (the renderer's limit for world positions)",
-                    v[i]
-                ),
-            ));
-        }
-        Ok(c)
-    }
-
-    /// A colour or other per-channel factor: finite, >= 0 and at most
-    /// `MAX_COLOUR` (> 1 is fine, the pipeline is HDR).
-    fn colour(&self, field: &str, v: [f64; 3]) -> Result<Vec3> {
-        let c = self.vec3(field, v)?;
-        if let Some(i) = v.iter().position(|&x| x < 0.0) {
-            return Err(self.invalid(
-                field,
-                format!("component {i} must not be negative, got {}", v[i]),
-            ));
-        }
-        if let Some(i) = v.iter().position(|&x| x > MAX_COLOUR) {
-            return Err(self.invalid(
-                field,
-                format!(
-                    "component {i} must be at most {MAX_COLOUR:e}, got {:e}",
-                    v[i]
-                ),
-            ));
-        }
-        Ok(c)
-    }
-
-    fn positive(&self, field: &str, x: f64) -> Result<f32> {
-        if x.is_finite() && x <= 0.0 {
-            return Err(self.invalid(field, format!("must be greater than 0, got {x}")));
-        }
-        self.finite(field, x)
-    }
-
-    /// A length or scale factor: within `MIN_LENGTH..=MAX_LENGTH`.
-    fn length(&self, field: &str, x: f64) -> Result<f32> {
-        if !x.is_finite() || x <= 0.0 {
-            return self.positive(field, x);
-        }
-        if !(MIN_LENGTH..=MAX_LENGTH).contains(&x) {
-            return Err(self.invalid(
-                field,
-                format!("must be between {MIN_LENGTH:e} and {MAX_LENGTH:e}, got {x:e}"),
-            ));
-        }
-        self.finite(field, x)
-    }
-
-    fn non_negative(&self, field: &str, x: f64) -> Result<f32> {
-        let v = self.finite(field, x)?;
-        if x >= 0.0 {
-            Ok(v)
-        } else {
-            Err(self.invalid(field, format!("must not be negative, got {x}")))
-        }
-    }
-
-    /// A direction or axis, returned normalised. Normalised in f64 after
-    /// dividing by the largest component, so neither huge nor tiny
-    /// components overflow or underflow on the way.
-    fn direction(&self, field: &str, v: [f64; 3], what: &str) -> Result<Vec3> {
-        for (i, x) in v.iter().enumerate() {
-            if !x.is_finite() {
-                return Err(self.invalid(
-                    field,
-                    format!("component {i} must be a finite number, got {x}"),
-                ));
-            }
-        }
-        let v = glam::DVec3::from(v);
-        let largest = v.abs().max_element();
-        if largest == 0.0 {
-            return Err(self.invalid(field, format!("{what} has zero length")));
-        }
-        Ok((v / largest).normalize().as_vec3())
-    }
-
-    fn scene(&self, raw: SceneFile) -> Result<Scene> {
+    fn scene(&self, raw: SceneFile) -> Result<Description> {
         let ambient = self.colour("ambient", raw.ambient)?;
         let light_cutoff = self.non_negative("light_cutoff", raw.light_cutoff)?;
         let output = self.output(raw.output)?;
@@ -504,48 +409,41 @@ impl Check<'_> {
         }
 
         let mut objects = Vec::with_capacity(raw.objects.len());
-        let mut warnings = Vec::new();
+        let mut after_model = false;
         for (i, object) in raw.objects.into_iter().enumerate() {
             let path = format!("objects[{i}]");
-            if matches!(object.shape.kind, ShapeKind::Obj) {
-                objects.extend(self.obj_object(
-                    &path,
-                    object,
-                    &mut materials,
-                    &mut by_name,
-                    &mut warnings,
-                )?);
+            let models = Materials {
+                materials: &materials,
+                by_name: &by_name,
+                after_model,
+            };
+            objects.push(if matches!(object.shape.kind, ShapeKind::Obj) {
+                after_model = true;
+                ObjectDescription::Model(self.model_object(&path, object, &models)?)
             } else {
-                objects.push(self.object(&path, object, &materials, &by_name)?);
-            }
+                self.object(&path, object, &models)?
+            });
         }
 
-        let sky = super::sky::check(self.file, raw.sun, raw.atmosphere, &mut warnings)?;
+        let mut warnings = Vec::new();
+        let sky = self.sky(raw.sun, raw.atmosphere, &mut warnings)?;
 
-        let mut files = self.models.take();
-        for m in &materials {
-            let texture = m.texture.as_ref().and_then(|t| t.file());
-            files.extend(texture.map(Path::to_path_buf));
-            files.extend(m.normal_map.iter().cloned());
-        }
-        let mut seen = std::collections::HashSet::new();
-        files.retain(|f| seen.insert(f.clone()));
-
-        let mut scene = Scene {
-            output,
-            camera,
-            ambient,
-            tone_map,
-            lights,
-            materials,
+        Ok(Description {
+            scene: Scene {
+                output,
+                camera,
+                ambient,
+                tone_map,
+                lights,
+                materials,
+                objects: Vec::new(),
+                light_cutoff,
+                sky,
+                warnings,
+                files: Vec::new(),
+            },
             objects,
-            light_cutoff,
-            sky,
-            warnings,
-            files,
-        };
-        scene.warn_unused_maps(self.file);
-        Ok(scene)
+        })
     }
 
     fn output(&self, raw: OutputFile) -> Result<Output> {
@@ -570,7 +468,7 @@ impl Check<'_> {
     fn camera(&self, raw: CameraFile) -> Result<Camera> {
         let eye = self.coordinates("camera.eye", raw.eye)?;
         let look_at = self.coordinates("camera.look_at", raw.look_at)?;
-        let up = self.direction("camera.up", raw.up, "up")?;
+        let up = self.direction("camera.up", raw.up, "up")?.as_vec3();
         if raw.fov_y.is_finite() && !(raw.fov_y > 0.0 && raw.fov_y < 180.0) {
             return Err(self.invalid(
                 "camera.fov_y",
@@ -709,7 +607,9 @@ impl Check<'_> {
                     self.invalid(field("direction"), "required for a directional light")
                 })?;
                 Ok(Light::Directional {
-                    direction: self.direction(&field("direction"), direction, "direction")?,
+                    direction: self
+                        .direction(&field("direction"), direction, "direction")?
+                        .as_vec3(),
                     color,
                 })
             }
@@ -807,9 +707,8 @@ impl Check<'_> {
         &self,
         path: &str,
         raw: ObjectFile,
-        materials: &[Material],
-        by_name: &HashMap<String, usize>,
-    ) -> Result<Object> {
+        materials: &Materials<'_>,
+    ) -> Result<ObjectDescription> {
         let field = |name: &str| format!("{path}.{name}");
         if raw.name.trim().is_empty() {
             return Err(self.invalid(field("name"), "must not be empty"));
@@ -824,12 +723,7 @@ impl Check<'_> {
                 return Err(self.invalid(field(name), "only an obj shape takes this"));
             }
         }
-        let material = self.material_index(
-            &field("material"),
-            raw.material.as_deref(),
-            materials,
-            by_name,
-        )?;
+        let material = self.material_ref(&field("material"), raw.material.as_deref(), materials)?;
         let shape = self.shape(&field("shape"), &raw.shape)?;
         let tessellation = raw.tessellation.unwrap_or(DEFAULT_TESSELLATION);
         for (direction, segments) in ["u", "v"].into_iter().zip(tessellation) {
@@ -844,17 +738,139 @@ impl Check<'_> {
             }
         }
         let transform = self.transform(path, &raw)?;
-        Ok(Object {
+        let mut object = Object {
             name: raw.name,
             shape,
             tessellation: (tessellation[0], tessellation[1]),
+            // Replaced when a pending name is resolved.
+            material: usize::MAX,
+            transform,
+        };
+        Ok(match material {
+            MaterialRef::Index(i) => {
+                object.material = i;
+                ObjectDescription::Shape(object)
+            }
+            MaterialRef::Pending(name) => ObjectDescription::ShapeWithModelMaterial(object, name),
+        })
+    }
+
+    /// An `obj` object: every field is checked here, and the model is
+    /// read after parsing (`models.rs`). It takes `smoothing`,
+    /// `crease_angle`, `weld_tolerance` and `tangents`, not sizes or a
+    /// tessellation; its `material` is optional (the model's MTL materials
+    /// apply without it).
+    fn model_object(
+        &self,
+        path: &str,
+        raw: ObjectFile,
+        materials: &Materials<'_>,
+    ) -> Result<ModelObject> {
+        let field = |name: &str| format!("{path}.{name}");
+        if raw.name.trim().is_empty() {
+            return Err(self.invalid(field("name"), "must not be empty"));
+        }
+        let shape = &raw.shape;
+        if let Some((name, _)) = shape.sizes().iter().find(|(_, v)| v.is_some()) {
+            return Err(self.invalid(
+                field(&format!("shape.{name}")),
+                format!("an obj has no {name} (it takes path)"),
+            ));
+        }
+        if raw.tessellation.is_some() {
+            return Err(self.invalid(
+                field("tessellation"),
+                "an obj model brings its own triangles; tessellation is for parametric shapes",
+            ));
+        }
+        let model_path = shape
+            .path
+            .as_ref()
+            .ok_or_else(|| self.invalid(field("shape.path"), "required for an obj"))?;
+        let crease_degrees = match raw.crease_angle {
+            None => obj::DEFAULT_CREASE_DEGREES,
+            Some(x) => {
+                let x = self.finite(&field("crease_angle"), x)?;
+                if !(0.0..=180.0).contains(&x) {
+                    return Err(self.invalid(
+                        field("crease_angle"),
+                        format!("must be between 0 and 180 degrees, got {x}"),
+                    ));
+                }
+                x
+            }
+        };
+        let weld_tolerance = match raw.weld_tolerance {
+            None => obj::DEFAULT_WELD_TOLERANCE,
+            Some(x) => {
+                let x = self.finite(&field("weld_tolerance"), x)?;
+                // Up to 1e-3: welding further apart merges real features,
+                // and the hash cells would hold so many points that welding
+                // turns quadratic.
+                if !(0.0..=1e-3).contains(&x) {
+                    return Err(self.invalid(
+                        field("weld_tolerance"),
+                        format!(
+                            "must be between 0 and 0.001 (a fraction of the model's \
+                             bounding-box diagonal), got {x}"
+                        ),
+                    ));
+                }
+                x
+            }
+        };
+        let options = obj::ModelOptions {
+            smoothing: raw.smoothing.map(|s| match s {
+                SmoothingFile::Face => Smoothing::Face,
+                SmoothingFile::Object => Smoothing::Object,
+                SmoothingFile::Model => Smoothing::Model,
+                SmoothingFile::File => Smoothing::File,
+            }),
+            crease_degrees,
+            weld_tolerance,
+            tangents: match raw.tangents {
+                None | Some(TangentsFile::Aerial) => obj::TangentMethod::Aerial,
+                Some(TangentsFile::Mikktspace) => obj::TangentMethod::Mikktspace,
+            },
+        };
+        let transform = self.transform(path, &raw)?;
+        let material = match &raw.material {
+            Some(name) => Some(self.material_ref(&field("material"), Some(name), materials)?),
+            None => None,
+        };
+        Ok(ModelObject {
+            field: path.to_owned(),
+            path: self.base_dir.join(model_path),
+            name: raw.name,
             material,
+            options,
             transform,
         })
     }
 
+    /// The material `name` (at `field`), which is required: a scene
+    /// material, or, after a model, pending until the model is read.
+    fn material_ref(
+        &self,
+        field: &str,
+        name: Option<&str>,
+        materials: &Materials<'_>,
+    ) -> Result<MaterialRef> {
+        match name {
+            Some(name) if materials.after_model && !materials.by_name.contains_key(name) => {
+                Ok(MaterialRef::Pending(PendingMaterial {
+                    field: field.to_owned(),
+                    name: name.to_owned(),
+                }))
+            }
+            name => self
+                .material_index(field, name, materials.materials, materials.by_name)
+                .map(MaterialRef::Index),
+        }
+    }
+
     /// The index of the material `name` (at `field`), which is required.
-    fn material_index(
+    pub(super) fn material_index(
         &self,
         field: &str,
         name: Option<&str>,
@@ -886,7 +902,9 @@ impl Check<'_> {
         let (rotate_axis, rotate_degrees) = match &raw.rotate {
             None => (Vec3::Y, 0.0),
             Some(rotate) => {
-                let axis = self.direction(&field("rotate.axis"), rotate.axis, "axis")?;
+                let axis = self
+                    .direction(&field("rotate.axis"), rotate.axis, "axis")?
+                    .as_vec3();
                 if !rotate.degrees.is_finite() {
                     self.finite(&field("rotate.degrees"), rotate.degrees)?;
                 }
@@ -942,7 +960,7 @@ impl Check<'_> {
             return Err(self.invalid(format!("{path}.path"), "only an obj shape has a path"));
         }
         let (kind, required, optional): (&str, &[&str], &[&str]) = match raw.kind {
-            ShapeKind::Obj => return Err(self.invalid(path, "an obj is loaded by obj_object")),
+            ShapeKind::Obj => return Err(self.invalid(path, "an obj is described by model_object")),
             ShapeKind::Sphere => ("sphere", &["radius"], &[]),
             ShapeKind::Torus => ("torus", &["major_radius", "minor_radius"], &[]),
             ShapeKind::Plane => ("plane", &["width", "depth"], &[]),
@@ -986,7 +1004,7 @@ impl Check<'_> {
             Ok(v)
         };
         Ok(match raw.kind {
-            ShapeKind::Obj => return Err(self.invalid(path, "an obj is loaded by obj_object")),
+            ShapeKind::Obj => return Err(self.invalid(path, "an obj is described by model_object")),
             ShapeKind::Sphere => Shape::Sphere {
                 radius: size("radius")?,
             },

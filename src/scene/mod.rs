@@ -5,12 +5,14 @@
 //! in `assets/scenes/`.
 
 mod camera;
+mod checks;
 mod error;
 mod file;
 mod knobs;
 mod lights;
 mod material;
 mod model_scene;
+mod models;
 mod object;
 mod sky;
 
@@ -315,7 +317,11 @@ impl Scene {
     /// message); [`SceneError::Invalid`] for values that break the rules
     /// above, naming the field path (e.g. `objects[2].rotate.axis`).
     pub fn from_toml(text: &str, file: &str, base_dir: &Path) -> Result<Scene, SceneError> {
-        file::parse(text, file, base_dir)
+        // Parsing describes the scene (every field checked, no model file
+        // opened); the OBJ models it names are read after.
+        let check = checks::Check { file, base_dir };
+        let description = check.parse(text)?;
+        check.load_models(description)
     }
 
     /// A scene with nothing in it: only an output size and a tone map (for

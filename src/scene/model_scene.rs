@@ -257,7 +257,7 @@ pub fn model_scene_toml(model: &Path, options: &ModelSceneOptions) -> Result<Str
     }
     if options.ground {
         // At most the largest length a scene file accepts.
-        let size = (radius * 16.0).min(super::file::MAX_LENGTH);
+        let size = (radius * 16.0).min(super::checks::MAX_LENGTH);
         let _ = writeln!(
             s,
             "\n[[objects]]\nname = \"ground\"\nmaterial = \"ground\"\n\

@@ -1,5 +1,9 @@
 //! The `[sun]` and `[atmosphere]` tables of a scene file: their syntax
-//! (serde mirror types) and their validation into a [`Sky`].
+//! (serde mirror types) and the rules only they have (a shell above the
+//! ground, coefficients from the gas or the turbidity, table sizes), which
+//! turn them into a [`Sky`]. Numbers, vectors and directions are checked
+//! by the shared checks in `checks.rs`, with the same words as in the rest
+//! of the file.
 //!
 //! Every number is kept in f64: the CPU reference integrator and the
 //! optical-depth table baker work in double precision, and planet-scale
@@ -9,7 +13,7 @@
 use glam::DVec3;
 use serde::Deserialize;
 
-use super::SceneError;
+use super::checks::{Check, Result};
 use crate::atmosphere::coefficients;
 use crate::atmosphere::model::*;
 
@@ -112,391 +116,345 @@ fn default_angular_radius() -> f64 {
     0.004675
 }
 
-/// Validates the two tables. `[atmosphere]` needs `[sun]` and the other way
-/// round: the sun only exists in this renderer as light through the
-/// atmosphere.
-pub(super) fn check(
-    file: &str,
-    sun: Option<SunFile>,
-    atmosphere: Option<AtmosphereFile>,
-    warnings: &mut Vec<super::SceneWarning>,
-) -> Result<Option<Sky>, SceneError> {
-    let invalid = |field: &str, reason: String| SceneError::Invalid {
-        file: file.to_owned(),
-        field: field.to_owned(),
-        reason,
-    };
-    let (sun, atmosphere) = match (sun, atmosphere) {
-        (None, None) => return Ok(None),
-        (Some(_), None) => {
-            return Err(invalid(
-                "sun",
-                "a sun needs an [atmosphere] table (it is drawn by the atmosphere pass)".into(),
-            ))
-        }
-        (None, Some(_)) => {
-            return Err(invalid(
-                "atmosphere",
-                "an atmosphere needs a [sun] table with a direction".into(),
-            ))
-        }
-        (Some(s), Some(a)) => (s, a),
-    };
-    let finite = |field: &str, x: f64| -> Result<f64, SceneError> {
-        if x.is_finite() {
-            Ok(x)
-        } else {
-            Err(invalid(field, format!("must be a finite number, got {x}")))
-        }
-    };
-    let vector = |field: &str, v: [f64; 3]| -> Result<DVec3, SceneError> {
-        for (i, x) in v.iter().enumerate() {
-            if !x.is_finite() {
-                return Err(invalid(
-                    field,
-                    format!("component {i} must be a finite number, got {x}"),
-                ));
+impl Check<'_> {
+    /// Validates the two tables. `[atmosphere]` needs `[sun]` and the other
+    /// way round: the sun only exists in this renderer as light through the
+    /// atmosphere.
+    pub(super) fn sky(
+        &self,
+        sun: Option<SunFile>,
+        atmosphere: Option<AtmosphereFile>,
+        warnings: &mut Vec<super::SceneWarning>,
+    ) -> Result<Option<Sky>> {
+        let (sun, atmosphere) = match (sun, atmosphere) {
+            (None, None) => return Ok(None),
+            (Some(_), None) => {
+                return Err(self.invalid(
+                    "sun",
+                    "a sun needs an [atmosphere] table (it is drawn by the atmosphere pass)",
+                ))
             }
-        }
-        Ok(DVec3::from(v))
-    };
-    // Coefficients and colours: >= 0 and bounded like scene colours, so
-    // products with path lengths of 1e9 m stay finite.
-    let non_negative = |field: &str, v: [f64; 3], max: f64| -> Result<DVec3, SceneError> {
-        let d = vector(field, v)?;
-        for (i, x) in v.iter().enumerate() {
-            if *x < 0.0 || *x > max {
-                return Err(invalid(
-                    field,
-                    format!("component {i} must be between 0 and {max:e}, got {x:e}"),
-                ));
+            (None, Some(_)) => {
+                return Err(self.invalid(
+                    "atmosphere",
+                    "an atmosphere needs a [sun] table with a direction",
+                ))
             }
-        }
-        Ok(d)
-    };
-    // A finite number for which `ok` holds, or an error saying what it
-    // `must` be.
-    let within = |field: &str, x: f64, ok: &dyn Fn(f64) -> bool, must: &str| {
-        let x = finite(field, x)?;
-        if ok(x) {
-            Ok(x)
-        } else {
-            Err(invalid(field, format!("must be {must}, got {x:e}")))
-        }
-    };
-    let length = |field: &str, x: f64| -> Result<f64, SceneError> {
-        within(
-            field,
-            x,
-            &|x| x > 0.0 && x <= MAX_RADIUS,
-            &format!("greater than 0 and at most {MAX_RADIUS:e}"),
-        )
-    };
+            (Some(s), Some(a)) => (s, a),
+        };
+        // Radii and scale heights, kept in f64: above 0 and at most
+        // MAX_RADIUS (the scene's length bound, without its lower end).
+        let planet_length = |field: &str, x: f64| -> Result<f64> {
+            self.within(
+                field,
+                x,
+                &|x| x > 0.0 && x <= MAX_RADIUS,
+                &format!("greater than 0 and at most {MAX_RADIUS:e}"),
+            )
+        };
 
-    let direction = vector("sun.direction", sun.direction)?;
-    let largest = direction.abs().max_element();
-    if largest == 0.0 {
-        return Err(invalid("sun.direction", "direction has zero length".into()));
-    }
-    let direction = (direction / largest).normalize();
-    let irradiance = non_negative("sun.irradiance", sun.irradiance, 1e6)?;
-    let angular_radius = within(
-        "sun.angular_radius",
-        sun.angular_radius,
-        &|x| x > 0.0 && x < std::f64::consts::FRAC_PI_2,
-        "between 0 and pi/2 radians (exclusive)",
-    )?;
+        let direction = self.direction("sun.direction", sun.direction, "direction")?;
+        let irradiance = self.components_up_to("sun.irradiance", sun.irradiance, 1e6)?;
+        let angular_radius = self.within(
+            "sun.angular_radius",
+            sun.angular_radius,
+            &|x| x > 0.0 && x < std::f64::consts::FRAC_PI_2,
+            "between 0 and pi/2 radians (exclusive)",
+        )?;
 
-    let earth = Atmosphere::earth();
-    let bottom_radius = length(
-        "atmosphere.bottom_radius",
-        atmosphere.bottom_radius.unwrap_or(earth.bottom_radius),
-    )?;
-    let top_radius = length(
-        "atmosphere.top_radius",
-        atmosphere.top_radius.unwrap_or(earth.top_radius),
-    )?;
-    // A shell thinner than a millionth of the radius cannot be resolved by
-    // f32 altitudes on the GPU.
-    if top_radius <= bottom_radius * (1.0 + 1e-6) {
-        return Err(invalid(
+        let earth = Atmosphere::earth();
+        let bottom_radius = planet_length(
+            "atmosphere.bottom_radius",
+            atmosphere.bottom_radius.unwrap_or(earth.bottom_radius),
+        )?;
+        let top_radius = planet_length(
             "atmosphere.top_radius",
-            format!(
-                "must be above bottom_radius ({bottom_radius:e}) by more than a millionth of it, \
-                 got {top_radius:e}"
-            ),
-        ));
-    }
-    let center = match atmosphere.center {
-        Some(c) => vector("atmosphere.center", c)?,
-        None => DVec3::new(0.0, -bottom_radius, 0.0),
-    };
-    if let Some(i) = center.to_array().iter().position(|x| x.abs() > MAX_RADIUS) {
-        return Err(invalid(
-            "atmosphere.center",
-            format!(
-                "component {i} must be between -{MAX_RADIUS:e} and {MAX_RADIUS:e}, got {:e}",
-                center[i]
-            ),
-        ));
-    }
-    let coefficient = |name: &str, v: Option<[f64; 3]>, default: DVec3| {
-        non_negative(
-            &format!("atmosphere.{name}"),
-            v.unwrap_or(default.to_array()),
-            1.0,
-        )
-    };
-    // The derived coefficients (the seed's formulas) replace the explicit
-    // ones; giving both is refused rather than one silently winning.
-    if atmosphere.rayleigh_from.is_some() && atmosphere.rayleigh_scattering.is_some() {
-        return Err(invalid(
-            "atmosphere.rayleigh_from",
-            "give either rayleigh_scattering or rayleigh_from, not both".into(),
-        ));
-    }
-    if atmosphere.mie_from.is_some()
-        && (atmosphere.mie_scattering.is_some() || atmosphere.mie_extinction.is_some())
-    {
-        return Err(invalid(
-            "atmosphere.mie_from",
-            "give either mie_scattering and mie_extinction or mie_from, not both".into(),
-        ));
-    }
-    let wavelengths = match atmosphere.wavelengths {
-        Some(_) if atmosphere.rayleigh_from.is_none() && atmosphere.mie_from.is_none() => {
-            return Err(invalid(
-                "atmosphere.wavelengths",
-                "only used by rayleigh_from and mie_from; give one of them".into(),
-            ))
+            atmosphere.top_radius.unwrap_or(earth.top_radius),
+        )?;
+        // A shell thinner than a millionth of the radius cannot be resolved by
+        // f32 altitudes on the GPU.
+        if top_radius <= bottom_radius * (1.0 + 1e-6) {
+            return Err(self.invalid(
+                "atmosphere.top_radius",
+                format!(
+                    "must be above bottom_radius ({bottom_radius:e}) by more than a millionth of it, \
+                     got {top_radius:e}"
+                ),
+            ));
         }
-        Some(w) => {
-            let w = vector("atmosphere.wavelengths", w)?;
-            if let Some(i) = (0..3).find(|&i| !(100.0..=100_000.0).contains(&w[i])) {
-                return Err(invalid(
+        let center = match atmosphere.center {
+            Some(c) => self.vector("atmosphere.center", c)?,
+            None => DVec3::new(0.0, -bottom_radius, 0.0),
+        };
+        if let Some(i) = center.to_array().iter().position(|x| x.abs() > MAX_RADIUS) {
+            return Err(self.invalid(
+                "atmosphere.center",
+                format!(
+                    "component {i} must be between -{MAX_RADIUS:e} and {MAX_RADIUS:e}, got {:e}",
+                    center[i]
+                ),
+            ));
+        }
+        let coefficient = |name: &str, v: Option<[f64; 3]>, default: DVec3| {
+            self.components_up_to(
+                &format!("atmosphere.{name}"),
+                v.unwrap_or(default.to_array()),
+                1.0,
+            )
+        };
+        // The derived coefficients (the seed's formulas) replace the explicit
+        // ones; giving both is refused rather than one silently winning.
+        if atmosphere.rayleigh_from.is_some() && atmosphere.rayleigh_scattering.is_some() {
+            return Err(self.invalid(
+                "atmosphere.rayleigh_from",
+                "give either rayleigh_scattering or rayleigh_from, not both",
+            ));
+        }
+        if atmosphere.mie_from.is_some()
+            && (atmosphere.mie_scattering.is_some() || atmosphere.mie_extinction.is_some())
+        {
+            return Err(self.invalid(
+                "atmosphere.mie_from",
+                "give either mie_scattering and mie_extinction or mie_from, not both",
+            ));
+        }
+        let wavelengths = match atmosphere.wavelengths {
+            Some(_) if atmosphere.rayleigh_from.is_none() && atmosphere.mie_from.is_none() => {
+                return Err(self.invalid(
                     "atmosphere.wavelengths",
+                    "only used by rayleigh_from and mie_from; give one of them",
+                ))
+            }
+            Some(w) => {
+                let w = self.vector("atmosphere.wavelengths", w)?;
+                if let Some(i) = (0..3).find(|&i| !(100.0..=100_000.0).contains(&w[i])) {
+                    return Err(self.invalid(
+                        "atmosphere.wavelengths",
+                        format!(
+                            "component {i} must be between 100 and 100000 nm, got {}",
+                            w[i]
+                        ),
+                    ));
+                }
+                w
+            }
+            None => DVec3::from(coefficients::WAVELENGTHS_NM),
+        };
+        let derived = |field: &str, v: DVec3| -> Result<[f64; 3]> {
+            if let Some(i) = (0..3).find(|&i| !(v[i].is_finite() && v[i] <= 1.0)) {
+                return Err(self.invalid(
+                    field,
                     format!(
-                        "component {i} must be between 100 and 100000 nm, got {}",
-                        w[i]
+                        "gives a coefficient of {:e} 1/m in channel {i}; at most 1 is accepted",
+                        v[i]
                     ),
                 ));
             }
-            w
-        }
-        None => DVec3::from(coefficients::WAVELENGTHS_NM),
-    };
-    let derived = |field: &str, v: DVec3| -> Result<[f64; 3], SceneError> {
-        if let Some(i) = (0..3).find(|&i| !(v[i].is_finite() && v[i] <= 1.0)) {
-            return Err(invalid(
-                field,
-                format!(
-                    "gives a coefficient of {:e} 1/m in channel {i}; at most 1 is accepted",
-                    v[i]
-                ),
-            ));
-        }
-        Ok(v.to_array())
-    };
-    let rayleigh_given = match &atmosphere.rayleigh_from {
-        None => atmosphere.rayleigh_scattering,
-        Some(from) => {
-            let n = within(
-                "atmosphere.rayleigh_from.refractive_index",
-                from.refractive_index
-                    .unwrap_or(coefficients::AIR_REFRACTIVE_INDEX),
-                &|n| n > 1.0 && n <= 2.0,
-                "above 1 and at most 2",
-            )?;
-            let number_density = within(
-                "atmosphere.rayleigh_from.number_density",
-                from.number_density
-                    .unwrap_or(coefficients::AIR_NUMBER_DENSITY),
-                &|x| (1e10..=1e35).contains(&x),
-                "between 1e10 and 1e35 per m^3",
-            )?;
-            // (6 + 3p)/(6 - 7p): physical factors are 0..0.5.
-            let p = within(
-                "atmosphere.rayleigh_from.depolarization",
-                from.depolarization
-                    .unwrap_or(coefficients::AIR_DEPOLARIZATION),
-                &|p| (0.0..=0.5).contains(&p),
-                "between 0 and 0.5",
-            )?;
-            let beta = DVec3::from_array(std::array::from_fn(|i| {
-                coefficients::rayleigh_scattering(n, number_density, p, wavelengths[i] * 1e-9)
-            }));
-            Some(derived("atmosphere.rayleigh_from", beta)?)
-        }
-    };
-    let (mie_scattering_given, mie_extinction_given) = match &atmosphere.mie_from {
-        None => (atmosphere.mie_scattering, atmosphere.mie_extinction),
-        Some(from) => {
-            let t = within(
-                "atmosphere.mie_from.turbidity",
-                from.turbidity,
-                &|t| t > coefficients::MIN_TURBIDITY && t <= 1000.0,
-                &format!(
-                    "above {:.4} (where the formula's aerosol concentration \
-                     0.6544 T - 0.6510 turns positive) and at most 1000",
-                    coefficients::MIN_TURBIDITY
-                ),
-            )?;
-            let k = non_negative(
-                "atmosphere.mie_from.k",
-                from.k.unwrap_or([coefficients::MIE_K; 3]),
-                10.0,
-            )?;
-            let albedo = within(
-                "atmosphere.mie_from.albedo",
-                from.albedo.unwrap_or(0.9),
-                &|a| a > 0.0 && a <= 1.0,
-                "above 0 and at most 1",
-            )?;
-            let beta = DVec3::from_array(std::array::from_fn(|i| {
-                coefficients::mie_scattering(t, k[i], wavelengths[i] * 1e-9)
-            }));
-            let scattering = derived("atmosphere.mie_from.turbidity", beta)?;
-            let extinction = derived("atmosphere.mie_from", beta / albedo)?;
-            (Some(scattering), Some(extinction))
-        }
-    };
-    let rayleigh_scattering = coefficient(
-        "rayleigh_scattering",
-        rayleigh_given,
-        earth.rayleigh_scattering,
-    )?;
-    let mie_scattering = coefficient("mie_scattering", mie_scattering_given, earth.mie_scattering)?;
-    let mie_extinction = coefficient("mie_extinction", mie_extinction_given, earth.mie_extinction)?;
-    for i in 0..3 {
-        if mie_extinction[i] < mie_scattering[i] {
-            return Err(invalid(
-                "atmosphere.mie_extinction",
-                format!(
-                    "component {i} ({:e}) must be at least mie_scattering ({:e}): \
-                     extinction is scattering plus absorption",
-                    mie_extinction[i], mie_scattering[i]
-                ),
-            ));
-        }
-    }
-    let ozone_absorption = coefficient(
-        "ozone_absorption",
-        atmosphere.ozone_absorption,
-        earth.ozone_absorption,
-    )?;
-    let ground_albedo = non_negative(
-        "atmosphere.ground_albedo",
-        atmosphere
-            .ground_albedo
-            .unwrap_or(earth.ground_albedo.to_array()),
-        1.0,
-    )?;
-    // Scale heights below a metre make the density a step the table and
-    // the march cannot resolve; above 1e9 they are meaningless.
-    let scale_height = |name: &str, x: Option<f64>, default: f64| {
-        let field = format!("atmosphere.{name}");
-        let x = length(&field, x.unwrap_or(default))?;
-        if x < 1.0 {
-            return Err(invalid(&field, format!("must be at least 1 m, got {x:e}")));
-        }
-        Ok(x)
-    };
-    let rayleigh_scale_height = scale_height(
-        "rayleigh_scale_height",
-        atmosphere.rayleigh_scale_height,
-        earth.rayleigh_scale_height,
-    )?;
-    let mie_scale_height = scale_height(
-        "mie_scale_height",
-        atmosphere.mie_scale_height,
-        earth.mie_scale_height,
-    )?;
-    // |g| -> 1 makes the phase function a delta; 0.999 already peaks at 1e8.
-    let mie_g = within(
-        "atmosphere.mie_g",
-        atmosphere.mie_g.unwrap_or(earth.mie_g),
-        &|g| g.abs() <= 0.999,
-        "between -0.999 and 0.999",
-    )?;
-    let ozone_layer = atmosphere.ozone_layer.unwrap_or(earth.ozone_layer);
-    for (i, x) in ozone_layer.iter().enumerate() {
-        if !x.is_finite() || *x < 0.0 || *x > MAX_RADIUS {
-            return Err(invalid(
-                "atmosphere.ozone_layer",
-                format!("component {i} must be between 0 and {MAX_RADIUS:e}, got {x:e}"),
-            ));
-        }
-    }
-    if !(ozone_layer[0] < ozone_layer[1] && ozone_layer[1] < ozone_layer[2]) {
-        return Err(invalid(
-            "atmosphere.ozone_layer",
-            format!(
-                "must be increasing altitudes [start, peak, end], got {:?}",
-                ozone_layer
-            ),
-        ));
-    }
-    let samples = atmosphere.samples.unwrap_or(DEFAULT_ATMOSPHERE_SAMPLES);
-    if !(1..=MAX_ATMOSPHERE_SAMPLES).contains(&samples) {
-        return Err(invalid(
-            "atmosphere.samples",
-            format!("must be between 1 and {MAX_ATMOSPHERE_SAMPLES}, got {samples}"),
-        ));
-    }
-    let table_size = atmosphere
-        .od_table_size
-        .map_or(DEFAULT_TABLE_SIZE, |[w, h]| (w, h));
-    check_table_size(table_size.0, table_size.1)
-        .map_err(|e| invalid("atmosphere.od_table_size", e))?;
-    let sky_view = match atmosphere.sky_view {
-        None => DEFAULT_SKY_VIEW,
-        Some(SkyViewField::Word(w)) if w == "off" => None,
-        Some(SkyViewField::Word(w)) => {
-            return Err(invalid(
-                "atmosphere.sky_view",
-                format!("expected [width, height] or \"off\", got \"{w}\""),
-            ))
-        }
-        Some(SkyViewField::Size([w, h])) => {
-            check_sky_view(w, h).map_err(|e| invalid("atmosphere.sky_view", e))?;
-            Some((w, h))
-        }
-    };
-    Ok(Some(Sky {
-        sky_view,
-        table_size,
-        table_mapping: match atmosphere.od_table_mapping {
-            None | Some(TableMappingField::Horizon) => TableMapping::Horizon,
-            Some(TableMappingField::Linear) => TableMapping::Linear,
-            Some(TableMappingField::Seed) => {
-                warnings.push(seed_renamed(file, "atmosphere.od_table_mapping"));
-                TableMapping::Linear
+            Ok(v.to_array())
+        };
+        let rayleigh_given = match &atmosphere.rayleigh_from {
+            None => atmosphere.rayleigh_scattering,
+            Some(from) => {
+                let n = self.within(
+                    "atmosphere.rayleigh_from.refractive_index",
+                    from.refractive_index
+                        .unwrap_or(coefficients::AIR_REFRACTIVE_INDEX),
+                    &|n| n > 1.0 && n <= 2.0,
+                    "above 1 and at most 2",
+                )?;
+                let number_density = self.within(
+                    "atmosphere.rayleigh_from.number_density",
+                    from.number_density
+                        .unwrap_or(coefficients::AIR_NUMBER_DENSITY),
+                    &|x| (1e10..=1e35).contains(&x),
+                    "between 1e10 and 1e35 per m^3",
+                )?;
+                // (6 + 3p)/(6 - 7p): physical factors are 0..0.5.
+                let p = self.within(
+                    "atmosphere.rayleigh_from.depolarization",
+                    from.depolarization
+                        .unwrap_or(coefficients::AIR_DEPOLARIZATION),
+                    &|p| (0.0..=0.5).contains(&p),
+                    "between 0 and 0.5",
+                )?;
+                let beta = DVec3::from_array(std::array::from_fn(|i| {
+                    coefficients::rayleigh_scattering(n, number_density, p, wavelengths[i] * 1e-9)
+                }));
+                Some(derived("atmosphere.rayleigh_from", beta)?)
             }
-        },
-        table_filter: atmosphere.od_filter.unwrap_or(TableFilter::Manual),
-        ozone_depth: atmosphere.od_ozone.unwrap_or(OzoneDepth::Exact),
-        sun: Sun {
-            direction,
-            irradiance,
-            angular_radius,
-            disc: sun.disc,
-        },
-        atmosphere: Atmosphere {
-            center,
-            bottom_radius,
-            top_radius,
-            rayleigh_scattering,
-            rayleigh_scale_height,
-            mie_scattering,
-            mie_extinction,
-            mie_scale_height,
-            mie_g,
-            ozone_absorption,
-            ozone_layer,
-            ground_albedo,
-        },
-        samples,
-    }))
+        };
+        let (mie_scattering_given, mie_extinction_given) = match &atmosphere.mie_from {
+            None => (atmosphere.mie_scattering, atmosphere.mie_extinction),
+            Some(from) => {
+                let t = self.within(
+                    "atmosphere.mie_from.turbidity",
+                    from.turbidity,
+                    &|t| t > coefficients::MIN_TURBIDITY && t <= 1000.0,
+                    &format!(
+                        "above {:.4} (where the formula's aerosol concentration \
+                         0.6544 T - 0.6510 turns positive) and at most 1000",
+                        coefficients::MIN_TURBIDITY
+                    ),
+                )?;
+                let k = self.components_up_to(
+                    "atmosphere.mie_from.k",
+                    from.k.unwrap_or([coefficients::MIE_K; 3]),
+                    10.0,
+                )?;
+                let albedo = self.within(
+                    "atmosphere.mie_from.albedo",
+                    from.albedo.unwrap_or(0.9),
+                    &|a| a > 0.0 && a <= 1.0,
+                    "above 0 and at most 1",
+                )?;
+                let beta = DVec3::from_array(std::array::from_fn(|i| {
+                    coefficients::mie_scattering(t, k[i], wavelengths[i] * 1e-9)
+                }));
+                let scattering = derived("atmosphere.mie_from.turbidity", beta)?;
+                let extinction = derived("atmosphere.mie_from", beta / albedo)?;
+                (Some(scattering), Some(extinction))
+            }
+        };
+        let rayleigh_scattering = coefficient(
+            "rayleigh_scattering",
+            rayleigh_given,
+            earth.rayleigh_scattering,
+        )?;
+        let mie_scattering =
+            coefficient("mie_scattering", mie_scattering_given, earth.mie_scattering)?;
+        let mie_extinction =
+            coefficient("mie_extinction", mie_extinction_given, earth.mie_extinction)?;
+        for i in 0..3 {
+            if mie_extinction[i] < mie_scattering[i] {
+                return Err(self.invalid(
+                    "atmosphere.mie_extinction",
+                    format!(
+                        "component {i} ({:e}) must be at least mie_scattering ({:e}): \
+                         extinction is scattering plus absorption",
+                        mie_extinction[i], mie_scattering[i]
+                    ),
+                ));
+            }
+        }
+        let ozone_absorption = coefficient(
+            "ozone_absorption",
+            atmosphere.ozone_absorption,
+            earth.ozone_absorption,
+        )?;
+        let ground_albedo = self.components_up_to(
+            "atmosphere.ground_albedo",
+            atmosphere
+                .ground_albedo
+                .unwrap_or(earth.ground_albedo.to_array()),
+            1.0,
+        )?;
+        // Scale heights below a metre make the density a step the table and
+        // the march cannot resolve; above 1e9 they are meaningless.
+        let scale_height = |name: &str, x: Option<f64>, default: f64| {
+            let field = format!("atmosphere.{name}");
+            let x = planet_length(&field, x.unwrap_or(default))?;
+            if x < 1.0 {
+                return Err(self.invalid(&field, format!("must be at least 1 m, got {x:e}")));
+            }
+            Ok(x)
+        };
+        let rayleigh_scale_height = scale_height(
+            "rayleigh_scale_height",
+            atmosphere.rayleigh_scale_height,
+            earth.rayleigh_scale_height,
+        )?;
+        let mie_scale_height = scale_height(
+            "mie_scale_height",
+            atmosphere.mie_scale_height,
+            earth.mie_scale_height,
+        )?;
+        // |g| -> 1 makes the phase function a delta; 0.999 already peaks at 1e8.
+        let mie_g = self.within(
+            "atmosphere.mie_g",
+            atmosphere.mie_g.unwrap_or(earth.mie_g),
+            &|g| g.abs() <= 0.999,
+            "between -0.999 and 0.999",
+        )?;
+        let ozone_layer = atmosphere.ozone_layer.unwrap_or(earth.ozone_layer);
+        for (i, x) in ozone_layer.iter().enumerate() {
+            if !x.is_finite() || *x < 0.0 || *x > MAX_RADIUS {
+                return Err(self.invalid(
+                    "atmosphere.ozone_layer",
+                    format!("component {i} must be between 0 and {MAX_RADIUS:e}, got {x:e}"),
+                ));
+            }
+        }
+        if !(ozone_layer[0] < ozone_layer[1] && ozone_layer[1] < ozone_layer[2]) {
+            return Err(self.invalid(
+                "atmosphere.ozone_layer",
+                format!(
+                    "must be increasing altitudes [start, peak, end], got {:?}",
+                    ozone_layer
+                ),
+            ));
+        }
+        let samples = atmosphere.samples.unwrap_or(DEFAULT_ATMOSPHERE_SAMPLES);
+        if !(1..=MAX_ATMOSPHERE_SAMPLES).contains(&samples) {
+            return Err(self.invalid(
+                "atmosphere.samples",
+                format!("must be between 1 and {MAX_ATMOSPHERE_SAMPLES}, got {samples}"),
+            ));
+        }
+        let table_size = atmosphere
+            .od_table_size
+            .map_or(DEFAULT_TABLE_SIZE, |[w, h]| (w, h));
+        check_table_size(table_size.0, table_size.1)
+            .map_err(|e| self.invalid("atmosphere.od_table_size", e))?;
+        let sky_view = match atmosphere.sky_view {
+            None => DEFAULT_SKY_VIEW,
+            Some(SkyViewField::Word(w)) if w == "off" => None,
+            Some(SkyViewField::Word(w)) => {
+                return Err(self.invalid(
+                    "atmosphere.sky_view",
+                    format!("expected [width, height] or \"off\", got \"{w}\""),
+                ))
+            }
+            Some(SkyViewField::Size([w, h])) => {
+                check_sky_view(w, h).map_err(|e| self.invalid("atmosphere.sky_view", e))?;
+                Some((w, h))
+            }
+        };
+        Ok(Some(Sky {
+            sky_view,
+            table_size,
+            table_mapping: match atmosphere.od_table_mapping {
+                None | Some(TableMappingField::Horizon) => TableMapping::Horizon,
+                Some(TableMappingField::Linear) => TableMapping::Linear,
+                Some(TableMappingField::Seed) => {
+                    warnings.push(seed_renamed(self.file, "atmosphere.od_table_mapping"));
+                    TableMapping::Linear
+                }
+            },
+            table_filter: atmosphere.od_filter.unwrap_or(TableFilter::Manual),
+            ozone_depth: atmosphere.od_ozone.unwrap_or(OzoneDepth::Exact),
+            sun: Sun {
+                direction,
+                irradiance,
+                angular_radius,
+                disc: sun.disc,
+            },
+            atmosphere: Atmosphere {
+                center,
+                bottom_radius,
+                top_radius,
+                rayleigh_scattering,
+                rayleigh_scale_height,
+                mie_scattering,
+                mie_extinction,
+                mie_scale_height,
+                mie_g,
+                ozone_absorption,
+                ozone_layer,
+                ground_albedo,
+            },
+            samples,
+        }))
+    }
 }
 
 #[cfg(test)]

@@ -623,3 +623,43 @@ fn the_old_name_of_the_linear_mapping_is_read_with_a_warning() {
     );
     assert_eq!(knobbed.warnings.len(), 1);
 }
+
+/// The models are read after the file is parsed, but an object after an
+/// `obj` object can still name one of the model's materials
+/// (`object/material`), and an unknown name is refused with every material
+/// known at that object, the model's included.
+#[test]
+fn an_object_after_a_model_can_name_the_model_s_material() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("tri.obj"),
+        "mtllib tri.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n",
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("tri.mtl"), "newmtl red\nKd 0.8 0.1 0.1\n").unwrap();
+    let scene = |material: &str| {
+        Scene::from_toml(
+            &format!(
+                "{MINIMAL}[[materials]]\nname = \"grey\"\nkd = [0.5, 0.5, 0.5]\n\
+                 [[objects]]\nname = \"model\"\nshape = {{ type = \"obj\", path = \"tri.obj\" }}\n\
+                 [[objects]]\nname = \"ball\"\nmaterial = \"{material}\"\n\
+                 shape = {{ type = \"sphere\", radius = 1.0 }}\n\
+                 [[objects]]\nname = \"again\"\nmaterial = \"{material}\"\n\
+                 shape = {{ type = \"obj\", path = \"tri.obj\" }}\n"
+            ),
+            "t.toml",
+            dir.path(),
+        )
+    };
+    let s = scene("model/red").unwrap();
+    let red = s.materials.iter().position(|m| m.name == "model/red");
+    assert_eq!(red, Some(1), "{:?}", s.materials);
+    assert_eq!(s.objects.len(), 3);
+    assert!(s.objects[1..].iter().all(|o| o.material == 1));
+    let e = scene("model/blue").unwrap_err().to_string();
+    assert_eq!(
+        e,
+        "t.toml: objects[1].material: unknown material \"model/blue\" \
+         (defined: \"grey\", \"model/red\")"
+    );
+}

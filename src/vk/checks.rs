@@ -4,6 +4,10 @@
 //! would have reported a mistake. The tests make one of each kind the
 //! documentation promises is caught (a synchronization hazard, an object leaked
 //! at teardown) and assert the message arrives.
+//!
+//! Compiled only with the `validation-checks` feature, which the test
+//! suite turns on through its dev-dependency on this crate: the shipped
+//! library and binary have no way to make these mistakes.
 
 use super::{Context, VkError};
 use ash::vk;
@@ -15,7 +19,6 @@ impl Context {
     /// twice with no barrier between the clears: a write-after-write
     /// hazard that only synchronization validation reports. Everything it
     /// creates is destroyed again before it returns.
-    #[doc(hidden)]
     pub fn record_sync_hazard_for_validation_check(&self) -> Result<(), VkError> {
         let image_info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
@@ -133,7 +136,6 @@ impl Context {
 
     /// The error a deliberately failed run returns, so the tests can check
     /// that a failed run still reports what the layer said.
-    #[doc(hidden)]
     pub fn deliberate_failure_for_validation_check() -> VkError {
         VkError::Api(vk::Result::ERROR_UNKNOWN)
     }
@@ -141,7 +143,6 @@ impl Context {
     /// Creates a sampler and never destroys it, so destroying the device
     /// leaks it: the object-lifetime check reports that while the device
     /// is destroyed, after every frame is done.
-    #[doc(hidden)]
     pub fn leak_object_for_validation_check(&self) -> Result<(), VkError> {
         // SAFETY: a plain, valid sampler; leaking a handle is invalid use
         // the layer reports, not memory unsafety (the driver frees it with

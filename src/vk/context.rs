@@ -219,8 +219,9 @@ impl Context {
     /// Makes one deliberate API misuse (a sampler with anisotropic
     /// filtering, whose device feature was not enabled) so a caller can
     /// check that the validation messenger is live and counting. The
-    /// sampler is destroyed again at once.
-    #[doc(hidden)]
+    /// sampler is destroyed again at once. Only with the
+    /// `validation-checks` feature (see `vk/checks.rs`).
+    #[cfg(feature = "validation-checks")]
     pub fn misuse_api_for_validation_check(&self) -> Result<(), VkError> {
         let info = vk::SamplerCreateInfo::default()
             .anisotropy_enable(true)

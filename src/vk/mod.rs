@@ -5,6 +5,8 @@
 //! block states the invariant it relies on.
 
 mod buffer;
+// Test-only deliberate mistakes; see the `validation-checks` feature.
+#[cfg(feature = "validation-checks")]
 mod checks;
 mod commands;
 mod context;

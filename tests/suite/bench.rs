@@ -1,5 +1,6 @@
-//! `aerial bench`: the JSON report, the baseline gate, the empty pass under
-//! validation, and the benchmark scenes in assets/bench.
+//! `aerial bench`: the JSON report, the baseline gate (which fails when
+//! nothing matched), the empty pass under validation, the pass timings
+//! against the CPU frame time, and the benchmark scenes in assets/bench.
 
 use crate::common;
 
@@ -330,13 +331,9 @@ fn empty_pass_is_clean_under_validation_and_takes_time() {
             height: 64,
         },
         &RenderSettings {
-            validate: aerial::vk::validation::Validation::All,
-            device: None,
             warmup: 1,
             frames: 3,
-            keep_hdr: false,
-            empty_pass_between_frames: false,
-            ..Default::default()
+            ..common::validated_settings()
         },
         &mut || {},
     )
@@ -440,4 +437,91 @@ fn bench_scenes_have_the_intended_load_and_render_cleanly() {
             .filter(|p| p[..3] != [0, 0, 0]);
         assert!(lit.count() > 160 * 90 / 20, "{name} is nearly black");
     }
+}
+
+// Timings: the passes run inside the submission the CPU frame time spans
+// (submit to fence), so their sum cannot exceed it. A timestamp period or
+// mask applied wrongly (ticks read as milliseconds, garbage high bits)
+// breaks this by orders of magnitude.
+
+#[test]
+fn the_sum_of_pass_times_does_not_exceed_the_cpu_frame_time() {
+    let mut scene = aerial::scene::Scene::default_scene();
+    scene.set_output_size(Some(160), Some(90)).unwrap();
+    let run = aerial::app::render(
+        &scene,
+        &RenderSettings {
+            warmup: 1,
+            frames: 5,
+            ..common::validated_settings()
+        },
+    )
+    .unwrap();
+    common::assert_no_validation_messages(&run);
+    assert_eq!(run.frames.len(), 5);
+    for (i, f) in run.frames.iter().enumerate() {
+        assert_eq!(
+            f.pass_ms.len(),
+            run.passes.len(),
+            "frame {i}: one time per pass"
+        );
+        let gpu: f64 = f.pass_ms.iter().sum();
+        assert!(
+            f.pass_ms.iter().all(|t| t.is_finite() && *t >= 0.0) && gpu > 0.0,
+            "frame {i}: {:?}",
+            f.pass_ms
+        );
+        assert!(
+            gpu <= f.cpu_ms,
+            "frame {i}: passes sum to {gpu} ms, more than the CPU frame time {} ms",
+            f.cpu_ms
+        );
+    }
+}
+
+// The bench gate fails when nothing matched: a gate that compared nothing
+// must not pass.
+
+#[test]
+fn the_bench_gate_fails_when_no_pass_matched() {
+    let dir = common::fresh_dir("bench", "gate");
+    let current = dir.join("current.json");
+    common::succeed(common::tiny_triangle_bench(2).arg("--json").arg(&current));
+
+    // The same report compared with itself is not a failure; with every scene renamed
+    // and no empty pass, nothing matches and the gate fails, whatever the
+    // ratio limit.
+    let gate = |baseline: &Path| {
+        common::aerial()
+            .arg("bench")
+            .arg("--from-json")
+            .arg(&current)
+            .arg("--compare")
+            .arg(baseline)
+            .args(["--max-ratio", "1000"])
+            .output()
+            .unwrap()
+    };
+    // (Passes, or is inconclusive when a subpass timed near 0 in one of
+    // the two frames and its ratio's interval reaches past the limit.)
+    let same = gate(&current);
+    assert!(
+        matches!(same.status.code(), Some(0) | Some(3)),
+        "{}",
+        String::from_utf8_lossy(&same.stderr)
+    );
+
+    let mut value: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&current).unwrap()).unwrap();
+    value["empty_passes"] = serde_json::json!([]);
+    for s in value["scenes"].as_array_mut().unwrap() {
+        s["file"] = serde_json::json!("some/other/scene.toml");
+    }
+    let baseline = dir.join("baseline.json");
+    std::fs::write(&baseline, serde_json::to_string(&value).unwrap()).unwrap();
+    let out = gate(&baseline);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("nothing to compare"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
 }

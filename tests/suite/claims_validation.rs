@@ -14,8 +14,7 @@ use std::process::Output;
 fn settings(validate: Validation) -> RenderSettings {
     RenderSettings {
         validate,
-        frames: 1,
-        ..Default::default()
+        ..common::validated_settings()
     }
 }
 

@@ -1,4 +1,5 @@
-//! The command line: exit codes, error messages and output files.
+//! The command line: exit codes, error messages and output files (the
+//! same bytes from two processes, and the device in the PNG's metadata).
 
 use crate::common;
 use std::path::{Path, PathBuf};
@@ -89,4 +90,79 @@ fn a_zero_size_override_is_rejected() {
         .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("width"));
+}
+
+// What `aerial render` writes: the PNG's device metadata, and the same
+// bytes from two separate processes (what a CI job comparing with stored
+// references relies on).
+
+fn render_with_cli(dir: &Path, name: &str) -> (PathBuf, PathBuf) {
+    let (png, exr) = (
+        dir.join(format!("{name}.png")),
+        dir.join(format!("{name}.exr")),
+    );
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/transparency.toml");
+    common::succeed(
+        common::aerial()
+            .arg("render")
+            .arg(&scene)
+            .args(["--validate", "--width", "160", "--height", "90", "--out"])
+            .arg(&png)
+            .arg("--hdr")
+            .arg(&exr),
+    );
+    (png, exr)
+}
+
+#[test]
+fn two_processes_render_identical_images_and_record_the_device() {
+    let dir = common::fresh_dir("cli", "determinism");
+    let (png_a, exr_a) = render_with_cli(&dir, "a");
+    let (png_b, exr_b) = render_with_cli(&dir, "b");
+
+    let a = image::open(&png_a).unwrap().to_rgba8();
+    let b = image::open(&png_b).unwrap().to_rgba8();
+    assert_eq!(a.dimensions(), (160, 90));
+    let decoded = aerial::render::Pixels {
+        width: a.width(),
+        height: a.height(),
+        data: a.as_raw().clone(),
+    };
+    common::assert_not_blank(&decoded, 0.3);
+    assert!(a.as_raw() == b.as_raw(), "the tone-mapped images differ");
+    let (ha, hb) = (
+        aerial::image_io::read_exr(&exr_a).unwrap(),
+        aerial::image_io::read_exr(&exr_b).unwrap(),
+    );
+    assert!(
+        ha.data
+            .iter()
+            .map(|x| x.to_bits())
+            .eq(hb.data.iter().map(|x| x.to_bits())),
+        "the HDR images differ"
+    );
+
+    // The metadata names the device and driver this process rendered on,
+    // as the library reports them.
+    let text = aerial::image_io::read_png_text(&png_a).unwrap();
+    let get = |key: &str| {
+        text.iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.clone())
+            .unwrap_or_else(|| panic!("no {key} in {text:?}"))
+    };
+    let ctx = aerial::vk::Context::new(&aerial::vk::ContextOptions::default()).unwrap();
+    let info = ctx.device_info().clone();
+    drop(ctx);
+    assert_eq!(get("aerial:device"), info.name);
+    let driver = get("aerial:driver");
+    assert!(
+        driver.contains(&info.driver_name)
+            && driver.contains(&info.driver_info)
+            && driver.contains(&format!("{:#x}", info.driver_version)),
+        "{driver} vs {info:?}"
+    );
+    assert_eq!(get("aerial:vulkan"), info.api_version);
+    assert_eq!(aerial::image_io::read_png_text(&png_b).unwrap(), text);
+    std::fs::remove_dir_all(&dir).ok();
 }

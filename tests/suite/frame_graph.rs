@@ -1,5 +1,6 @@
 //! The frame as data: deferred lighting against forward on every example
-//! scene, tile light culling, and LDR output without an HDR attachment.
+//! scene, per-object and tile light culling, and LDR output without an HDR
+//! attachment.
 //! Every render runs under validation and must produce no message.
 
 use crate::common;
@@ -301,5 +302,121 @@ fn deferred_ldr_with_transparency_agrees_with_forward() {
     assert!(
         differing * 100 <= 3 * 240 * 135,
         "{differing} pixels differ"
+    );
+}
+
+// Per-object light culling, checked on pixels.
+//
+// A unit sphere at the origin, seen from (0, 0, 5), lit by a dim directional
+// light and a point light at (0, 0, 4) with attenuation 1/(1 + d^2). The
+// point light's distance to the sphere's bounding sphere is 3, so it
+// reaches the object with at most 1/10 of its intensity I. With
+// light_cutoff = 0.01 it is culled for I = 0.05 (0.005 < 0.01) and kept for
+// I = 0.15 (0.015 > 0.01; judged at the sphere's centre, 4 away, it would
+// wrongly be culled: 0.15/17 < 0.01).
+//
+// A culled light contributes nothing, and with the windowed attenuation
+// (1 / (1 + d^2) - cutoff / I, clamped at 0) a light beyond its range
+// contributes nothing either, so culling changes no pixel. Against no
+// cutoff at all (no window) the difference is at most the light's
+// unwindowed radiance at the nearest point, I/10, times kd + ks = 1, for
+// a light that is culled, and cutoff x (kd + ks) for one that is kept.
+
+fn culling_scene(intensity: Option<f64>, cutoff: f64) -> Scene {
+    let light = intensity.map_or(String::new(), |i| {
+        format!(
+            "[[lights]]\ntype = \"point\"\nposition = [0.0, 0.0, 4.0]\n\
+             intensity = {i}\nattenuation = [1.0, 0.0, 1.0]\n"
+        )
+    });
+    common::scene(&format!(
+        r#"
+light_cutoff = {cutoff}
+[output]
+width = 96
+height = 96
+hdr_format = "rgba32f"
+[camera]
+eye = [0.0, 0.0, 5.0]
+look_at = [0.0, 0.0, 0.0]
+fov_y = 40.0
+[[lights]]
+type = "directional"
+direction = [-1.0, -1.0, -1.0]
+intensity = 0.5
+{light}
+[[materials]]
+name = "m"
+kd = [0.5, 0.5, 0.5]
+ka = [0.0, 0.0, 0.0]
+ks = [0.5, 0.5, 0.5]
+shininess = 20.0
+[[objects]]
+name = "ball"
+material = "m"
+shape = {{ type = "sphere", radius = 1.0 }}
+"#
+    ))
+}
+
+/// Largest per-channel difference over pixels covered in both images, and
+/// how many covered pixels there are.
+fn max_difference(a: &Pixels<f32>, b: &Pixels<f32>) -> (f64, usize) {
+    let mut worst: f64 = 0.0;
+    let mut covered = 0;
+    for (pa, pb) in a.data.chunks_exact(4).zip(b.data.chunks_exact(4)) {
+        if pa[3] == 0.0 || pb[3] == 0.0 {
+            continue;
+        }
+        covered += 1;
+        for c in 0..3 {
+            worst = worst.max((pa[c] as f64 - pb[c] as f64).abs());
+        }
+    }
+    (worst, covered)
+}
+
+fn hdr(scene: &Scene) -> Pixels<f32> {
+    let run = common::render(scene, true);
+    common::assert_not_blank(&run.output, 0.2);
+    run.hdr.unwrap()
+}
+
+#[test]
+fn a_culled_light_changes_no_pixel_beyond_the_cutoff_bound() {
+    let cutoff = 0.01;
+    let without = hdr(&culling_scene(None, cutoff));
+
+    // Culled: the object's pixels are exactly those without the light.
+    let culled = hdr(&culling_scene(Some(0.05), cutoff));
+    let (diff, covered) = max_difference(&culled, &without);
+    assert!(covered > 2000, "{covered} covered pixels");
+    assert_eq!(diff, 0.0, "a culled light changed the object");
+
+    // Without culling the same light does reach the object, by no more
+    // than the bound I/10 x (kd + ks) = 0.005 (plus float rounding).
+    let exact = hdr(&culling_scene(Some(0.05), 0.0));
+    let (diff, _) = max_difference(&exact, &culled);
+    assert!(
+        diff > 0.001 && diff <= 0.005 + 1e-5,
+        "culling changed a pixel by {diff}, bound 0.005"
+    );
+
+    // Above the cutoff the light is kept, and it changes the object: its
+    // windowed attenuation (1 / (1 + d^2) - cutoff / I, from d = 3 at the
+    // nearest point) gives 0.15 x (0.1 - 0.0667) x (kd + ks) = 0.005 there.
+    let kept = hdr(&culling_scene(Some(0.15), cutoff));
+    let (diff, _) = max_difference(&kept, &without);
+    assert!(
+        diff > 0.003 && diff <= 0.005 + 1e-5,
+        "a light above the cutoff changed the object by {diff}, expected 0.005"
+    );
+    // The window dims it by at most cutoff x (kd + ks) = 0.01 against no
+    // cutoff at all.
+    let kept_exact = hdr(&culling_scene(Some(0.15), 0.0));
+    let (diff, _) = max_difference(&kept, &kept_exact);
+    assert!(
+        diff > 0.0 && diff <= 0.01 + 1e-5,
+        "the window changed a pixel by {diff}, bound 0.01"
     );
 }

@@ -3,7 +3,7 @@
 
 use crate::common;
 
-use aerial::app::{self, RenderSettings};
+use aerial::app;
 
 #[test]
 fn more_lights_than_a_uniform_block_holds_is_a_clear_error() {
@@ -28,10 +28,7 @@ shape = { type = "sphere", radius = 1.0 }
         toml.push_str("[[lights]]\ntype = \"directional\"\ndirection = [0.0, 0.0, -1.0]\nintensity = 0.0001\n");
     }
     let scene = common::scene(&toml);
-    let settings = RenderSettings {
-        validate: aerial::vk::validation::Validation::All,
-        ..Default::default()
-    };
+    let settings = common::validated_settings();
     let err = app::render(&scene, &settings).err().expect("rejected");
     // The failed run still returns the log, read after the device was
     // destroyed: the rejection left nothing behind for the layer to report.

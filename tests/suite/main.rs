@@ -1,9 +1,14 @@
 //! The integration tests, one binary with a module per area: rendering
 //! features, the commands, the scene and model formats, robustness, the
-//! benchmarks and the regression references. Shared helpers live only in
-//! `common`. One binary links once, where one per file linked forty times;
-//! only `tests/obj_memory.rs` stays a binary of its own, because it installs
-//! a counting global allocator that would count every other test's memory.
+//! benchmarks and the regression references. Each test lives in the module
+//! of the subject it checks (texture filters in `texture_filters`, exposure
+//! in `tonemap`, toon in `shading`, light culling in `frame_graph`, ...);
+//! a new area is a new module with `use crate::common;` and a `mod` line
+//! below. Shared helpers live only in `common`.
+//!
+//! One binary links once, where one per file linked forty times; only
+//! `tests/obj_memory.rs` stays a binary of its own, because it installs a
+//! counting global allocator that would count every other test's memory.
 //!
 //! Run one area with `cargo test --test suite AREA::`, e.g.
 //! `cargo test --test suite regression:: -- --nocapture`.
@@ -15,7 +20,6 @@ mod atmosphere_objects;
 mod bench;
 mod bench_metrics;
 mod bounds;
-mod claims_features;
 mod claims_validation;
 mod cli;
 mod cli_compare;
@@ -46,6 +50,7 @@ mod shading;
 mod sweep;
 mod sweep_shards;
 mod tall_atmosphere;
+mod texture_filters;
 mod tonemap;
 mod validation;
 mod viewer;

@@ -222,18 +222,7 @@ fn non_png_normal_map_is_a_clear_error() {
         "{ type = \"plane\", width = 2, depth = 2 }",
         0.0,
     );
-    let error = match aerial::app::render(
-        &s,
-        &aerial::app::RenderSettings {
-            validate: aerial::vk::validation::Validation::All,
-            device: None,
-            warmup: 0,
-            frames: 1,
-            keep_hdr: false,
-            empty_pass_between_frames: false,
-            ..Default::default()
-        },
-    ) {
+    let error = match aerial::app::render(&s, &common::validated_settings()) {
         Ok(_) => panic!("a JPEG normal map rendered"),
         Err(e) => e.to_string(),
     };

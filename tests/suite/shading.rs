@@ -329,3 +329,119 @@ fn transparent_objects_blend_back_to_front_in_any_scene_order() {
         }
     }
 }
+
+// Toon shading on a sphere, against a ray-traced oracle.
+//
+// A unit sphere at the origin seen from (0, 0, 4), lit by one directional
+// light travelling along -Z (radiance 1), kd = 0.5, ks = 0.3, no ambient.
+// Every visible point has N.L = N.z >= R/D = 0.25 (the silhouette circle
+// lies at z = R^2/D), so it is lit: the diffuse tones are 0.5 (N.L > 0.5)
+// and 0.2 (0.4 x 0.5, for 0 < N.L <= 0.5), the highlight adds 0.3, and the
+// silhouette where |N.V| < 0.2 is black. Which pixels are in the silhouette
+// ring follows from the exact ray-sphere intersection through each pixel
+// centre; the scene is symmetric about the view axis, so the image's
+// orientation does not matter.
+
+const TOON_SIZE: u32 = 128;
+const TOON_EYE: f64 = 4.0;
+const TOON_FOV_DEG: f64 = 40.0;
+
+/// |N.V| at the sphere point seen through pixel (x, y), or None if the
+/// pixel's ray misses the unit sphere.
+fn sphere_n_dot_v(x: u32, y: u32) -> Option<f64> {
+    let half = (TOON_FOV_DEG.to_radians() / 2.0).tan();
+    let px = ((x as f64 + 0.5) / TOON_SIZE as f64 * 2.0 - 1.0) * half;
+    let py = ((y as f64 + 0.5) / TOON_SIZE as f64 * 2.0 - 1.0) * half;
+    let len = (px * px + py * py + 1.0).sqrt();
+    let d = [px / len, py / len, -1.0 / len];
+    // |E + t d|^2 = 1 with E = (0, 0, D): t^2 + 2 t (E.d) + D^2 - 1 = 0.
+    let b = TOON_EYE * d[2];
+    let disc = b * b - (TOON_EYE * TOON_EYE - 1.0);
+    if disc < 0.0 {
+        return None;
+    }
+    let t = -b - disc.sqrt();
+    let p = [t * d[0], t * d[1], TOON_EYE + t * d[2]];
+    // N = P (unit sphere), V = -d.
+    Some((p[0] * d[0] + p[1] * d[1] + p[2] * d[2]).abs())
+}
+
+#[test]
+fn toon_has_two_diffuse_tones_a_highlight_and_a_silhouette_of_the_right_width() {
+    let toml = format!(
+        r#"
+[output]
+width = {TOON_SIZE}
+height = {TOON_SIZE}
+hdr_format = "rgba32f"
+[camera]
+eye = [0.0, 0.0, {TOON_EYE}]
+look_at = [0.0, 0.0, 0.0]
+fov_y = {TOON_FOV_DEG}
+[[lights]]
+type = "directional"
+direction = [0.0, 0.0, -1.0]
+[[materials]]
+name = "m"
+kd = [0.5, 0.5, 0.5]
+ka = [0.0, 0.0, 0.0]
+ks = [0.3, 0.3, 0.3]
+shininess = 60.0
+shading = "toon"
+[[objects]]
+name = "ball"
+material = "m"
+shape = {{ type = "sphere", radius = 1.0 }}
+tessellation = [256, 128]
+"#
+    );
+    let run = common::render(&common::scene(&toml), true);
+    let hdr = run.hdr.unwrap();
+
+    // The only values on the sphere: black, the two tones, tone + highlight.
+    let allowed = [0.0, 0.2, 0.5, 0.8];
+    let mut seen = [0usize; 4];
+    let (mut ring_expected, mut ring_rendered, mut wrong) = (0usize, 0usize, Vec::new());
+    for y in 0..TOON_SIZE {
+        for x in 0..TOON_SIZE {
+            let p = common::pixel(&hdr, x, y);
+            if p[3] == 0.0 {
+                continue; // background: not covered by the mesh
+            }
+            let v = p[0] as f64;
+            assert!(
+                p[1] == p[0] && p[2] == p[0],
+                "({x}, {y}) is not grey: {p:?}"
+            );
+            let k = allowed
+                .iter()
+                .position(|a| (v - a).abs() < 1e-4)
+                .unwrap_or_else(|| panic!("({x}, {y}) = {v}: not one of {allowed:?}"));
+            seen[k] += 1;
+            let Some(n_dot_v) = sphere_n_dot_v(x, y) else {
+                continue; // covered by a polygon, missed by the exact sphere
+            };
+            let black = k == 0;
+            ring_expected += (n_dot_v < 0.2) as usize;
+            ring_rendered += black as usize;
+            // Within 0.02 of the threshold, the mesh's interpolated normals
+            // may fall either way; elsewhere the classification is exact.
+            if (n_dot_v - 0.2).abs() > 0.02 && black != (n_dot_v < 0.2) {
+                wrong.push((x, y, n_dot_v, v));
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "silhouette misclassified at {wrong:?}");
+    // Each kind of pixel is present: ring, dark tone, bright tone, highlight.
+    // (This also rules out a blank image: the sphere covers about a third
+    // of the view.)
+    assert!(seen.iter().all(|&n| n > 10), "pixel counts {seen:?}");
+    assert!(seen.iter().sum::<usize>() > 4000, "pixel counts {seen:?}");
+    // The ring's area matches |N.V| < 0.2 within 10 %.
+    let ratio = ring_rendered as f64 / ring_expected as f64;
+    eprintln!("toon: pixels {seen:?}, ring {ring_rendered} rendered, {ring_expected} predicted");
+    assert!(
+        (0.9..=1.1).contains(&ratio),
+        "black ring {ring_rendered} pixels, |N.V| < 0.2 predicts {ring_expected}"
+    );
+}

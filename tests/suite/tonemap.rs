@@ -1,6 +1,7 @@
-//! The GPU tone-map subpass against the operators' formulas, and its
-//! behaviour on values a renderer can produce by accident (Inf, NaN,
-//! negatives). Every run is under validation with zero messages.
+//! The GPU tone-map subpass against the operators' formulas, at several
+//! exposures and through `aerial tonemap`, and its behaviour on values a
+//! renderer can produce by accident (Inf, NaN, negatives). Every run is
+//! under validation with zero messages.
 //!
 //! The subpass writes an sRGB attachment, so the CPU side applies the sRGB
 //! transfer function and the tolerance is one 8-bit step (the hardware's
@@ -25,6 +26,7 @@ fn reinhard(x: f64) -> f64 {
     x / (1.0 + x)
 }
 
+/// Narkowicz's ACES fit, as docs/frame.md names it.
 fn aces(x: f64) -> f64 {
     ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
 }
@@ -99,10 +101,7 @@ fn tone_mapping_the_hdr_output_reproduces_the_render() {
     let hdr = rendered.hdr.as_ref().unwrap();
     let again = app::run(
         RunSource::HdrImage(hdr, scene.tone_map),
-        &RenderSettings {
-            validate: aerial::vk::validation::Validation::All,
-            ..Default::default()
-        },
+        &common::validated_settings(),
         &mut || {},
     )
     .unwrap();
@@ -130,4 +129,125 @@ fn a_mis_sized_image_is_an_error_not_a_crash() {
     );
     let err = result.err().expect("rejected").to_string();
     assert!(err.contains("4x4"), "{err}");
+}
+
+// Tone mapping: both operators at exposures other than 1, through the
+// library and through `aerial tonemap --operator --exposure`. The oracle is
+// the operators' formulas and the sRGB encoding, within one 8-bit step.
+
+/// Log-spaced values 1e-3 .. 1e2 in R, half of them in G, twice in B.
+fn hdr_ramp() -> Pixels<f32> {
+    let n = 101;
+    let data = (0..n)
+        .flat_map(|i| {
+            let x = 10f32.powf(-3.0 + i as f32 * 0.05);
+            [x, 0.5 * x, 2.0 * x, 1.0]
+        })
+        .collect();
+    Pixels {
+        width: n,
+        height: 1,
+        data,
+    }
+}
+
+fn assert_tone_mapped(
+    what: &str,
+    input: &Pixels<f32>,
+    output: &[u8],
+    exposure: f64,
+    curve: fn(f64) -> f64,
+) {
+    assert_eq!(output.len(), input.data.len(), "{what}");
+    let mut worst: f64 = 0.0;
+    for (i, (inp, got)) in input.data.iter().zip(output).enumerate() {
+        if i % 4 == 3 {
+            assert_eq!(*got, 255, "{what}: alpha");
+            continue;
+        }
+        let expected = 255.0 * srgb_encode(curve(*inp as f64 * exposure));
+        worst = worst.max((*got as f64 - expected).abs());
+        assert!(
+            (*got as f64 - expected).abs() <= 1.0,
+            "{what}: value {i}: input {inp}, got {got}, expected {expected:.2}"
+        );
+    }
+    // Exposure must have mattered: without it some outputs would be off by
+    // far more than the tolerance.
+    let unexposed = input
+        .data
+        .iter()
+        .zip(output)
+        .enumerate()
+        .filter(|(i, _)| i % 4 != 3)
+        .map(|(_, (inp, got))| (255.0 * srgb_encode(curve(*inp as f64)) - *got as f64).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        unexposed > 10.0,
+        "{what}: exposure {exposure} changed nothing"
+    );
+}
+
+#[test]
+fn both_operators_apply_the_exposure() {
+    let input = hdr_ramp();
+    for (operator, curve) in [
+        (ToneMapOperator::Aces, aces as fn(f64) -> f64),
+        (ToneMapOperator::Reinhard, reinhard),
+    ] {
+        for exposure in [0.3f32, 3.0] {
+            let run = app::run(
+                RunSource::HdrImage(&input, ToneMap { operator, exposure }),
+                &common::validated_settings(),
+                &mut || {},
+            )
+            .unwrap();
+            common::assert_no_validation_messages(&run);
+            assert_tone_mapped(
+                &format!("{operator:?} at exposure {exposure}"),
+                &input,
+                &run.output.data,
+                exposure as f64,
+                curve,
+            );
+        }
+    }
+}
+
+#[test]
+fn the_tonemap_command_honours_operator_and_exposure() {
+    let dir = common::fresh_dir("tonemap", "command");
+    let exr = dir.join("ramp.exr");
+    let input = hdr_ramp();
+    aerial::image_io::write_exr(&exr, &input).unwrap();
+    for (operator, curve, exposure) in [
+        ("aces", aces as fn(f64) -> f64, 2.5),
+        ("reinhard", reinhard as fn(f64) -> f64, 0.4),
+    ] {
+        let png = dir.join(format!("{operator}.png"));
+        let out = common::aerial()
+            .arg("tonemap")
+            .arg(&exr)
+            .args(["--operator", operator, "--exposure", &exposure.to_string()])
+            .arg("--validate")
+            .arg("--out")
+            .arg(&png)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{operator}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let img = image::open(&png).unwrap().to_rgba8();
+        assert_eq!(img.dimensions(), (input.width, input.height));
+        assert_tone_mapped(
+            &format!("aerial tonemap --operator {operator} --exposure {exposure}"),
+            &input,
+            img.as_raw(),
+            exposure,
+            curve,
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -1,51 +1,94 @@
-//! OBJ models in a scene: an `obj` shape becomes one object per object or
-//! group of the file, each with its MTL material (checked against a scene
+//! OBJ models in a scene, read after the scene file is parsed: an `obj`
+//! object of the [`Description`] becomes one object per object or group
+//! of the file, each with its MTL material (checked against a scene
 //! material's bounds) unless the scene names one; missing or broken assets
 //! are warnings with visible fallbacks.
 
-use super::*;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use super::checks::{Check, Result, MAX_COLOUR};
+use super::file::{
+    Description, MaterialRef, ModelObject, ObjectDescription, PendingMaterial, DEFAULT_TESSELLATION,
+};
+use super::{AssetWarning, Material, Object, Scene, SceneWarning, ShadingModel, Shape, Texture};
+use crate::mesh::obj;
 
 impl Check<'_> {
-    /// An `obj` shape: the model is loaded, smoothed and given tangent
-    /// frames here, once, and becomes one object per object/group of the
-    /// file (named `name/group`), each with its MTL material unless the
-    /// scene object names one (then the MTL's textures are never opened,
-    /// and its problems are no concern of the scene's). Missing MTL
-    /// libraries and textures are `warnings` (see [`Check::mtl_material`]).
-    pub(super) fn obj_object(
+    /// The scene a parsed file describes: every OBJ model it names is
+    /// read, smoothed and given tangent frames here, once, in file order
+    /// (so the models' materials follow the scene's in the same order
+    /// every time). The models' warnings come before the sky's; the files
+    /// read are listed in [`Scene::files`].
+    pub(super) fn load_models(&self, description: Description) -> Result<Scene> {
+        let Description { mut scene, objects } = description;
+        let mut by_name: HashMap<String, usize> = scene
+            .materials
+            .iter()
+            .enumerate()
+            .map(|(i, m)| (m.name.clone(), i))
+            .collect();
+        let mut warnings = Vec::new();
+        let mut files = Vec::new();
+        for object in objects {
+            match object {
+                ObjectDescription::Shape(object) => scene.objects.push(object),
+                ObjectDescription::ShapeWithModelMaterial(mut object, pending) => {
+                    object.material =
+                        self.pending_material(&pending, &scene.materials, &by_name)?;
+                    scene.objects.push(object);
+                }
+                ObjectDescription::Model(model) => {
+                    let parts = self.model_objects(
+                        model,
+                        &mut scene.materials,
+                        &mut by_name,
+                        &mut warnings,
+                        &mut files,
+                    )?;
+                    scene.objects.extend(parts);
+                }
+            }
+        }
+        warnings.append(&mut scene.warnings);
+        scene.warnings = warnings;
+
+        for m in &scene.materials {
+            let texture = m.texture.as_ref().and_then(|t| t.file());
+            files.extend(texture.map(Path::to_path_buf));
+            files.extend(m.normal_map.iter().cloned());
+        }
+        let mut seen = std::collections::HashSet::new();
+        files.retain(|f| seen.insert(f.clone()));
+        scene.files = files;
+
+        scene.warn_unused_maps(self.file);
+        Ok(scene)
+    }
+
+    /// The objects of one `obj` object: one per object/group of the file
+    /// (named `name/group`), each with its MTL material unless the scene
+    /// object names one (then the MTL's textures are never opened, and its
+    /// problems are no concern of the scene's). Missing MTL libraries and
+    /// textures are `warnings` (see [`Check::mtl_material`]); the files
+    /// read are added to `files`.
+    fn model_objects(
         &self,
-        path: &str,
-        raw: ObjectFile,
+        model: ModelObject,
         materials: &mut Vec<Material>,
         by_name: &mut HashMap<String, usize>,
         warnings: &mut Vec<SceneWarning>,
+        files: &mut Vec<PathBuf>,
     ) -> Result<Vec<Object>> {
-        let field = |name: &str| format!("{path}.{name}");
-        if raw.name.trim().is_empty() {
-            return Err(self.invalid(field("name"), "must not be empty"));
-        }
-        let shape = &raw.shape;
-        if let Some((name, _)) = shape.sizes().iter().find(|(_, v)| v.is_some()) {
-            return Err(self.invalid(
-                field(&format!("shape.{name}")),
-                format!("an obj has no {name} (it takes path)"),
-            ));
-        }
-        if raw.tessellation.is_some() {
-            return Err(self.invalid(
-                field("tessellation"),
-                "an obj model brings its own triangles; tessellation is for parametric shapes",
-            ));
-        }
-        let model_path = shape
-            .path
-            .as_ref()
-            .ok_or_else(|| self.invalid(field("shape.path"), "required for an obj"))?;
-        let resolved = self.base_dir.join(model_path);
+        let field = |name: &str| format!("{}.{name}", model.field);
+        let resolved = &model.path;
         // A model is parsed, smoothed and given frames when the scene is
         // loaded, before the renderer's own memory estimate: refuse here,
         // from the file's size, what cannot fit the budget.
-        if let Ok(meta) = std::fs::metadata(&resolved) {
+        if let Ok(meta) = std::fs::metadata(resolved) {
             let budget = crate::budget::MemoryBudget::from_env()
                 .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
             budget
@@ -55,57 +98,11 @@ impl Check<'_> {
                 )
                 .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
         }
-        let model = obj::load_obj(&resolved)
+        let loaded = obj::load_obj(resolved)
             .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
-        self.models.borrow_mut().extend(model.files.iter().cloned());
-        let crease_degrees = match raw.crease_angle {
-            None => obj::DEFAULT_CREASE_DEGREES,
-            Some(x) => {
-                let x = self.finite(&field("crease_angle"), x)?;
-                if !(0.0..=180.0).contains(&x) {
-                    return Err(self.invalid(
-                        field("crease_angle"),
-                        format!("must be between 0 and 180 degrees, got {x}"),
-                    ));
-                }
-                x
-            }
-        };
-        let weld_tolerance = match raw.weld_tolerance {
-            None => obj::DEFAULT_WELD_TOLERANCE,
-            Some(x) => {
-                let x = self.finite(&field("weld_tolerance"), x)?;
-                // Up to 1e-3: welding further apart merges real features,
-                // and the hash cells would hold so many points that welding
-                // turns quadratic.
-                if !(0.0..=1e-3).contains(&x) {
-                    return Err(self.invalid(
-                        field("weld_tolerance"),
-                        format!(
-                            "must be between 0 and 0.001 (a fraction of the model's \
-                             bounding-box diagonal), got {x}"
-                        ),
-                    ));
-                }
-                x
-            }
-        };
-        let options = obj::ModelOptions {
-            smoothing: raw.smoothing.map(|s| match s {
-                SmoothingFile::Face => Smoothing::Face,
-                SmoothingFile::Object => Smoothing::Object,
-                SmoothingFile::Model => Smoothing::Model,
-                SmoothingFile::File => Smoothing::File,
-            }),
-            crease_degrees,
-            weld_tolerance,
-            tangents: match raw.tangents {
-                None | Some(TangentsFile::Aerial) => obj::TangentMethod::Aerial,
-                Some(TangentsFile::Mikktspace) => obj::TangentMethod::Mikktspace,
-            },
-        };
-        let meshes =
-            obj::model_meshes(&model, &options, &resolved.display().to_string()).map_err(|e| {
+        files.extend(loaded.files.iter().cloned());
+        let meshes = obj::model_meshes(&loaded, &model.options, &resolved.display().to_string())
+            .map_err(|e| {
                 // Only a smoothing mode the file cannot satisfy is the
                 // option's fault; anything else is the model's.
                 let at = match e {
@@ -114,12 +111,12 @@ impl Check<'_> {
                 };
                 self.invalid(field(at), e.to_string())
             })?;
-        let transform = self.transform(path, &raw)?;
-        let over = match &raw.material {
-            Some(name) => {
-                Some(self.material_index(&field("material"), Some(name), materials, by_name)?)
-            }
+        let over = match &model.material {
             None => None,
+            Some(MaterialRef::Index(i)) => Some(*i),
+            Some(MaterialRef::Pending(pending)) => {
+                Some(self.pending_material(pending, materials, by_name)?)
+            }
         };
         let mut warn = |warning: AssetWarning| {
             warnings.push(SceneWarning {
@@ -129,12 +126,12 @@ impl Check<'_> {
             })
         };
         if over.is_none() {
-            model.warnings.iter().cloned().for_each(&mut warn);
+            loaded.warnings.iter().cloned().for_each(&mut warn);
         }
         // The model's own materials, added on first use as `name/material`.
         let mut own: HashMap<Option<usize>, usize> = HashMap::new();
         let mut objects = Vec::with_capacity(meshes.len());
-        for (i, (part, (mesh, _))) in model.parts.iter().zip(meshes).enumerate() {
+        for (i, (part, (mesh, _))) in loaded.parts.iter().zip(meshes).enumerate() {
             // A group whose faces all collapsed draws nothing; an empty
             // vertex buffer is not a valid draw.
             if mesh.indices.is_empty() {
@@ -147,8 +144,8 @@ impl Check<'_> {
                     None => {
                         let m = self.mtl_material(
                             &field("shape.path"),
-                            &raw.name,
-                            part.material.map(|m| &model.materials[m]),
+                            &model.name,
+                            part.material.map(|m| &loaded.materials[m]),
                             &resolved.display().to_string(),
                             materials,
                             by_name,
@@ -177,14 +174,14 @@ impl Check<'_> {
                 ));
             }
             objects.push(Object {
-                name: format!("{}/{part_name}", raw.name),
+                name: format!("{}/{part_name}", model.name),
                 shape: Shape::Mesh {
                     mesh: Arc::new(mesh),
                 },
                 // Unused for a mesh; kept only because every object has one.
                 tessellation: (DEFAULT_TESSELLATION[0], DEFAULT_TESSELLATION[1]),
                 material,
-                transform,
+                transform: model.transform,
             });
         }
         if objects.is_empty() {
@@ -197,6 +194,17 @@ impl Check<'_> {
             ));
         }
         Ok(objects)
+    }
+
+    /// The index of a material named after a model, among the materials
+    /// known now (the scene's and those of the models read so far).
+    fn pending_material(
+        &self,
+        pending: &PendingMaterial,
+        materials: &[Material],
+        by_name: &HashMap<String, usize>,
+    ) -> Result<usize> {
+        self.material_index(&pending.field, Some(&pending.name), materials, by_name)
     }
 
     /// Adds the scene material for an MTL material (or the default grey for
