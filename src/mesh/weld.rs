@@ -86,10 +86,15 @@ pub(crate) fn weld_corners(slices: &[&[Vec3]], distance: f32) -> Welded {
     if distance > 0.0 {
         let group_of_position = weld_by_distance(&unique, f64::from(distance));
         let groups = group_of_position.iter().map(|&g| g as usize + 1).max();
+        let groups = groups.unwrap_or(0);
+        // Groups are numbered in order of their first position, so when
+        // every position is its own group (the distance joined none: the
+        // common case) the numbering is the identity, and the corners'
+        // position numbers serve as their groups without a copy.
         return Welded {
             position_of,
-            group_of_position: Some(group_of_position),
-            groups: groups.unwrap_or(0),
+            group_of_position: (groups < unique.len()).then_some(group_of_position),
+            groups,
         };
     }
     Welded {
