@@ -19,7 +19,7 @@ use glam::{Vec2, Vec3};
 
 use super::mikktspace::build_mesh_mikktspace;
 use super::smoothing::{smooth_normals_numbered, PositionNumbers, Smoothing, SmoothingOptions};
-use super::tangents::{build_mesh_numbered, TangentStats};
+use super::tangents::{build_mesh_in, MeshBuffers, MeshScratch, TangentStats};
 use super::Mesh;
 
 /// Why a model could not be loaded. The message names the file and, where
@@ -949,42 +949,69 @@ pub fn model_frames_numbered(
     numbers: Option<&PositionNumbers>,
     method: TangentMethod,
 ) -> Vec<(Mesh, TangentStats)> {
-    let build = |(i, part): (usize, &ObjPart), normals: &[Vec3]| match method {
-        TangentMethod::Aerial => build_mesh_numbered(
+    let build = |(i, part): (usize, &ObjPart),
+                 normals: &[Vec3],
+                 buffers: Option<MeshBuffers>,
+                 scratch: &mut MeshScratch| match (method, buffers) {
+        (TangentMethod::Aerial, Some(buffers)) => build_mesh_in(
             &part.positions,
             normals,
             part.uvs.as_deref(),
             numbers.and_then(|n| n.part(i)),
+            buffers,
+            scratch,
         ),
-        TangentMethod::Mikktspace => {
-            build_mesh_mikktspace(&part.positions, normals, part.uvs.as_deref())
-        }
+        _ => build_mesh_mikktspace(&part.positions, normals, part.uvs.as_deref()),
+    };
+    // Each part's arrays, and each thread's working arrays, are reserved
+    // here, before the threads start: they then reuse the memory smoothing
+    // freed instead of faulting in fresh pages in each thread's own pool.
+    let aerial = method == TangentMethod::Aerial;
+    let buffers = model
+        .parts
+        .iter()
+        .map(|part| aerial.then(|| MeshBuffers::for_corners(part.positions.len())));
+    let largest = model.parts.iter().map(|p| p.positions.len()).max();
+    let scratch = || match largest {
+        Some(corners) if aerial => MeshScratch::for_corners(corners),
+        _ => MeshScratch::default(),
     };
     // Parts are independent: spread them over the cores (in order).
     let threads = std::thread::available_parallelism()
         .map_or(1, |n| n.get())
         .min(model.parts.len());
     if threads <= 1 {
+        let mut scratch = scratch();
         return model
             .parts
             .iter()
             .enumerate()
             .zip(&normals)
-            .map(|(part, normals)| build(part, normals))
+            .zip(buffers)
+            .map(|((part, normals), buffers)| build(part, normals, buffers, &mut scratch))
             .collect();
     }
-    let jobs: Vec<((usize, &ObjPart), &Vec<Vec3>)> =
-        model.parts.iter().enumerate().zip(&normals).collect();
+    let mut jobs: Vec<_> = model
+        .parts
+        .iter()
+        .enumerate()
+        .zip(&normals)
+        .zip(buffers)
+        .map(|((part, normals), buffers)| (part, normals, buffers))
+        .collect();
     let chunk = jobs.len().div_ceil(threads);
     std::thread::scope(|scope| {
         let handles: Vec<_> = jobs
-            .chunks(chunk)
+            .chunks_mut(chunk)
             .map(|chunk| {
                 let build = &build;
+                let mut scratch = scratch();
                 scope.spawn(move || {
                     chunk
-                        .iter()
-                        .map(|&(part, normals)| build(part, normals))
+                        .iter_mut()
+                        .map(|(part, normals, buffers)| {
+                            build(*part, normals, buffers.take(), &mut scratch)
+                        })
                         .collect::<Vec<_>>()
                 })
             })

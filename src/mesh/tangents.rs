@@ -64,10 +64,73 @@ pub fn build_mesh_numbered(
     uvs: Option<&[Vec2]>,
     numbers: Option<PartNumbers>,
 ) -> (Mesh, TangentStats) {
+    let corners = positions.len();
+    let buffers = MeshBuffers::for_corners(corners);
+    let mut scratch = MeshScratch::for_corners(corners);
+    build_mesh_in(positions, normals, uvs, numbers, buffers, &mut scratch)
+}
+
+/// The arrays [`build_mesh_numbered`] fills, reserved ahead: a caller
+/// that builds meshes on other threads reserves them on its own, so that
+/// they reuse the memory its earlier stages freed (each thread allocates
+/// from its own pool, and fresh memory costs a page fault per 4 KB).
+pub(crate) struct MeshBuffers {
+    vertices: Vec<Vertex>,
+    indices: Vec<u32>,
+}
+
+impl MeshBuffers {
+    /// Room for a soup of `corners` corners with up to one vertex per four
+    /// corners (a closed mesh has about one per six; cuts and seams add
+    /// some), so that the arrays do not grow: reserved memory costs
+    /// nothing until it is written.
+    pub(crate) fn for_corners(corners: usize) -> Self {
+        MeshBuffers {
+            vertices: Vec::with_capacity(corners / 4 + 16),
+            indices: Vec::with_capacity(corners),
+        }
+    }
+}
+
+/// The working arrays of [`build_mesh_in`] (each vertex's sums of frames,
+/// and the vertices of each position), reused from one mesh to the next.
+#[derive(Default)]
+pub(crate) struct MeshScratch {
+    sums: Vec<(DVec3, DVec3)>,
+    earlier: Vec<u32>,
+}
+
+impl MeshScratch {
+    /// Room for the meshes of soups of up to `corners` corners (see
+    /// [`MeshBuffers::for_corners`]).
+    pub(crate) fn for_corners(corners: usize) -> Self {
+        MeshScratch {
+            sums: Vec::with_capacity(corners / 4 + 16),
+            earlier: Vec::with_capacity(corners / 4 + 16),
+        }
+    }
+}
+
+/// [`build_mesh_numbered`] into `buffers`, working in `scratch`.
+pub(crate) fn build_mesh_in(
+    positions: &[Vec3],
+    normals: &[Vec3],
+    uvs: Option<&[Vec2]>,
+    numbers: Option<PartNumbers>,
+    buffers: MeshBuffers,
+    scratch: &mut MeshScratch,
+) -> (Mesh, TangentStats) {
+    let MeshBuffers {
+        mut vertices,
+        mut indices,
+    } = buffers;
+    let sums = &mut scratch.sums;
+    sums.clear();
     let mut stats = TangentStats::default();
     let corners = positions.len() / 3 * 3;
     let uv = |c: usize| uvs.map_or(Vec2::ZERO, |u| u[c]);
-    let mut by_position = numbers.and_then(|n| ByPosition::new(n.positions, corners));
+    let mut by_position =
+        numbers.and_then(|n| ByPosition::new(n.positions, corners, &mut scratch.earlier));
     // Smoothing's corner angles, when they cover every triangle.
     let face_angles = numbers.map(|n| n.faces).filter(|f| f.len() == corners / 3);
 
@@ -80,9 +143,6 @@ pub fn build_mesh_numbered(
     // there are more.
     let expected = corners / 6 + 16;
     let mut table = IndexTable::with_capacity(if by_position.is_some() { 1 } else { expected });
-    let mut vertices: Vec<Vertex> = Vec::with_capacity(expected);
-    let mut sums: Vec<(DVec3, DVec3)> = Vec::with_capacity(expected);
-    let mut indices = Vec::with_capacity(corners);
     const BATCH: usize = 8;
     let mut frames = [(DVec3::ZERO, DVec3::ZERO); BATCH];
     let mut keys = [[0u32; 9]; 3 * BATCH];
@@ -186,7 +246,7 @@ pub fn build_mesh_numbered(
     }
     drop(table);
 
-    for (vertex, (t, b)) in vertices.iter_mut().zip(sums) {
+    for (vertex, &(t, b)) in vertices.iter_mut().zip(sums.iter()) {
         let n = Vec3::from(vertex.normal).as_dvec3();
         let sign = f64::from(vertex.tangent[3]);
         // Gram-Schmidt against the normal; if T vanished (or is parallel to
@@ -225,7 +285,7 @@ struct ByPosition<'a> {
     numbers: &'a [u32],
     base: u32,
     last: Vec<u32>,
-    earlier: Vec<u32>,
+    earlier: &'a mut Vec<u32>,
     crowded: IndexTable,
 }
 
@@ -237,7 +297,7 @@ impl<'a> ByPosition<'a> {
     /// far more numbers than it has corners (a small part of a large
     /// model whose positions are scattered over the model's numbering:
     /// an array of them all would cost more than the hash table).
-    fn new(numbers: &'a [u32], corners: usize) -> Option<Self> {
+    fn new(numbers: &'a [u32], corners: usize, earlier: &'a mut Vec<u32>) -> Option<Self> {
         if numbers.len() != corners {
             return None;
         }
@@ -255,7 +315,10 @@ impl<'a> ByPosition<'a> {
             numbers,
             base: low,
             last: vec![u32::MAX; span],
-            earlier: Vec::with_capacity(corners / 6 + 16),
+            earlier: {
+                earlier.clear();
+                earlier
+            },
             crowded: IndexTable::with_capacity(1),
         })
     }

@@ -86,10 +86,15 @@ pub(crate) fn weld_corners(slices: &[&[Vec3]], distance: f32) -> Welded {
     if distance > 0.0 {
         let group_of_position = weld_by_distance(&unique, f64::from(distance));
         let groups = group_of_position.iter().map(|&g| g as usize + 1).max();
+        let groups = groups.unwrap_or(0);
+        // Groups are numbered in order of their first position, so when
+        // every position is its own group (the distance joined none: the
+        // common case) the numbering is the identity, and the corners'
+        // position numbers serve as their groups without a copy.
         return Welded {
             position_of,
-            group_of_position: Some(group_of_position),
-            groups: groups.unwrap_or(0),
+            group_of_position: (groups < unique.len()).then_some(group_of_position),
+            groups,
         };
     }
     Welded {
@@ -97,6 +102,39 @@ pub(crate) fn weld_corners(slices: &[&[Vec3]], distance: f32) -> Welded {
         group_of_position: None,
         groups: unique.len(),
     }
+}
+
+/// The forward neighbours of a grid cell: the 13 of its 26 neighbours
+/// whose keys come after its own (offsets along x, y, z), so that each
+/// pair of cells is searched once, from the cell that comes first.
+const FORWARD: [[i64; 3]; 13] = [
+    [0, 0, 1],
+    [0, 1, -1],
+    [0, 1, 0],
+    [0, 1, 1],
+    [1, -1, -1],
+    [1, -1, 0],
+    [1, -1, 1],
+    [1, 0, -1],
+    [1, 0, 0],
+    [1, 0, 1],
+    [1, 1, -1],
+    [1, 1, 0],
+    [1, 1, 1],
+];
+
+/// A cell key's weight per axis: 21 bits each.
+const AXIS: [u64; 3] = [1 << 42, 1 << 21, 1];
+
+/// A distinct point on the grid of [`weld_by_distance`]: its cell's key,
+/// its number, and which of the [`FORWARD`] neighbouring cells it is
+/// within reach of (bit `k` for `FORWARD[k]`), so that the search over
+/// the sorted points reads nothing but this array.
+#[derive(Clone, Copy)]
+struct OnGrid {
+    key: u64,
+    index: u32,
+    near: u32,
 }
 
 /// The group of each of the distinct `points` (numbered in order of their
@@ -124,43 +162,64 @@ fn weld_by_distance(points: &[Vec3], distance: f64) -> Vec<u32> {
     // Cells four tolerances wide, or wider when the tolerance is below the
     // coordinates' own precision, so that scaled coordinates stay within
     // 2^19: a cell's coordinates then pack into one 64-bit key (21 bits
-    // each), and their rounding error stays far below the margin that
-    // decides which neighbouring cells to search.
+    // each), and their rounding error (below 2^-32 of a cell) stays far
+    // below the margin that decides which neighbouring cells to search.
     let size = (4.0 * distance).max(f64::from(extent) * 2f64.powi(-19));
     let inv = 1.0 / size;
     // A point whose scaled coordinate is within `reach` of a cell face
-    // (plus a margin for the rounding of the scaling) may have partners in
-    // the neighbouring cell on that side; otherwise only in its own.
-    let reach = distance * inv + 0.05;
+    // may have partners in the neighbouring cell on that side; otherwise
+    // only in its own.
+    let reach = distance * inv + 1e-3;
     // Coordinates offset to be positive (and never at the ends of their 21
-    // bits), so that a neighbour's key is the key plus a constant.
-    const OFFSET: i64 = (1 << 19) + 2;
-    const AXIS: [u64; 3] = [1 << 42, 1 << 21, 1];
-    let key_of = |c: glam::DVec3| -> u64 {
-        let [x, y, z] = c.as_i64vec3().to_array().map(|v| (v + OFFSET) as u64);
-        x * AXIS[0] + y * AXIS[1] + z
+    // bits), so that truncation is the floor and a neighbour's key is the
+    // key plus a constant.
+    const OFFSET: f64 = ((1 << 19) + 2) as f64;
+    // Per axis, the neighbours whose offset along it is -1, 0 or +1.
+    let along = |axis: usize, step: i64| -> u32 {
+        (0..FORWARD.len())
+            .filter(|&k| FORWARD[k][axis] == step)
+            .fold(0, |m, k| m | 1 << k)
     };
+    let masks: [[u32; 3]; 3] = [0, 1, 2].map(|a| [along(a, -1), along(a, 0), along(a, 1)]);
 
     // The finite points sorted by cell: the grid's cells become runs of one
     // array, and a neighbouring cell's run is found by a cursor moving
     // forward through it, so every access is sequential (a table of cells
     // costs a cache miss per lookup once the points outgrow the caches).
-    let mut sorted: Vec<(u64, u32)> = points
-        .iter()
-        .enumerate()
-        .filter(|(_, p)| finite(p))
-        .map(|(i, p)| (key_of((p.as_dvec3() * inv).floor()), i as u32))
-        .collect();
-    sorted.sort_unstable();
-    // Each pair of points is compared once, from the point whose cell
-    // comes first: within its own cell, the points after it; and the cells
-    // after its own in key order among its neighbours within reach (13 of
-    // the 26). Each of those has a cursor, moving forward as the keys do.
-    let forward: Vec<[i64; 3]> = (-1..=1)
-        .flat_map(|dx| (-1..=1).flat_map(move |dy| (-1..=1).map(move |dz| [dx, dy, dz])))
-        .filter(|&o| o > [0, 0, 0])
-        .collect();
-    let mut cursors = vec![0usize; forward.len()];
+    let mut sorted: Vec<OnGrid> = Vec::with_capacity(points.len());
+    for (i, p) in points.iter().enumerate() {
+        if !finite(p) {
+            continue;
+        }
+        let scaled = p.as_dvec3() * inv + OFFSET;
+        let (mut key, mut near) = (0, u32::MAX);
+        for (axis, &s) in scaled.to_array().iter().enumerate() {
+            // Positive: the truncation (to i64, one instruction) is the floor.
+            let cell = s as i64;
+            let fraction = s - cell as f64;
+            let [below, level, above] = masks[axis];
+            let mut allowed = level;
+            if fraction < reach {
+                allowed |= below;
+            }
+            if fraction > 1.0 - reach {
+                allowed |= above;
+            }
+            near &= allowed;
+            key += cell as u64 * AXIS[axis];
+        }
+        sorted.push(OnGrid {
+            key,
+            index: i as u32,
+            near,
+        });
+    }
+    sorted.sort_unstable_by_key(|g| g.key);
+    let delta = FORWARD.map(|offset| {
+        offset.iter().zip(AXIS).fold(0u64, |k, (&o, axis)| {
+            k.wrapping_add((o as u64).wrapping_mul(axis))
+        })
+    });
     let join = |i: u32, j: u32, parent: &mut Vec<u32>| {
         if points[j as usize]
             .as_dvec3()
@@ -171,37 +230,32 @@ fn weld_by_distance(points: &[Vec3], distance: f64) -> Vec<u32> {
             parent[a.max(b) as usize] = a.min(b);
         }
     };
-    for (s, &(key, i)) in sorted.iter().enumerate() {
-        for &(other, j) in &sorted[s + 1..] {
-            if other != key {
+    // Each pair of points is compared once, from the point whose cell
+    // comes first: within its own cell, the points after it; and the
+    // forward neighbouring cells within its reach, each through a cursor
+    // that moves forward as the keys do.
+    let mut cursors = [0usize; FORWARD.len()];
+    for (s, here) in sorted.iter().enumerate() {
+        for other in &sorted[s + 1..] {
+            if other.key != here.key {
                 break;
             }
-            join(i, j, &mut parent);
+            join(here.index, other.index, &mut parent);
         }
-        let scaled = points[i as usize].as_dvec3() * inv;
-        let fraction = scaled - scaled.floor();
-        let below = fraction.to_array().map(|f| f < reach);
-        let above = fraction.to_array().map(|f| f > 1.0 - reach);
-        for (offset, cursor) in forward.iter().zip(&mut cursors) {
-            let within = (0..3).all(|a| match offset[a] {
-                -1 => below[a],
-                1 => above[a],
-                _ => true,
-            });
-            if !within {
-                continue;
-            }
-            let target = offset.iter().zip(AXIS).fold(key, |k, (&o, axis)| {
-                k.wrapping_add((o as u64).wrapping_mul(axis))
-            });
-            while *cursor < sorted.len() && sorted[*cursor].0 < target {
+        let mut near = here.near;
+        while near != 0 {
+            let k = near.trailing_zeros() as usize;
+            near &= near - 1;
+            let target = here.key.wrapping_add(delta[k]);
+            let cursor = &mut cursors[k];
+            while *cursor < sorted.len() && sorted[*cursor].key < target {
                 *cursor += 1;
             }
-            for &(other, j) in &sorted[*cursor..] {
-                if other != target {
+            for other in &sorted[*cursor..] {
+                if other.key != target {
                     break;
                 }
-                join(i, j, &mut parent);
+                join(here.index, other.index, &mut parent);
             }
         }
     }
@@ -218,4 +272,66 @@ fn weld_by_distance(points: &[Vec3], distance: f64) -> Vec<u32> {
         };
     }
     group
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Welding by distance against every pair compared directly: points in
+    /// tight clusters (chains of points just within and just beyond the
+    /// distance, across cell faces and corners, at negative and positive
+    /// coordinates), the same groups, numbered the same way.
+    #[test]
+    fn distance_welding_matches_every_pair() {
+        let mut state = 0x853c_49e6_748f_ea9b_u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for round in 0..40 {
+            let distance = [1e-3f32, 0.01, 0.1, 0.37][round % 4];
+            let centres: Vec<Vec3> = (0..8)
+                .map(|_| (Vec3::new(next(), next(), next()) * 2.0 - 1.0) * 0.2)
+                .collect();
+            let points: Vec<Vec3> = (0..300)
+                .map(|_| {
+                    let c = centres[(next() * 8.0) as usize % 8];
+                    let offset = Vec3::new(next(), next(), next()) * 2.0 - 1.0;
+                    c + offset * distance * (0.5 + [3.0, 30.0][round % 2] * next())
+                })
+                .collect();
+            let d = f64::from(distance);
+            // Every pair: union-find whose root is the smallest index.
+            let mut parent: Vec<usize> = (0..points.len()).collect();
+            fn root(parent: &[usize], mut i: usize) -> usize {
+                while parent[i] != i {
+                    i = parent[i];
+                }
+                i
+            }
+            for i in 0..points.len() {
+                for j in i + 1..points.len() {
+                    if points[i].as_dvec3().distance(points[j].as_dvec3()) <= d {
+                        let (a, b) = (root(&parent, i), root(&parent, j));
+                        parent[a.max(b)] = a.min(b);
+                    }
+                }
+            }
+            let mut expected = vec![0u32; points.len()];
+            let mut groups = 0;
+            for i in 0..points.len() {
+                let r = root(&parent, i);
+                expected[i] = if r == i {
+                    groups += 1;
+                    groups - 1
+                } else {
+                    expected[r]
+                };
+            }
+            assert_eq!(weld_by_distance(&points, d), expected, "round {round}");
+        }
+    }
 }
