@@ -12,6 +12,7 @@
 // on the same samples (trapezoid between samples, while the scattering
 // uses each sample as a midpoint: two different rules, as the seed asks,
 // so both sums do not share one bias).
+#include "constants.glsl"
 
 layout(std140, set = 0, binding = 0) uniform Sky {
     vec4 forward;          // xyz: camera forward (unit)
@@ -41,11 +42,11 @@ layout(set = 0, binding = 1) uniform sampler2D od_table;
 // The table's mapping (0: horizon, Bruneton-style, split at the
 // horizontal; 1: the seed's linear altitude × linear cosine) and filter
 // (0: manual bilinear; 1: nearest; 2: the sampler's bilinear filter).
-layout(constant_id = 0) const int TABLE_MAPPING = 0;
-layout(constant_id = 1) const int TABLE_FILTER = 0;
+layout(constant_id = SPEC_TABLE_MAPPING) const int TABLE_MAPPING = 0;
+layout(constant_id = SPEC_TABLE_FILTER) const int TABLE_FILTER = 0;
 // The ozone's integral towards the sun: in closed form (true) or from the
 // table's third channel (false).
-layout(constant_id = 2) const bool OZONE_EXACT = true;
+layout(constant_id = SPEC_OZONE_EXACT) const bool OZONE_EXACT = true;
 
 const float PI = 3.14159265358979;
 const float INF = 1.0 / 0.0;

@@ -22,4 +22,10 @@
 // The tone map's specialization constants.
 #define SPEC_TONEMAP_OPERATOR 0
 #define SPEC_TONEMAP_EXPOSURE 1
+
+// The atmosphere shaders' specialization constants.
+#define SPEC_TABLE_MAPPING 0
+#define SPEC_TABLE_FILTER 1
+#define SPEC_OZONE_EXACT 2
+#define SPEC_SKY_VIEW_HARDWARE_FILTER 3
 #endif

@@ -23,6 +23,12 @@ pub const SPEC_SHININESS_EXPONENT: u32 = 4;
 pub const SPEC_TONEMAP_OPERATOR: u32 = 0;
 pub const SPEC_TONEMAP_EXPOSURE: u32 = 1;
 
+/// The atmosphere shaders' specialization constants.
+pub const SPEC_TABLE_MAPPING: u32 = 0;
+pub const SPEC_TABLE_FILTER: u32 = 1;
+pub const SPEC_OZONE_EXACT: u32 = 2;
+pub const SPEC_SKY_VIEW_HARDWARE_FILTER: u32 = 3;
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -44,6 +50,13 @@ mod tests {
             ("SPEC_SHININESS_EXPONENT", SPEC_SHININESS_EXPONENT),
             ("SPEC_TONEMAP_OPERATOR", SPEC_TONEMAP_OPERATOR),
             ("SPEC_TONEMAP_EXPOSURE", SPEC_TONEMAP_EXPOSURE),
+            ("SPEC_TABLE_MAPPING", SPEC_TABLE_MAPPING),
+            ("SPEC_TABLE_FILTER", SPEC_TABLE_FILTER),
+            ("SPEC_OZONE_EXACT", SPEC_OZONE_EXACT),
+            (
+                "SPEC_SKY_VIEW_HARDWARE_FILTER",
+                SPEC_SKY_VIEW_HARDWARE_FILTER,
+            ),
         ];
         let glsl = include_str!("../../glsl/include/constants.glsl");
         let defined: Vec<(&str, u32)> = glsl

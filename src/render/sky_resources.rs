@@ -180,6 +180,12 @@ pub struct SkyResources {
     /// width × height (Rayleigh, Mie, transmittance) side by side.
     pub sky_view_image: Option<Image>,
     _sampler: Sampler,
+    /// The sky-view table's bilinear sampler, where the device can filter
+    /// the table's format.
+    _sky_view_sampler: Option<Sampler>,
+    /// Whether the atmosphere pass reads the sky-view table through
+    /// `_sky_view_sampler` rather than by four fetches.
+    pub sky_view_hardware_filter: bool,
     /// The sky-view table's size (directions), when there is one.
     pub sky_view: Option<(u32, u32)>,
     /// The optical-depth table's size in bytes and its bake time (wall
@@ -282,6 +288,16 @@ impl SkyResources {
             SamplerFilter::Nearest
         };
         let sampler = Sampler::clamped(ctx, filter)?;
+        // The sky-view table is filtered by the sampler wherever the device
+        // can (glsl/atmosphere.frag, SKY_VIEW_HARDWARE_FILTER), and fetched
+        // and filtered by hand where it cannot.
+        let sky_view_hardware_filter = crate::vk::supports_linear_sampling(ctx, TABLE_FORMAT);
+        let sky_view_sampler = match &sky_view_image {
+            Some(_) if sky_view_hardware_filter => {
+                Some(Sampler::clamped(ctx, SamplerFilter::Bilinear)?)
+            }
+            _ => None,
+        };
         let both = ShaderStageFlags::FRAGMENT | ShaderStageFlags::COMPUTE;
         let mut bindings = vec![
             DescriptorBinding {
@@ -319,7 +335,7 @@ impl SkyResources {
         set.write_sampled_image(1, &table_image, &sampler);
         if let Some(image) = &sky_view_image {
             set.write_storage_image(2, image);
-            set.write_sampled_image(3, image, &sampler);
+            set.write_sampled_image(3, image, sky_view_sampler.as_ref().unwrap_or(&sampler));
         }
         Ok(SkyResources {
             set,
@@ -330,6 +346,8 @@ impl SkyResources {
             _table: table_image,
             sky_view_image,
             _sampler: sampler,
+            _sky_view_sampler: sky_view_sampler,
+            sky_view_hardware_filter,
             sky_view: sky.sky_view,
             table_bytes: table.bytes(),
             table_bake_seconds: table.bake_seconds,

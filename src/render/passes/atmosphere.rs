@@ -14,6 +14,9 @@
 
 use super::{fullscreen_pipeline, InputAttachments, PassResources, PassSetup, RecordPass};
 use crate::atmosphere::TableMapping;
+use crate::render::shader_ids::{
+    SPEC_OZONE_EXACT, SPEC_SKY_VIEW_HARDWARE_FILTER, SPEC_TABLE_FILTER, SPEC_TABLE_MAPPING,
+};
 use crate::render::sky_resources::SkyResources;
 use crate::render::RenderError;
 use crate::scene::{OzoneDepth, TableFilter};
@@ -43,7 +46,11 @@ pub(super) fn table_constants(sky: &crate::scene::Sky) -> [(u32, u32); 3] {
         TableFilter::Hardware => 2,
     };
     let ozone_exact = u32::from(sky.ozone_depth == OzoneDepth::Exact);
-    [(0, mapping), (1, filter), (2, ozone_exact)]
+    [
+        (SPEC_TABLE_MAPPING, mapping),
+        (SPEC_TABLE_FILTER, filter),
+        (SPEC_OZONE_EXACT, ozone_exact),
+    ]
 }
 
 pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
@@ -53,7 +60,11 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     })?;
     let inputs = InputAttachments::declared(setup)?;
     let layout = PipelineLayout::new(setup.ctx, &[&resources.layout, &inputs.layout])?;
-    let constants = table_constants(sky);
+    let mut constants = table_constants(sky).to_vec();
+    constants.push((
+        SPEC_SKY_VIEW_HARDWARE_FILTER,
+        u32::from(resources.sky_view_hardware_filter),
+    ));
     // (shader features, depth test) per draw.
     let draws: &[(&[&str], Option<CompareOp>)] = if resources.sky_view.is_some() {
         &[
