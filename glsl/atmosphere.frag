@@ -21,6 +21,11 @@
 // on lavapipe the fetches were about 40 % of the pass), by hand otherwise.
 layout(set = 0, binding = 3) uniform sampler2D sky_view_table;
 layout(constant_id = SPEC_SKY_VIEW_HARDWARE_FILTER) const bool SKY_VIEW_HARDWARE_FILTER = false;
+// Whether the frame draws transparent objects, the only surfaces that leave
+// colour where depth still holds the far plane. Without them a sky pixel's
+// surface colour is the clear colour, black, and is not read: on lavapipe
+// an input-attachment read is about two empty passes' worth per full screen.
+layout(constant_id = SPEC_TRANSPARENT_OVER_SKY) const bool TRANSPARENT_OVER_SKY = true;
 #endif
 
 layout(input_attachment_index = 0, set = 1, binding = 0) uniform subpassInput surface;
@@ -77,9 +82,11 @@ Path sky_view_path(vec3 d) {
 #endif
 
 void main() {
-    // Transparent surfaces leave colour without depth, so the colour is
-    // read even where nothing opaque was drawn.
+#ifdef SKY_VIEW
+    vec3 colour = TRANSPARENT_OVER_SKY ? subpassLoad(surface).rgb : vec3(0.0);
+#else
     vec3 colour = subpassLoad(surface).rgb;
+#endif
     vec2 ndc = gl_FragCoord.xy * sky.viewport.zw * 2.0 - 1.0;
     vec3 ray = sky.forward.xyz + sky.right.xyz * ndc.x - sky.up.xyz * ndc.y;
     float ray_length = length(ray);

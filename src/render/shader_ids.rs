@@ -28,6 +28,7 @@ pub const SPEC_TABLE_MAPPING: u32 = 0;
 pub const SPEC_TABLE_FILTER: u32 = 1;
 pub const SPEC_OZONE_EXACT: u32 = 2;
 pub const SPEC_SKY_VIEW_HARDWARE_FILTER: u32 = 3;
+pub const SPEC_TRANSPARENT_OVER_SKY: u32 = 4;
 
 #[cfg(test)]
 mod tests {
@@ -57,6 +58,7 @@ mod tests {
                 "SPEC_SKY_VIEW_HARDWARE_FILTER",
                 SPEC_SKY_VIEW_HARDWARE_FILTER,
             ),
+            ("SPEC_TRANSPARENT_OVER_SKY", SPEC_TRANSPARENT_OVER_SKY),
         ];
         let glsl = include_str!("../../glsl/include/constants.glsl");
         let defined: Vec<(&str, u32)> = glsl

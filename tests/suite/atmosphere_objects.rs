@@ -307,3 +307,40 @@ fn image_precision_agrees_with_the_oracle() {
         assert!(e <= 1e-5, "{label}: {image} against {exact}");
     }
 }
+
+/// A half-transparent sphere seen against the sky: transparent surfaces
+/// leave colour where the depth still holds the far plane, so the
+/// atmosphere pass's sky-view draw must read the surface colour there (it
+/// skips that read only when the frame has no transparent objects).
+#[test]
+fn a_transparent_object_against_the_sky_stays_visible() {
+    let scene = |with_sphere: bool| {
+        let sphere = if with_sphere {
+            "[[objects]]\nname = \"glass\"\nmaterial = \"glass\"\n\
+             shape = { type = \"sphere\", radius = 3.0 }\ntranslate = [0.0, 12.0, -20.0]\n"
+        } else {
+            ""
+        };
+        common::scene(&format!(
+            "ambient = [0.0, 0.0, 0.0]\n\
+             [output]\nwidth = 32\nheight = 32\nhdr_format = \"rgba32f\"\n\
+             [camera]\neye = [0.0, 2.0, 0.0]\nlook_at = [0.0, 12.0, -20.0]\nfov_y = 30.0\n\
+             [[materials]]\nname = \"glass\"\nkd = [1.0, 0.05, 0.05]\nopacity = 0.5\n\
+             {sphere}\
+             [sun]\ndirection = [0.0, 0.5, 1.0]\n[atmosphere]\n"
+        ))
+    };
+    let sky_only = common::render(&scene(false), true).hdr.unwrap();
+    let with_glass = common::render(&scene(true), true).hdr.unwrap();
+    let (sky, glass) = (
+        common::hdr_pixel(&sky_only, 16, 16),
+        common::hdr_pixel(&with_glass, 16, 16),
+    );
+    // The red glass, lit by the sun behind the camera, adds red to the sky
+    // behind it (measured: 29 times the sky's own red); without the read
+    // the pixel would be the sky alone.
+    assert!(
+        glass.x > sky.x * 10.0 && glass.x - sky.x > 10.0 * (glass.z - sky.z).abs(),
+        "sky {sky} with glass {glass}"
+    );
+}

@@ -16,6 +16,7 @@ use super::{fullscreen_pipeline, InputAttachments, PassResources, PassSetup, Rec
 use crate::atmosphere::TableMapping;
 use crate::render::shader_ids::{
     SPEC_OZONE_EXACT, SPEC_SKY_VIEW_HARDWARE_FILTER, SPEC_TABLE_FILTER, SPEC_TABLE_MAPPING,
+    SPEC_TRANSPARENT_OVER_SKY,
 };
 use crate::render::sky_resources::SkyResources;
 use crate::render::RenderError;
@@ -64,6 +65,10 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     constants.push((
         SPEC_SKY_VIEW_HARDWARE_FILTER,
         u32::from(resources.sky_view_hardware_filter),
+    ));
+    constants.push((
+        SPEC_TRANSPARENT_OVER_SKY,
+        u32::from(!setup.plan.transparent.is_empty()),
     ));
     // (shader features, depth test) per draw.
     let draws: &[(&[&str], Option<CompareOp>)] = if resources.sky_view.is_some() {
