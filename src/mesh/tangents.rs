@@ -447,13 +447,7 @@ mod tests {
     /// mode and at several weld distances.
     #[test]
     fn numbered_joining_matches_hashing_bit_for_bit() {
-        let mut state = 0x9e37_79b9_u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = crate::mesh::tests::uniform_stream(0x9e37_79b9_u64);
         for round in 0..4 {
             let mut pool: Vec<Vec3> = (0..(6 << round))
                 .map(|_| Vec3::new(next(), next(), next()) * 2.0 - 1.0)

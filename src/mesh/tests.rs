@@ -5,6 +5,18 @@
 use super::*;
 use glam::{DVec3, Vec3};
 
+/// A repeatable stream of numbers in [0, 1) (xorshift64 from `seed`), for
+/// the randomised tests of the welding and tangent code.
+pub(super) fn uniform_stream(seed: u64) -> impl FnMut() -> f32 {
+    let mut state = seed;
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
 /// One of every surface, plus awkward variants (spindle torus, steep flag).
 fn surfaces() -> Vec<(&'static str, Box<dyn ParametricSurface>)> {
     vec![

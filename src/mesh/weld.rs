@@ -284,13 +284,7 @@ mod tests {
     /// coordinates), the same groups, numbered the same way.
     #[test]
     fn distance_welding_matches_every_pair() {
-        let mut state = 0x853c_49e6_748f_ea9b_u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = crate::mesh::tests::uniform_stream(0x853c_49e6_748f_ea9b_u64);
         for round in 0..40 {
             let distance = [1e-3f32, 0.01, 0.1, 0.37][round % 4];
             let centres: Vec<Vec3> = (0..8)
