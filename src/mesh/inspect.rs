@@ -164,8 +164,9 @@ pub fn inspect(path: &Path, options: &ModelOptions) -> Result<MeshReport, ObjErr
     Ok(report)
 }
 
-/// Processor time of this process so far, over every thread.
-fn process_cpu_seconds() -> f64 {
+/// Processor time of this process so far, over every thread: on a shared
+/// machine it tells work apart from time spent waiting for a core.
+pub fn process_cpu_seconds() -> f64 {
     let mut t = libc::timespec {
         tv_sec: 0,
         tv_nsec: 0,

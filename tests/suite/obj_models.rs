@@ -11,6 +11,7 @@ use crate::common;
 use std::fmt::Write as _;
 use std::path::Path;
 
+use aerial::mesh::inspect::process_cpu_seconds;
 use aerial::mesh::obj::{load_obj, model_meshes, ModelOptions};
 use aerial::mesh::smoothing::{
     naive_normals, smooth_normals, smooth_normals_numbered, Smoothing, SmoothingOptions,
@@ -652,19 +653,6 @@ fn rendered_smoothing_matches_analytic_sphere() {
         "object: {object:?}"
     );
     assert!(face.0 > object.0, "face: {face:?} vs object {object:?}");
-}
-
-/// CPU time of the process (every thread), so that timings on a shared
-/// machine can be told apart from time spent waiting for a core.
-fn process_cpu_seconds() -> f64 {
-    let mut t = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `t` is a valid, writable timespec; the clock id is a constant
-    // every Linux supports.
-    unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut t) };
-    t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9
 }
 
 /// Relative (negative) indices, quads, `g` groups and faces with and
