@@ -85,26 +85,24 @@ pub fn read_png_text(path: &Path) -> Result<Vec<(String, String)>, RenderError> 
         .iter()
         .map(|c| (c.keyword.clone(), c.text.clone()))
         .collect();
-    for chunk in &info.compressed_latin1_text {
-        let mut chunk = chunk.clone();
-        chunk
-            .decompress_text()
-            .map_err(|e| err(format!("zTXt chunk {:?}: {e}", chunk.keyword)))?;
-        let value = chunk
-            .get_text()
-            .map_err(|e| err(format!("zTXt chunk {:?}: {e}", chunk.keyword)))?;
-        text.push((chunk.keyword, value));
+    // zTXt and iTXt chunks are two types with the same two calls (no
+    // shared trait), so one macro reads both.
+    macro_rules! push_decompressed {
+        ($chunks:expr, $kind:literal) => {
+            for chunk in $chunks {
+                let mut chunk = chunk.clone();
+                let value = chunk
+                    .decompress_text()
+                    .and_then(|()| chunk.get_text())
+                    .map_err(|e| {
+                        err(format!(concat!($kind, " chunk {:?}: {}"), chunk.keyword, e))
+                    })?;
+                text.push((chunk.keyword, value));
+            }
+        };
     }
-    for chunk in &info.utf8_text {
-        let mut chunk = chunk.clone();
-        chunk
-            .decompress_text()
-            .map_err(|e| err(format!("iTXt chunk {:?}: {e}", chunk.keyword)))?;
-        let value = chunk
-            .get_text()
-            .map_err(|e| err(format!("iTXt chunk {:?}: {e}", chunk.keyword)))?;
-        text.push((chunk.keyword, value));
-    }
+    push_decompressed!(&info.compressed_latin1_text, "zTXt");
+    push_decompressed!(&info.utf8_text, "iTXt");
     Ok(text)
 }
 
@@ -228,5 +226,36 @@ mod tests {
             .to_string();
         assert!(msg.contains("missing.png"), "{msg}");
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// Compressed (zTXt) and international (iTXt) chunks written by another
+    /// encoder are inflated and read after the plain ones.
+    #[test]
+    fn compressed_and_international_text_chunks_are_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("chunks.png");
+        let file = std::fs::File::create(&path).unwrap();
+        let mut encoder = png::Encoder::new(file, 1, 1);
+        encoder.set_color(png::ColorType::Grayscale);
+        encoder
+            .add_ztxt_chunk("zipped".into(), "z".repeat(300))
+            .unwrap();
+        encoder
+            .add_itxt_chunk("world".into(), "Világ ✓".into())
+            .unwrap();
+        encoder.add_text_chunk("plain".into(), "p".into()).unwrap();
+        encoder
+            .write_header()
+            .unwrap()
+            .write_image_data(&[7])
+            .unwrap();
+        let text = read_png_text(&path).unwrap();
+        let expected = [
+            ("plain", "p".to_string()),
+            ("zipped", "z".repeat(300)),
+            ("world", "Világ ✓".to_string()),
+        ]
+        .map(|(k, v)| (k.to_string(), v));
+        assert_eq!(text, expected);
     }
 }
