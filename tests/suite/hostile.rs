@@ -334,39 +334,30 @@ fn a_failed_run_leaves_none_of_its_outputs_and_keeps_old_files() {
     let dir = Scratch::new();
     let png = dir.path("a.png");
     let missing = dir.path("nodir/x.exr");
-    let run = aerial(
-        &[
-            "render",
-            "--width",
-            "8",
-            "--height",
-            "8",
-            "--out",
-            s(&png),
-            "--hdr",
-            s(&missing),
-        ],
-        &[],
-    );
+    // A run that fails: the --hdr output's folder does not exist.
+    let failing_run = || {
+        aerial(
+            &[
+                "render",
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "--out",
+                s(&png),
+                "--hdr",
+                s(&missing),
+            ],
+            &[],
+        )
+    };
+    let run = failing_run();
     assert_fails(&run, 2, &["nodir"]);
     assert!(dir.entries().is_empty(), "{:?}", dir.entries());
 
     // An existing file is left as it was when the run fails.
     std::fs::write(&png, b"old").unwrap();
-    let run = aerial(
-        &[
-            "render",
-            "--width",
-            "8",
-            "--height",
-            "8",
-            "--out",
-            s(&png),
-            "--hdr",
-            s(&missing),
-        ],
-        &[],
-    );
+    let run = failing_run();
     assert_fails(&run, 2, &["nodir"]);
     assert_eq!(std::fs::read(&png).unwrap(), b"old");
     let same = aerial(
