@@ -180,12 +180,10 @@ pub struct SkyResources {
     /// width × height (Rayleigh, Mie, transmittance) side by side.
     pub sky_view_image: Option<Image>,
     _sampler: Sampler,
-    /// The sky-view table's bilinear sampler, where the device can filter
-    /// the table's format.
-    _sky_view_sampler: Option<Sampler>,
-    /// Whether the atmosphere pass reads the sky-view table through
-    /// `_sky_view_sampler` rather than by four fetches.
-    pub sky_view_hardware_filter: bool,
+    /// The sky-view table's bilinear sampler, where there is a table and
+    /// the device can filter its format (see
+    /// [`SkyResources::sky_view_hardware_filter`]).
+    sky_view_sampler: Option<Sampler>,
     /// The sky-view table's size (directions), when there is one.
     pub sky_view: Option<(u32, u32)>,
     /// The optical-depth table's size in bytes and its bake time (wall
@@ -195,6 +193,12 @@ pub struct SkyResources {
 }
 
 impl SkyResources {
+    /// Whether the atmosphere pass reads the sky-view table through its
+    /// bilinear sampler rather than by four fetches and a blend.
+    pub fn sky_view_hardware_filter(&self) -> bool {
+        self.sky_view_sampler.is_some()
+    }
+
     /// Rewrites the uniforms for `sky` (its sun) seen by `camera`, between
     /// frames; the tables do not depend on either (the sky-view table is
     /// computed from the uniforms in every frame).
@@ -291,9 +295,8 @@ impl SkyResources {
         // The sky-view table is filtered by the sampler wherever the device
         // can (glsl/atmosphere.frag, SKY_VIEW_HARDWARE_FILTER), and fetched
         // and filtered by hand where it cannot.
-        let sky_view_hardware_filter = crate::vk::supports_linear_sampling(ctx, TABLE_FORMAT);
         let sky_view_sampler = match &sky_view_image {
-            Some(_) if sky_view_hardware_filter => {
+            Some(_) if crate::vk::supports_linear_sampling(ctx, TABLE_FORMAT) => {
                 Some(Sampler::clamped(ctx, SamplerFilter::Bilinear)?)
             }
             _ => None,
@@ -346,8 +349,7 @@ impl SkyResources {
             _table: table_image,
             sky_view_image,
             _sampler: sampler,
-            _sky_view_sampler: sky_view_sampler,
-            sky_view_hardware_filter,
+            sky_view_sampler,
             sky_view: sky.sky_view,
             table_bytes: table.bytes(),
             table_bake_seconds: table.bake_seconds,

@@ -61,15 +61,22 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     })?;
     let inputs = InputAttachments::declared(setup)?;
     let layout = PipelineLayout::new(setup.ctx, &[&resources.layout, &inputs.layout])?;
-    let mut constants = table_constants(sky).to_vec();
-    constants.push((
-        SPEC_SKY_VIEW_HARDWARE_FILTER,
-        u32::from(resources.sky_view_hardware_filter),
-    ));
-    constants.push((
-        SPEC_TRANSPARENT_OVER_SKY,
-        u32::from(!setup.plan.transparent.is_empty()),
-    ));
+    // The march's constants, plus the two only this pass's sky-view
+    // variant reads.
+    let constants = [
+        &table_constants(sky)[..],
+        &[
+            (
+                SPEC_SKY_VIEW_HARDWARE_FILTER,
+                u32::from(resources.sky_view_hardware_filter()),
+            ),
+            (
+                SPEC_TRANSPARENT_OVER_SKY,
+                u32::from(!setup.plan.transparent.is_empty()),
+            ),
+        ],
+    ]
+    .concat();
     // (shader features, depth test) per draw.
     let draws: &[(&[&str], Option<CompareOp>)] = if resources.sky_view.is_some() {
         &[
