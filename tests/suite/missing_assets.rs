@@ -21,6 +21,12 @@ const QUAD: &str = "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n\
                     vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
                     usemtl m\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
 
+/// The scene's one warning, as text (fails if it has another count).
+fn only_warning(scene: &Scene) -> String {
+    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+    scene.warnings[0].to_string()
+}
+
 fn scene_of(dir: &Path, extra: &str) -> Result<Scene, aerial::scene::SceneError> {
     let toml = format!(
         "ambient = [1, 1, 1]\n[output]\nwidth = 64\nheight = 64\ntexture_filter = \"nearest\"\n\
@@ -36,8 +42,7 @@ fn a_missing_mtl_library_is_a_warning_naming_it_and_groups_get_the_default_mater
     let dir = tempfile::tempdir().unwrap();
     write(dir.path(), "m.obj", &format!("mtllib gone.mtl\n{QUAD}"));
     let scene = scene_of(dir.path(), "").unwrap();
-    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
-    let warning = scene.warnings[0].to_string();
+    let warning = only_warning(&scene);
     let tried = dir.path().join("gone.mtl");
     assert!(
         warning.contains("\"gone.mtl\"") && warning.contains(&tried.display().to_string()),
@@ -58,8 +63,7 @@ fn a_missing_mtl_library_is_a_warning_naming_it_and_groups_get_the_default_mater
     // rest of the library loads.
     write(dir.path(), "gone.mtl", "newmtl m\nNs shiny\nKd 0 0 1\n");
     let scene = scene_of(dir.path(), "").unwrap();
-    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
-    let warning = scene.warnings[0].to_string();
+    let warning = only_warning(&scene);
     assert!(
         warning.contains("gone.mtl:2: Ns needs a number, got \"shiny\""),
         "{warning}"
@@ -70,8 +74,7 @@ fn a_missing_mtl_library_is_a_warning_naming_it_and_groups_get_the_default_mater
     // left out, with a warning naming the line.
     write(dir.path(), "gone.mtl", "newmtl m\nKd 0.25\nKs 0.1 x 0.2\n");
     let scene = scene_of(dir.path(), "").unwrap();
-    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
-    let warning = scene.warnings[0].to_string();
+    let warning = only_warning(&scene);
     assert!(
         warning.contains("gone.mtl:3: Ks needs one or three numbers"),
         "{warning}"
@@ -139,8 +142,7 @@ fn a_missing_texture_becomes_a_magenta_checker_and_a_missing_normal_map_the_flat
     write(dir.path(), "m.mtl", "newmtl m\nmap_Kd bad.png\n");
     write(dir.path(), "bad.png", "this is not an image");
     let scene = scene_of(dir.path(), "").unwrap();
-    assert_eq!(scene.warnings.len(), 1);
-    let text = scene.warnings[0].to_string();
+    let text = only_warning(&scene);
     assert!(
         text.contains("bad.png") && text.contains("neither a PNG nor a JPEG"),
         "{text}"
@@ -541,8 +543,7 @@ fn mtl_values_out_of_bounds_are_warnings_with_their_fallback() {
         "newmtl m\nKd 1 0 0\n\nnewmtl m\nKd 0 1 0\n",
     );
     let scene = scene_of(dir.path(), "").unwrap();
-    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
-    let w = scene.warnings[0].to_string();
+    let w = only_warning(&scene);
     assert!(
         w.contains("m.mtl:4: material \"m\" is defined again (first at line 1)")
             && w.contains("the later definition is used"),
