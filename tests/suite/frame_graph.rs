@@ -5,6 +5,7 @@
 
 use crate::common;
 
+use aerial::app::RenderRun;
 use aerial::render::tiles::{self, TILE_SIZE};
 use aerial::render::{FramePlan, Pixels, SceneGeometry};
 use aerial::scene::{HdrFormat, Lighting, Scene, ToneMapOperator};
@@ -19,6 +20,23 @@ fn example(name: &str) -> Scene {
 
 /// Largest per-channel difference between two 8-bit images, in LSB, and
 /// how many pixels differ at all.
+/// Scene `name` rendered with forward and then with deferred lighting; the
+/// deferred frame has its lighting pass and a picture.
+fn forward_and_deferred(name: &str, scene: &Scene, keep_hdr: bool) -> (RenderRun, RenderRun) {
+    let mut scene = scene.clone();
+    scene.output.lighting = Lighting::Forward;
+    let forward = common::render(&scene, keep_hdr);
+    scene.output.lighting = Lighting::Deferred;
+    let deferred = common::render(&scene, keep_hdr);
+    assert!(
+        deferred.passes.contains(&"lighting"),
+        "{name}: deferred plan has no lighting pass: {:?}",
+        deferred.passes
+    );
+    common::assert_not_blank(&deferred.output, 0.2);
+    (forward, deferred)
+}
+
 fn diff_u8(a: &Pixels<u8>, b: &Pixels<u8>) -> (u8, usize) {
     assert_eq!((a.width, a.height), (b.width, b.height));
     let mut worst = 0;
@@ -56,15 +74,7 @@ fn deferred_and_forward_agree_on_every_example_scene() {
         let mut scene = example(name);
         scene.light_cutoff = 0.0;
         scene.set_output_size(Some(320), Some(180)).unwrap();
-        let forward = common::render(&scene, true);
-        scene.output.lighting = Lighting::Deferred;
-        let deferred = common::render(&scene, true);
-        assert!(
-            deferred.passes.contains(&"lighting"),
-            "{name}: deferred plan has no lighting pass: {:?}",
-            deferred.passes
-        );
-        common::assert_not_blank(&deferred.output, 0.2);
+        let (forward, deferred) = forward_and_deferred(name, &scene, true);
         let (worst, differing) = diff_u8(&forward.output, &deferred.output);
         println!("{name}: forward vs deferred: {differing} pixels differ, by at most {worst}/255");
         assert!(worst <= 2, "{name}: differ by {worst}/255");
@@ -107,16 +117,7 @@ fn deferred_and_forward_agree_with_each_scene_s_own_cutoff() {
         let mut scene = example(name);
         assert!(scene.light_cutoff > 0.0, "{name}: no cutoff to test");
         scene.set_output_size(Some(320), Some(180)).unwrap();
-        scene.output.lighting = Lighting::Forward;
-        let forward = common::render(&scene, false);
-        scene.output.lighting = Lighting::Deferred;
-        let deferred = common::render(&scene, false);
-        assert!(
-            deferred.passes.contains(&"lighting"),
-            "{name}: deferred plan has no lighting pass: {:?}",
-            deferred.passes
-        );
-        common::assert_not_blank(&deferred.output, 0.2);
+        let (forward, deferred) = forward_and_deferred(name, &scene, false);
         let (worst, differing) = diff_u8(&forward.output, &deferred.output);
         println!(
             "{name} (cutoff {}): forward vs deferred: {differing} pixels differ, by at most {worst}/255",
