@@ -2,7 +2,8 @@
 // Deferred lighting: reads the G-buffer and depth of this pixel as input
 // attachments, rebuilds the world position from depth, and adds the light
 // of exactly the lights that reach this screen tile (its group's block,
-// LIGHT_COUNT of them) to the colour target with additive blending.
+// LIGHT_COUNT of them, as constants when static) to the colour target
+// with additive blending.
 #include "frame_data.glsl"
 #include "lighting.glsl"
 #include "octahedral.glsl"
@@ -28,8 +29,8 @@ void main() {
     vec3 kd = subpassLoad(g_albedo).rgb;
     vec4 ks_shininess = subpassLoad(g_material);
     vec3 color = vec3(0.0);
-    for (uint i = 0u; i < LIGHT_COUNT; ++i) {
-        color += blinn_phong_light(tile.lights[i], p, n, v, kd, ks_shininess);
-    }
+#define PHONG_TERM(light) color += blinn_phong_light(light, p, n, v, kd, ks_shininess)
+    FOR_EACH_LIGHT(tile, PHONG_TERM)
+#undef PHONG_TERM
     out_color = vec4(color, 0.0);
 }

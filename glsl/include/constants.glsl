@@ -18,6 +18,11 @@
 #define SPEC_LIGHT_ARRAY_LENGTH 2
 #define SPEC_DEBUG_ATTRIBUTE 3
 #define SPEC_SHININESS_EXPONENT 4
+// Static lights: whether a pipeline's lights are specialization constants
+// (static_lights.glsl), and the first of their ids, 12 per light.
+#define SPEC_STATIC_LIGHTS 5
+#define SPEC_STATIC_LIGHT_DATA 16
+#define MAX_STATIC_LIGHTS 8
 
 // The tone map's specialization constants.
 #define SPEC_TONEMAP_OPERATOR 0

@@ -14,6 +14,7 @@ layout(set = FRAME_SET, binding = 0) uniform Frame {
     vec4 ambient;          // rgb: La
     mat4 inverse_view_projection;
     vec4 viewport;         // width, height, 1/width, 1/height
+    vec4 light_origin;     // xyz: the point static lights are placed from, relative to the camera
 } frame;
 
 // The number of lights a draw evaluates, a specialization constant: the
@@ -23,3 +24,5 @@ layout(constant_id = SPEC_LIGHT_COUNT) const uint LIGHT_COUNT = 0u;
 // The declared length of the light array: LIGHT_COUNT, but at least 1, since
 // a GLSL array cannot be empty.
 layout(constant_id = SPEC_LIGHT_ARRAY_LENGTH) const uint LIGHT_ARRAY_LENGTH = 1u;
+
+#include "static_lights.glsl"

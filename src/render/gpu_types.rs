@@ -15,10 +15,20 @@ pub struct ViewUniforms {
     pub inverse_view_projection: [[f32; 4]; 4],
     /// Width, height, 1/width, 1/height in pixels.
     pub viewport: [f32; 4],
+    /// Where static lights are placed from (`render::static_lights`),
+    /// relative to the camera.
+    pub light_origin: [f32; 4],
 }
 
 impl ViewUniforms {
-    pub fn new(scene: &crate::scene::Scene, width: u32, height: u32) -> ViewUniforms {
+    /// The block for `scene`'s camera; static lights are placed from
+    /// `light_anchor` (a world position).
+    pub fn new(
+        scene: &crate::scene::Scene,
+        width: u32,
+        height: u32,
+        light_anchor: glam::DVec3,
+    ) -> ViewUniforms {
         let aspect = width as f32 / height as f32;
         // Camera-relative, composed and inverted in double precision: with a
         // far/near ratio of 1e6 and more, a float inverse loses most of the
@@ -33,6 +43,12 @@ impl ViewUniforms {
             ambient: scene.ambient.extend(0.0).to_array(),
             inverse_view_projection: inverse.to_cols_array_2d(),
             viewport: [w, h, 1.0 / w, 1.0 / h],
+            light_origin: scene
+                .camera
+                .relative(light_anchor)
+                .as_vec3()
+                .extend(0.0)
+                .to_array(),
         }
     }
 }
@@ -72,7 +88,7 @@ mod tests {
     // Sizes the GLSL layouts imply; a mismatch would shift every field.
     #[test]
     fn layouts_match_glsl() {
-        assert_eq!(std::mem::size_of::<ViewUniforms>(), 176);
+        assert_eq!(std::mem::size_of::<ViewUniforms>(), 192);
         assert_eq!(std::mem::size_of::<GpuLight>(), 48);
         assert_eq!(std::mem::size_of::<ObjectHeader>(), 192);
     }

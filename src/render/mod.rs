@@ -2,7 +2,8 @@
 //! (`plan`: attachments and passes), one type per pass (`passes`), the GPU
 //! resources and the recorded command buffer (`renderer`); the images are
 //! written by `crate::image_io`. `tiles` culls lights per screen tile for deferred
-//! lighting; `octahedral` is the G-buffer's normal encoding. `empty_pass`
+//! lighting, and `static_lights` carries unchanging lights as
+//! specialization constants; `octahedral` is the G-buffer's normal encoding. `empty_pass`
 //! is the driver's floor that benchmarks divide by; `reference` is the
 //! exact CPU image that sweeps can measure against.
 
@@ -20,6 +21,7 @@ mod renderer;
 mod scene_resources;
 pub mod shader_ids;
 pub mod sky_resources;
+mod static_lights;
 pub mod tiles;
 
 pub use empty_pass::EmptyPass;

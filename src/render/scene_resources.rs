@@ -60,6 +60,9 @@ pub struct SceneResources {
     pub ranges: Vec<GeometryRange>,
     /// Dynamic offset of each object's block.
     pub block_offsets: Vec<u32>,
+    /// The world position static lights are placed from: the camera when
+    /// these resources were made (`render::static_lights`).
+    pub light_anchor: glam::DVec3,
     frame_buffer: Buffer,
     object_buffer: Buffer,
 }
@@ -72,7 +75,8 @@ impl SceneResources {
         plan: &FramePlan,
     ) -> Result<SceneResources, RenderError> {
         let (geometry_buffer, ranges) = upload_geometry(ctx, geometry)?;
-        let frame = ViewUniforms::new(scene, plan.width, plan.height);
+        let light_anchor = scene.camera.eye;
+        let frame = ViewUniforms::new(scene, plan.width, plan.height, light_anchor);
         let frame_buffer = Buffer::with_data(
             ctx,
             "frame",
@@ -256,6 +260,7 @@ impl SceneResources {
             geometry: geometry_buffer,
             ranges,
             block_offsets,
+            light_anchor,
             frame_buffer,
             object_buffer,
         })
@@ -267,7 +272,7 @@ impl SceneResources {
     /// lights as those this was created with (so every block keeps its
     /// size and offset).
     pub fn set_view(&mut self, scene: &Scene, plan: &FramePlan) {
-        let frame = ViewUniforms::new(scene, plan.width, plan.height);
+        let frame = ViewUniforms::new(scene, plan.width, plan.height, self.light_anchor);
         self.frame_buffer.write(0, bytemuck::bytes_of(&frame));
         for (i, &offset) in self.block_offsets.iter().enumerate() {
             let block = object_block(scene, i, plan.draws().find(|d| d.object == i));

@@ -18,6 +18,12 @@ pub const SPEC_LIGHT_COUNT: u32 = 1;
 pub const SPEC_LIGHT_ARRAY_LENGTH: u32 = 2;
 pub const SPEC_DEBUG_ATTRIBUTE: u32 = 3;
 pub const SPEC_SHININESS_EXPONENT: u32 = 4;
+/// Whether a pipeline's lights are specialization constants
+/// (`render::static_lights`), and the first of their ids, 12 per light.
+pub const SPEC_STATIC_LIGHTS: u32 = 5;
+pub const SPEC_STATIC_LIGHT_DATA: u32 = 16;
+/// The most lights a pipeline carries as constants.
+pub const MAX_STATIC_LIGHTS: u32 = 8;
 
 /// The tone map's specialization constants.
 pub const SPEC_TONEMAP_OPERATOR: u32 = 0;
@@ -49,6 +55,9 @@ mod tests {
             ("SPEC_LIGHT_ARRAY_LENGTH", SPEC_LIGHT_ARRAY_LENGTH),
             ("SPEC_DEBUG_ATTRIBUTE", SPEC_DEBUG_ATTRIBUTE),
             ("SPEC_SHININESS_EXPONENT", SPEC_SHININESS_EXPONENT),
+            ("SPEC_STATIC_LIGHTS", SPEC_STATIC_LIGHTS),
+            ("SPEC_STATIC_LIGHT_DATA", SPEC_STATIC_LIGHT_DATA),
+            ("MAX_STATIC_LIGHTS", MAX_STATIC_LIGHTS),
             ("SPEC_TONEMAP_OPERATOR", SPEC_TONEMAP_OPERATOR),
             ("SPEC_TONEMAP_EXPOSURE", SPEC_TONEMAP_EXPOSURE),
             ("SPEC_TABLE_MAPPING", SPEC_TABLE_MAPPING),

@@ -4,7 +4,9 @@
 //! rebuilds the position from depth and adds exactly those lights to the
 //! colour target (additive blending over the ambient term the G-buffer
 //! pass wrote). As for forward draws, the light count is a specialization
-//! constant, so each group's loop has a fixed trip count.
+//! constant, so each group's loop has a fixed trip count, and so are the
+//! lights themselves where they fit (`render::static_lights`): one pipeline
+//! per group then, instead of one per light count.
 //!
 //! The tiles are drawn at the far plane with a LESS test against the
 //! stored (reversed-Z) depth, so pixels without a surface are never shaded.
@@ -13,6 +15,7 @@ use super::{InputAttachments, PassResources, PassSetup, RecordPass};
 use crate::render::gpu_types::GpuLight;
 use crate::render::scene_resources::{gpu_light, pack_blocks};
 use crate::render::shader_ids::{SPEC_LIGHT_ARRAY_LENGTH, SPEC_LIGHT_COUNT};
+use crate::render::static_lights;
 use crate::render::RenderError;
 use crate::shaders;
 use crate::vk::CompareOp;
@@ -27,7 +30,8 @@ use std::collections::BTreeMap;
 struct GroupDraw {
     /// Indices into the scene's lights.
     lights: Vec<usize>,
-    light_count: u32,
+    /// Index into `DeferredLightingPass::pipelines`.
+    pipeline: usize,
     vertex_offset: u64,
     vertex_count: u32,
     block_offset: u32,
@@ -37,7 +41,7 @@ struct GroupDraw {
 /// pool and layouts.
 pub struct DeferredLightingPass {
     groups: Vec<GroupDraw>,
-    pipelines: BTreeMap<u32, GraphicsPipeline>,
+    pipelines: Vec<GraphicsPipeline>,
     layout: PipelineLayout,
     lights_set: DescriptorSet,
     _pool: DescriptorPool,
@@ -81,7 +85,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         blocks.push(group_block(setup.scene, &group.lights));
         groups.push(GroupDraw {
             lights: group.lights.clone(),
-            light_count: group.lights.len() as u32,
+            pipeline: 0,
             vertex_offset: (first * std::mem::size_of::<[f32; 2]>()) as u64,
             vertex_count: (vertex_data.len() - first) as u32,
             block_offset: 0,
@@ -133,11 +137,31 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         format: Format::R32G32_SFLOAT,
         offset: 0,
     }];
-    let mut pipelines = BTreeMap::new();
-    for g in &groups {
-        if pipelines.contains_key(&g.light_count) {
-            continue;
+    // Static lights give each group its own pipeline; past the limit, or
+    // with a group too large for them, groups share one per light count.
+    let static_lights = groups.len() <= static_lights::MAX_STATIC_PIPELINES
+        && groups.iter().all(|g| static_lights::fits(&g.lights));
+    let mut pipelines = Vec::new();
+    let mut by_count: BTreeMap<usize, usize> = BTreeMap::new();
+    for g in &mut groups {
+        let count = g.lights.len();
+        if !static_lights {
+            if let Some(&p) = by_count.get(&count) {
+                g.pipeline = p;
+                continue;
+            }
+            by_count.insert(count, pipelines.len());
         }
+        g.pipeline = pipelines.len();
+        let mut specialization = vec![
+            (SPEC_LIGHT_COUNT, count as u32),
+            (SPEC_LIGHT_ARRAY_LENGTH, count.max(1) as u32),
+        ];
+        specialization.extend(static_lights::constants(
+            setup.scene,
+            resources.light_anchor,
+            static_lights.then_some(&g.lights[..]),
+        ));
         let pipeline = GraphicsPipeline::new(
             ctx,
             &layout,
@@ -145,10 +169,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
             &GraphicsPipelineDesc {
                 vertex_shader: &vert,
                 fragment_shader: &frag,
-                specialization: &[
-                    (SPEC_LIGHT_COUNT, g.light_count),
-                    (SPEC_LIGHT_ARRAY_LENGTH, g.light_count.max(1)),
-                ],
+                specialization: &specialization,
                 vertex_stride: std::mem::size_of::<[f32; 2]>() as u32,
                 vertex_attributes: &attributes,
                 cull_mode: CullModeFlags::NONE,
@@ -160,7 +181,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
                 subpass: setup.subpass,
             },
         )?;
-        pipelines.insert(g.light_count, pipeline);
+        pipelines.push(pipeline);
     }
     Ok(Box::new(DeferredLightingPass {
         groups,
@@ -196,13 +217,13 @@ impl RecordPass for DeferredLightingPass {
         };
         let mut bound = None;
         for g in &self.groups {
-            if bound != Some(g.light_count) {
-                cmd.bind_pipeline(&self.pipelines[&g.light_count]);
+            if bound != Some(g.pipeline) {
+                cmd.bind_pipeline(&self.pipelines[g.pipeline]);
                 if bound.is_none() {
                     cmd.bind_descriptor_set(&self.layout, 0, &resources.frame_set, &[]);
                     cmd.bind_descriptor_set(&self.layout, 2, &self.inputs.set, &[]);
                 }
-                bound = Some(g.light_count);
+                bound = Some(g.pipeline);
             }
             cmd.bind_descriptor_set(&self.layout, 1, &self.lights_set, &[g.block_offset]);
             cmd.bind_vertex_buffer(&self.vertices, g.vertex_offset);

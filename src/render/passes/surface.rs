@@ -12,6 +12,7 @@ use super::{PassResources, PassSetup, RecordPass};
 use crate::mesh::Vertex;
 use crate::render::plan::{Draw, FramePlan, PipelineKey, ShadingKey};
 use crate::render::shader_ids::*;
+use crate::render::static_lights;
 use crate::render::RenderError;
 use crate::scene::Scene;
 use crate::shaders;
@@ -30,10 +31,24 @@ enum Form {
     GBuffer,
 }
 
+/// A pipeline: the draw's key, and its lights when they are
+/// specialization constants (`render::static_lights`).
+type SurfaceKey = (PipelineKey, Option<Vec<usize>>);
+
 pub struct SurfacePass {
     form: Form,
     draws: Vec<Draw>,
-    pipelines: BTreeMap<PipelineKey, GraphicsPipeline>,
+    pipelines: BTreeMap<SurfaceKey, GraphicsPipeline>,
+    /// Whether draws that can carry their lights as constants do.
+    static_lights: bool,
+}
+
+/// Which pipeline `d` uses: with `static_lights`, a draw without the sun
+/// whose lights fit is specialized by them.
+fn surface_key(d: &Draw, static_lights: bool) -> SurfaceKey {
+    let lights = (static_lights && d.sun.is_none() && static_lights::fits(&d.lights))
+        .then(|| d.lights.clone());
+    (d.pipeline, lights)
 }
 
 pub fn create_opaque(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
@@ -55,6 +70,16 @@ impl SurfacePass {
             Form::Opaque | Form::GBuffer => setup.plan.opaque.clone(),
         };
         let mut pipelines = BTreeMap::new();
+        let mut keys: Vec<SurfaceKey> = draws.iter().map(|d| surface_key(d, true)).collect();
+        keys.sort();
+        keys.dedup();
+        // Past the limit, every draw reads its lights from its block.
+        let static_lights = keys.len() <= static_lights::MAX_STATIC_PIPELINES;
+        if !static_lights {
+            keys = draws.iter().map(|d| surface_key(d, false)).collect();
+            keys.sort();
+            keys.dedup();
+        }
         if !draws.is_empty() {
             let resources = setup.scene_resources()?;
             let render_pass = setup.render_pass()?;
@@ -63,13 +88,10 @@ impl SurfacePass {
                 Form::Transparent => vec![Blend::Alpha],
                 Form::GBuffer => vec![Blend::Replace; 4],
             };
-            let mut keys: Vec<PipelineKey> = draws.iter().map(|d| d.pipeline).collect();
-            keys.sort();
-            keys.dedup();
             // Keys that differ only in specialization constants (light
             // count, shading model) share their shader modules.
             let mut modules: BTreeMap<Vec<&str>, (ShaderModule, ShaderModule)> = BTreeMap::new();
-            for key in keys {
+            for (key, lights) in keys {
                 let mut features = Vec::new();
                 if key.textured {
                     features.push("BASE_COLOR_TEXTURE");
@@ -92,6 +114,18 @@ impl SurfacePass {
                 }
                 let (vert, frag) = &modules[&features];
                 let attributes = vertex_attributes(key.textured, key.normal_mapped, key.debug != 0);
+                let mut specialization = vec![
+                    (SPEC_SHADING_MODEL, key.shading as u32),
+                    (SPEC_LIGHT_COUNT, key.lights),
+                    (SPEC_LIGHT_ARRAY_LENGTH, key.lights.max(1)),
+                    (SPEC_DEBUG_ATTRIBUTE, key.debug),
+                    (SPEC_SHININESS_EXPONENT, key.shininess_exponent),
+                ];
+                specialization.extend(static_lights::constants(
+                    setup.scene,
+                    resources.light_anchor,
+                    lights.as_deref(),
+                ));
                 let pipeline = GraphicsPipeline::new(
                     setup.ctx,
                     &resources.layout,
@@ -99,13 +133,7 @@ impl SurfacePass {
                     &GraphicsPipelineDesc {
                         vertex_shader: vert,
                         fragment_shader: frag,
-                        specialization: &[
-                            (SPEC_SHADING_MODEL, key.shading as u32),
-                            (SPEC_LIGHT_COUNT, key.lights),
-                            (SPEC_LIGHT_ARRAY_LENGTH, key.lights.max(1)),
-                            (SPEC_DEBUG_ATTRIBUTE, key.debug),
-                            (SPEC_SHININESS_EXPONENT, key.shininess_exponent),
-                        ],
+                        specialization: &specialization,
                         vertex_stride: std::mem::size_of::<Vertex>() as u32,
                         vertex_attributes: &attributes,
                         cull_mode: CullModeFlags::BACK,
@@ -118,13 +146,14 @@ impl SurfacePass {
                         subpass: setup.subpass,
                     },
                 )?;
-                pipelines.insert(key, pipeline);
+                pipelines.insert((key, lights), pipeline);
             }
         }
         Ok(Box::new(SurfacePass {
             form,
             draws,
             pipelines,
+            static_lights,
         }))
     }
 }
@@ -134,16 +163,16 @@ impl RecordPass for SurfacePass {
         let Some(resources) = frame.scene else {
             return Ok(());
         };
-        let mut bound: Option<PipelineKey> = None;
+        let mut bound: Option<SurfaceKey> = None;
         for d in &self.draws {
-            let pipeline = &self.pipelines[&d.pipeline];
+            let key = surface_key(d, self.static_lights);
             let layout = &resources.layout;
-            if bound != Some(d.pipeline) {
-                cmd.bind_pipeline(pipeline);
+            if bound.as_ref() != Some(&key) {
+                cmd.bind_pipeline(&self.pipelines[&key]);
                 if bound.is_none() {
                     cmd.bind_descriptor_set(layout, FRAME_SET, &resources.frame_set, &[]);
                 }
-                bound = Some(d.pipeline);
+                bound = Some(key);
             }
             let range = &resources.ranges[d.object];
             if range.index_count == 0 {
@@ -171,10 +200,11 @@ impl RecordPass for SurfacePass {
             Form::Transparent => &plan.transparent,
             Form::Opaque | Form::GBuffer => &plan.opaque,
         };
-        if let Some(d) = draws
-            .iter()
-            .find(|d| !self.pipelines.contains_key(&d.pipeline))
-        {
+        if let Some(d) = draws.iter().find(|d| {
+            !self
+                .pipelines
+                .contains_key(&surface_key(d, self.static_lights))
+        }) {
             return Err(RenderError::Frame(format!(
                 "object {} needs a pipeline the '{:?}' pass did not create",
                 d.object, self.form
