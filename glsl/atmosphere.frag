@@ -53,8 +53,8 @@ vec3 sky_view_bilinear(ivec2 p, float ax, float ay) {
 Path sky_view_path(vec3 d) {
     bool below;
     vec2 f = sky_view_coords(d, below);
-    int w = int(sky.sky_view.x);
-    int half_h = int(sky.sky_view.y) / 2;
+    int w = int(STATIC_SKY_VIEW.x);
+    int half_h = int(STATIC_SKY_VIEW.y) / 2;
     int x0 = min(int(floor(f.x)), w - 2);
     int y0 = min(int(floor(f.y)), half_h - 2);
     float ax = f.x - float(x0);
@@ -87,7 +87,7 @@ void main() {
 #else
     vec3 colour = subpassLoad(surface).rgb;
 #endif
-    vec2 ndc = gl_FragCoord.xy * sky.viewport.zw * 2.0 - 1.0;
+    vec2 ndc = gl_FragCoord.xy * STATIC_VIEWPORT.zw * 2.0 - 1.0;
     vec3 ray = sky.forward.xyz + sky.right.xyz * ndc.x - sky.up.xyz * ndc.y;
     float ray_length = length(ray);
     vec3 d = ray / ray_length;
@@ -108,7 +108,7 @@ void main() {
 
     vec3 o = sky.origin.xyz;
     float t0, t1;
-    if (!sphere(o, d, sky.terms.y, sky.radii.y, t0, t1) || t1 <= 0.0) {
+    if (!sphere(o, d, sky.terms.y, STATIC_RADII.y, t0, t1) || t1 <= 0.0) {
         // The ray misses the atmosphere: the pixel is unchanged, plus the
         // sun seen from space.
         out_color = vec4(colour + (t_surface == INF ? disc : vec3(0.0)), 1.0);

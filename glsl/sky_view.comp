@@ -11,8 +11,8 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 2, rgba32f) uniform writeonly image2D sky_view_table;
 
 void main() {
-    int w = int(sky.sky_view.x);
-    int h = int(sky.sky_view.y);
+    int w = int(STATIC_SKY_VIEW.x);
+    int h = int(STATIC_SKY_VIEW.y);
     int x = int(gl_GlobalInvocationID.x);
     int y = int(gl_GlobalInvocationID.y);
     if (x >= w || y >= h) {

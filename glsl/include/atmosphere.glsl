@@ -35,6 +35,36 @@ layout(std140, set = 0, binding = 0) uniform Sky {
     vec4 sky_view;         // x, y: sky-view table width, height (directions)
 } sky;
 
+// The block's fields the frame never changes (the atmosphere, the tables'
+// sizes, the viewport) are read from specialization constants instead, 4
+// per field from SPEC_SKY_STATIC on, in this order (`sky_resources::
+// static_constants`): lavapipe reads a uniform block once per pixel and
+// per march sample, where constants cost nothing (static_lights.glsl).
+// The camera, the sun and the table frame stay in the block.
+#define SKY_STATIC_FIELD(NAME, i) \
+    layout(constant_id = SPEC_SKY_STATIC + 4 * i + 0) const float NAME##_0 = 0.0; \
+    layout(constant_id = SPEC_SKY_STATIC + 4 * i + 1) const float NAME##_1 = 0.0; \
+    layout(constant_id = SPEC_SKY_STATIC + 4 * i + 2) const float NAME##_2 = 0.0; \
+    layout(constant_id = SPEC_SKY_STATIC + 4 * i + 3) const float NAME##_3 = 0.0;
+SKY_STATIC_FIELD(SKY_RADII, 0)
+SKY_STATIC_FIELD(SKY_RAYLEIGH, 1)
+SKY_STATIC_FIELD(SKY_MIE_SCATTERING, 2)
+SKY_STATIC_FIELD(SKY_MIE_EXTINCTION, 3)
+SKY_STATIC_FIELD(SKY_OZONE_ABSORPTION, 4)
+SKY_STATIC_FIELD(SKY_OZONE_LAYER, 5)
+SKY_STATIC_FIELD(SKY_GROUND_ALBEDO, 6)
+SKY_STATIC_FIELD(SKY_VIEWPORT, 7)
+SKY_STATIC_FIELD(SKY_SKY_VIEW, 8)
+#define STATIC_RADII vec4(SKY_RADII_0, SKY_RADII_1, SKY_RADII_2, SKY_RADII_3)
+#define STATIC_RAYLEIGH vec4(SKY_RAYLEIGH_0, SKY_RAYLEIGH_1, SKY_RAYLEIGH_2, SKY_RAYLEIGH_3)
+#define STATIC_MIE_SCATTERING vec4(SKY_MIE_SCATTERING_0, SKY_MIE_SCATTERING_1, SKY_MIE_SCATTERING_2, SKY_MIE_SCATTERING_3)
+#define STATIC_MIE_EXTINCTION vec4(SKY_MIE_EXTINCTION_0, SKY_MIE_EXTINCTION_1, SKY_MIE_EXTINCTION_2, SKY_MIE_EXTINCTION_3)
+#define STATIC_OZONE_ABSORPTION vec4(SKY_OZONE_ABSORPTION_0, SKY_OZONE_ABSORPTION_1, SKY_OZONE_ABSORPTION_2, SKY_OZONE_ABSORPTION_3)
+#define STATIC_OZONE_LAYER vec4(SKY_OZONE_LAYER_0, SKY_OZONE_LAYER_1, SKY_OZONE_LAYER_2, SKY_OZONE_LAYER_3)
+#define STATIC_GROUND_ALBEDO vec4(SKY_GROUND_ALBEDO_0, SKY_GROUND_ALBEDO_1, SKY_GROUND_ALBEDO_2, SKY_GROUND_ALBEDO_3)
+#define STATIC_VIEWPORT vec4(SKY_VIEWPORT_0, SKY_VIEWPORT_1, SKY_VIEWPORT_2, SKY_VIEWPORT_3)
+#define STATIC_SKY_VIEW vec4(SKY_SKY_VIEW_0, SKY_SKY_VIEW_1, SKY_SKY_VIEW_2, SKY_SKY_VIEW_3)
+
 // The optical-depth table, one RGBA32F texel per (direction, altitude),
 // read with texelFetch, or filtered by the sampler (TABLE_FILTER 2).
 layout(set = 0, binding = 1) uniform sampler2D od_table;
@@ -77,8 +107,8 @@ bool sphere(vec3 o, vec3 d, float c, float radius, out float t0, out float t1) {
 // The table's texels at texel coordinates (fx, fy) (centres on integers),
 // filtered between rows 0 and last_row.
 vec3 table_texels(float fx, float fy, int last_row) {
-    int w = int(sky.ozone_layer.z);
-    int hh = int(sky.ozone_layer.w);
+    int w = int(STATIC_OZONE_LAYER.z);
+    int hh = int(STATIC_OZONE_LAYER.w);
     if (TABLE_FILTER == 1) {
         return texelFetch(od_table, ivec2(round(fx), round(fy)), 0).xyz;
     }
@@ -102,8 +132,8 @@ vec3 table_texels(float fx, float fy, int last_row) {
 // The table's last row (the horizontal ray) at texel coordinate fx,
 // filtered along the row alone: two fetches.
 vec3 table_row(float fx) {
-    int w = int(sky.ozone_layer.z);
-    int hh = int(sky.ozone_layer.w);
+    int w = int(STATIC_OZONE_LAYER.z);
+    int hh = int(STATIC_OZONE_LAYER.w);
     if (TABLE_FILTER == 1) {
         return texelFetch(od_table, ivec2(round(fx), hh - 1), 0).xyz;
     }
@@ -118,10 +148,10 @@ vec3 table_row(float fx) {
 
 // Density integrals from a filtered texel value v stored for altitude h.
 vec3 table_decode(vec3 v, float h) {
-    float offset = sky.ground_albedo.w;
+    float offset = STATIC_GROUND_ALBEDO.w;
     return vec3(
-        max(exp(v.x - h * sky.rayleigh.w) - offset, 0.0),
-        max(exp(v.y - h * sky.mie_scattering.w) - offset, 0.0),
+        max(exp(v.x - h * STATIC_RAYLEIGH.w) - offset, 0.0),
+        max(exp(v.y - h * STATIC_MIE_SCATTERING.w) - offset, 0.0),
         v.z);
 }
 
@@ -160,9 +190,9 @@ struct SunRay {
 };
 
 SunRay sun_ray(float h, float mu) {
-    float rb = sky.radii.x;
+    float rb = STATIC_RADII.x;
     SunRay ray;
-    ray.h = clamp(h, 0.0, sky.radii.y - rb);
+    ray.h = clamp(h, 0.0, STATIC_RADII.y - rb);
     ray.mu = mu;
     float r = rb + ray.h;
     ray.rho = sqrt(ray.h * (2.0 * rb + ray.h));
@@ -179,12 +209,12 @@ SunRay sun_ray(float h, float mu) {
 // a select rather than a branch: a CPU driver runs both sides of a branch
 // its lanes disagree on anyway.
 vec3 table_densities(SunRay ray) {
-    float rb = sky.radii.x;
-    float rt = sky.radii.y;
+    float rb = STATIC_RADII.x;
+    float rt = STATIC_RADII.y;
     float thickness = rt - rb;
     float h = ray.h;
-    int w = int(sky.ozone_layer.z);
-    int hh = int(sky.ozone_layer.w);
+    int w = int(STATIC_OZONE_LAYER.z);
+    int hh = int(STATIC_OZONE_LAYER.w);
     if (TABLE_MAPPING == 1) {
         float fx = clamp((1.0 - ray.mu) * 0.5, 0.0, 1.0) * float(w - 1);
         float fy = clamp(h / thickness, 0.0, 1.0) * float(hh - 1);
@@ -212,7 +242,7 @@ vec3 table_densities(SunRay ray) {
 // b <= a) of a density slope * (altitude - zero), by three-point
 // Gauss-Legendre.
 float ozone_interval(SunRay ray, float start, float a, float b, float zero, float slope) {
-    float rb = sky.radii.x;
+    float rb = STATIC_RADII.x;
     float mid = 0.5 * (a + b) + start;
     float half_length = 0.5 * max(b - a, 0.0);
     float sum = 0.0;
@@ -228,7 +258,7 @@ float ozone_interval(SunRay ray, float start, float a, float b, float zero, floa
 // Half the chord of the sphere at altitude k, from the lowest point;
 // negative when the ray passes above it.
 float ozone_half_chord(float k, float alt_low) {
-    float disc = (k - alt_low) * (2.0 * sky.radii.x + k + alt_low);
+    float disc = (k - alt_low) * (2.0 * STATIC_RADII.x + k + alt_low);
     return disc < 0.0 ? -1.0 : sqrt(disc);
 }
 
@@ -238,10 +268,10 @@ float ozone_half_chord(float k, float alt_low) {
 // shell in at most two intervals. Distances are from the lowest point
 // (u = s + start).
 float ozone_to_top(SunRay ray) {
-    float thickness = sky.radii.y - sky.radii.x;
-    float start = (sky.radii.x + ray.h) * ray.mu;
+    float thickness = STATIC_RADII.y - STATIC_RADII.x;
+    float start = (STATIC_RADII.x + ray.h) * ray.mu;
     float end = ozone_half_chord(thickness, ray.alt_low) - start;
-    float knots[3] = float[3](sky.ozone_absorption.w, sky.ozone_layer.x, sky.ozone_layer.y);
+    float knots[3] = float[3](STATIC_OZONE_ABSORPTION.w, STATIC_OZONE_LAYER.x, STATIC_OZONE_LAYER.y);
     float sum = 0.0;
     for (int shell = 0; shell < 2; shell++) {
         float lower = knots[shell];
@@ -272,26 +302,26 @@ vec3 sun_optical_depth(float h, float r, vec3 p, out bool lit) {
     }
     vec3 d = table_densities(ray);
     // Uniform branch: an atmosphere without ozone skips the integral.
-    if (OZONE_EXACT && any(greaterThan(sky.ozone_absorption.xyz, vec3(0.0)))) {
+    if (OZONE_EXACT && any(greaterThan(STATIC_OZONE_ABSORPTION.xyz, vec3(0.0)))) {
         d.z = ozone_to_top(ray);
     }
-    return sky.rayleigh.xyz * d.x + sky.mie_extinction.xyz * d.y + sky.ozone_absorption.xyz * d.z;
+    return STATIC_RAYLEIGH.xyz * d.x + STATIC_MIE_EXTINCTION.xyz * d.y + STATIC_OZONE_ABSORPTION.xyz * d.z;
 }
 
 vec3 densities(float h) {
     float ozone = 0.0;
-    float start = sky.ozone_absorption.w;
-    float peak = sky.ozone_layer.x;
-    float end = sky.ozone_layer.y;
+    float start = STATIC_OZONE_ABSORPTION.w;
+    float peak = STATIC_OZONE_LAYER.x;
+    float end = STATIC_OZONE_LAYER.y;
     if (h > start && h < end) {
         ozone = h <= peak ? (h - start) / (peak - start) : (end - h) / (end - peak);
     }
-    return vec3(exp(-h * sky.rayleigh.w), exp(-h * sky.mie_scattering.w), ozone);
+    return vec3(exp(-h * STATIC_RAYLEIGH.w), exp(-h * STATIC_MIE_SCATTERING.w), ozone);
 }
 
 vec3 extinction(vec3 rho) {
-    return sky.rayleigh.xyz * rho.x + sky.mie_extinction.xyz * rho.y
-        + sky.ozone_absorption.xyz * rho.z;
+    return STATIC_RAYLEIGH.xyz * rho.x + STATIC_MIE_EXTINCTION.xyz * rho.y
+        + STATIC_OZONE_ABSORPTION.xyz * rho.z;
 }
 
 // Altitude at distance t along a ray with b = dot(o, d) and
@@ -299,7 +329,7 @@ vec3 extinction(vec3 rho) {
 // planet-scale difference.
 float altitude(float c, float b, float t, out float r) {
     float r2_minus = c + t * (2.0 * b + t);
-    float rb = sky.radii.x;
+    float rb = STATIC_RADII.x;
     r = sqrt(max(rb * rb + r2_minus, 0.0));
     return r2_minus / (r + rb);
 }
@@ -336,8 +366,8 @@ Path march(vec3 d, float t_surface, int ground_rule) {
     path.t_end = INF;
 
     vec3 o = sky.origin.xyz;
-    float rb = sky.radii.x;
-    float rt = sky.radii.y;
+    float rb = STATIC_RADII.x;
+    float rt = STATIC_RADII.y;
     float t0, t1;
     if (!sphere(o, d, sky.terms.y, rt, t0, t1) || t1 <= 0.0) {
         return path;
@@ -349,7 +379,7 @@ Path march(vec3 d, float t_surface, int ground_rule) {
     bool inside = t0 <= 0.0;
     if (!inside) {
         o = o + t0 * d;
-        c_bottom = sky.radii.z * sky.radii.z;
+        c_bottom = STATIC_RADII.z * STATIC_RADII.z;
         shift = t0;
     }
     float b = dot(o, d);
@@ -372,7 +402,7 @@ Path march(vec3 d, float t_surface, int ground_rule) {
     }
     path.t_end = t_end + shift;
 
-    int n = int(sky.radii.w);
+    int n = int(STATIC_RADII.w);
     vec3 tau = vec3(0.0);
     float previous_t = 0.0;
     float h_start = c_bottom / (sqrt(rb * rb + c_bottom) + rb);
@@ -405,8 +435,8 @@ Path march(vec3 d, float t_surface, int ground_rule) {
         vec3 sun_tau = sun_optical_depth(h, r, o + t * d, lit);
         // One exponential for both paths; no branch (lanes stay together).
         vec3 weight = exp(-(tau + sun_tau)) * (lit ? dt : 0.0);
-        path.rayleigh += sky.rayleigh.xyz * (rho.x * weight);
-        path.mie += sky.mie_scattering.xyz * (rho.y * weight);
+        path.rayleigh += STATIC_RAYLEIGH.xyz * (rho.x * weight);
+        path.mie += STATIC_MIE_SCATTERING.xyz * (rho.y * weight);
     }
     {
         float r;
@@ -420,7 +450,7 @@ Path march(vec3 d, float t_surface, int ground_rule) {
 // The Rayleigh phase and the Cornette-Shanks Mie phase at cosine mu
 // between the view ray and the sun, both normalised over the sphere.
 vec2 phases(float mu) {
-    float g = sky.mie_extinction.w;
+    float g = STATIC_MIE_EXTINCTION.w;
     float phase_r = 3.0 / (16.0 * PI) * (1.0 + mu * mu);
     // x^1.5 as x * sqrt(x) (x >= (1 - |g|)^2 > 0): the same value without
     // pow's exp2(1.5 * log2(x)), which costs a CPU driver a polynomial each.
@@ -437,9 +467,9 @@ vec3 ground_radiance(vec3 p) {
     vec3 sun = sky.sun_direction.xyz;
     float cos_sun = dot(normal, sun);
     bool lit;
-    vec3 sun_tau = sun_optical_depth(0.0, sky.radii.x, p, lit);
+    vec3 sun_tau = sun_optical_depth(0.0, STATIC_RADII.x, p, lit);
     if (cos_sun > 0.0 && lit) {
-        return sky.ground_albedo.xyz / PI * cos_sun * sky.sun_irradiance.xyz * exp(-sun_tau);
+        return STATIC_GROUND_ALBEDO.xyz / PI * cos_sun * sky.sun_irradiance.xyz * exp(-sun_tau);
     }
     return vec3(0.0);
 }
@@ -485,8 +515,8 @@ float sky_view_row_unit(float f) {
 
 // The direction of the texel at column x, row y.
 vec3 sky_view_direction(int x, int y) {
-    int w = int(sky.sky_view.x);
-    int half_h = int(sky.sky_view.y) / 2;
+    int w = int(STATIC_SKY_VIEW.x);
+    int half_h = int(STATIC_SKY_VIEW.y) / 2;
     float s;
     float nadir;
     float horizon = sky.zenith.w;
@@ -515,8 +545,8 @@ vec2 sky_view_coords(vec3 d, out bool below) {
     float cx = dot(d, ax);
     float cy = abs(dot(d, cross(z, ax)));
     float azimuth = (cx == 0.0 && cy == 0.0) ? 0.0 : atan(cy, cx);
-    int w = int(sky.sky_view.x);
-    int half_h = int(sky.sky_view.y) / 2;
+    int w = int(STATIC_SKY_VIEW.x);
+    int half_h = int(STATIC_SKY_VIEW.y) / 2;
     float horizon = sky.zenith.w;
     below = nadir < horizon;
     float s;

@@ -34,4 +34,6 @@
 #define SPEC_OZONE_EXACT 2
 #define SPEC_SKY_VIEW_HARDWARE_FILTER 3
 #define SPEC_TRANSPARENT_OVER_SKY 4
+// The first of the sky block's unchanging fields, 4 ids per field.
+#define SPEC_SKY_STATIC 8
 #endif

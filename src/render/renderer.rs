@@ -233,7 +233,16 @@ impl Renderer {
             RenderError::Frame("a renderer of an HDR image has no view to move".into())
         })?;
         let plan = FramePlan::new(scene, &geometry, self.keep_hdr);
-        if same_resources(&self.plan, &plan) {
+        // The atmosphere's pipelines hold its unchanging fields as
+        // constants; a sky that changes them needs new pipelines.
+        let sky_kept = match (&self.sky_resources, &scene.sky) {
+            (Some(resources), Some(sky)) => {
+                resources.keeps_static_fields(sky, &scene.camera, &plan)
+            }
+            (None, None) => true,
+            _ => false,
+        };
+        if sky_kept && same_resources(&self.plan, &plan) {
             if let Some(resources) = &mut self.scene_resources {
                 resources.set_view(scene, &plan);
             }

@@ -12,6 +12,7 @@
 //! shaders camera-relative.
 
 use super::plan::FramePlan;
+use super::shader_ids::SPEC_SKY_STATIC;
 use super::RenderError;
 use crate::atmosphere::OpticalDepthTable;
 use crate::scene::{Camera, Sky, TableFilter};
@@ -190,9 +191,48 @@ pub struct SkyResources {
     /// clock), for the reports.
     pub table_bytes: usize,
     pub table_bake_seconds: f64,
+    /// The block's unchanging fields the pipelines hold as constants.
+    static_fields: [[f32; 4]; 9],
+}
+
+impl SkyUniforms {
+    /// The fields the frame never changes, in the order the shaders
+    /// declare their constants (glsl/include/atmosphere.glsl).
+    fn static_fields(&self) -> [[f32; 4]; 9] {
+        [
+            self.radii,
+            self.rayleigh,
+            self.mie_scattering,
+            self.mie_extinction,
+            self.ozone_absorption,
+            self.ozone_layer,
+            self.ground_albedo,
+            self.viewport,
+            self.sky_view,
+        ]
+    }
 }
 
 impl SkyResources {
+    /// The specialization constants that carry the sky block's unchanging
+    /// fields, as the atmosphere shaders read them.
+    pub fn static_constants(&self) -> Vec<(u32, u32)> {
+        self.static_fields
+            .iter()
+            .flatten()
+            .enumerate()
+            .map(|(i, v)| (SPEC_SKY_STATIC + i as u32, v.to_bits()))
+            .collect()
+    }
+
+    /// Whether `sky` seen by `camera` in `plan` keeps the fields these
+    /// resources' pipelines hold as constants, so that `set_view` can move
+    /// to it.
+    pub fn keeps_static_fields(&self, sky: &Sky, camera: &Camera, plan: &FramePlan) -> bool {
+        let block = uniforms(sky, camera, plan.width, plan.height, self.table_size);
+        block.static_fields() == self.static_fields
+    }
+
     /// Whether the atmosphere pass reads the sky-view table through its
     /// bilinear sampler rather than by four fetches and a blend.
     pub fn sky_view_hardware_filter(&self) -> bool {
@@ -353,6 +393,7 @@ impl SkyResources {
             sky_view: sky.sky_view,
             table_bytes: table.bytes(),
             table_bake_seconds: table.bake_seconds,
+            static_fields: block.static_fields(),
         })
     }
 }

@@ -75,6 +75,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
                 u32::from(!setup.plan.transparent.is_empty()),
             ),
         ],
+        &resources.static_constants(),
     ]
     .concat();
     // (shader features, depth test) per draw.

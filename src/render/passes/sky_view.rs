@@ -38,7 +38,8 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     };
     let layout = PipelineLayout::new(setup.ctx, &[&resources.layout])?;
     let shader = ShaderModule::new(setup.ctx, shaders::SKY_VIEW_COMP.base())?;
-    let pipeline = ComputePipeline::new(setup.ctx, &layout, &shader, &table_constants(sky))?;
+    let constants = [&table_constants(sky)[..], &resources.static_constants()].concat();
+    let pipeline = ComputePipeline::new(setup.ctx, &layout, &shader, &constants)?;
     Ok(Box::new(SkyViewPass {
         pipeline,
         layout,
