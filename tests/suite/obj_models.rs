@@ -607,6 +607,107 @@ fn smoothing_and_tangent_time() {
     }
 }
 
+/// Writes the cut torus models of `docs/mesh-performance.md` (4v x v
+/// segments, v = sqrt(N / 8), cut into 8 objects along u, each object
+/// repeating its boundary vertices, with UVs and no normals) for the
+/// triangle counts in `AERIAL_TORUS_SIZES` (default `10000,100000,1000000`)
+/// into the folder `AERIAL_TORUS_DIR`, as `torus<N>.obj`:
+/// `AERIAL_TORUS_DIR=/tmp cargo test --release --test suite
+/// obj_models::write_cut_torus_models -- --ignored`.
+#[test]
+#[ignore = "writes benchmark models"]
+fn write_cut_torus_models() {
+    let Ok(dir) = std::env::var("AERIAL_TORUS_DIR") else {
+        return;
+    };
+    let sizes = std::env::var("AERIAL_TORUS_SIZES").unwrap_or("10000,100000,1000000".into());
+    for n in sizes.split(',') {
+        let n: usize = n.trim().parse().unwrap();
+        let v = ((n / 8) as f64).sqrt().round() as u32;
+        let text = grid_obj(torus, (4 * v, v), (8, 1));
+        std::fs::write(Path::new(&dir).join(format!("torus{n}.obj")), text).unwrap();
+    }
+}
+
+/// A digest of every OBJ model under the folders of `AERIAL_OBJ_DIRS`
+/// (separated by `:`) that loads, per smoothing mode and tangent method:
+/// one line per model and mode, for comparing builds bit for bit. The
+/// meshes made with the file's vertex indices are checked against those
+/// made without (every corner's position hashed), bit for bit.
+/// `AERIAL_OBJ_DIRS=assets cargo test --release --test suite
+/// obj_models::model_file_digests -- --ignored --nocapture`.
+#[test]
+#[ignore = "reads model folders named in the environment"]
+fn model_file_digests() {
+    use aerial::mesh::obj::TangentMethod;
+    use std::hash::{Hash, Hasher};
+    let Ok(dirs) = std::env::var("AERIAL_OBJ_DIRS") else {
+        return;
+    };
+    fn walk(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
+        let Ok(entries) = std::fs::read_dir(dir) else {
+            return;
+        };
+        for entry in entries.flatten() {
+            let path = entry.path();
+            if path.is_dir() {
+                walk(&path, out);
+            } else if path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+            {
+                out.push(path);
+            }
+        }
+    }
+    let mut files = Vec::new();
+    for dir in dirs.split(':') {
+        walk(Path::new(dir), &mut files);
+    }
+    files.sort();
+    let mut compared = 0;
+    for file in &files {
+        let Ok(model) = load_obj(file) else {
+            continue;
+        };
+        let mut unindexed = model.clone();
+        for part in &mut unindexed.parts {
+            part.vertex_indices = None;
+        }
+        for smoothing in [Smoothing::Model, Smoothing::Object, Smoothing::Face] {
+            for tangents in [TangentMethod::Aerial, TangentMethod::Mikktspace] {
+                let options = ModelOptions {
+                    smoothing: Some(smoothing),
+                    tangents,
+                    ..ModelOptions::default()
+                };
+                let Ok(meshes) = model_meshes(&model, &options, "m") else {
+                    continue;
+                };
+                let again = model_meshes(&unindexed, &options, "m").unwrap();
+                let mut hasher = std::collections::hash_map::DefaultHasher::new();
+                for ((mesh, stats), (other, other_stats)) in meshes.iter().zip(&again) {
+                    let bytes: &[u8] = bytemuck::cast_slice(&mesh.vertices);
+                    let other_bytes: &[u8] = bytemuck::cast_slice(&other.vertices);
+                    assert!(bytes == other_bytes, "{}", file.display());
+                    assert_eq!(mesh.indices, other.indices, "{}", file.display());
+                    assert_eq!(stats, other_stats, "{}", file.display());
+                    bytes.hash(&mut hasher);
+                    mesh.indices.hash(&mut hasher);
+                    format!("{stats:?}").hash(&mut hasher);
+                }
+                compared += 1;
+                println!(
+                    "{} {smoothing:?} {tangents:?} {:016x}",
+                    file.display(),
+                    hasher.finish()
+                );
+            }
+        }
+    }
+    println!("{compared} models and modes compared");
+}
+
 /// The render check of the smoothing modes: the cut sphere, loaded from
 /// OBJ, against the renderer's own analytic sphere with the same vertices
 /// (exact normals). With `model` smoothing the images agree to 2/255 per
