@@ -14,7 +14,7 @@ use std::path::Path;
 use aerial::mesh::inspect::process_cpu_seconds;
 use aerial::mesh::obj::{load_obj, model_meshes, ModelOptions};
 use aerial::mesh::smoothing::{
-    naive_normals, smooth_normals, smooth_normals_numbered, Smoothing, SmoothingOptions,
+    naive_normals, smooth_normals, smooth_normals_indexed, Smoothing, SmoothingOptions,
 };
 use aerial::mesh::tangents::{build_mesh, build_mesh_numbered, max_orthonormality_error};
 use aerial::mesh::Mesh;
@@ -512,14 +512,16 @@ fn multi_object_model_renders_clean_with_mtl_materials() {
     assert_eq!(over.materials.len(), 1);
 }
 
-/// Corner positions and UVs of a torus grid of about `triangles` triangles,
-/// cut into 4 objects along u (boundary vertices repeated).
-fn torus_soup(triangles: usize) -> Vec<(Vec<Vec3>, Vec<Vec2>)> {
+/// Corner positions, UVs and vertex indices of a torus grid of about
+/// `triangles` triangles, cut into 4 objects along u (boundary vertices
+/// repeated: each object numbers its own vertices, as an OBJ file's
+/// objects do).
+fn torus_soup(triangles: usize) -> Vec<(Vec<Vec3>, Vec<Vec2>, Vec<u32>)> {
     let v_segments = ((triangles / 8) as f64).sqrt().round().max(3.0) as u32;
     let u_segments = 4 * v_segments;
     (0..4)
         .map(|cut| {
-            let (mut positions, mut uvs) = (Vec::new(), Vec::new());
+            let (mut positions, mut uvs, mut indices) = (Vec::new(), Vec::new(), Vec::new());
             let (i0, i1) = (u_segments * cut / 4, u_segments * (cut + 1) / 4);
             for i in i0..i1 {
                 for j in 0..v_segments {
@@ -528,16 +530,18 @@ fn torus_soup(triangles: usize) -> Vec<(Vec<Vec3>, Vec<Vec2>)> {
                             (i + di) as f32 / u_segments as f32,
                             (j + dj) as f32 / v_segments as f32,
                         );
-                        (torus(u, v).0, Vec2::new(u, v))
+                        let index = (i + di - i0) * (v_segments + 1) + j + dj;
+                        (torus(u, v).0, Vec2::new(u, v), index)
                     };
                     let [a, b, c, d] = [corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1)];
-                    for (p, t) in [a, b, c, a, c, d] {
+                    for (p, t, index) in [a, b, c, a, c, d] {
                         positions.push(p);
                         uvs.push(t);
+                        indices.push(index);
                     }
                 }
             }
-            (positions, uvs)
+            (positions, uvs, indices)
         })
         .collect()
 }
@@ -554,23 +558,25 @@ fn smoothing_and_tangent_time() {
     let mut cpu_of = Vec::new();
     for triangles in [10_000, 100_000, 1_000_000] {
         let soup = torus_soup(triangles);
-        let count: usize = soup.iter().map(|(p, _)| p.len() / 3).sum();
-        let positions: Vec<&[Vec3]> = soup.iter().map(|(p, _)| p.as_slice()).collect();
+        let count: usize = soup.iter().map(|(p, _, _)| p.len() / 3).sum();
+        let positions: Vec<&[Vec3]> = soup.iter().map(|(p, _, _)| p.as_slice()).collect();
+        let indices: Vec<Option<&[u32]>> = soup.iter().map(|(_, _, i)| Some(&i[..])).collect();
         let options = SmoothingOptions {
             mode: Smoothing::Model,
             crease_degrees: 60.0,
             weld_distance: 1e-5 * 2.8 * 1.4,
         };
         let (start, cpu_start) = (Instant::now(), process_cpu_seconds());
-        // As `aerial mesh` does: the tangent stage reuses the welding.
-        let (normals, numbers) = smooth_normals_numbered(&positions, &options);
+        // As `aerial mesh` does: welding from the vertex indices, and the
+        // tangent stage reusing the welding.
+        let (normals, numbers) = smooth_normals_indexed(&positions, &indices, &options);
         let smoothing = start.elapsed().as_secs_f64();
         let (start, cpu_middle) = (Instant::now(), process_cpu_seconds());
         let meshes: Vec<Mesh> = soup
             .iter()
             .zip(&normals)
             .enumerate()
-            .map(|(i, ((p, t), n))| {
+            .map(|(i, ((p, t, _), n))| {
                 build_mesh_numbered(p, n, Some(t), numbers.as_ref().and_then(|x| x.part(i))).0
             })
             .collect();
