@@ -1076,6 +1076,13 @@ mod tests {
                 .enumerate()
                 .map(|(i, (_, x))| ((i + round) % 4 != 0).then_some(x.as_slice()))
                 .collect();
+            // Indices numbered within a larger model (far beyond the
+            // corners' count) are hashed instead, with the same results.
+            let offset: Vec<Vec<u32>> = parts
+                .iter()
+                .map(|(_, x)| x.iter().map(|&i| i + 1_000_000).collect())
+                .collect();
+            let sparse: Vec<Option<&[u32]>> = offset.iter().map(|x| Some(&x[..])).collect();
             for mode in [Smoothing::Object, Smoothing::Model] {
                 for weld_distance in [0.0, 1e-4] {
                     let options = SmoothingOptions {
@@ -1092,6 +1099,8 @@ mod tests {
                             .collect()
                     };
                     assert_eq!(bits(&hashed), bits(&indexed), "round {round}, {mode:?}");
+                    let (far, _) = smooth_normals_indexed(&positions, &sparse, &options);
+                    assert_eq!(bits(&hashed), bits(&far), "round {round}, {mode:?}");
                     let (a, b) = (hashed_numbers.unwrap(), indexed_numbers.unwrap());
                     for part in 0..parts.len() {
                         let (a, b) = (a.part(part).unwrap(), b.part(part).unwrap());

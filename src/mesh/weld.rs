@@ -87,7 +87,12 @@ pub(crate) fn weld_corners(
     let mut firsts = [0u32; BATCH];
     for (s, slice) in slices.iter().enumerate() {
         let given = indices.get(s).copied().flatten();
-        let Some(given) = given.filter(|g| g.len() == slice.len()) else {
+        let given = given.filter(|g| g.len() == slice.len());
+        // Indices spread far beyond the slice's corners (a part numbered
+        // within a larger model) would cost an array larger than the
+        // table: those corners are hashed instead.
+        let vertices = given.map_or(0, |g| g.iter().max().map_or(0, |&m| m as usize + 1));
+        let Some(given) = given.filter(|_| vertices <= 2 * slice.len() + 1024) else {
             for batch in slice.chunks(BATCH) {
                 for ((key, hash), p) in keys.iter_mut().zip(&mut hashes).zip(batch) {
                     // + 0.0 so that -0.0 and 0.0 are one key.
@@ -108,7 +113,6 @@ pub(crate) fn weld_corners(
             }
             continue;
         };
-        let vertices = given.iter().max().map_or(0, |&m| m as usize + 1);
         numbered.clear();
         numbered.resize(vertices, NONE);
         // Batches of corners large enough to hold about BATCH first
