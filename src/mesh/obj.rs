@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 
 use super::mikktspace::build_mesh_mikktspace;
-use super::smoothing::{smooth_normals_numbered, PositionNumbers, Smoothing, SmoothingOptions};
+use super::smoothing::{smooth_normals_indexed, PositionNumbers, Smoothing, SmoothingOptions};
 use super::tangents::{build_mesh_in, MeshBuffers, MeshScratch, TangentStats};
 use super::Mesh;
 
@@ -119,6 +119,12 @@ pub struct ObjPart {
     pub name: String,
     /// Corner positions.
     pub positions: Vec<Vec3>,
+    /// The vertex index of each corner, when known: corners with equal
+    /// indices have bit-identical positions (they come from one `v` line
+    /// of the file). Welding then looks up each vertex's position once
+    /// rather than each corner's; `None` makes no difference to the
+    /// results.
+    pub vertex_indices: Option<Vec<u32>>,
     /// Corner texture coordinates, `None` when any face of the file lacks
     /// them.
     pub uvs: Option<Vec<Vec2>>,
@@ -543,9 +549,10 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
         });
     }
     let mut parts = Vec::new();
-    for model in models {
+    for mut model in models {
+        let vertex_indices = std::mem::take(&mut model.mesh.indices);
         let mesh = &model.mesh;
-        if mesh.indices.is_empty() {
+        if vertex_indices.is_empty() {
             continue;
         }
         let corner = |array: &[f32], index: u32, n: usize| -> Option<Vec<f32>> {
@@ -556,13 +563,12 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
             file: file.to_owned(),
             reason: format!("object \"{}\": {what} index out of range", model.name),
         };
-        let positions = mesh
-            .indices
+        let positions = vertex_indices
             .iter()
             .map(|&i| corner(&mesh.positions, i, 3).map(|p| Vec3::new(p[0], p[1], p[2])))
             .collect::<Option<Vec<_>>>()
             .ok_or_else(|| out_of_range("vertex"))?;
-        let full = |indices: &[u32]| indices.len() == mesh.indices.len();
+        let full = |indices: &[u32]| indices.len() == vertex_indices.len();
         // `tobj` fills a corner without an index with a neighbour's value,
         // so attributes are only used when the pre-scan saw them on every
         // corner of the file.
@@ -592,6 +598,7 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
         parts.push(ObjPart {
             name: model.name.clone(),
             positions,
+            vertex_indices: Some(vertex_indices),
             uvs,
             normals,
             material: mesh.material_id.filter(|&m| m < materials.len()),
@@ -901,8 +908,14 @@ pub fn model_normals_numbered(
         });
     }
     let positions: Vec<&[Vec3]> = model.parts.iter().map(|p| p.positions.as_slice()).collect();
-    let (generated, numbers) = smooth_normals_numbered(
+    let indices: Vec<Option<&[u32]>> = model
+        .parts
+        .iter()
+        .map(|p| p.vertex_indices.as_deref())
+        .collect();
+    let (generated, numbers) = smooth_normals_indexed(
         &positions,
+        &indices,
         &SmoothingOptions {
             mode,
             crease_degrees: options.crease_degrees,

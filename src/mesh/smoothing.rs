@@ -201,7 +201,7 @@ fn each_face(
 /// as one group id per point (each id below `points.len()`; groups are
 /// numbered in the order of their first point).
 pub fn weld(points: &[Vec3], distance: f32) -> Vec<usize> {
-    weld_corners(&[points], distance)
+    weld_corners(&[points], &[], distance)
         .group_of()
         .iter()
         .map(|&g| g as usize)
@@ -269,7 +269,20 @@ pub fn smooth_normals_numbered(
     parts: &[&[Vec3]],
     options: &SmoothingOptions,
 ) -> (Vec<Vec<Vec3>>, Option<PositionNumbers>) {
-    let (normals, _, numbers) = smooth_normals_all(parts, options);
+    smooth_normals_indexed(parts, &[], options)
+}
+
+/// [`smooth_normals_numbered`], given each part's vertex indices where
+/// known (one per corner; corners with equal indices in one part have
+/// bit-identical positions, as the corners of one OBJ `v` line): welding
+/// then looks up each vertex's position once instead of each corner's.
+/// The same normals and numbers, bit for bit.
+pub fn smooth_normals_indexed(
+    parts: &[&[Vec3]],
+    indices: &[Option<&[u32]>],
+    options: &SmoothingOptions,
+) -> (Vec<Vec<Vec3>>, Option<PositionNumbers>) {
+    let (normals, _, numbers) = smooth_normals_all(parts, indices, options);
     (normals, numbers)
 }
 
@@ -280,15 +293,23 @@ pub fn smooth_normals_counted(
     parts: &[&[Vec3]],
     options: &SmoothingOptions,
 ) -> (Vec<Vec<Vec3>>, u64) {
-    let (normals, comparisons, _) = smooth_normals_all(parts, options);
+    let (normals, comparisons, _) = smooth_normals_all(parts, &[], options);
     (normals, comparisons)
 }
 
 /// Normals, crease comparisons and position numbers of [`smooth_normals`].
 fn smooth_normals_all(
     parts: &[&[Vec3]],
+    indices: &[Option<&[u32]>],
     options: &SmoothingOptions,
 ) -> (Vec<Vec<Vec3>>, u64, Option<PositionNumbers>) {
+    // Each part's indices of its whole triangles.
+    let indices: Vec<Option<&[u32]>> = (0..parts.len())
+        .map(|i| {
+            let given = indices.get(i).copied().flatten()?;
+            (given.len() == parts[i].len()).then(|| &given[..given.len() / 3 * 3])
+        })
+        .collect();
     let cos_crease = f64::from(options.crease_degrees.clamp(0.0, 180.0))
         .to_radians()
         .cos();
@@ -312,7 +333,7 @@ fn smooth_normals_all(
                 .enumerate()
                 .map(|(i, p)| {
                     let (mut normals, work, numbered) =
-                        smooth_scope(&[whole(p)], options, cos_crease);
+                        smooth_scope(&[whole(p)], &indices[i..=i], options, cos_crease);
                     comparisons += work;
                     ranges.push((i, 0..numbered.0.len()));
                     buffers.push(numbered);
@@ -328,7 +349,7 @@ fn smooth_normals_all(
         Smoothing::Model => {
             // One scope of every part's whole triangles, back to back.
             let scope: Vec<&[Vec3]> = parts.iter().map(|p| whole(p)).collect();
-            let (normals, work, numbered) = smooth_scope(&scope, options, cos_crease);
+            let (normals, work, numbered) = smooth_scope(&scope, &indices, options, cos_crease);
             comparisons += work;
             let mut start = 0;
             let ranges = scope
@@ -384,16 +405,18 @@ struct Group {
 }
 
 /// Smooth normals of one weld scope: `slices` hold whole triangles, taken
-/// back to back; one normal per corner of each, the crease comparisons
+/// back to back (with their vertex indices where known, see
+/// [`weld_corners`]); one normal per corner of each, the crease comparisons
 /// made, and the corners' exact position numbers and the face data (back
 /// to back).
 fn smooth_scope(
     slices: &[&[Vec3]],
+    indices: &[Option<&[u32]>],
     options: &SmoothingOptions,
     cos_crease: f64,
 ) -> (Vec<Vec<Vec3>>, u64, Numbered) {
     let faces = face_data(slices);
-    let welded = weld_corners(slices, options.weld_distance);
+    let welded = weld_corners(slices, indices, options.weld_distance);
     let groups_of_corners = welded.group_of();
     let group_of = &*groups_of_corners;
     let count = group_of.len();
@@ -1002,5 +1025,89 @@ mod tests {
         // 2000 faces, pleated so that neighbours differ by about 90 degrees.
         let pleated = fan(2000, 0.0, 40.0);
         check("pleated star", &pleated, 45.0, 10f32.to_radians());
+    }
+
+    /// Welding from vertex indices gives the same normals and position
+    /// numbers, bit for bit, as hashing every corner: random soups whose
+    /// vertices repeat positions under other indices (an object's copy of
+    /// another's boundary, `-0.0` against `0.0`), positions within the
+    /// weld distance, trailing corners, parts with and without indices,
+    /// in the object and model modes.
+    #[test]
+    fn indexed_welding_matches_hashing_bit_for_bit() {
+        let mut next = crate::mesh::tests::uniform_stream(0x9e37_79b9_7f4a_7c15);
+        for round in 0..80 {
+            let mut pick = |n: usize| (next() * n as f32) as usize % n;
+            let points: Vec<Vec3> = (0..3 + round % 9)
+                .map(|_| Vec3::new(pick(3) as f32, pick(3) as f32, pick(2) as f32 * 0.5))
+                .collect();
+            // Vertices: the points, some twice, some negated zeros, some
+            // moved within the weld distance.
+            let vertices: Vec<Vec3> = (0..2 * points.len())
+                .map(|i| {
+                    let p = points[i % points.len()];
+                    match pick(4) {
+                        0 => Vec3::select(p.cmpeq(Vec3::ZERO), Vec3::splat(-0.0), p),
+                        1 => Vec3::new(p.x + 2e-6 * pick(3) as f32, p.y, p.z),
+                        _ => p,
+                    }
+                })
+                .collect();
+            let mut parts: Vec<(Vec<Vec3>, Vec<u32>)> = (0..1 + round % 3)
+                .map(|_| {
+                    let corners = 3 * (1 + pick(12)) + pick(3);
+                    let indices: Vec<u32> =
+                        (0..corners).map(|_| pick(vertices.len()) as u32).collect();
+                    let positions = indices.iter().map(|&i| vertices[i as usize]).collect();
+                    (positions, indices)
+                })
+                .collect();
+            if round % 5 == 0 {
+                // Negated zeros under one index are one position either way.
+                for (positions, _) in &mut parts {
+                    for p in positions.iter_mut() {
+                        *p = Vec3::select(p.cmpeq(Vec3::ZERO), Vec3::ZERO, *p);
+                    }
+                }
+            }
+            let positions: Vec<&[Vec3]> = parts.iter().map(|(p, _)| p.as_slice()).collect();
+            let indices: Vec<Option<&[u32]>> = parts
+                .iter()
+                .enumerate()
+                .map(|(i, (_, x))| ((i + round) % 4 != 0).then_some(x.as_slice()))
+                .collect();
+            // Indices numbered within a larger model (far beyond the
+            // corners' count) are hashed instead, with the same results.
+            let offset: Vec<Vec<u32>> = parts
+                .iter()
+                .map(|(_, x)| x.iter().map(|&i| i + 1_000_000).collect())
+                .collect();
+            let sparse: Vec<Option<&[u32]>> = offset.iter().map(|x| Some(&x[..])).collect();
+            for mode in [Smoothing::Object, Smoothing::Model] {
+                for weld_distance in [0.0, 1e-4] {
+                    let options = SmoothingOptions {
+                        mode,
+                        crease_degrees: [30.0, 60.0, 180.0][round % 3],
+                        weld_distance,
+                    };
+                    let (hashed, hashed_numbers) = smooth_normals_numbered(&positions, &options);
+                    let (indexed, indexed_numbers) =
+                        smooth_normals_indexed(&positions, &indices, &options);
+                    let bits = |n: &[Vec<Vec3>]| -> Vec<Vec<[u32; 3]>> {
+                        n.iter()
+                            .map(|p| p.iter().map(|v| v.to_array().map(f32::to_bits)).collect())
+                            .collect()
+                    };
+                    assert_eq!(bits(&hashed), bits(&indexed), "round {round}, {mode:?}");
+                    let (far, _) = smooth_normals_indexed(&positions, &sparse, &options);
+                    assert_eq!(bits(&hashed), bits(&far), "round {round}, {mode:?}");
+                    let (a, b) = (hashed_numbers.unwrap(), indexed_numbers.unwrap());
+                    for part in 0..parts.len() {
+                        let (a, b) = (a.part(part).unwrap(), b.part(part).unwrap());
+                        assert_eq!(a.positions, b.positions, "round {round}, {mode:?}");
+                    }
+                }
+            }
+        }
     }
 }

@@ -48,7 +48,21 @@ impl Welded {
 /// Groups of the corners of `slices` (taken back to back) within
 /// `distance` of one another, transitively; 0 joins bit-identical
 /// positions only (`-0.0` and `0.0` are one).
-pub(crate) fn weld_corners(slices: &[&[Vec3]], distance: f32) -> Welded {
+///
+/// `indices`, when given for a slice (one per corner, as many as its
+/// corners), are the file's vertex indices: corners with equal indices
+/// have bit-identical positions (the caller guarantees it). Only the first
+/// corner of each index is then looked up in the table of distinct
+/// positions, the others take its number from an array indexed by the
+/// vertex index: a closed mesh has about six corners per vertex. The
+/// numbers are the same either way (positions numbered in order of their
+/// first corner), and different indices with equal positions (an
+/// object's copy of another's boundary) are still joined by the table.
+pub(crate) fn weld_corners(
+    slices: &[&[Vec3]],
+    indices: &[Option<&[u32]>],
+    distance: f32,
+) -> Welded {
     let count: usize = slices.iter().map(|s| s.len()).sum();
     assert!(
         count < u32::MAX as usize,
@@ -64,23 +78,85 @@ pub(crate) fn weld_corners(slices: &[&[Vec3]], distance: f32) -> Welded {
     const BATCH: usize = 16;
     let mut keys = [[0u32; 3]; BATCH];
     let mut hashes = [0u64; BATCH];
-    for batch in slices.iter().flat_map(|s| s.chunks(BATCH)) {
-        for ((key, hash), p) in keys.iter_mut().zip(&mut hashes).zip(batch) {
-            // + 0.0 so that -0.0 and 0.0 are one key.
-            *key = (*p + Vec3::ZERO).to_array().map(f32::to_bits);
-            *hash = hash_words(*key);
-        }
-        table.touch(&hashes[..batch.len()]);
-        for (&key, &hash) in keys.iter().zip(&hashes).take(batch.len()) {
-            let next = unique.len() as u32;
-            let id = table.get_or_insert(hash, next, |u| {
-                unique[u as usize].to_array().map(f32::to_bits) == key
-            });
-            if id == next {
-                unique.push(Vec3::from_array(key.map(f32::from_bits)));
+    // The number of each vertex index of the slice at hand (`NONE` before
+    // its first corner), reused from slice to slice.
+    let mut numbered: Vec<u32> = Vec::new();
+    const NONE: u32 = u32::MAX;
+    // The corners of a batch of indexed corners that are their index's
+    // first (their positions are looked up), in corner order.
+    let mut firsts = [0u32; BATCH];
+    for (s, slice) in slices.iter().enumerate() {
+        let given = indices.get(s).copied().flatten();
+        let given = given.filter(|g| g.len() == slice.len());
+        // Indices spread far beyond the slice's corners (a part numbered
+        // within a larger model) would cost an array larger than the
+        // table: those corners are hashed instead.
+        let vertices = given.map_or(0, |g| g.iter().max().map_or(0, |&m| m as usize + 1));
+        let Some(given) = given.filter(|_| vertices <= 2 * slice.len() + 1024) else {
+            for batch in slice.chunks(BATCH) {
+                for ((key, hash), p) in keys.iter_mut().zip(&mut hashes).zip(batch) {
+                    // + 0.0 so that -0.0 and 0.0 are one key.
+                    *key = (*p + Vec3::ZERO).to_array().map(f32::to_bits);
+                    *hash = hash_words(*key);
+                }
+                table.touch(&hashes[..batch.len()]);
+                for (&key, &hash) in keys.iter().zip(&hashes).take(batch.len()) {
+                    let next = unique.len() as u32;
+                    let id = table.get_or_insert(hash, next, |u| {
+                        unique[u as usize].to_array().map(f32::to_bits) == key
+                    });
+                    if id == next {
+                        unique.push(Vec3::from_array(key.map(f32::from_bits)));
+                    }
+                    position_of.push(id);
+                }
             }
-            position_of.push(id);
+            continue;
+        };
+        numbered.clear();
+        numbered.resize(vertices, NONE);
+        // Batches of corners large enough to hold about BATCH first
+        // corners of an index (one in six on a closed mesh), cut short
+        // when BATCH are found.
+        let mut start = 0;
+        while start < slice.len() {
+            let mut found = 0;
+            let mut end = start;
+            while end < slice.len() && found < BATCH {
+                let slot = &mut numbered[given[end] as usize];
+                if *slot == NONE {
+                    // Pending: its later corners in this batch wait for it.
+                    *slot = NONE - 1;
+                    let key = (slice[end] + Vec3::ZERO).to_array().map(f32::to_bits);
+                    keys[found] = key;
+                    hashes[found] = hash_words(key);
+                    firsts[found] = end as u32;
+                    found += 1;
+                }
+                end += 1;
+            }
+            table.touch(&hashes[..found]);
+            for ((&key, &hash), &corner) in keys.iter().zip(&hashes).zip(&firsts).take(found) {
+                let next = unique.len() as u32;
+                let id = table.get_or_insert(hash, next, |u| {
+                    unique[u as usize].to_array().map(f32::to_bits) == key
+                });
+                if id == next {
+                    unique.push(Vec3::from_array(key.map(f32::from_bits)));
+                }
+                numbered[given[corner as usize] as usize] = id;
+            }
+            position_of.extend(given[start..end].iter().map(|&i| numbered[i as usize]));
+            start = end;
         }
+        debug_assert!(
+            slice
+                .iter()
+                .zip(&position_of[position_of.len() - slice.len()..])
+                .all(|(p, &n)| (*p + Vec3::ZERO).to_array().map(f32::to_bits)
+                    == unique[n as usize].to_array().map(f32::to_bits)),
+            "corners with equal vertex indices at different positions"
+        );
     }
     drop(table);
     if distance > 0.0 {

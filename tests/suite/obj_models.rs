@@ -14,7 +14,7 @@ use std::path::Path;
 use aerial::mesh::inspect::process_cpu_seconds;
 use aerial::mesh::obj::{load_obj, model_meshes, ModelOptions};
 use aerial::mesh::smoothing::{
-    naive_normals, smooth_normals, smooth_normals_numbered, Smoothing, SmoothingOptions,
+    naive_normals, smooth_normals, smooth_normals_indexed, Smoothing, SmoothingOptions,
 };
 use aerial::mesh::tangents::{build_mesh, build_mesh_numbered, max_orthonormality_error};
 use aerial::mesh::Mesh;
@@ -512,14 +512,16 @@ fn multi_object_model_renders_clean_with_mtl_materials() {
     assert_eq!(over.materials.len(), 1);
 }
 
-/// Corner positions and UVs of a torus grid of about `triangles` triangles,
-/// cut into 4 objects along u (boundary vertices repeated).
-fn torus_soup(triangles: usize) -> Vec<(Vec<Vec3>, Vec<Vec2>)> {
+/// Corner positions, UVs and vertex indices of a torus grid of about
+/// `triangles` triangles, cut into 4 objects along u (boundary vertices
+/// repeated: each object numbers its own vertices, as an OBJ file's
+/// objects do).
+fn torus_soup(triangles: usize) -> Vec<(Vec<Vec3>, Vec<Vec2>, Vec<u32>)> {
     let v_segments = ((triangles / 8) as f64).sqrt().round().max(3.0) as u32;
     let u_segments = 4 * v_segments;
     (0..4)
         .map(|cut| {
-            let (mut positions, mut uvs) = (Vec::new(), Vec::new());
+            let (mut positions, mut uvs, mut indices) = (Vec::new(), Vec::new(), Vec::new());
             let (i0, i1) = (u_segments * cut / 4, u_segments * (cut + 1) / 4);
             for i in i0..i1 {
                 for j in 0..v_segments {
@@ -528,16 +530,18 @@ fn torus_soup(triangles: usize) -> Vec<(Vec<Vec3>, Vec<Vec2>)> {
                             (i + di) as f32 / u_segments as f32,
                             (j + dj) as f32 / v_segments as f32,
                         );
-                        (torus(u, v).0, Vec2::new(u, v))
+                        let index = (i + di - i0) * (v_segments + 1) + j + dj;
+                        (torus(u, v).0, Vec2::new(u, v), index)
                     };
                     let [a, b, c, d] = [corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1)];
-                    for (p, t) in [a, b, c, a, c, d] {
+                    for (p, t, index) in [a, b, c, a, c, d] {
                         positions.push(p);
                         uvs.push(t);
+                        indices.push(index);
                     }
                 }
             }
-            (positions, uvs)
+            (positions, uvs, indices)
         })
         .collect()
 }
@@ -554,23 +558,25 @@ fn smoothing_and_tangent_time() {
     let mut cpu_of = Vec::new();
     for triangles in [10_000, 100_000, 1_000_000] {
         let soup = torus_soup(triangles);
-        let count: usize = soup.iter().map(|(p, _)| p.len() / 3).sum();
-        let positions: Vec<&[Vec3]> = soup.iter().map(|(p, _)| p.as_slice()).collect();
+        let count: usize = soup.iter().map(|(p, _, _)| p.len() / 3).sum();
+        let positions: Vec<&[Vec3]> = soup.iter().map(|(p, _, _)| p.as_slice()).collect();
+        let indices: Vec<Option<&[u32]>> = soup.iter().map(|(_, _, i)| Some(&i[..])).collect();
         let options = SmoothingOptions {
             mode: Smoothing::Model,
             crease_degrees: 60.0,
             weld_distance: 1e-5 * 2.8 * 1.4,
         };
         let (start, cpu_start) = (Instant::now(), process_cpu_seconds());
-        // As `aerial mesh` does: the tangent stage reuses the welding.
-        let (normals, numbers) = smooth_normals_numbered(&positions, &options);
+        // As `aerial mesh` does: welding from the vertex indices, and the
+        // tangent stage reusing the welding.
+        let (normals, numbers) = smooth_normals_indexed(&positions, &indices, &options);
         let smoothing = start.elapsed().as_secs_f64();
         let (start, cpu_middle) = (Instant::now(), process_cpu_seconds());
         let meshes: Vec<Mesh> = soup
             .iter()
             .zip(&normals)
             .enumerate()
-            .map(|(i, ((p, t), n))| {
+            .map(|(i, ((p, t, _), n))| {
                 build_mesh_numbered(p, n, Some(t), numbers.as_ref().and_then(|x| x.part(i))).0
             })
             .collect();
@@ -605,6 +611,107 @@ fn smoothing_and_tangent_time() {
             );
         }
     }
+}
+
+/// Writes the cut torus models of `docs/mesh-performance.md` (4v x v
+/// segments, v = sqrt(N / 8), cut into 8 objects along u, each object
+/// repeating its boundary vertices, with UVs and no normals) for the
+/// triangle counts in `AERIAL_TORUS_SIZES` (default `10000,100000,1000000`)
+/// into the folder `AERIAL_TORUS_DIR`, as `torus<N>.obj`:
+/// `AERIAL_TORUS_DIR=/tmp cargo test --release --test suite
+/// obj_models::write_cut_torus_models -- --ignored`.
+#[test]
+#[ignore = "writes benchmark models"]
+fn write_cut_torus_models() {
+    let Ok(dir) = std::env::var("AERIAL_TORUS_DIR") else {
+        return;
+    };
+    let sizes = std::env::var("AERIAL_TORUS_SIZES").unwrap_or("10000,100000,1000000".into());
+    for n in sizes.split(',') {
+        let n: usize = n.trim().parse().unwrap();
+        let v = ((n / 8) as f64).sqrt().round() as u32;
+        let text = grid_obj(torus, (4 * v, v), (8, 1));
+        std::fs::write(Path::new(&dir).join(format!("torus{n}.obj")), text).unwrap();
+    }
+}
+
+/// A digest of every OBJ model under the folders of `AERIAL_OBJ_DIRS`
+/// (separated by `:`) that loads, per smoothing mode and tangent method:
+/// one line per model and mode, for comparing builds bit for bit. The
+/// meshes made with the file's vertex indices are checked against those
+/// made without (every corner's position hashed), bit for bit.
+/// `AERIAL_OBJ_DIRS=assets cargo test --release --test suite
+/// obj_models::model_file_digests -- --ignored --nocapture`.
+#[test]
+#[ignore = "reads model folders named in the environment"]
+fn model_file_digests() {
+    use aerial::mesh::obj::TangentMethod;
+    use std::hash::{Hash, Hasher};
+    let Ok(dirs) = std::env::var("AERIAL_OBJ_DIRS") else {
+        return;
+    };
+    fn walk(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
+        let Ok(entries) = std::fs::read_dir(dir) else {
+            return;
+        };
+        for entry in entries.flatten() {
+            let path = entry.path();
+            if path.is_dir() {
+                walk(&path, out);
+            } else if path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+            {
+                out.push(path);
+            }
+        }
+    }
+    let mut files = Vec::new();
+    for dir in dirs.split(':') {
+        walk(Path::new(dir), &mut files);
+    }
+    files.sort();
+    let mut compared = 0;
+    for file in &files {
+        let Ok(model) = load_obj(file) else {
+            continue;
+        };
+        let mut unindexed = model.clone();
+        for part in &mut unindexed.parts {
+            part.vertex_indices = None;
+        }
+        for smoothing in [Smoothing::Model, Smoothing::Object, Smoothing::Face] {
+            for tangents in [TangentMethod::Aerial, TangentMethod::Mikktspace] {
+                let options = ModelOptions {
+                    smoothing: Some(smoothing),
+                    tangents,
+                    ..ModelOptions::default()
+                };
+                let Ok(meshes) = model_meshes(&model, &options, "m") else {
+                    continue;
+                };
+                let again = model_meshes(&unindexed, &options, "m").unwrap();
+                let mut hasher = std::collections::hash_map::DefaultHasher::new();
+                for ((mesh, stats), (other, other_stats)) in meshes.iter().zip(&again) {
+                    let bytes: &[u8] = bytemuck::cast_slice(&mesh.vertices);
+                    let other_bytes: &[u8] = bytemuck::cast_slice(&other.vertices);
+                    assert!(bytes == other_bytes, "{}", file.display());
+                    assert_eq!(mesh.indices, other.indices, "{}", file.display());
+                    assert_eq!(stats, other_stats, "{}", file.display());
+                    bytes.hash(&mut hasher);
+                    mesh.indices.hash(&mut hasher);
+                    format!("{stats:?}").hash(&mut hasher);
+                }
+                compared += 1;
+                println!(
+                    "{} {smoothing:?} {tangents:?} {:016x}",
+                    file.display(),
+                    hasher.finish()
+                );
+            }
+        }
+    }
+    println!("{compared} models and modes compared");
 }
 
 /// The render check of the smoothing modes: the cut sphere, loaded from
