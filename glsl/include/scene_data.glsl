@@ -11,8 +11,10 @@ layout(constant_id = SPEC_SHADING_MODEL) const int SHADING_MODEL = SHADING_PHONG
 
 // One block per object: its transform, its material and exactly the lights
 // that can reach it (see Scene::lights_reaching), bound with a dynamic offset.
-// A uniform block rather than a storage buffer: with constant offsets the
-// driver reads uniform data once per draw instead of once per invocation.
+// Lavapipe still reads a uniform block once per invocation (about 2.6
+// instructions per float per pixel), so lights that fit are carried as
+// specialization constants instead (static_lights.glsl) and `lights` is
+// read only by draws that cannot.
 layout(std140, set = OBJECT_SET, binding = 0) uniform ObjectBlock {
     mat4 model;
     mat4 normal_matrix;  // inverse transpose of the model matrix
