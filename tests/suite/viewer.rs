@@ -32,9 +32,14 @@ struct Xvfb {
 impl Xvfb {
     fn start() -> Xvfb {
         // Tests run in parallel and other X servers may be up: try display
-        // numbers until one starts.
+        // numbers until one starts. Each test of this process takes its own
+        // numbers: two tests trying the same one could both see the socket
+        // of the server only one of them started, and the other's viewer
+        // would lose its display when that test ends.
+        static NEXT: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
         let first = 200 + std::process::id() % 300;
-        for n in first..first + 100 {
+        for _ in 0..100 {
+            let n = first + NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed) % 1000;
             if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()
                 || Path::new(&format!("/tmp/.X{n}-lock")).exists()
             {
