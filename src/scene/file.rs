@@ -83,6 +83,7 @@ struct OutputFile {
     texture_filter: TextureFilter,
     lighting: Lighting,
     debug_view: Option<DebugView>,
+    static_lights: bool,
 }
 
 impl Default for OutputFile {
@@ -94,6 +95,7 @@ impl Default for OutputFile {
             texture_filter: TextureFilter::Trilinear,
             lighting: Lighting::Forward,
             debug_view: None,
+            static_lights: true,
         }
     }
 }
@@ -462,6 +464,7 @@ impl Check<'_> {
             texture_filter: raw.texture_filter,
             lighting: raw.lighting,
             debug_view: raw.debug_view,
+            static_lights: raw.static_lights,
         })
     }
 

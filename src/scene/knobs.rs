@@ -162,6 +162,21 @@ pub const KNOBS: &[Knob] = &[
         read: |s| s.output.hdr_format.name().into(),
     },
     Knob {
+        name: "static_lights",
+        // The same image either way; only the cost changes.
+        best: Best::Unchanged,
+        values: "on | off (off: every light read from its uniform block, to measure the difference)",
+        apply: |s, v| {
+            s.output.static_lights = match v {
+                "on" => true,
+                "off" => false,
+                _ => return Err("expected on or off".into()),
+            };
+            Ok(())
+        },
+        read: |s| if s.output.static_lights { "on" } else { "off" }.into(),
+    },
+    Knob {
         name: "texture_filter",
         best: Best::Fixed("trilinear"),
         values: "nearest | bilinear | trilinear",
@@ -445,6 +460,7 @@ mod tests {
             ("light_cutoff", "0.01"),
             ("hdr_format", "rgba32f"),
             ("texture_filter", "nearest"),
+            ("static_lights", "off"),
         ] {
             let knob = Knob::find(name).unwrap();
             knob.set(&mut scene, value).unwrap();

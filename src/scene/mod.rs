@@ -122,6 +122,10 @@ pub struct Output {
     pub lighting: Lighting,
     /// Draw one surface attribute instead of the lit image.
     pub debug_view: Option<DebugView>,
+    /// Lights the frame never changes as specialization constants rather
+    /// than uniform reads (`render::static_lights`); off only to measure
+    /// what that saves.
+    pub static_lights: bool,
 }
 
 /// A surface attribute drawn instead of the lit image (`[output]
@@ -335,6 +339,7 @@ impl Scene {
                 texture_filter: TextureFilter::Trilinear,
                 lighting: Lighting::Forward,
                 debug_view: None,
+                static_lights: true,
             },
             camera: Camera {
                 eye: DVec3::Z,

@@ -297,6 +297,7 @@ fn minimal_scene_gets_the_documented_defaults() {
             texture_filter: crate::scene::TextureFilter::Trilinear,
             lighting: crate::scene::Lighting::Forward,
             debug_view: None,
+            static_lights: true,
         }
     );
     assert_eq!(scene.camera.up, Vec3::Y);

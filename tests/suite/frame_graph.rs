@@ -421,3 +421,45 @@ fn a_culled_light_changes_no_pixel_beyond_the_cutoff_bound() {
         "the window changed a pixel by {diff}, bound 0.01"
     );
 }
+
+/// Lights carried as specialization constants (`static_lights = true`, the
+/// default) and read from their uniform blocks give the same image, bit
+/// for bit, forward and deferred: the constants are the block's floats and
+/// the shader's arithmetic is the same. Oracle: the block path. Scenes: six
+/// lights on every object and tile (all static), three lights with the
+/// default cutoff, and sixteen lights with culling off (more than a
+/// pipeline carries, so both settings read the blocks there).
+#[test]
+fn static_lights_draw_what_uniform_blocks_draw() {
+    let bench = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bench/many_lights.toml");
+    let mut scenes = vec![(
+        "bench many_lights.toml",
+        Scene::load(&bench).unwrap_or_else(|e| panic!("{e}")),
+    )];
+    scenes.push(("default.toml", example("default.toml")));
+    let mut sixteen = example("many_lights.toml");
+    sixteen.light_cutoff = 0.0;
+    scenes.push(("many_lights.toml, no culling", sixteen));
+    for (name, mut scene) in scenes {
+        scene.set_output_size(Some(160), Some(90)).unwrap();
+        scene.output.static_lights = false;
+        let (block_forward, block_deferred) = forward_and_deferred(name, &scene, true);
+        scene.output.static_lights = true;
+        let (forward, deferred) = forward_and_deferred(name, &scene, true);
+        common::assert_not_blank(&forward.output, 0.2);
+        for (path, a, b) in [
+            ("forward", &forward, &block_forward),
+            ("deferred", &deferred, &block_deferred),
+        ] {
+            assert_eq!(diff_u8(&a.output, &b.output), (0, 0), "{name}, {path}");
+            let (ha, hb) = (a.hdr.as_ref().unwrap(), b.hdr.as_ref().unwrap());
+            assert!(
+                ha.data
+                    .iter()
+                    .zip(&hb.data)
+                    .all(|(x, y)| x.to_bits() == y.to_bits()),
+                "{name}, {path}: HDR differs"
+            );
+        }
+    }
+}

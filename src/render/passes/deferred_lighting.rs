@@ -139,7 +139,8 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     }];
     // Static lights give each group its own pipeline; past the limit, or
     // with a group too large for them, groups share one per light count.
-    let static_lights = groups.len() <= static_lights::MAX_STATIC_PIPELINES
+    let static_lights = setup.scene.output.static_lights
+        && groups.len() <= static_lights::MAX_STATIC_PIPELINES
         && groups.iter().all(|g| static_lights::fits(&g.lights));
     let mut pipelines = Vec::new();
     let mut by_count: BTreeMap<usize, usize> = BTreeMap::new();

@@ -74,7 +74,8 @@ impl SurfacePass {
         keys.sort();
         keys.dedup();
         // Past the limit, every draw reads its lights from its block.
-        let static_lights = keys.len() <= static_lights::MAX_STATIC_PIPELINES;
+        let static_lights =
+            setup.scene.output.static_lights && keys.len() <= static_lights::MAX_STATIC_PIPELINES;
         if !static_lights {
             keys = draws.iter().map(|d| surface_key(d, false)).collect();
             keys.sort();
