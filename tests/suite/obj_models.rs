@@ -618,7 +618,7 @@ fn smoothing_and_tangent_time() {
 /// repeating its boundary vertices, with UVs and no normals) for the
 /// triangle counts in `AERIAL_TORUS_SIZES` (default `10000,100000,1000000`)
 /// into the folder `AERIAL_TORUS_DIR`, as `torus<N>.obj`:
-/// `AERIAL_TORUS_DIR=/tmp cargo test --release --test suite
+/// `AERIAL_TORUS_DIR=bench-models cargo test --release --test suite
 /// obj_models::write_cut_torus_models -- --ignored`.
 #[test]
 #[ignore = "writes benchmark models"]
