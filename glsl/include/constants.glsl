@@ -36,4 +36,14 @@
 #define SPEC_TRANSPARENT_OVER_SKY 4
 // The first of the sky block's unchanging fields, 4 ids per field.
 #define SPEC_SKY_STATIC 8
+
+// Four float specialization constants NAME_0 .. NAME_3 with ids ID ..
+// ID + 3, read back as one vector by SPEC_VEC4(NAME): the static lights
+// and the sky's unchanging fields are declared with these.
+#define SPEC_VEC4_CONSTANTS(NAME, ID) \
+    layout(constant_id = (ID) + 0) const float NAME##_0 = 0.0; \
+    layout(constant_id = (ID) + 1) const float NAME##_1 = 0.0; \
+    layout(constant_id = (ID) + 2) const float NAME##_2 = 0.0; \
+    layout(constant_id = (ID) + 3) const float NAME##_3 = 0.0;
+#define SPEC_VEC4(NAME) vec4(NAME##_0, NAME##_1, NAME##_2, NAME##_3)
 #endif

@@ -12,20 +12,12 @@
 layout(constant_id = SPEC_STATIC_LIGHTS) const bool STATIC_LIGHTS = false;
 
 // Twelve constants per light, in GpuLight's order: position (w = 1 for a
-// point light), colour, attenuation.
+// point light), colour, attenuation. One line per light up to
+// MAX_STATIC_LIGHTS, here and in FOR_EACH_LIGHT.
 #define STATIC_LIGHT_CONSTANTS(k) \
-    layout(constant_id = SPEC_STATIC_LIGHT_DATA + 12 * k + 0) const float STATIC_LIGHT_##k##_0 = 0.0; \
-    layout(constant_id = SPEC_STATIC_LIGHT_DATA + 12 * k + 1) const float STATIC_LIGHT_##k##_1 = 0.0; \
-    layout(constant_id = SPEC_STATIC_LIGHT_DATA + 12 * k + 2) const float STATIC_LIGHT_##k##_2 = 0.0; \
-    layout(constant_id = SPEC_STATIC_LIGHT_DATA + 12 * k + 3) const float STATIC_LIGHT_##k##_3 = 0.0; \
-    layout(constant_id = SPEC_STATIC_LIGHT_DATA + 12 * k + 4) const float STATIC_LIGHT_##k##_4 = 0.0; \
-    layout(constant_id = SPEC_STATIC_LIGHT_DATA + 12 * k + 5) const float STATIC_LIGHT_##k##_5 = 0.0; \
-    layout(constant_id = SPEC_STATIC_LIGHT_DATA + 12 * k + 6) const float STATIC_LIGHT_##k##_6 = 0.0; \
-    layout(constant_id = SPEC_STATIC_LIGHT_DATA + 12 * k + 7) const float STATIC_LIGHT_##k##_7 = 0.0; \
-    layout(constant_id = SPEC_STATIC_LIGHT_DATA + 12 * k + 8) const float STATIC_LIGHT_##k##_8 = 0.0; \
-    layout(constant_id = SPEC_STATIC_LIGHT_DATA + 12 * k + 9) const float STATIC_LIGHT_##k##_9 = 0.0; \
-    layout(constant_id = SPEC_STATIC_LIGHT_DATA + 12 * k + 10) const float STATIC_LIGHT_##k##_10 = 0.0; \
-    layout(constant_id = SPEC_STATIC_LIGHT_DATA + 12 * k + 11) const float STATIC_LIGHT_##k##_11 = 0.0;
+    SPEC_VEC4_CONSTANTS(STATIC_LIGHT_##k##_POSITION, SPEC_STATIC_LIGHT_DATA + 12 * k) \
+    SPEC_VEC4_CONSTANTS(STATIC_LIGHT_##k##_COLOR, SPEC_STATIC_LIGHT_DATA + 12 * k + 4) \
+    SPEC_VEC4_CONSTANTS(STATIC_LIGHT_##k##_ATTENUATION, SPEC_STATIC_LIGHT_DATA + 12 * k + 8)
 
 STATIC_LIGHT_CONSTANTS(0)
 STATIC_LIGHT_CONSTANTS(1)
@@ -36,12 +28,12 @@ STATIC_LIGHT_CONSTANTS(5)
 STATIC_LIGHT_CONSTANTS(6)
 STATIC_LIGHT_CONSTANTS(7)
 
-// Light k of the pipeline's constants.
+// Light k of the pipeline's constants, its position moved to the origin.
 #define STATIC_LIGHT(k) Light( \
-    vec4(vec3(STATIC_LIGHT_##k##_0, STATIC_LIGHT_##k##_1, STATIC_LIGHT_##k##_2) \
-             + frame.light_origin.xyz * STATIC_LIGHT_##k##_3, STATIC_LIGHT_##k##_3), \
-    vec4(STATIC_LIGHT_##k##_4, STATIC_LIGHT_##k##_5, STATIC_LIGHT_##k##_6, STATIC_LIGHT_##k##_7), \
-    vec4(STATIC_LIGHT_##k##_8, STATIC_LIGHT_##k##_9, STATIC_LIGHT_##k##_10, STATIC_LIGHT_##k##_11))
+    SPEC_VEC4(STATIC_LIGHT_##k##_POSITION) \
+        + vec4(frame.light_origin.xyz * STATIC_LIGHT_##k##_POSITION_3, 0.0), \
+    SPEC_VEC4(STATIC_LIGHT_##k##_COLOR), \
+    SPEC_VEC4(STATIC_LIGHT_##k##_ATTENUATION))
 
 // Runs TERM(light) for each of the draw's LIGHT_COUNT lights: the
 // constants when STATIC_LIGHTS (at most MAX_STATIC_LIGHTS of them), else

@@ -39,6 +39,15 @@ pub const SPEC_TRANSPARENT_OVER_SKY: u32 = 4;
 /// (`sky_resources::static_constants`).
 pub const SPEC_SKY_STATIC: u32 = 8;
 
+/// The specialization entries of consecutive float constants from id
+/// `first` on (the shaders' `SPEC_VEC4_CONSTANTS`).
+pub fn float_constants(
+    first: u32,
+    values: impl IntoIterator<Item = f32>,
+) -> impl Iterator<Item = (u32, u32)> {
+    (first..).zip(values.into_iter().map(f32::to_bits))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

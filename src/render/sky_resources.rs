@@ -12,7 +12,7 @@
 //! shaders camera-relative.
 
 use super::plan::FramePlan;
-use super::shader_ids::SPEC_SKY_STATIC;
+use super::shader_ids::{float_constants, SPEC_SKY_STATIC};
 use super::RenderError;
 use crate::atmosphere::OpticalDepthTable;
 use crate::scene::{Camera, Sky, TableFilter};
@@ -217,12 +217,7 @@ impl SkyResources {
     /// The specialization constants that carry the sky block's unchanging
     /// fields, as the atmosphere shaders read them.
     pub fn static_constants(&self) -> Vec<(u32, u32)> {
-        self.static_fields
-            .iter()
-            .flatten()
-            .enumerate()
-            .map(|(i, v)| (SPEC_SKY_STATIC + i as u32, v.to_bits()))
-            .collect()
+        float_constants(SPEC_SKY_STATIC, self.static_fields.into_iter().flatten()).collect()
     }
 
     /// Whether `sky` seen by `camera` in `plan` keeps the fields these

@@ -19,7 +19,9 @@
 
 use super::gpu_types::GpuLight;
 use super::scene_resources::gpu_light;
-use super::shader_ids::{MAX_STATIC_LIGHTS, SPEC_STATIC_LIGHTS, SPEC_STATIC_LIGHT_DATA};
+use super::shader_ids::{
+    float_constants, MAX_STATIC_LIGHTS, SPEC_STATIC_LIGHTS, SPEC_STATIC_LIGHT_DATA,
+};
 use crate::scene::Scene;
 
 /// The most pipelines a pass specializes by their lights: each costs a
@@ -29,6 +31,13 @@ pub const MAX_STATIC_PIPELINES: usize = 32;
 /// Whether a light list can be carried as constants.
 pub fn fits(lights: &[usize]) -> bool {
     lights.len() <= MAX_STATIC_LIGHTS as usize
+}
+
+/// Whether a pass of `scene` whose light lists that fit need `pipelines`
+/// pipelines carries them as constants: the scene allows it
+/// (`static_lights`) and the count is within [`MAX_STATIC_PIPELINES`].
+pub fn enabled(scene: &Scene, pipelines: usize) -> bool {
+    scene.output.static_lights && pipelines <= MAX_STATIC_PIPELINES
 }
 
 /// The specialization constants of a pipeline whose lights are `lights`
@@ -46,10 +55,10 @@ pub fn constants(scene: &Scene, anchor: glam::DVec3, lights: Option<&[usize]>) -
             attenuation,
         } = gpu_light(&scene.lights[light], anchor, scene.light_cutoff);
         let values = position.into_iter().chain(color).chain(attenuation);
-        for (c, value) in values.enumerate() {
-            let id = SPEC_STATIC_LIGHT_DATA + 12 * k as u32 + c as u32;
-            constants.push((id, value.to_bits()));
-        }
+        constants.extend(float_constants(
+            SPEC_STATIC_LIGHT_DATA + 12 * k as u32,
+            values,
+        ));
     }
     constants
 }

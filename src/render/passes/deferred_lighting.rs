@@ -137,16 +137,17 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         format: Format::R32G32_SFLOAT,
         offset: 0,
     }];
-    // Static lights give each group its own pipeline; past the limit, or
-    // with a group too large for them, groups share one per light count.
-    let static_lights = setup.scene.output.static_lights
-        && groups.len() <= static_lights::MAX_STATIC_PIPELINES
-        && groups.iter().all(|g| static_lights::fits(&g.lights));
+    // Static lights give each group that fits its own pipeline; past the
+    // limit, and for groups too large for them, groups share one per light
+    // count.
+    let fitting = groups.iter().filter(|g| static_lights::fits(&g.lights));
+    let static_lights = static_lights::enabled(setup.scene, fitting.count());
     let mut pipelines = Vec::new();
     let mut by_count: BTreeMap<usize, usize> = BTreeMap::new();
     for g in &mut groups {
         let count = g.lights.len();
-        if !static_lights {
+        let carried = static_lights && static_lights::fits(&g.lights);
+        if !carried {
             if let Some(&p) = by_count.get(&count) {
                 g.pipeline = p;
                 continue;
@@ -161,7 +162,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         specialization.extend(static_lights::constants(
             setup.scene,
             resources.light_anchor,
-            static_lights.then_some(&g.lights[..]),
+            carried.then_some(&g.lights[..]),
         ));
         let pipeline = GraphicsPipeline::new(
             ctx,

@@ -70,16 +70,20 @@ impl SurfacePass {
             Form::Opaque | Form::GBuffer => setup.plan.opaque.clone(),
         };
         let mut pipelines = BTreeMap::new();
-        let mut keys: Vec<SurfaceKey> = draws.iter().map(|d| surface_key(d, true)).collect();
-        keys.sort();
-        keys.dedup();
-        // Past the limit, every draw reads its lights from its block.
-        let static_lights =
-            setup.scene.output.static_lights && keys.len() <= static_lights::MAX_STATIC_PIPELINES;
-        if !static_lights {
-            keys = draws.iter().map(|d| surface_key(d, false)).collect();
+        let distinct_keys = |static_lights: bool| {
+            let mut keys: Vec<SurfaceKey> = draws
+                .iter()
+                .map(|d| surface_key(d, static_lights))
+                .collect();
             keys.sort();
             keys.dedup();
+            keys
+        };
+        // Past the limit, every draw reads its lights from its block.
+        let mut keys = distinct_keys(true);
+        let static_lights = static_lights::enabled(setup.scene, keys.len());
+        if !static_lights {
+            keys = distinct_keys(false);
         }
         if !draws.is_empty() {
             let resources = setup.scene_resources()?;
