@@ -334,8 +334,8 @@ fn a_failed_run_leaves_none_of_its_outputs_and_keeps_old_files() {
     let dir = Scratch::new();
     let png = dir.path("a.png");
     let missing = dir.path("nodir/x.exr");
-    // A run that fails: the --hdr output's folder does not exist.
-    let failing_run = || {
+    // An 8x8 render of the default scene to `out` and `hdr`.
+    let render = |out: &Path, hdr: &Path| {
         aerial(
             &[
                 "render",
@@ -344,13 +344,15 @@ fn a_failed_run_leaves_none_of_its_outputs_and_keeps_old_files() {
                 "--height",
                 "8",
                 "--out",
-                s(&png),
+                s(out),
                 "--hdr",
-                s(&missing),
+                s(hdr),
             ],
             &[],
         )
     };
+    // A run that fails: the --hdr output's folder does not exist.
+    let failing_run = || render(&png, &missing);
     let run = failing_run();
     assert_fails(&run, 2, &["nodir"]);
     assert!(dir.entries().is_empty(), "{:?}", dir.entries());
@@ -360,20 +362,7 @@ fn a_failed_run_leaves_none_of_its_outputs_and_keeps_old_files() {
     let run = failing_run();
     assert_fails(&run, 2, &["nodir"]);
     assert_eq!(std::fs::read(&png).unwrap(), b"old");
-    let same = aerial(
-        &[
-            "render",
-            "--width",
-            "8",
-            "--height",
-            "8",
-            "--out",
-            s(&png),
-            "--hdr",
-            s(&png),
-        ],
-        &[],
-    );
+    let same = render(&png, &png);
     assert_fails(&same, 2, &["same file"]);
     assert_eq!(dir.entries(), ["a.png"]);
 }
