@@ -476,6 +476,7 @@ mod tests {
             ("shading", "flat"),
             ("lights", "999"),
             ("tessellation", "-1"),
+            ("static_lights", "maybe"),
         ] {
             let e = Knob::find(name)
                 .unwrap()

@@ -664,3 +664,20 @@ fn an_object_after_a_model_can_name_the_model_s_material() {
          (defined: \"grey\", \"model/red\")"
     );
 }
+
+/// `[output] static_lights` takes a boolean; another type is refused with
+/// the file, the line and the field's text, and a missing one is on.
+#[test]
+fn static_lights_takes_a_boolean() {
+    assert!(parse(MINIMAL).unwrap().output.static_lights);
+    let off = format!("[output]\nstatic_lights = false\n{MINIMAL}");
+    assert!(!parse(&off).unwrap().output.static_lights);
+    for value in ["\"yes\"", "1", "[true]"] {
+        let text = format!("[output]\nstatic_lights = {value}\n{MINIMAL}");
+        let e = parse(&text).unwrap_err().to_string();
+        assert!(
+            e.contains("test.toml") && e.contains("line 2") && e.contains("static_lights"),
+            "{value}: {e}"
+        );
+    }
+}
