@@ -6,6 +6,7 @@
 use super::obj::{
     load_obj, model_frames_numbered, model_normals_numbered, AssetWarning, ModelOptions, ObjError,
 };
+use super::heap::HeapReuse;
 use super::smoothing::weld;
 use super::tangents::max_orthonormality_error;
 use std::path::Path;
@@ -70,6 +71,8 @@ pub struct MeshReport {
 /// Loads `path` as the renderer would with `options` and reports on it.
 pub fn inspect(path: &Path, options: &ModelOptions) -> Result<MeshReport, ObjError> {
     let file = path.display().to_string();
+    // Each stage reuses the memory the one before freed (see `HeapReuse`).
+    let _reuse = HeapReuse::enter();
     let (start, cpu_start) = (Instant::now(), process_cpu_seconds());
     let model = load_obj(path)?;
     let (load, cpu_load) = (start.elapsed().as_secs_f64(), process_cpu_seconds());

@@ -6,6 +6,7 @@
 //! [`Vertex`] data with analytic normals and tangents, so shading quality
 //! does not depend on how finely the surface is cut.
 
+pub mod heap;
 pub mod height;
 pub mod inspect;
 mod join;

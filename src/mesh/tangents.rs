@@ -20,7 +20,7 @@
 use glam::{DVec3, Vec2, Vec3};
 
 use super::join::{hash_words, IndexTable};
-use super::smoothing::PartNumbers;
+use super::smoothing::{corner_angle, PartNumbers};
 use super::{Mesh, Vertex};
 
 /// Statistics of one [`build_mesh`] call, for reports and tests.
@@ -186,11 +186,10 @@ pub(crate) fn build_mesh_in(
             // Weighted by the corner angle, like the normals, so that how
             // the surface is cut into triangles does not bias the frame.
             let angle = |here: DVec3, next: DVec3, prev: DVec3| {
-                let angle = f64::from(
-                    (next - here)
-                        .as_vec3()
-                        .angle_between((prev - here).as_vec3()),
-                );
+                let angle = f64::from(corner_angle(
+                    (next - here).as_vec3(),
+                    (prev - here).as_vec3(),
+                ));
                 if angle.is_finite() {
                     angle
                 } else {

@@ -98,6 +98,10 @@ impl Check<'_> {
                 )
                 .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
         }
+        // Parsing, smoothing and tangent frames each reuse the memory the
+        // stage before freed, and the free memory goes back to the system
+        // once the meshes are made.
+        let _reuse = crate::mesh::heap::HeapReuse::enter();
         let loaded = obj::load_obj(resolved)
             .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
         files.extend(loaded.files.iter().cloned());
