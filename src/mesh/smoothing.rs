@@ -160,7 +160,7 @@ pub(crate) fn corner_angle(u: Vec3, v: Vec3) -> f32 {
     let acute = acute * root;
     let obtuse = std::f32::consts::PI - acute;
     // All ones when the cosine is negative (or NaN, as glam's `>= 0` test).
-    let mask = 0u32.wrapping_sub(u32::from(!(cosine >= 0.0)));
+    let mask = 0u32.wrapping_sub(u32::from((cosine < 0.0) | cosine.is_nan()));
     f32::from_bits(acute.to_bits() & !mask | obtuse.to_bits() & mask)
 }
 
