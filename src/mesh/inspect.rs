@@ -3,10 +3,10 @@
 //! across objects, degenerate and mirrored triangles, non-finite
 //! attributes, the worst tangent-frame error, and the time of each stage.
 
+use super::heap::HeapReuse;
 use super::obj::{
     load_obj, model_frames_numbered, model_normals_numbered, AssetWarning, ModelOptions, ObjError,
 };
-use super::heap::HeapReuse;
 use super::smoothing::weld;
 use super::tangents::max_orthonormality_error;
 use std::path::Path;
