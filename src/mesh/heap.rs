@@ -7,7 +7,7 @@
 //! freed) straight from the system and unmaps it when freed, so every
 //! stage's arrays are fresh pages: a page fault and a cleared page per
 //! 4 KiB, about 2 to 3 µs each on a virtual machine, which at a million
-//! triangles is a quarter of the smoothing and tangent time. While a
+//! triangles was a sixth of the smoothing and tangent time. While a
 //! [`HeapReuse`] is alive, blocks of any size come from the heap and freed
 //! memory stays there, so each stage reuses what the one before freed
 //! (the file's text, the parser's arrays, smoothing's tables); when the
@@ -57,7 +57,9 @@ mod allocator {
     /// memory at its top is kept (a model's largest array is its file's
     /// text: 785 MB at ten million triangles).
     const KEEP: libc::c_int = 1 << 30;
-    /// glibc's documented defaults for both thresholds.
+    /// glibc's documented defaults for both thresholds. Once set, the
+    /// mapping threshold no longer rises by itself as blocks are freed:
+    /// large blocks are mapped from the system, as at start.
     const DEFAULT: libc::c_int = 128 * 1024;
 
     pub fn keep_freed() {

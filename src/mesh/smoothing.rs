@@ -140,8 +140,8 @@ impl Face {
 /// (its approximate arc cosine: the same operations in the same order),
 /// but taking the obtuse side by a mask instead of a branch: whether a
 /// corner is obtuse is as good as random on most meshes (a right angle's
-/// cosine is rounding noise around zero), and a mispredicted branch cost
-/// more than the whole polynomial.
+/// cosine is rounding noise around zero), and a sampling profile put a
+/// sixth of the face data's time on that branch.
 pub(crate) fn corner_angle(u: Vec3, v: Vec3) -> f32 {
     let cosine = u.dot(v) / (u.length_squared() * v.length_squared()).sqrt();
     let x = cosine.abs();
