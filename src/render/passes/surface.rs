@@ -38,6 +38,9 @@ type SurfaceKey = (PipelineKey, Option<Vec<usize>>);
 pub struct SurfacePass {
     form: Form,
     draws: Vec<Draw>,
+    /// Each draw's pipeline, resolved when the draws are taken so that
+    /// recording copies no light lists.
+    draw_keys: Vec<SurfaceKey>,
     pipelines: BTreeMap<SurfaceKey, GraphicsPipeline>,
     /// Whether draws that can carry their lights as constants do.
     static_lights: bool,
@@ -49,6 +52,14 @@ fn surface_key(d: &Draw, static_lights: bool) -> SurfaceKey {
     let lights = (static_lights && d.sun.is_none() && static_lights::fits(&d.lights))
         .then(|| d.lights.clone());
     (d.pipeline, lights)
+}
+
+/// [`surface_key`] of each of `draws`.
+fn surface_keys(draws: &[Draw], static_lights: bool) -> Vec<SurfaceKey> {
+    draws
+        .iter()
+        .map(|d| surface_key(d, static_lights))
+        .collect()
 }
 
 pub fn create_opaque(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
@@ -70,21 +81,19 @@ impl SurfacePass {
             Form::Opaque | Form::GBuffer => setup.plan.opaque.clone(),
         };
         let mut pipelines = BTreeMap::new();
-        let distinct_keys = |static_lights: bool| {
-            let mut keys: Vec<SurfaceKey> = draws
-                .iter()
-                .map(|d| surface_key(d, static_lights))
-                .collect();
+        let distinct = |keys: &[SurfaceKey]| {
+            let mut keys = keys.to_vec();
             keys.sort();
             keys.dedup();
             keys
         };
         // Past the limit, every draw reads its lights from its block.
-        let mut keys = distinct_keys(true);
-        let static_lights = static_lights::enabled(setup.scene, keys.len());
+        let mut draw_keys = surface_keys(&draws, true);
+        let static_lights = static_lights::enabled(setup.scene, distinct(&draw_keys).len());
         if !static_lights {
-            keys = distinct_keys(false);
+            draw_keys = surface_keys(&draws, false);
         }
+        let keys = distinct(&draw_keys);
         if !draws.is_empty() {
             let resources = setup.scene_resources()?;
             let render_pass = setup.render_pass()?;
@@ -157,6 +166,7 @@ impl SurfacePass {
         Ok(Box::new(SurfacePass {
             form,
             draws,
+            draw_keys,
             pipelines,
             static_lights,
         }))
@@ -168,12 +178,11 @@ impl RecordPass for SurfacePass {
         let Some(resources) = frame.scene else {
             return Ok(());
         };
-        let mut bound: Option<SurfaceKey> = None;
-        for d in &self.draws {
-            let key = surface_key(d, self.static_lights);
+        let mut bound: Option<&SurfaceKey> = None;
+        for (d, key) in self.draws.iter().zip(&self.draw_keys) {
             let layout = &resources.layout;
-            if bound.as_ref() != Some(&key) {
-                cmd.bind_pipeline(&self.pipelines[&key]);
+            if bound != Some(key) {
+                cmd.bind_pipeline(&self.pipelines[key]);
                 if bound.is_none() {
                     cmd.bind_descriptor_set(layout, FRAME_SET, &resources.frame_set, &[]);
                 }
@@ -205,17 +214,19 @@ impl RecordPass for SurfacePass {
             Form::Transparent => &plan.transparent,
             Form::Opaque | Form::GBuffer => &plan.opaque,
         };
-        if let Some(d) = draws.iter().find(|d| {
-            !self
-                .pipelines
-                .contains_key(&surface_key(d, self.static_lights))
-        }) {
+        let keys = surface_keys(draws, self.static_lights);
+        if let Some((d, _)) = draws
+            .iter()
+            .zip(&keys)
+            .find(|(_, key)| !self.pipelines.contains_key(key))
+        {
             return Err(RenderError::Frame(format!(
                 "object {} needs a pipeline the '{:?}' pass did not create",
                 d.object, self.form
             )));
         }
         self.draws = draws.clone();
+        self.draw_keys = keys;
         Ok(())
     }
 }
