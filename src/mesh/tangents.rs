@@ -221,7 +221,7 @@ pub(crate) fn build_mesh_in(
         }
         for ((key, &hash), &(weight, c)) in keys.iter().zip(&hashes).zip(&weights).take(kept) {
             let next = vertices.len() as u32;
-            let same = |v: u32| vertex_key(&vertices[v as usize]) == *key;
+            let same = |v: u32| same_key(&vertex_key(&vertices[v as usize]), key);
             let index = match &mut by_position {
                 Some(by_position) => by_position.get_or_insert(c, key, next, same),
                 None => table.get_or_insert(hash, next, same),
@@ -367,6 +367,14 @@ fn vertex_key(v: &Vertex) -> [u32; 9] {
     }
     key[8] = u32::from(v.tangent[3] < 0.0);
     key
+}
+
+/// Whether two vertex keys are equal, every word compared without a
+/// branch: `==` on the arrays calls the C library's `memcmp`, a call per
+/// corner that took a fifth of the tangent stage at 10⁶ triangles.
+#[inline]
+fn same_key(a: &[u32; 9], b: &[u32; 9]) -> bool {
+    a.iter().zip(b).fold(0, |differ, (x, y)| differ | (x ^ y)) == 0
 }
 
 /// The exact bits of a corner's position, normal and UV, the part of the

@@ -450,3 +450,57 @@ fn vertex_layout_is_tightly_packed() {
     let bytes: &[u8] = bytemuck::cast_slice(&mesh.vertices);
     assert_eq!(bytes.len(), mesh.vertices.len() * 48);
 }
+
+/// The bounding-box diagonal, taken four points at a time, is the one a
+/// point-at-a-time fold finds (minima and maxima are exact, so equal to
+/// the bit): parts of every length from 0 to 14 points (every remainder
+/// of the four-point steps), spread over signs and magnitudes, with
+/// `-0.0` among them.
+#[test]
+fn model_diagonal_matches_a_point_at_a_time_fold() {
+    use super::obj::{ObjModel, ObjPart};
+    let mut next = uniform_stream(0x5eed_d1a9);
+    for round in 0..50 {
+        let parts: Vec<ObjPart> = (0..(round % 4) + 1)
+            .map(|p| ObjPart {
+                name: String::new(),
+                positions: (0..(round * 3 + p * 5) % 15)
+                    .map(|_| {
+                        let scale = 10f32.powi((next() * 12.0) as i32 - 6);
+                        let p = (Vec3::new(next(), next(), next()) * 2.0 - 1.0) * scale;
+                        if next() < 0.1 {
+                            Vec3::new(-0.0, p.y, p.z)
+                        } else {
+                            p
+                        }
+                    })
+                    .collect(),
+                vertex_indices: None,
+                uvs: None,
+                normals: None,
+                material: None,
+            })
+            .collect();
+        let points: Vec<Vec3> = parts.iter().flat_map(|p| p.positions.clone()).collect();
+        let expected = match points.first() {
+            None => 0.0,
+            Some(&first) => {
+                let (lo, hi) = points
+                    .iter()
+                    .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+                (hi - lo).length()
+            }
+        };
+        let model = ObjModel {
+            parts,
+            materials: Vec::new(),
+            warnings: Vec::new(),
+            files: Vec::new(),
+        };
+        assert_eq!(
+            model.diagonal().to_bits(),
+            expected.to_bits(),
+            "round {round}"
+        );
+    }
+}
