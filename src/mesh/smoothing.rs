@@ -16,6 +16,7 @@
 
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
+use std::mem::MaybeUninit;
 use std::ops::Range;
 
 use glam::{DVec3, Vec3};
@@ -169,25 +170,10 @@ pub(crate) fn corner_angle(u: Vec3, v: Vec3) -> f32 {
 fn face_data(slices: &[&[Vec3]]) -> Vec<Face> {
     let first_face = first_faces(slices);
     let total = first_face[slices.len()];
-    let mut faces = vec![Face::default(); total];
-    let threads = threads_for(3 * total);
-    let chunk = total.div_ceil(threads).max(1);
-    let fill = |start: usize, out: &mut [Face]| {
-        each_face(slices, &first_face, start..start + out.len(), |f, t| {
-            out[f - start] = Face::of(t);
-        });
-    };
-    if threads <= 1 {
-        fill(0, &mut faces);
-    } else {
-        std::thread::scope(|scope| {
-            for (i, out) in faces.chunks_mut(chunk).enumerate() {
-                let fill = &fill;
-                scope.spawn(move || fill(i * chunk, out));
-            }
-        });
-    }
-    faces
+    let mut faces = fill_back_to_back(&[total], threads_for(3 * total), |range| {
+        faces_in(slices, &first_face, range).map(Face::of)
+    });
+    faces.pop().unwrap_or_default()
 }
 
 /// The number of the first whole triangle of each slice, back to back, and
@@ -203,26 +189,76 @@ fn first_faces(slices: &[&[Vec3]]) -> Vec<usize> {
     first
 }
 
-/// Calls `f` with the number and corners of each face in `range`.
-fn each_face(
-    slices: &[&[Vec3]],
-    first_face: &[usize],
+/// The corners of each face in `range` (faces numbered back to back over
+/// `slices`, `first_face` from [`first_faces`]).
+fn faces_in<'a>(
+    slices: &'a [&'a [Vec3]],
+    first_face: &'a [usize],
     range: Range<usize>,
-    mut f: impl FnMut(usize, &[Vec3]),
-) {
-    // The last slice starting at or before the range (empty ones skipped).
-    let mut s = first_face.partition_point(|&x| x <= range.start) - 1;
-    let mut face = range.start;
-    while face < range.end {
-        let end = first_face[s + 1].min(range.end);
-        let base = first_face[s];
-        for g in face..end {
-            let l = g - base;
-            f(g, &slices[s][3 * l..3 * l + 3]);
+) -> impl Iterator<Item = &'a [Vec3]> + 'a {
+    slices.iter().zip(first_face).flat_map(move |(s, &base)| {
+        let end = base + s.len() / 3;
+        let (from, to) = (range.start.clamp(base, end), range.end.clamp(base, end));
+        s[3 * (from - base)..3 * (to - base)].chunks_exact(3)
+    })
+}
+
+/// Vectors of `lengths` values, filled in place on `threads` threads: taken
+/// back to back, the values in `range` are those `values(range)` yields,
+/// and each thread fills a contiguous share. No element is written twice,
+/// where a vector made with a placeholder first costs another pass over
+/// its memory (a few milliseconds per million corners).
+pub(crate) fn fill_back_to_back<T: Send, I: Iterator<Item = T>>(
+    lengths: &[usize],
+    threads: usize,
+    values: impl Fn(Range<usize>) -> I + Sync,
+) -> Vec<Vec<T>> {
+    let mut outputs: Vec<Vec<T>> = lengths.iter().map(|&n| Vec::with_capacity(n)).collect();
+    let total: usize = lengths.iter().sum();
+    let threads = threads.max(1);
+    let share = total.div_ceil(threads).max(1);
+    type Share<'a, T> = Vec<(usize, &'a mut [MaybeUninit<T>])>;
+    let mut shares: Vec<Share<T>> = (0..threads).map(|_| Vec::new()).collect();
+    let mut start = 0;
+    for (out, &length) in outputs.iter_mut().zip(lengths) {
+        let mut rest = &mut out.spare_capacity_mut()[..length];
+        while !rest.is_empty() {
+            let thread = (start / share).min(threads - 1);
+            let room = ((thread + 1) * share).saturating_sub(start).max(1);
+            let (mine, tail) = rest.split_at_mut(room.min(rest.len()));
+            start += mine.len();
+            shares[thread].push((start - mine.len(), mine));
+            rest = tail;
         }
-        face = end;
-        s += 1;
     }
+    let fill = |share: Share<T>| {
+        for (start, slots) in share {
+            let (mut written, end) = (0, start + slots.len());
+            for (slot, value) in slots.iter_mut().zip(values(start..end)) {
+                slot.write(value);
+                written += 1;
+            }
+            assert_eq!(written, slots.len(), "fewer values than elements");
+        }
+    };
+    if threads == 1 {
+        shares.into_iter().for_each(fill);
+    } else {
+        std::thread::scope(|scope| {
+            for share in shares {
+                let fill = &fill;
+                scope.spawn(move || fill(share));
+            }
+        });
+    }
+    for (out, &length) in outputs.iter_mut().zip(lengths) {
+        // SAFETY: the shares cover the first `length` elements of every
+        // output exactly once, and each share's fill wrote every element
+        // of it or panicked; a panic on a worker thread is raised again
+        // when the scope above ends, before this line.
+        unsafe { out.set_len(length) };
+    }
+    outputs
 }
 
 /// Groups of point indices within `distance` of one another (transitively),
@@ -503,17 +539,18 @@ fn smooth_scope(
         .sum();
 
     // The shared normals, every corner at once (on every core); the other
-    // corners are filled in below.
-    let mut normals: Vec<Vec<Vec3>> = slices.iter().map(|s| vec![Vec3::Y; s.len()]).collect();
-    let fill = |start: usize, out: &mut [Vec3]| {
-        for (n, &g) in out.iter_mut().zip(&group_of[start..]) {
+    // corners hold +Y until they are filled in below.
+    let lengths: Vec<usize> = slices.iter().map(|s| s.len()).collect();
+    let mut normals = fill_back_to_back(&lengths, threads_for(count), |range| {
+        group_of[range].iter().map(|&g| {
             let group = &groups[g as usize];
             if group.shared {
-                *n = group.sum.as_vec3();
+                group.sum.as_vec3()
+            } else {
+                Vec3::Y
             }
-        }
-    };
-    in_runs(&mut normals, threads_for(count), fill);
+        })
+    });
 
     // The other groups' corners, as contiguous runs (a counting sort by
     // group, corners ascending within each), compared corner by corner.
@@ -559,44 +596,6 @@ fn smooth_scope(
     }
     drop(groups_of_corners);
     (normals, work, (welded.position_of, faces))
-}
-
-/// Calls `fill(first corner, run)` over every corner of `outputs` (taken
-/// back to back), split into `threads` runs, each on its own thread.
-fn in_runs(outputs: &mut [Vec<Vec3>], threads: usize, fill: impl Fn(usize, &mut [Vec3]) + Sync) {
-    let total: usize = outputs.iter().map(|o| o.len()).sum();
-    if threads <= 1 {
-        let mut start = 0;
-        for out in outputs {
-            fill(start, out);
-            start += out.len();
-        }
-        return;
-    }
-    let share = total.div_ceil(threads).max(1);
-    let mut batches: Vec<Vec<(usize, &mut [Vec3])>> = (0..threads).map(|_| Vec::new()).collect();
-    let mut start = 0;
-    for out in outputs.iter_mut() {
-        let mut rest = out.as_mut_slice();
-        while !rest.is_empty() {
-            let batch = (start / share).min(threads - 1);
-            let room = ((batch + 1) * share - start).max(1);
-            let (mine, tail) = rest.split_at_mut(room.min(rest.len()));
-            start += mine.len();
-            batches[batch].push((start - mine.len(), mine));
-            rest = tail;
-        }
-    }
-    std::thread::scope(|scope| {
-        for batch in batches {
-            let fill = &fill;
-            scope.spawn(move || {
-                for (start, out) in batch {
-                    fill(start, out);
-                }
-            });
-        }
-    });
 }
 
 /// The normals of the runs of corners `order[starts[r]..starts[r + 1]]`
@@ -866,6 +865,33 @@ fn unit_or(v: DVec3, fallback: DVec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every element of every output is the value of its place in the
+    /// back-to-back sequence, whatever the lengths (empty ones among them)
+    /// and however many threads share the work; too few values panic
+    /// rather than leave an element unwritten.
+    #[test]
+    fn back_to_back_filling_writes_every_element_once() {
+        let layouts: [&[usize]; 5] = [&[], &[0], &[7], &[0, 5, 0, 17, 3, 0], &[1, 1, 1, 1, 1]];
+        for lengths in layouts {
+            for threads in 0..6 {
+                let outputs =
+                    fill_back_to_back(lengths, threads, |range| range.map(|i| (i as u64) * 7 + 1));
+                let mut start = 0;
+                for (out, &length) in outputs.iter().zip(lengths) {
+                    let expected: Vec<u64> =
+                        (start..start + length).map(|i| i as u64 * 7 + 1).collect();
+                    assert_eq!(*out, expected, "{lengths:?} on {threads} threads");
+                    start += length;
+                }
+                assert_eq!(outputs.len(), lengths.len());
+            }
+        }
+        let short = std::panic::catch_unwind(|| {
+            fill_back_to_back(&[4, 4], 2, |range| range.skip(1).map(|i| i.to_string()))
+        });
+        assert!(short.is_err());
+    }
 
     fn options(mode: Smoothing, crease_degrees: f32) -> SmoothingOptions {
         SmoothingOptions {
