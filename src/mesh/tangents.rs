@@ -251,11 +251,15 @@ pub(crate) fn build_mesh_in(
         // Gram-Schmidt against the normal; if T vanished (or is parallel to
         // the normal), fall back to B turned into a tangent, then to any
         // direction orthogonal to the normal.
+        // The fallback is only computed when needed: nearly every vertex
+        // has a tangent of its own.
         let from_t = (t - n * n.dot(t)).try_normalize();
-        let from_b = (b - n * n.dot(b))
-            .try_normalize()
-            .map(|b| b.cross(n) * sign);
-        let tangent = match from_t.or(from_b) {
+        let from_b = || {
+            (b - n * n.dot(b))
+                .try_normalize()
+                .map(|b| b.cross(n) * sign)
+        };
+        let tangent = match from_t.or_else(from_b) {
             Some(tangent) => tangent,
             None => {
                 stats.from_normal += 1;
