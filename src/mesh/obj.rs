@@ -581,10 +581,11 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
         if vertex_indices.is_empty() {
             continue;
         }
-        let corner = |array: &[f32], index: u32, n: usize| -> Option<Vec<f32>> {
+        // The corner's values in `array` (`n` per vertex), if in range.
+        fn corner(array: &[f32], index: u32, n: usize) -> Option<&[f32]> {
             let start = index as usize * n;
-            array.get(start..start + n).map(<[f32]>::to_vec)
-        };
+            array.get(start..start + n)
+        }
         let out_of_range = |what: &str| ObjError::File {
             file: file.to_owned(),
             reason: format!("object \"{}\": {what} index out of range", model.name),
