@@ -124,7 +124,6 @@ impl Face {
         Face { normal, weights }
     }
 
-
     /// The weighted normal corner `corner` (0 to 2) contributes.
     fn contribution(&self, corner: usize) -> DVec3 {
         self.normal * f64::from(self.weights[corner])
