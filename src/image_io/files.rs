@@ -119,7 +119,15 @@ pub fn exr_file(path: &Path, pixels: &Pixels<f32>) -> Result<PendingFile, Render
         (p[0], p[1], p[2], p[3])
     });
     let mut out = std::io::BufWriter::new(file.file());
-    Image::from_channels((w, pixels.height as usize), channels)
+    // Tiles in increasing order: compressed on every core, but written in
+    // one order, so that the same pixels always make the same bytes (in
+    // the unspecified order they land as their threads finish, and two
+    // renders of one scene differ byte for byte).
+    let encoding = Encoding {
+        line_order: LineOrder::Increasing,
+        ..Encoding::FAST_LOSSLESS
+    };
+    Image::from_encoded_channels((w, pixels.height as usize), encoding, channels)
         .write()
         .to_buffered(&mut out)
         .map_err(|e| RenderError::Output {
@@ -226,6 +234,38 @@ mod tests {
             .to_string();
         assert!(msg.contains("missing.png"), "{msg}");
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// The same pixels make the same bytes: the tiles are written in
+    /// increasing order (the header says so), not as their threads finish;
+    /// and the pixels read back unchanged.
+    #[test]
+    fn exr_files_of_the_same_pixels_are_the_same_bytes() {
+        let dir = tempfile::tempdir().unwrap();
+        let (width, height) = (700u32, 300u32);
+        let data: Vec<f32> = (0..width * height * 4)
+            .map(|i| ((i * 2_654_435_761) % 1000) as f32 * 0.01)
+            .collect();
+        let pixels = Pixels {
+            width,
+            height,
+            data,
+        };
+        let files: Vec<Vec<u8>> = (0..4)
+            .map(|k| {
+                let path = dir.path().join(format!("{k}.exr"));
+                write_exr(&path, &pixels).unwrap();
+                std::fs::read(&path).unwrap()
+            })
+            .collect();
+        assert!(files.iter().all(|f| *f == files[0]));
+        let path = dir.path().join("0.exr");
+        let meta = exr::meta::MetaData::read_from_file(&path, false).unwrap();
+        assert!(meta
+            .headers
+            .iter()
+            .all(|h| h.line_order == exr::meta::attribute::LineOrder::Increasing));
+        assert_eq!(read_exr(&path).unwrap().data, pixels.data);
     }
 
     /// Compressed (zTXt) and international (iTXt) chunks written by another
