@@ -217,7 +217,8 @@ struct OnGrid {
 /// none is): a bound on every coordinate of every finite point. Sixteen
 /// floats side by side, compared without branches, so that the
 /// comparisons run in vector registers: a fold over `f32::max` (which
-/// must handle NaN) took 3 ms for half a million points.
+/// must handle NaN) took 3.5 to 4 ms for half a million points, this
+/// takes 1.
 fn finite_extent(points: &[Vec3]) -> f32 {
     const WIDTH: usize = 16;
     let floats: &[f32] = bytemuck::cast_slice(points);
