@@ -244,7 +244,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let (width, height) = (700u32, 300u32);
         let data: Vec<f32> = (0..width * height * 4)
-            .map(|i| ((i * 2_654_435_761) % 1000) as f32 * 0.01)
+            .map(|i| (i.wrapping_mul(2_654_435_761) % 1000) as f32 * 0.01)
             .collect();
         let pixels = Pixels {
             width,
