@@ -75,16 +75,11 @@ pub(crate) fn weld_corners(
     let mut position_of: Vec<u32> = Vec::with_capacity(count);
     // In batches: their first slots are read together first (see
     // `IndexTable::touch`).
-    const BATCH: usize = 16;
     let mut keys = [[0u32; 3]; BATCH];
     let mut hashes = [0u64; BATCH];
-    // The number of each vertex index of the slice at hand (`NONE` before
-    // its first corner), reused from slice to slice.
+    // The number of each vertex index of the slice at hand (`u32::MAX`
+    // before its first corner), reused from slice to slice.
     let mut numbered: Vec<u32> = Vec::new();
-    const NONE: u32 = u32::MAX;
-    // The corners of a batch of indexed corners that are their index's
-    // first (their positions are looked up), in corner order.
-    let mut firsts = [0u32; BATCH];
     for (s, slice) in slices.iter().enumerate() {
         let given = indices.get(s).copied().flatten();
         let given = given.filter(|g| g.len() == slice.len());
@@ -114,29 +109,26 @@ pub(crate) fn weld_corners(
             continue;
         };
         numbered.clear();
-        numbered.resize(vertices, NONE);
+        numbered.resize(vertices, u32::MAX);
         // Batches of corners large enough to hold about BATCH first
         // corners of an index (one in six on a closed mesh), cut short
-        // when BATCH are found.
-        let mut start = 0;
-        while start < slice.len() {
-            let mut found = 0;
-            let mut end = start;
-            while end < slice.len() && found < BATCH {
-                let slot = &mut numbered[given[end] as usize];
-                if *slot == NONE {
-                    // Pending: its later corners in this batch wait for it.
-                    *slot = NONE - 1;
-                    let key = (slice[end] + Vec3::ZERO).to_array().map(f32::to_bits);
-                    keys[found] = key;
-                    hashes[found] = hash_words(key);
-                    firsts[found] = end as u32;
-                    found += 1;
-                }
-                end += 1;
-            }
-            table.touch(&hashes[..found]);
-            for ((&key, &hash), &corner) in keys.iter().zip(&hashes).zip(&firsts).take(found) {
+        // when BATCH are found. Each batch's table slots are read while
+        // the batch before it is joined, so that their cache misses are
+        // waited for behind that work rather than in front of it.
+        let mut current = Batch::default();
+        let mut ahead = Batch::default();
+        current.collect(0, slice, given, &mut numbered);
+        table.touch(current.hashes());
+        while !current.span.is_empty() {
+            ahead.collect(current.span.end, slice, given, &mut numbered);
+            table.touch(ahead.hashes());
+            for ((&key, &hash), &corner) in current
+                .keys
+                .iter()
+                .zip(&current.hashes)
+                .zip(&current.firsts)
+                .take(current.found)
+            {
                 let next = unique.len() as u32;
                 let id = table.get_or_insert(hash, next, |u| {
                     unique[u as usize].to_array().map(f32::to_bits) == key
@@ -146,8 +138,9 @@ pub(crate) fn weld_corners(
                 }
                 numbered[given[corner as usize] as usize] = id;
             }
-            position_of.extend(given[start..end].iter().map(|&i| numbered[i as usize]));
-            start = end;
+            let span = current.span.clone();
+            position_of.extend(given[span].iter().map(|&i| numbered[i as usize]));
+            std::mem::swap(&mut current, &mut ahead);
         }
         debug_assert!(
             slice
@@ -177,6 +170,54 @@ pub(crate) fn weld_corners(
         position_of,
         group_of_position: None,
         groups: unique.len(),
+    }
+}
+
+/// Corners per batch of table lookups in [`weld_corners`].
+const BATCH: usize = 16;
+
+/// Pending marker in [`weld_corners`]'s numbers of vertex indices: the
+/// index's first corner is in a batch not yet joined.
+const PENDING: u32 = u32::MAX - 1;
+
+/// A batch of indexed corners in [`weld_corners`]: the corners it spans,
+/// and those that are their vertex index's first (whose positions are
+/// looked up), with their position keys and hashes, in corner order.
+#[derive(Default)]
+struct Batch {
+    span: std::ops::Range<usize>,
+    found: usize,
+    keys: [[u32; 3]; BATCH],
+    hashes: [u64; BATCH],
+    firsts: [u32; BATCH],
+}
+
+impl Batch {
+    /// The batch starting at corner `start` of `slice` (vertex indices
+    /// `given`), marking each index it is the first to use as pending in
+    /// `numbered` (`u32::MAX` for an index not seen yet).
+    fn collect(&mut self, start: usize, slice: &[Vec3], given: &[u32], numbered: &mut [u32]) {
+        self.found = 0;
+        let mut end = start;
+        while end < slice.len() && self.found < BATCH {
+            let slot = &mut numbered[given[end] as usize];
+            if *slot == u32::MAX {
+                // Pending: its later corners wait for this batch's join.
+                *slot = PENDING;
+                let key = (slice[end] + Vec3::ZERO).to_array().map(f32::to_bits);
+                self.keys[self.found] = key;
+                self.hashes[self.found] = hash_words(key);
+                self.firsts[self.found] = end as u32;
+                self.found += 1;
+            }
+            end += 1;
+        }
+        self.span = start..end;
+    }
+
+    /// The hashes of the batch's first corners.
+    fn hashes(&self) -> &[u64] {
+        &self.hashes[..self.found]
     }
 }
 
