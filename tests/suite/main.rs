@@ -39,6 +39,7 @@ mod mesh_command;
 mod mikktspace;
 mod missing_assets;
 mod model_corpus;
+mod multiple_scattering;
 mod normal_maps;
 mod obj_models;
 mod outputs;
