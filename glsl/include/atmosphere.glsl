@@ -324,7 +324,7 @@ float ozone_interval(SunRay ray, float start, float a, float b, float zero, floa
     for (int i = -1; i <= 1; i++) {
         float u = mid + float(i) * half_length * 0.7745966692;
         float rho2 = ray.rho2_low + u * u;
-        float alt = rho2 / (sqrt(rho2 + rb * rb) + rb);
+        float alt = rho2 / (sqrt(max(rho2 + rb * rb, 0.0)) + rb);
         sum += (i == 0 ? 8.0 / 9.0 : 5.0 / 9.0) * (alt - zero);
     }
     return half_length * slope * sum;
