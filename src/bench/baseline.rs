@@ -148,6 +148,109 @@ impl BaselineComparison {
     }
 }
 
+/// Why a comparison cannot back a gate's verdict: a gate that judged
+/// none of the workload, or less than it claims, must not pass.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum Unjudgeable {
+    #[error("nothing to compare: no scene and pass of this run is in the baseline")]
+    NothingMatched,
+    #[error(
+        "nothing of the workload was compared: only empty-pass rows of this run are in the \
+         baseline"
+    )]
+    OnlyEmptyPasses,
+    #[error(
+        "--metric {metric}: no scene row has {metric} in both this run and the baseline, so \
+         the gate cannot judge them"
+    )]
+    MetricMissing { metric: String },
+    #[error("nothing large enough to judge in {metric}: {reason}")]
+    NothingJudged { metric: String, reason: String },
+    #[error(
+        "{} row(s) have no usable baseline median (must be a positive number), so they \
+         cannot be compared: {}",
+        .rows.len(),
+        .rows.join(", ")
+    )]
+    NoUsableMedian { rows: Vec<String> },
+}
+
+impl BaselineComparison {
+    /// Whether the rows can back a verdict on `metrics` (the metrics the
+    /// gate judges; `work` is never judged). Each metric must have judged
+    /// rows of the scenes: for time, at least one GPU row (a pass or the
+    /// GPU total) unless the device had no timestamps and only CPU frame
+    /// rows exist; for instructions, at least one row of 3.5 million
+    /// instructions or more. So a baseline whose empty pass is slower than
+    /// every pass, or whose passes are all too small, is an error rather
+    /// than a pass judged on the CPU frame time alone.
+    pub fn judgeable(&self, metrics: &[Metric]) -> Result<(), Unjudgeable> {
+        if self.rows.is_empty() {
+            return Err(Unjudgeable::NothingMatched);
+        }
+        let workload = |r: &&RatioRow| !r.key.scene.starts_with(EMPTY_PASS_PREFIX);
+        if !self.rows.iter().any(|r| workload(&r)) {
+            return Err(Unjudgeable::OnlyEmptyPasses);
+        }
+        for &metric in metrics.iter().filter(|m| **m != Metric::Work) {
+            let name = metric_name(metric).to_string();
+            let rows: Vec<&RatioRow> = self
+                .rows
+                .iter()
+                .filter(workload)
+                .filter(|r| r.metric == metric)
+                .collect();
+            if rows.is_empty() {
+                return Err(Unjudgeable::MetricMissing { metric: name });
+            }
+            let gpu: Vec<&&RatioRow> = rows.iter().filter(|r| r.key.pass != CPU_FRAME).collect();
+            let judged = if gpu.is_empty() {
+                rows.iter().any(|r| r.not_judged.is_none())
+            } else {
+                gpu.iter().any(|r| r.not_judged.is_none())
+            };
+            if !judged {
+                let reason = match metric {
+                    Metric::Instructions => format!(
+                        "every matched scene row is under {MIN_JUDGED_INSTRUCTIONS:e} \
+                         instructions, below what the counts resolve (render larger images)"
+                    ),
+                    _ => "every matched GPU row of a scene is faster than the baseline's empty \
+                          pass at its resolution, so no GPU time is judged (render larger \
+                          images; a baseline whose empty pass is slower than all its passes \
+                          cannot judge time)"
+                        .to_string(),
+                };
+                return Err(Unjudgeable::NothingJudged {
+                    metric: name,
+                    reason,
+                });
+            }
+        }
+        // A row without a ratio (a baseline median of 0) was not compared;
+        // a gate that compared less than it claims must not pass.
+        let rows: Vec<String> = self
+            .rows
+            .iter()
+            .filter(|r| r.not_judged.is_none() && r.ratio.is_none())
+            .map(|r| format!("{} (baseline {})", r.key, r.baseline))
+            .collect();
+        if !rows.is_empty() {
+            return Err(Unjudgeable::NoUsableMedian { rows });
+        }
+        Ok(())
+    }
+}
+
+/// How `--metric` names a metric.
+pub fn metric_name(metric: Metric) -> &'static str {
+    match metric {
+        Metric::Time => "time",
+        Metric::Instructions => "instructions",
+        Metric::Work => "work",
+    }
+}
+
 /// How the keys of empty-pass rows begin.
 pub const EMPTY_PASS_PREFIX: &str = "empty pass ";
 
@@ -296,6 +399,12 @@ pub fn compare(
                 let usable = b.median > 0.0 && b.median.is_finite() && c.median.is_finite();
                 let interval = if !usable || c.samples.is_empty() {
                     None
+                } else if same_values(&c.samples, &b.samples) {
+                    // One set of frames on both sides (a report compared
+                    // with itself or a copy): resampling it twice, each
+                    // side on its own, would invent a difference where
+                    // there is none. The ratio is its medians'.
+                    Some(Interval::point(c.median / b.median))
                 } else if b.samples.is_empty() {
                     ratio_interval(&c.samples, &[b.median])
                         .map(|i| around(i, &c.samples, &[b.median], c.median / b.median))
@@ -331,11 +440,22 @@ pub fn compare(
     }
 }
 
+/// Whether `a` and `b` hold the same values, in any order.
+fn same_values(a: &[f64], b: &[f64]) -> bool {
+    let sorted = |x: &[f64]| {
+        let mut v = x.to_vec();
+        v.sort_unstable_by(f64::total_cmp);
+        v
+    };
+    a.len() == b.len() && sorted(a) == sorted(b)
+}
+
 /// The interval `i` of the ratio of the samples' medians, moved to be
 /// about `ratio`, the ratio of the reports' medians: the samples give the
 /// interval's relative width, the medians its place. The two agree in
-/// every report `bench` writes; they differ only in an edited report,
-/// whose stated medians are then what is judged.
+/// every report `bench` writes and every report it loads (a median that
+/// is not its samples' is refused on loading); they can differ only in
+/// reports built in code.
 fn around(i: Interval, a: &[f64], b: &[f64], ratio: f64) -> Interval {
     let median = |x: &[f64]| {
         let mut v = x.to_vec();
