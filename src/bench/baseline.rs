@@ -173,6 +173,13 @@ pub enum Unjudgeable {
         .rows.join(", ")
     )]
     NoUsableMedian { rows: Vec<String> },
+    #[error(
+        "{} row(s) of this run have no usable median (must be a number, at least 0), so they \
+         cannot be compared: {}",
+        .rows.len(),
+        .rows.join(", ")
+    )]
+    NoUsableCurrentMedian { rows: Vec<String> },
 }
 
 impl BaselineComparison {
@@ -227,16 +234,26 @@ impl BaselineComparison {
                 });
             }
         }
-        // A row without a ratio (a baseline median of 0) was not compared;
-        // a gate that compared less than it claims must not pass.
-        let rows: Vec<String> = self
-            .rows
-            .iter()
-            .filter(|r| r.not_judged.is_none() && r.ratio.is_none())
-            .map(|r| format!("{} (baseline {})", r.key, r.baseline))
-            .collect();
+        // A judged row without a ratio (a median of 0 or below) was not
+        // compared; a gate that compared less than it claims must not pass.
+        let unusable = |baseline: bool| -> Vec<String> {
+            self.rows
+                .iter()
+                .filter(|r| r.not_judged.is_none() && r.ratio.is_none())
+                .filter(|r| baseline == !(r.baseline > 0.0 && r.baseline.is_finite()))
+                .map(|r| match baseline {
+                    true => format!("{} (baseline {})", r.key, r.baseline),
+                    false => format!("{} (this run {})", r.key, r.current),
+                })
+                .collect()
+        };
+        let rows = unusable(true);
         if !rows.is_empty() {
             return Err(Unjudgeable::NoUsableMedian { rows });
+        }
+        let rows = unusable(false);
+        if !rows.is_empty() {
+            return Err(Unjudgeable::NoUsableCurrentMedian { rows });
         }
         Ok(())
     }
@@ -396,7 +413,10 @@ pub fn compare(
     for c in &current_rows {
         match baseline_rows.iter().find(|b| same(b, c)) {
             Some(b) => {
-                let usable = b.median > 0.0 && b.median.is_finite() && c.median.is_finite();
+                let usable = b.median > 0.0
+                    && b.median.is_finite()
+                    && c.median >= 0.0
+                    && c.median.is_finite();
                 let interval = if !usable || c.samples.is_empty() {
                     None
                 } else if same_values(&c.samples, &b.samples) {

@@ -412,9 +412,10 @@ fn a_live_run_is_gated_against_a_stored_baseline() {
 }
 
 /// Baselines that could judge nothing, or nothing honestly: medians of 0,
-/// −1 or 1e-300, negative or zero frames, an empty pass far slower than
-/// its frames or slower than every pass. Each is an error (exit 2) naming
-/// the file and the field, never "ok".
+/// −1 or 1e-300 (of the scenes or of every row), negative, zero or
+/// sub-nanosecond frames, an empty pass far slower than its frames or
+/// slower than every pass. Each is an error (exit 2) naming the file and
+/// the field or rows, never "ok".
 #[test]
 fn hostile_baselines_are_errors_naming_the_field() {
     let dir = common::fresh_dir("bench", "gate-hostile");
@@ -426,30 +427,49 @@ fn hostile_baselines_are_errors_naming_the_field() {
         ],
         0.5,
     );
-    let every_median = |v: &mut serde_json::Value, to: f64| {
-        fn walk(v: &mut serde_json::Value, to: f64) {
-            match v {
-                serde_json::Value::Object(map) => {
-                    if map.contains_key("median") {
-                        map.insert("median".into(), serde_json::json!(to));
-                    }
-                    map.values_mut().for_each(|x| walk(x, to));
+    // Every "median" in the JSON (or under the scenes) set to `to`.
+    fn every_median(v: &mut serde_json::Value, to: f64) {
+        match v {
+            serde_json::Value::Object(map) => {
+                if map.contains_key("median") {
+                    map.insert("median".into(), serde_json::json!(to));
                 }
-                serde_json::Value::Array(items) => items.iter_mut().for_each(|x| walk(x, to)),
-                _ => {}
+                map.values_mut().for_each(|x| every_median(x, to));
             }
+            serde_json::Value::Array(items) => items.iter_mut().for_each(|x| every_median(x, to)),
+            _ => {}
         }
-        walk(v, to)
-    };
-    let cases: Vec<(Box<dyn Fn(&mut serde_json::Value)>, &str)> = vec![
-        (Box::new(move |v| every_median(v, 0.0)), ".ms.median: 0"),
+    }
+    fn scene_medians(v: &mut serde_json::Value, to: f64) {
+        every_median(&mut v["scenes"], to)
+    }
+    type Edit = Box<dyn Fn(&mut serde_json::Value)>;
+    let cases: Vec<(Edit, &str)> = vec![
         (
-            Box::new(move |v| every_median(v, -1.0)),
-            ".ms.median: -1 is negative",
+            Box::new(|v| scene_medians(v, 0.0)),
+            "nothing large enough to judge in time",
         ),
         (
-            Box::new(move |v| every_median(v, 1e-300)),
-            "shorter than 1 ns",
+            Box::new(|v| scene_medians(v, -1.0)),
+            "nothing large enough to judge in time",
+        ),
+        (
+            Box::new(|v| scene_medians(v, 1e-300)),
+            "nothing large enough to judge in time",
+        ),
+        (
+            Box::new(|v| every_median(v, 0.0)),
+            "no usable baseline median",
+        ),
+        (
+            Box::new(|v| every_median(v, -1.0)),
+            "no usable baseline median",
+        ),
+        (
+            Box::new(|v: &mut serde_json::Value| {
+                v["empty_passes"][0]["gpu"]["ms"]["median"] = serde_json::json!(1e300)
+            }),
+            "nothing large enough to judge in time",
         ),
         (
             Box::new(|v: &mut serde_json::Value| {
@@ -465,9 +485,9 @@ fn hostile_baselines_are_errors_naming_the_field() {
         ),
         (
             Box::new(|v: &mut serde_json::Value| {
-                v["empty_passes"][0]["gpu"]["ms"]["median"] = serde_json::json!(1e300)
+                v["scenes"][0]["cpu_frame"]["samples_ms"][4] = serde_json::json!(1e-300)
             }),
-            "empty_passes[0].gpu.ms.median: 1e300 is not the median",
+            "scenes[0].cpu_frame.samples_ms[4]: 1e-300 ms is shorter than 1 ns",
         ),
     ];
     let check = |baseline: &Path, expected: &str| {
