@@ -14,7 +14,7 @@
 //! another build profile) are reported as warnings, not failures: CI
 //! decides what to do with them. Rows present on one side only are listed.
 
-use super::report::{BenchReport, Metric, PassReport, Resolution, CPU_FRAME};
+use super::report::{BenchReport, Metric, PassReport, Resolution, CPU_FRAME, GPU_TOTAL};
 use crate::report::stats::{ratio_interval, Interval};
 use std::fmt;
 
@@ -61,9 +61,13 @@ pub struct RatioRow {
 pub enum NotJudged {
     /// An instruction row under [`MIN_JUDGED_INSTRUCTIONS`].
     FewInstructions,
-    /// A scene's time row faster than the baseline's empty pass at that
+    /// A scene's pass faster than the baseline's empty pass at that
     /// resolution: on a binning driver a subpass can time near zero in one
-    /// frame and a whole pass in the next, so its ratio has no bound.
+    /// frame and a whole pass in the next, so its ratio has no bound. The
+    /// GPU total and the CPU frame hold the whole frame's work wherever the
+    /// driver did it, and are always judged: so a baseline whose empty
+    /// pass is slower than everything (edited, or of a frame smaller than
+    /// the empty pass) still judges the frame.
     BelowEmptyPass,
 }
 
@@ -184,13 +188,11 @@ pub enum Unjudgeable {
 
 impl BaselineComparison {
     /// Whether the rows can back a verdict on `metrics` (the metrics the
-    /// gate judges; `work` is never judged). Each metric must have judged
-    /// rows of the scenes: for time, at least one GPU row (a pass or the
-    /// GPU total) unless the device had no timestamps and only CPU frame
-    /// rows exist; for instructions, at least one row of 3.5 million
-    /// instructions or more. So a baseline whose empty pass is slower than
-    /// every pass, or whose passes are all too small, is an error rather
-    /// than a pass judged on the CPU frame time alone.
+    /// gate judges; `work` is never judged): some row of the scenes must
+    /// have been matched and judged in each metric. For time the GPU total
+    /// and CPU frame always are; for instructions, a row of 3.5 million
+    /// instructions or more must be there. And no judged row may lack its
+    /// ratio (a median of 0 or below).
     pub fn judgeable(&self, metrics: &[Metric]) -> Result<(), Unjudgeable> {
         if self.rows.is_empty() {
             return Err(Unjudgeable::NothingMatched);
@@ -210,22 +212,13 @@ impl BaselineComparison {
             if rows.is_empty() {
                 return Err(Unjudgeable::MetricMissing { metric: name });
             }
-            let gpu: Vec<&&RatioRow> = rows.iter().filter(|r| r.key.pass != CPU_FRAME).collect();
-            let judged = if gpu.is_empty() {
-                rows.iter().any(|r| r.not_judged.is_none())
-            } else {
-                gpu.iter().any(|r| r.not_judged.is_none())
-            };
-            if !judged {
+            if !rows.iter().any(|r| r.not_judged.is_none()) {
                 let reason = match metric {
                     Metric::Instructions => format!(
                         "every matched scene row is under {MIN_JUDGED_INSTRUCTIONS:e} \
                          instructions, below what the counts resolve (render larger images)"
                     ),
-                    _ => "every matched GPU row of a scene is faster than the baseline's empty \
-                          pass at its resolution, so no GPU time is judged (render larger \
-                          images; a baseline whose empty pass is slower than all its passes \
-                          cannot judge time)"
+                    _ => "every matched scene row is faster than the baseline's empty pass"
                         .to_string(),
                 };
                 return Err(Unjudgeable::NothingJudged {
@@ -403,9 +396,11 @@ pub fn compare(
         Metric::Instructions if b.median < MIN_JUDGED_INSTRUCTIONS => {
             Some(NotJudged::FewInstructions)
         }
-        Metric::Time if c.key.pass != CPU_FRAME => time_floor(&c.key.scene)
-            .filter(|&floor| b.median < floor)
-            .map(|_| NotJudged::BelowEmptyPass),
+        Metric::Time if c.key.pass != CPU_FRAME && c.key.pass != GPU_TOTAL => {
+            time_floor(&c.key.scene)
+                .filter(|&floor| b.median < floor)
+                .map(|_| NotJudged::BelowEmptyPass)
+        }
         _ => None,
     };
     let mut matched = Vec::new();

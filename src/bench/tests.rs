@@ -485,26 +485,25 @@ fn reports_with_impossible_values_are_refused_naming_the_field() {
 }
 
 /// A gate must judge something of each metric it claims: a comparison
-/// whose GPU rows are all below what their metric resolves (a baseline
-/// whose empty pass is slower than every pass, instruction rows under
-/// 3.5e6) or that lacks the metric altogether is an error, not a pass
-/// judged on the CPU frame time alone.
+/// whose instruction rows are all too small to resolve, or that lacks the
+/// metric altogether, is an error; so is one with a judged row it cannot
+/// divide. A baseline's empty pass, however slow, never hides the frame:
+/// the GPU total and the CPU frame are always judged.
 #[test]
 fn a_gate_that_cannot_judge_its_metric_is_an_error() {
-    use crate::bench::baseline::Unjudgeable;
+    use crate::bench::baseline::{NotJudged, Unjudgeable};
     let current = sampled_report();
     // The baseline's empty pass slower than every pass of the scene.
     let mut slow_floor = sampled_report();
     *slow_floor.empty_passes[0].gpu.as_mut().unwrap() = sampled("empty", &wobbly(500.0, 0.1, 9));
     let c = compare(&current, &slow_floor, &[Metric::Time]);
-    assert!(c
-        .rows
-        .iter()
-        .any(|r| r.key.pass == CPU_FRAME && r.not_judged.is_none()));
-    assert!(matches!(
-        c.judgeable(&[Metric::Time]),
-        Err(Unjudgeable::NothingJudged { .. })
-    ));
+    for row in c.rows.iter().filter(|r| r.key.scene == "a.toml") {
+        let pass = row.key.pass.as_str();
+        let judged = pass == GPU_TOTAL || pass == CPU_FRAME;
+        let expected = (!judged).then_some(NotJudged::BelowEmptyPass);
+        assert_eq!(row.not_judged, expected, "{row:?}");
+    }
+    c.judgeable(&[Metric::Time]).unwrap();
     // Instructions asked for, but no row has them on both sides.
     let c = compare(&current, &current, &[Metric::Time, Metric::Instructions]);
     let e = c
@@ -534,9 +533,10 @@ fn a_gate_that_cannot_judge_its_metric_is_an_error() {
         c.judgeable(&[Metric::Time]),
         Err(Unjudgeable::NothingMatched)
     );
-    // Medians edited (frames kept): only the scenes' set to 0, -1 or
-    // 1e-300 puts every GPU row under the floor; the floor far slower than
-    // its frames too. Every spelling is an error, never a pass.
+    // Medians edited (frames kept), of the scenes or of every row, and
+    // the floor's: a median of 0 or below is refused, any other is judged
+    // as stated (the frame's total among them), never hidden under the
+    // floor.
     fn scene_medians(r: &mut BenchReport, to: f64) {
         let s = &mut r.scenes[0];
         for row in s
@@ -560,27 +560,30 @@ fn a_gate_that_cannot_judge_its_metric_is_an_error() {
         r.empty_passes[0].gpu.as_mut().unwrap().ms.median = to;
     }
     type Edit = fn(&mut BenchReport, f64);
-    for (edit, to, expected) in [
-        (
-            scene_medians as Edit,
-            0.0,
-            "nothing large enough to judge in time",
-        ),
-        (scene_medians, -1.0, "nothing large enough to judge in time"),
-        (
-            scene_medians,
-            1e-300,
-            "nothing large enough to judge in time",
-        ),
-        (floor_median, 1e300, "nothing large enough to judge in time"),
-        (every_median, 0.0, "no usable baseline median"),
-        (every_median, -1.0, "no usable baseline median"),
+    for (edit, to) in [
+        (scene_medians as Edit, 0.0),
+        (scene_medians, -1.0),
+        (every_median, 0.0),
+        (every_median, -1.0),
     ] {
         let mut baseline = sampled_report();
         edit(&mut baseline, to);
         let c = compare(&current, &baseline, &[Metric::Time]);
         let e = c.judgeable(&[Metric::Time]).unwrap_err().to_string();
-        assert!(e.contains(expected), "{to}: expected '{expected}' in: {e}");
+        assert!(e.contains("no usable baseline median"), "{to}: {e}");
+        assert!(e.contains("a.toml / gpu total (baseline"), "{to}: {e}");
+    }
+    for (edit, to, verdict) in [
+        (scene_medians as Edit, 1e-300, Verdict::Fail),
+        (floor_median, 1e300, Verdict::Pass),
+    ] {
+        let mut baseline = sampled_report();
+        edit(&mut baseline, to);
+        let c = compare(&current, &baseline, &[Metric::Time]);
+        c.judgeable(&[Metric::Time]).unwrap();
+        let total = c.rows.iter().find(|r| r.key.pass == GPU_TOTAL).unwrap();
+        assert_eq!(total.not_judged, None, "{to}");
+        assert_eq!(c.verdict(1.5), verdict, "{to}");
     }
     // A median of this run below 0 (an edited report) is not compared.
     let mut odd = sampled_report();

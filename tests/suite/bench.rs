@@ -411,19 +411,31 @@ fn a_live_run_is_gated_against_a_stored_baseline() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Baselines that could judge nothing, or nothing honestly: medians of 0,
-/// −1 or 1e-300 (of the scenes or of every row), negative, zero or
+/// Baselines that once made the gate judge nothing and say "ok": medians
+/// of 0, −1 or 1e-300 (of the scenes or of every row), negative, zero or
 /// sub-nanosecond frames, an empty pass far slower than its frames or
-/// slower than every pass. Each is an error (exit 2) naming the file and
-/// the field or rows, never "ok".
+/// slower than every pass. Against a run twice as slow, each is now an
+/// error naming the file and the field or rows (exit 2), or the slowdown
+/// (exit 1): the frame's GPU total and CPU time are judged whatever the
+/// empty pass. Never "ok".
 #[test]
-fn hostile_baselines_are_errors_naming_the_field() {
+fn hostile_baselines_are_errors_or_judge_the_frame() {
     let dir = common::fresh_dir("bench", "gate-hostile");
+    let baseline = |empty: f64| {
+        synthetic(
+            "s.toml",
+            &[
+                ("opaque", frames_around(2.0, 0.05)),
+                ("readback", frames_around(1.0, 0.05)),
+            ],
+            empty,
+        )
+    };
     let current = synthetic(
         "s.toml",
         &[
-            ("opaque", frames_around(2.0, 0.05)),
-            ("readback", frames_around(1.0, 0.05)),
+            ("opaque", frames_around(4.0, 0.05)),
+            ("readback", frames_around(2.0, 0.05)),
         ],
         0.5,
     );
@@ -444,92 +456,69 @@ fn hostile_baselines_are_errors_naming_the_field() {
         every_median(&mut v["scenes"], to)
     }
     type Edit = Box<dyn Fn(&mut serde_json::Value)>;
-    let cases: Vec<(Edit, &str)> = vec![
+    let unusable = "no usable baseline median";
+    let slower = "slower than --max-ratio 1.5";
+    let cases: Vec<(Edit, i32, &str)> = vec![
+        (Box::new(|v| scene_medians(v, 0.0)), 2, unusable),
+        (Box::new(|v| scene_medians(v, -1.0)), 2, unusable),
+        (Box::new(|v| every_median(v, 0.0)), 2, unusable),
+        (Box::new(|v| every_median(v, -1.0)), 2, unusable),
+        (Box::new(|v| scene_medians(v, 1e-300)), 1, slower),
+        (Box::new(|v| every_median(v, 1e-300)), 1, slower),
         (
-            Box::new(|v| scene_medians(v, 0.0)),
-            "nothing large enough to judge in time",
+            Box::new(|v| v["empty_passes"][0]["gpu"]["ms"]["median"] = serde_json::json!(1e300)),
+            1,
+            slower,
         ),
         (
-            Box::new(|v| scene_medians(v, -1.0)),
-            "nothing large enough to judge in time",
-        ),
-        (
-            Box::new(|v| scene_medians(v, 1e-300)),
-            "nothing large enough to judge in time",
-        ),
-        (
-            Box::new(|v| every_median(v, 0.0)),
-            "no usable baseline median",
-        ),
-        (
-            Box::new(|v| every_median(v, -1.0)),
-            "no usable baseline median",
-        ),
-        (
-            Box::new(|v: &mut serde_json::Value| {
-                v["empty_passes"][0]["gpu"]["ms"]["median"] = serde_json::json!(1e300)
-            }),
-            "nothing large enough to judge in time",
-        ),
-        (
-            Box::new(|v: &mut serde_json::Value| {
-                v["scenes"][0]["passes"][0]["samples_ms"][2] = serde_json::json!(-0.5)
-            }),
+            Box::new(|v| v["scenes"][0]["passes"][0]["samples_ms"][2] = serde_json::json!(-0.5)),
+            2,
             "scenes[0].passes[0].samples_ms[2]: -0.5 is negative",
         ),
         (
-            Box::new(|v: &mut serde_json::Value| {
-                v["scenes"][0]["gpu_total"]["samples_ms"][0] = serde_json::json!(0.0)
-            }),
+            Box::new(|v| v["scenes"][0]["gpu_total"]["samples_ms"][0] = serde_json::json!(0.0)),
+            2,
             "scenes[0].gpu_total.samples_ms[0]: 0",
         ),
         (
-            Box::new(|v: &mut serde_json::Value| {
-                v["scenes"][0]["cpu_frame"]["samples_ms"][4] = serde_json::json!(1e-300)
-            }),
+            Box::new(|v| v["scenes"][0]["cpu_frame"]["samples_ms"][4] = serde_json::json!(1e-300)),
+            2,
             "scenes[0].cpu_frame.samples_ms[4]: 1e-300 ms is shorter than 1 ns",
         ),
     ];
-    let check = |baseline: &Path, expected: &str| {
+    current.save(&dir.join("current.json")).unwrap();
+    let check = |path: &Path, code: i32, expected: &str| {
         let out = common::aerial()
             .args(["bench", "--from-json"])
             .arg(dir.join("current.json"))
             .arg("--compare")
-            .arg(baseline)
+            .arg(path)
             .args(["--max-ratio", "1.5"])
             .output()
             .unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{expected}: {}", show(&out));
+        assert_eq!(out.status.code(), Some(code), "{expected}: {}", show(&out));
         assert!(
-            stderr.contains(&baseline.display().to_string()) && stderr.contains(expected),
+            stderr.contains(expected)
+                && (code == 1 || stderr.contains(&path.display().to_string())),
             "expected '{expected}' in: {stderr}"
         );
         assert!(
             !stderr.contains("panicked") && !String::from_utf8_lossy(&out.stdout).contains("ok:")
         );
     };
-    current.save(&dir.join("current.json")).unwrap();
-    for (n, (edit, expected)) in cases.iter().enumerate() {
-        let mut v = serde_json::to_value(&current).unwrap();
+    for (n, (edit, code, expected)) in cases.iter().enumerate() {
+        let mut v = serde_json::to_value(baseline(0.5)).unwrap();
         edit(&mut v);
         let path = dir.join(format!("hostile{n}.json"));
         std::fs::write(&path, v.to_string()).unwrap();
-        check(&path, expected);
+        check(&path, *code, expected);
     }
     // Consistent frames, but the empty pass slower than every pass: the
-    // GPU rows cannot be judged, and the CPU frame alone is not a gate.
-    let slow_floor = synthetic(
-        "s.toml",
-        &[
-            ("opaque", frames_around(2.0, 0.05)),
-            ("readback", frames_around(1.0, 0.05)),
-        ],
-        1e6,
-    );
+    // passes are not judged, the frame is.
     let path = dir.join("slow-floor.json");
-    slow_floor.save(&path).unwrap();
-    check(&path, "nothing large enough to judge in time");
+    baseline(1e6).save(&path).unwrap();
+    check(&path, 1, slower);
     std::fs::remove_dir_all(&dir).ok();
 }
 
