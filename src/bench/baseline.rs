@@ -233,7 +233,10 @@ impl BaselineComparison {
             self.rows
                 .iter()
                 .filter(|r| r.not_judged.is_none() && r.ratio.is_none())
-                .filter(|r| baseline == !(r.baseline > 0.0 && r.baseline.is_finite()))
+                .filter(|r| {
+                    let usable = r.baseline > 0.0 && r.baseline.is_finite();
+                    baseline != usable
+                })
                 .map(|r| match baseline {
                     true => format!("{} (baseline {})", r.key, r.baseline),
                     false => format!("{} (this run {})", r.key, r.current),
