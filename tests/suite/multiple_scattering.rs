@@ -70,15 +70,20 @@ fn probe(label: &str, scene: &Scene, paths: u32) -> Probes {
                 darkest = darkest.min(got[c] / e);
             }
             println!(
-                "{label} ({x}, {y}): gpu {:.5?}, full {:.5?} ± {:.5?}, single {:.5?}",
-                got.to_array(),
-                exact.radiance.to_array(),
-                exact.std_error.to_array(),
-                exact.single.to_array()
+                "{label} ({x}, {y}): gpu {}, full {} ± {}, single {}",
+                e3(got),
+                e3(exact.radiance),
+                e3(exact.std_error),
+                e3(exact.single)
             );
         }
     }
     Probes { errors, darkest }
+}
+
+/// A colour in three significant digits.
+fn e3(c: glam::DVec3) -> String {
+    format!("[{:.2e}, {:.2e}, {:.2e}]", c.x, c.y, c.z)
 }
 
 /// The median and the maximum of the errors, each less three of its
@@ -112,8 +117,16 @@ fn the_default_sky_matches_full_light_transport() {
     println!("sun 2-90° up: median {median:.3}, max {max:.3}");
     assert!(median <= 0.03, "median {median}");
     assert!(max <= 0.08, "max {max}");
-    let (median, max) = median_and_max(&twilight);
-    println!("twilight: median {median:.3}, max {max:.3}");
+    // In twilight the reference's paths reach sunlight rarely, so its
+    // spread is wide and its own error estimate unreliable where few
+    // paths score: only probes it knows to 5 % are judged.
+    let known: Vec<(f64, f64)> = twilight.into_iter().filter(|(_, s)| *s <= 0.05).collect();
+    assert!(known.len() >= 10, "{} twilight probes known to 5 %", known.len());
+    let (median, max) = median_and_max(&known);
+    println!(
+        "twilight ({} probes): median {median:.3}, max {max:.3}",
+        known.len()
+    );
     assert!(max <= 0.2, "twilight max {max}");
 }
 
