@@ -576,6 +576,7 @@ fn smoothing_and_tangent_time() {
             materials: Vec::new(),
             warnings: Vec::new(),
             files: Vec::new(),
+            origin: glam::DVec3::ZERO,
         };
         let count: usize = model.parts.iter().map(|p| p.triangle_count()).sum();
         let options = ModelOptions {
