@@ -259,12 +259,14 @@ fn destination(path: &Path, probe: bool) -> Result<PathBuf, FileError> {
 fn not_a_file_name(path: &Path) -> Option<String> {
     use std::os::unix::ffi::OsStrExt as _;
     let bytes = path.as_os_str().as_bytes();
-    if bytes.ends_with(b"/") || bytes.ends_with(b"/.") {
-        return Some(
-            "the path ends in \"/\", so it names a folder, not a file; an output is a file: \
-             remove the trailing slash"
-                .into(),
-        );
+    if let Some(end) = ["/", "/."]
+        .into_iter()
+        .find(|end| bytes.ends_with(end.as_bytes()))
+    {
+        return Some(format!(
+            "the path ends in \"{end}\", so it names a folder, not a file; an output is a \
+             file: name it without the trailing \"{end}\""
+        ));
     }
     if path.file_name().is_none() {
         return Some("the path does not name a file".into());
@@ -369,7 +371,7 @@ pub fn check_room(outputs: &[(&Path, u64)]) -> Result<(), FileError> {
 /// metadata text.
 pub fn png_size_bound(width: u32, height: u32) -> u64 {
     let raw = u64::from(height) * (1 + 4 * u64::from(width));
-    raw + raw / 64 + (64 << 10)
+    raw + raw / 64 + (16 << 10)
 }
 
 /// An upper bound of the size of an OpenEXR of `width` x `height` RGBA
@@ -378,7 +380,7 @@ pub fn png_size_bound(width: u32, height: u32) -> u64 {
 /// chunk offset table and headers.
 pub fn exr_size_bound(width: u32, height: u32) -> u64 {
     let raw = u64::from(width) * u64::from(height) * 16;
-    raw + raw / 64 + u64::from(height) * 16 + (64 << 10)
+    raw + raw / 64 + u64::from(height) * 16 + (16 << 10)
 }
 
 /// The file formats this crate writes images in. The name of an output

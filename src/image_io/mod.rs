@@ -8,7 +8,7 @@ mod files;
 
 pub use files::{
     exr_file, exr_size, image_size, png_file, read_exr, read_png_text, tonemap_memory, write_exr,
-    write_png, READ_EXR_BYTES_PER_PIXEL,
+    write_png, READ_EXR_BYTES_PER_PIXEL, TONEMAP_BUFFER_BYTES_PER_PIXEL,
 };
 
 use image::{DynamicImage, ImageReader};
