@@ -32,6 +32,7 @@ mod fuzz;
 mod gbuffer_range;
 mod height_maps;
 mod hostile;
+mod hostile_io;
 mod interrupt;
 mod limits;
 mod local_defects;

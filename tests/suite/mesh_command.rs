@@ -66,7 +66,11 @@ fn mesh_reports_counts_known_by_construction() {
     assert_eq!(report["vertices"], 11);
     assert_eq!(report["welded_boundary_points"], 2);
     assert_eq!(report["mirrored_triangles"], 2);
-    assert_eq!(report["degenerate_triangles"], 1);
+    // The flat-UV triangle has zero UV area; none has zero area, and every
+    // object has texture coordinates.
+    assert_eq!(report["zero_uv_area_triangles"], 1);
+    assert_eq!(report["collapsed_triangles"], 0);
+    assert_eq!(report["triangles_without_uvs"], 0);
     assert_eq!(report["non_finite_attributes"], 0);
     assert!(report["max_orthonormality_error"].as_f64().unwrap() < 1e-5);
     for stage in ["load", "smoothing", "tangents"] {
