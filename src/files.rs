@@ -962,6 +962,39 @@ mod tests {
     }
 
     #[test]
+    fn files_match_inputs_only_while_their_path_leads_to_them() {
+        let d = dir("stale");
+        std::fs::write(d.join("in.obj"), b"input").unwrap();
+        std::fs::hard_link(d.join("in.obj"), d.join("hard.json")).unwrap();
+        assert!(same_file(&d.join("in.obj"), &d.join("hard.json")));
+        assert!(same_file(&d.join("x.png"), &d.join("./x.png")));
+        assert!(!same_file(&d.join("in.obj"), &d.join("x.png")));
+        protect_inputs([d.join("in.obj")]);
+        assert!(check_destination(&d.join("hard.json")).is_err());
+        // The input is removed: its inode may be reused by a new file,
+        // which is no input. The hard link is the only name left.
+        std::fs::remove_file(d.join("in.obj")).unwrap();
+        std::fs::rename(d.join("hard.json"), d.join("new.json")).unwrap();
+        assert!(check_destination(&d.join("new.json")).is_ok());
+        std::fs::remove_dir_all(&d).ok();
+    }
+
+    #[test]
+    fn files_refuse_names_of_folders_and_hide_temporary_names() {
+        for name in ["o.png/", "o.png/.", "a/b//", "/"] {
+            let msg = check_destination(Path::new(name)).unwrap_err().to_string();
+            assert!(msg.contains(name), "{name}: {msg}");
+        }
+        assert!(not_a_file_name(Path::new("./o.png")).is_none());
+        let tagged = std::io::Error::new(
+            std::io::ErrorKind::NotFound,
+            "No such file or directory (os error 2) at path \"/proc/.o.png.x1.tmp\"",
+        );
+        let plain = without_temporary_name(tagged).to_string();
+        assert_eq!(plain, "No such file or directory (os error 2)");
+    }
+
+    #[test]
     fn files_check_the_extension_of_each_format_in_any_case() {
         for (name, format, ok) in [
             ("a.png", Format::Png, true),
