@@ -470,6 +470,17 @@ pub fn check_output_dir(dir: &Path) -> Result<(), FileError> {
                     probe.display()
                 )))
             }
+            // A symbolic link to nothing: the folder cannot be made there
+            // (creating it fails, after the work).
+            Err(_) if std::fs::symlink_metadata(probe).is_ok() => {
+                let target = std::fs::read_link(probe)
+                    .map_or_else(|_| "?".into(), |t| t.display().to_string());
+                return Err(refuse(format!(
+                    "{} is a symbolic link to a missing target ({target}), so the folder \
+                     cannot be created; make the folder it names or remove the link",
+                    probe.display()
+                )));
+            }
             Err(_) => match probe.parent() {
                 Some(p) if !p.as_os_str().is_empty() => probe = p,
                 // A relative path whose first component is missing: it is
@@ -932,6 +943,11 @@ mod tests {
         std::fs::write(d.join("f"), b"").unwrap();
         assert!(check_output_dir(&d.join("f")).is_err());
         assert!(check_output_dir(&d.join("f/sub")).is_err());
+        std::os::unix::fs::symlink(d.join("gone"), d.join("dangling")).unwrap();
+        for out in [d.join("dangling"), d.join("dangling/sub")] {
+            let msg = check_output_dir(&out).unwrap_err().to_string();
+            assert!(msg.contains("missing target"), "{msg}");
+        }
         std::fs::remove_dir_all(&d).ok();
     }
 

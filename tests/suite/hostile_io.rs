@@ -760,3 +760,35 @@ fn strict_errors_say_strict_made_them() {
         "{err}"
     );
 }
+
+/// A sweep's output folder that is (or lies under) a symbolic link to
+/// nothing cannot be created: refused before the first render, naming the
+/// link, with nothing created.
+#[test]
+fn an_output_folder_at_a_dangling_link_is_refused_before_the_work() {
+    let f = Fixture::new();
+    std::os::unix::fs::symlink(f.path("nowhere"), f.path("dangling")).unwrap();
+    for out_dir in ["dangling", "dangling/sub", "./dangling"] {
+        let before = f.snapshot();
+        let out = f.run(&[
+            os("sweep"),
+            os("s.toml"),
+            os("--knob"),
+            os("lights=1,2"),
+            os("--out-dir"),
+            os(out_dir),
+        ]);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{out_dir}:\n{err}");
+        assert!(
+            err.contains("dangling") && err.contains("missing target"),
+            "{out_dir}: {err}"
+        );
+        assert!(
+            !err.contains("device:"),
+            "{out_dir}: the work started: {err}"
+        );
+        assert!(f.snapshot() == before, "{out_dir} changed the folder");
+        assert!(!f.path("nowhere").exists());
+    }
+}
