@@ -1,5 +1,6 @@
 #version 450
 // feature: SKY_VIEW
+// feature: MULTIPLE_SCATTERING
 // The atmosphere subpass: for each pixel, single scattering along the view
 // ray through the atmosphere (Rayleigh + Mie, ozone absorption) in front
 // of whatever the surface pass drew there, or the analytic ground sphere,
@@ -12,6 +13,10 @@
 // thousand directions) instead of marching: there the radiance depends on
 // the direction only. The phase functions, the ground's lighting and the
 // sun disc are still evaluated per pixel. The other variant marches.
+//
+// The MULTIPLE_SCATTERING variant adds every order of scattering above the
+// first (isotropic, so no phase applies) and lights the ground by the sky
+// too (include/atmosphere.glsl).
 
 #include "atmosphere.glsl"
 
@@ -70,10 +75,16 @@ Path sky_view_path(vec3 d) {
         path.rayleigh = texture(sky_view_table, at * texel).xyz;
         path.mie = texture(sky_view_table, (at + vec2(w, 0)) * texel).xyz;
         path.transmittance = texture(sky_view_table, (at + vec2(2 * w, 0)) * texel).xyz;
+#ifdef MULTIPLE_SCATTERING
+        path.multiple = texture(sky_view_table, (at + vec2(3 * w, 0)) * texel).xyz;
+#endif
     } else {
         path.rayleigh = sky_view_bilinear(p, ax, ay);
         path.mie = sky_view_bilinear(p + ivec2(w, 0), ax, ay);
         path.transmittance = sky_view_bilinear(p + ivec2(2 * w, 0), ax, ay);
+#ifdef MULTIPLE_SCATTERING
+        path.multiple = sky_view_bilinear(p + ivec2(3 * w, 0), ax, ay);
+#endif
     }
     path.end = below ? END_GROUND : END_SKY;
     path.t_end = INF;
@@ -123,7 +134,11 @@ void main() {
 #endif
 
     vec2 phase = phases(dot(d, sun));
+#ifdef MULTIPLE_SCATTERING
+    vec3 inscatter = sky.sun_irradiance.xyz * (phase.x * path.rayleigh + phase.y * path.mie + path.multiple);
+#else
     vec3 inscatter = sky.sun_irradiance.xyz * (phase.x * path.rayleigh + phase.y * path.mie);
+#endif
     // What lies behind the air, times the view transmittance.
     vec3 seen;
     if (path.end == END_SURFACE) {

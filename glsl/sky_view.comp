@@ -1,8 +1,11 @@
 #version 450
+// feature: MULTIPLE_SCATTERING
 // The sky-view table: the atmosphere's single-scattering sums (without the
 // phase functions) for a grid of directions around the camera, marched
 // exactly as the atmosphere subpass marches a pixel (include/atmosphere.glsl
 // has the march and the table's layout). One invocation per direction.
+// The MULTIPLE_SCATTERING variant writes a fourth panel: the sum of the
+// higher orders.
 
 #include "atmosphere.glsl"
 
@@ -33,4 +36,7 @@ void main() {
     imageStore(sky_view_table, ivec2(x, y), vec4(path.rayleigh, 0.0));
     imageStore(sky_view_table, ivec2(x + w, y), vec4(path.mie, 0.0));
     imageStore(sky_view_table, ivec2(x + 2 * w, y), vec4(third, 0.0));
+#ifdef MULTIPLE_SCATTERING
+    imageStore(sky_view_table, ivec2(x + 3 * w, y), vec4(path.multiple, 0.0));
+#endif
 }

@@ -53,6 +53,8 @@ pub enum CountError {
     NotUnderValgrind,
     #[error("callgrind dump {}: {reason}", .path.display())]
     Dump { path: PathBuf, reason: String },
+    #[error("interrupted; the counting run under valgrind was stopped")]
+    Interrupted,
 }
 
 /// A valgrind client request: a no-op sequence of instructions that
@@ -156,7 +158,7 @@ impl Callgrind {
 
 /// The instruction total (`Ir`) of one callgrind dump file.
 fn read_dump_total(path: &Path) -> Result<u64, CountError> {
-    let text = std::fs::read_to_string(path).map_err(|e| CountError::Dump {
+    let text = crate::files::read_text(path, MAX_DUMP_BYTES).map_err(|e| CountError::Dump {
         path: path.to_path_buf(),
         reason: e.to_string(),
     })?;
@@ -165,6 +167,11 @@ fn read_dump_total(path: &Path) -> Result<u64, CountError> {
         reason: "no 'summary:' or 'totals:' line with an Ir count".to_string(),
     })
 }
+
+/// The largest callgrind dump read: one dump of a frame's submission, with
+/// per-function costs only (`--dump-line=no --dump-instr=no`), is a few
+/// hundred kilobytes.
+const MAX_DUMP_BYTES: u64 = 256 << 20;
 
 /// The first event (`Ir`, the only one callgrind collects without cache
 /// simulation) of the `totals:` line (the sum over the dump's functions),
@@ -196,9 +203,19 @@ pub fn parse_dump_total(text: &str) -> Option<u64> {
 /// instructions moved by up to 0.9 % between runs with 2 threads, by
 /// 0.07 % with none). It also makes counts from hosts with different core
 /// counts compare.
+///
+/// valgrind runs as a child of this process that dies with it (see
+/// [`crate::bench::child`]): an interrupt stops it and returns
+/// [`CountError::Interrupted`], and it is killed if this process ends
+/// without stopping it. Its temporary files (`TMPDIR`) and its error
+/// output go into `dir`, so removing `dir` leaves nothing behind; its
+/// debugger pipes are off (`--vgdb=no`).
 pub fn spawn_counting_run(args: &[std::ffi::OsString], dir: &Path) -> Result<(), CountError> {
+    use crate::bench::child::{self, ChildError};
     let exe = std::env::current_exe().map_err(CountError::NoValgrind)?;
     let out = dir.join("callgrind.out");
+    let log = dir.join("valgrind.log");
+    let stderr = std::fs::File::create(&log).map_err(CountError::NoValgrind)?;
     let mut command = std::process::Command::new("valgrind");
     command
         .arg("--tool=callgrind")
@@ -206,25 +223,39 @@ pub fn spawn_counting_run(args: &[std::ffi::OsString], dir: &Path) -> Result<(),
         .arg(format!("--callgrind-out-file={}", out.display()))
         .arg("--dump-line=no")
         .arg("--dump-instr=no")
+        .arg("--vgdb=no")
         .arg("-q")
         .arg(exe)
         .args(args)
         .env(CALLGRIND_OUT_ENV, &out)
+        .env("TMPDIR", dir)
+        .stdin(std::process::Stdio::null())
         .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped());
+        .stderr(stderr);
     if std::env::var_os("LP_NUM_THREADS").is_none() {
         command.env("LP_NUM_THREADS", "0");
     }
-    let output = command.output().map_err(CountError::NoValgrind)?;
-    if !output.status.success() {
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        let stderr = stderr.trim();
+    let status =
+        child::run(&mut command, "the counting run under valgrind", None).map_err(|e| match e {
+            ChildError::Spawn { error, .. } => CountError::NoValgrind(error),
+            ChildError::Interrupted { .. } => CountError::Interrupted,
+            e => CountError::ChildFailed {
+                status: e.to_string(),
+                stderr: String::new(),
+            },
+        })?;
+    if !status.success() {
+        // What valgrind and the copy printed, without the temporary
+        // folder's name (it is gone once this returns).
+        let text = child::tail_of(&log, 16 << 10)
+            .replace(&dir.display().to_string(), "(temporary folder)");
+        let text = text.trim();
         return Err(CountError::ChildFailed {
-            status: output.status.to_string(),
-            stderr: if stderr.is_empty() {
+            status: status.to_string(),
+            stderr: if text.is_empty() {
                 String::new()
             } else {
-                format!(":\n{stderr}")
+                format!(":\n{text}")
             },
         });
     }

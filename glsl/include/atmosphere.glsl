@@ -12,7 +12,18 @@
 // on the same samples (trapezoid between samples, while the scattering
 // uses each sample as a midpoint: two different rules, as the seed asks,
 // so both sums do not share one bias).
+//
+// With MULTIPLE_SCATTERING defined, every march sample also gathers the
+// light scattered two or more times, from Hillaire's (2020)
+// multiple-scattering table (baked by multiple_scattering.comp), and the
+// ground is lit by the sky as well as the sun (GROUND_SKY_LIGHT, from the
+// sky-irradiance table baked by sky_irradiance.comp). Without it none of
+// that code is compiled, and the single-scattering image is unchanged.
 #include "constants.glsl"
+
+#if defined(MULTIPLE_SCATTERING) && !defined(BAKING_SKY_IRRADIANCE)
+#define GROUND_SKY_LIGHT
+#endif
 
 layout(std140, set = 0, binding = 0) uniform Sky {
     vec4 forward;          // xyz: camera forward (unit)
@@ -63,6 +74,22 @@ SPEC_VEC4_CONSTANTS(SKY_SKY_VIEW, SPEC_SKY_STATIC + 32)
 // The optical-depth table, one RGBA32F texel per (direction, altitude),
 // read with texelFetch, or filtered by the sampler (TABLE_FILTER 2).
 layout(set = 0, binding = 1) uniform sampler2D od_table;
+
+#ifdef MULTIPLE_SCATTERING
+// Hillaire's Psi_ms per unit solar irradiance, by (cosine of the sun's
+// zenith angle, altitude): the isotropic radiance of every order above
+// the first that a unit of scattering coefficient sends on.
+layout(set = 0, binding = 4) uniform sampler2D ms_table;
+#endif
+#ifdef GROUND_SKY_LIGHT
+// The sky's irradiance on a horizontal surface per unit solar irradiance,
+// by (cosine of the sun's zenith angle, altitude): every order of the
+// sky's light, the direct sun excluded.
+layout(set = 0, binding = 5) uniform sampler2D irradiance_table;
+#endif
+// Whether the two tables above are read through the sampler's bilinear
+// filter (the device filters RGBA32F) or by four fetches and a blend.
+layout(constant_id = SPEC_SUN_TABLES_LINEAR_FILTER) const bool SUN_TABLES_LINEAR_FILTER = false;
 
 // The table's mapping (0: horizon, Bruneton-style, split at the
 // horizontal; 1: the seed's linear altitude × linear cosine) and filter
@@ -170,6 +197,59 @@ float table_altitude_unit(float h, float thickness) {
     return crowd_ends_inverse(clamp(h / thickness, 0.0, 1.0));
 }
 
+// The multiple-scattering and sky-irradiance tables share one layout
+// (src/render/sun_tables.rs): columns by the cosine mu_s of the sun's
+// zenith angle, linear from -1 to 1; rows by altitude, row coordinate
+// sqrt(h / thickness), crowded towards the ground where the air is dense;
+// texel centres on both ends of both axes.
+vec2 sun_table_coords(ivec2 size, float h, float mu_s) {
+    float thickness = STATIC_RADII.y - STATIC_RADII.x;
+    float fx = clamp(mu_s * 0.5 + 0.5, 0.0, 1.0) * float(size.x - 1);
+    float fy = sqrt(clamp(h / thickness, 0.0, 1.0)) * float(size.y - 1);
+    return vec2(fx, fy);
+}
+
+// The altitude and sun cosine of texel (x, y) of such a table.
+vec2 sun_table_texel(ivec2 size, int x, int y) {
+    float thickness = STATIC_RADII.y - STATIC_RADII.x;
+    float s = float(y) / float(size.y - 1);
+    return vec2(thickness * s * s, float(x) / float(size.x - 1) * 2.0 - 1.0);
+}
+
+#if defined(MULTIPLE_SCATTERING) || defined(GROUND_SKY_LIGHT)
+// Bilinear between the four texels around f (texel units, centres on
+// integers) of a table of at least 2 x 2 texels.
+vec3 sun_table_read(sampler2D table, vec2 f) {
+    ivec2 size = textureSize(table, 0);
+    if (SUN_TABLES_LINEAR_FILTER) {
+        return textureLod(table, (f + 0.5) / vec2(size), 0.0).xyz;
+    }
+    int x0 = min(int(floor(f.x)), size.x - 2);
+    int y0 = min(int(floor(f.y)), size.y - 2);
+    float ax = f.x - float(x0);
+    float ay = f.y - float(y0);
+    vec3 t00 = texelFetch(table, ivec2(x0, y0), 0).xyz;
+    vec3 t10 = texelFetch(table, ivec2(x0 + 1, y0), 0).xyz;
+    vec3 t01 = texelFetch(table, ivec2(x0, y0 + 1), 0).xyz;
+    vec3 t11 = texelFetch(table, ivec2(x0 + 1, y0 + 1), 0).xyz;
+    return mix(mix(t00, t10, ax), mix(t01, t11, ax), ay);
+}
+#endif
+
+#ifdef MULTIPLE_SCATTERING
+// Psi_ms at altitude h with the sun at cosine mu_s from the zenith.
+vec3 multiple_scattering(float h, float mu_s) {
+    return sun_table_read(ms_table, sun_table_coords(textureSize(ms_table, 0), h, mu_s));
+}
+#endif
+
+#ifdef GROUND_SKY_LIGHT
+// The sky's irradiance on a horizontal surface at altitude h.
+vec3 sky_irradiance(float h, float mu_s) {
+    return sun_table_read(irradiance_table, sun_table_coords(textureSize(irradiance_table, 0), h, mu_s));
+}
+#endif
+
 // A ray towards the sun from altitude h (clamped to the atmosphere) along
 // cosine mu, also described from its lowest point (src/atmosphere/mod.rs,
 // lowest_point): rho^2 = r^2 - Rb^2 there and its altitude, both negative
@@ -244,7 +324,7 @@ float ozone_interval(SunRay ray, float start, float a, float b, float zero, floa
     for (int i = -1; i <= 1; i++) {
         float u = mid + float(i) * half_length * 0.7745966692;
         float rho2 = ray.rho2_low + u * u;
-        float alt = rho2 / (sqrt(rho2 + rb * rb) + rb);
+        float alt = rho2 / (sqrt(max(rho2 + rb * rb, 0.0)) + rb);
         sum += (i == 0 ? 8.0 / 9.0 : 5.0 / 9.0) * (alt - zero);
     }
     return half_length * slope * sum;
@@ -344,6 +424,9 @@ struct Path {
     vec3 rayleigh;
     vec3 mie;
     vec3 transmittance; // from the camera to the ray's end
+#ifdef MULTIPLE_SCATTERING
+    vec3 multiple;      // every higher order, isotropic: no phase applies
+#endif
     int end;
     float t_end;        // distance from the camera to the end
 };
@@ -352,24 +435,29 @@ struct Path {
 // t_surface (INF: none). ground: 0 decides by the sphere test; 1 ignores
 // the ground; 2 ends at the ground, or where the ray grazes it (the rows
 // either side of the horizon in the sky-view table).
-Path march(vec3 d, float t_surface, int ground_rule) {
+//
+// march_from starts at o (relative to the centre) with c_bottom =
+// |o|^2 - Rb^2 and c_top = |o|^2 - Rt^2 given exactly; march starts at
+// the camera.
+Path march_from(vec3 o, float c_bottom, float c_top, vec3 d, float t_surface, int ground_rule) {
     Path path;
     path.rayleigh = vec3(0.0);
     path.mie = vec3(0.0);
     path.transmittance = vec3(1.0);
+#ifdef MULTIPLE_SCATTERING
+    path.multiple = vec3(0.0);
+#endif
     path.end = END_SPACE;
     path.t_end = INF;
 
-    vec3 o = sky.origin.xyz;
     float rb = STATIC_RADII.x;
     float rt = STATIC_RADII.y;
     float t0, t1;
-    if (!sphere(o, d, sky.terms.y, rt, t0, t1) || t1 <= 0.0) {
+    if (!sphere(o, d, c_top, rt, t0, t1) || t1 <= 0.0) {
         return path;
     }
     // From outside, start at the entry point, where |o|^2 - Rb^2 is
     // exactly Rt^2 - Rb^2: altitudes along the ray stay precise.
-    float c_bottom = sky.terms.x;
     float shift = 0.0;
     bool inside = t0 <= 0.0;
     if (!inside) {
@@ -382,7 +470,10 @@ Path march(vec3 d, float t_surface, int ground_rule) {
     path.end = END_SKY;
     if (ground_rule != 1) {
         float g0, g1;
-        if (sphere(o, d, c_bottom, rb, g0, g1) && g0 > 0.0) {
+        // A ray that starts on the ground (c_bottom = 0) and points into
+        // it hits it at distance 0: g0 = 0 < g1. One that points away has
+        // g1 = 0 and misses.
+        if (sphere(o, d, c_bottom, rb, g0, g1) && g0 >= 0.0 && g1 > 0.0) {
             t_end = g0;
             path.end = END_GROUND;
         } else if (ground_rule == 2) {
@@ -428,8 +519,18 @@ Path march(vec3 d, float t_surface, int ground_rule) {
         previous_extinction = e;
         bool lit;
         vec3 sun_tau = sun_optical_depth(h, r, o + t * d, lit);
+#ifdef MULTIPLE_SCATTERING
+        // The higher orders reach into the planet's shadow too: no lit
+        // test, and the view's transmittance alone.
+        vec3 view = exp(-tau) * dt;
+        vec3 weight = view * exp(-sun_tau) * (lit ? 1.0 : 0.0);
+        float mu_s = dot(o + t * d, sky.sun_direction.xyz) / r;
+        vec3 scattering = STATIC_RAYLEIGH.xyz * rho.x + STATIC_MIE_SCATTERING.xyz * rho.y;
+        path.multiple += scattering * multiple_scattering(h, mu_s) * view;
+#else
         // One exponential for both paths; no branch (lanes stay together).
         vec3 weight = exp(-(tau + sun_tau)) * (lit ? dt : 0.0);
+#endif
         path.rayleigh += STATIC_RAYLEIGH.xyz * (rho.x * weight);
         path.mie += STATIC_MIE_SCATTERING.xyz * (rho.y * weight);
     }
@@ -440,6 +541,10 @@ Path march(vec3 d, float t_surface, int ground_rule) {
     }
     path.transmittance = exp(-tau);
     return path;
+}
+
+Path march(vec3 d, float t_surface, int ground_rule) {
+    return march_from(sky.origin.xyz, sky.terms.x, sky.terms.y, d, t_surface, ground_rule);
 }
 
 // The Rayleigh phase and the Cornette-Shanks Mie phase at cosine mu
@@ -455,18 +560,23 @@ vec2 phases(float mu) {
     return vec2(phase_r, phase_m);
 }
 
-// The sunlit ground at p (relative to the centre, on the planet): the
-// Lambertian albedo under the transmitted sun, no skylight.
+// The ground at p (relative to the centre, on the planet): the Lambertian
+// albedo under the transmitted sun, and, with GROUND_SKY_LIGHT, under the
+// sky's irradiance.
 vec3 ground_radiance(vec3 p) {
     vec3 normal = normalize(p);
     vec3 sun = sky.sun_direction.xyz;
     float cos_sun = dot(normal, sun);
     bool lit;
     vec3 sun_tau = sun_optical_depth(0.0, STATIC_RADII.x, p, lit);
+    vec3 radiance = vec3(0.0);
     if (cos_sun > 0.0 && lit) {
-        return STATIC_GROUND_ALBEDO.xyz / PI * cos_sun * sky.sun_irradiance.xyz * exp(-sun_tau);
+        radiance = STATIC_GROUND_ALBEDO.xyz / PI * cos_sun * sky.sun_irradiance.xyz * exp(-sun_tau);
     }
-    return vec3(0.0);
+#ifdef GROUND_SKY_LIGHT
+    radiance += STATIC_GROUND_ALBEDO.xyz / PI * sky.sun_irradiance.xyz * sky_irradiance(0.0, cos_sun);
+#endif
+    return radiance;
 }
 
 // The sky-view table: the Path sums for directions around the camera, by
@@ -483,7 +593,8 @@ vec3 ground_radiance(vec3 p) {
 // edge, which rows spaced for the horizon missed by half on a pixel
 // beside the edge. The table is an RGBA32F image three times as
 // wide: the Rayleigh sums in columns 0..W-1, the Mie sums in W..2W-1, the
-// transmittance in 2W..3W-1.
+// transmittance in 2W..3W-1; with MULTIPLE_SCATTERING four times, the
+// higher orders' sums in 3W..4W-1.
 
 // Whether the camera is outside the atmosphere (its edge's nadir angle is
 // pi inside; from space it is below pi/2 plus the planet's angular size).

@@ -34,6 +34,7 @@
 #define SPEC_OZONE_EXACT 2
 #define SPEC_SKY_VIEW_HARDWARE_FILTER 3
 #define SPEC_TRANSPARENT_OVER_SKY 4
+#define SPEC_SUN_TABLES_LINEAR_FILTER 5
 // The first of the sky block's unchanging fields, 4 ids per field.
 #define SPEC_SKY_STATIC 8
 

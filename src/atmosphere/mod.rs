@@ -10,6 +10,8 @@
 //! [`model`] holds the types (planet and air, sun, table settings) that
 //! scenes are read into; [`reference`](mod@reference) integrates the model
 //! adaptively (the oracle of the tests);
+//! [`transport`] adds every order of scattering and ground reflection to
+//! it (an unbiased Monte Carlo estimate with its standard error);
 //! [`table`] bakes the optical-depth table the GPU pass samples;
 //! [`ozone`] integrates the ozone layer along a ray in closed form;
 //! [`coefficients`] derives scattering coefficients from physical
@@ -25,6 +27,7 @@ pub mod model;
 pub mod ozone;
 pub mod reference;
 pub mod table;
+pub mod transport;
 
 use glam::DVec3;
 use std::f64::consts::PI;

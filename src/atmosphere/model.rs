@@ -35,6 +35,29 @@ pub fn check_table_size(w: u32, h: u32) -> Result<(), String> {
     }
 }
 
+/// Default multiple-scattering table size (sun angle × altitude texels):
+/// Hillaire's 32 × 32.
+pub const DEFAULT_MS_TABLE_SIZE: (u32, u32) = (32, 32);
+/// Default sky-irradiance table size (sun angle × altitude texels):
+/// Bruneton's 64 × 16.
+pub const DEFAULT_IRRADIANCE_TABLE_SIZE: (u32, u32) = (64, 16);
+/// Largest accepted side of either table: both are baked on the device
+/// once per atmosphere, marching dozens of directions per texel.
+pub const MAX_SUN_TABLE_SIDE: u32 = 512;
+
+/// Checks a multiple-scattering or sky-irradiance table size (the scene
+/// fields and the knobs): 2 to [`MAX_SUN_TABLE_SIDE`] texels a side, so
+/// every lookup interpolates between two texels on both axes.
+pub fn check_sun_table_size(w: u32, h: u32) -> Result<(), String> {
+    if [w, h].iter().all(|n| (2..=MAX_SUN_TABLE_SIDE).contains(n)) {
+        Ok(())
+    } else {
+        Err(format!(
+            "each side must be between 2 and {MAX_SUN_TABLE_SIDE}, got [{w}, {h}]"
+        ))
+    }
+}
+
 /// Default sky-view table size (azimuth × nadir-angle directions).
 pub const DEFAULT_SKY_VIEW: Option<(u32, u32)> = Some((128, 256));
 /// Largest accepted sky-view table side.
@@ -70,6 +93,14 @@ pub struct Sky {
     /// pixels showing sky or ground read instead of marching; `None`
     /// marches every pixel.
     pub sky_view: Option<(u32, u32)>,
+    /// Whether light scattered more than once (and the sky's light on the
+    /// ground) is drawn, from Hillaire's multiple-scattering table; off
+    /// draws single scattering alone.
+    pub multiple_scattering: bool,
+    /// The multiple-scattering table's texels, sun angle × altitude.
+    pub ms_table_size: (u32, u32),
+    /// The sky-irradiance table's texels, sun angle × altitude.
+    pub irradiance_table_size: (u32, u32),
 }
 
 /// How (altitude, direction) maps to the optical-depth table

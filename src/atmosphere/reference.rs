@@ -245,8 +245,10 @@ pub fn atmosphere_segment(
         return None;
     }
     let start = t0.max(0.0);
+    // A ray from a point on the ground (g0 = 0) into it hits it at
+    // distance 0; one pointing away from it has g1 = 0 and misses.
     match ray_sphere(origin, direction, atmosphere.bottom_radius) {
-        Some((g0, _)) if g0 > 0.0 => Some((start, g0, true)),
+        Some((g0, g1)) if g0 >= 0.0 && g1 > 0.0 => Some((start, g0, true)),
         _ => Some((start, t1, false)),
     }
 }

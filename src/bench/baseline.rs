@@ -14,7 +14,7 @@
 //! another build profile) are reported as warnings, not failures: CI
 //! decides what to do with them. Rows present on one side only are listed.
 
-use super::report::{BenchReport, Metric, PassReport, Resolution, CPU_FRAME};
+use super::report::{BenchReport, Metric, PassReport, Resolution, CPU_FRAME, GPU_TOTAL};
 use crate::report::stats::{ratio_interval, Interval};
 use std::fmt;
 
@@ -61,9 +61,13 @@ pub struct RatioRow {
 pub enum NotJudged {
     /// An instruction row under [`MIN_JUDGED_INSTRUCTIONS`].
     FewInstructions,
-    /// A scene's time row faster than the baseline's empty pass at that
+    /// A scene's pass faster than the baseline's empty pass at that
     /// resolution: on a binning driver a subpass can time near zero in one
-    /// frame and a whole pass in the next, so its ratio has no bound.
+    /// frame and a whole pass in the next, so its ratio has no bound. The
+    /// GPU total and the CPU frame hold the whole frame's work wherever the
+    /// driver did it, and are always judged: so a baseline whose empty
+    /// pass is slower than everything (edited, or of a frame smaller than
+    /// the empty pass) still judges the frame.
     BelowEmptyPass,
 }
 
@@ -145,6 +149,118 @@ impl BaselineComparison {
             .map(|r| r.verdict(max_ratio))
             .max()
             .unwrap_or(Verdict::Pass)
+    }
+}
+
+/// Why a comparison cannot back a gate's verdict: a gate that judged
+/// none of the workload, or less than it claims, must not pass.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum Unjudgeable {
+    #[error("nothing to compare: no scene and pass of this run is in the baseline")]
+    NothingMatched,
+    #[error(
+        "nothing of the workload was compared: only empty-pass rows of this run are in the \
+         baseline"
+    )]
+    OnlyEmptyPasses,
+    #[error(
+        "--metric {metric}: no scene row has {metric} in both this run and the baseline, so \
+         the gate cannot judge them"
+    )]
+    MetricMissing { metric: String },
+    #[error("nothing large enough to judge in {metric}: {reason}")]
+    NothingJudged { metric: String, reason: String },
+    #[error(
+        "{} row(s) have no usable baseline median (must be a positive number), so they \
+         cannot be compared: {}",
+        .rows.len(),
+        .rows.join(", ")
+    )]
+    NoUsableMedian { rows: Vec<String> },
+    #[error(
+        "{} row(s) of this run have no usable median (must be a number, at least 0), so they \
+         cannot be compared: {}",
+        .rows.len(),
+        .rows.join(", ")
+    )]
+    NoUsableCurrentMedian { rows: Vec<String> },
+}
+
+impl BaselineComparison {
+    /// Whether the rows can back a verdict on `metrics` (the metrics the
+    /// gate judges; `work` is never judged): some row of the scenes must
+    /// have been matched and judged in each metric. For time the GPU total
+    /// and CPU frame always are; for instructions, a row of 3.5 million
+    /// instructions or more must be there. And no judged row may lack its
+    /// ratio (a median of 0 or below).
+    pub fn judgeable(&self, metrics: &[Metric]) -> Result<(), Unjudgeable> {
+        if self.rows.is_empty() {
+            return Err(Unjudgeable::NothingMatched);
+        }
+        let workload = |r: &&RatioRow| !r.key.scene.starts_with(EMPTY_PASS_PREFIX);
+        if !self.rows.iter().any(|r| workload(&r)) {
+            return Err(Unjudgeable::OnlyEmptyPasses);
+        }
+        for &metric in metrics.iter().filter(|m| **m != Metric::Work) {
+            let name = metric_name(metric).to_string();
+            let rows: Vec<&RatioRow> = self
+                .rows
+                .iter()
+                .filter(workload)
+                .filter(|r| r.metric == metric)
+                .collect();
+            if rows.is_empty() {
+                return Err(Unjudgeable::MetricMissing { metric: name });
+            }
+            if !rows.iter().any(|r| r.not_judged.is_none()) {
+                let reason = match metric {
+                    Metric::Instructions => format!(
+                        "every matched scene row is under {MIN_JUDGED_INSTRUCTIONS:e} \
+                         instructions, below what the counts resolve (render larger images)"
+                    ),
+                    _ => "every matched scene row is faster than the baseline's empty pass"
+                        .to_string(),
+                };
+                return Err(Unjudgeable::NothingJudged {
+                    metric: name,
+                    reason,
+                });
+            }
+        }
+        // A judged row without a ratio (a median of 0 or below) was not
+        // compared; a gate that compared less than it claims must not pass.
+        let unusable = |baseline: bool| -> Vec<String> {
+            self.rows
+                .iter()
+                .filter(|r| r.not_judged.is_none() && r.ratio.is_none())
+                .filter(|r| {
+                    let usable = r.baseline > 0.0 && r.baseline.is_finite();
+                    baseline != usable
+                })
+                .map(|r| match baseline {
+                    true => format!("{} (baseline {})", r.key, r.baseline),
+                    false => format!("{} (this run {})", r.key, r.current),
+                })
+                .collect()
+        };
+        let rows = unusable(true);
+        if !rows.is_empty() {
+            return Err(Unjudgeable::NoUsableMedian { rows });
+        }
+        let rows = unusable(false);
+        if !rows.is_empty() {
+            return Err(Unjudgeable::NoUsableCurrentMedian { rows });
+        }
+        Ok(())
+    }
+}
+
+/// How `--metric` names a metric.
+pub fn metric_name(metric: Metric) -> &'static str {
+    match metric {
+        Metric::Time => "time",
+        Metric::Instructions => "instructions",
+        Metric::Work => "work",
     }
 }
 
@@ -283,9 +399,11 @@ pub fn compare(
         Metric::Instructions if b.median < MIN_JUDGED_INSTRUCTIONS => {
             Some(NotJudged::FewInstructions)
         }
-        Metric::Time if c.key.pass != CPU_FRAME => time_floor(&c.key.scene)
-            .filter(|&floor| b.median < floor)
-            .map(|_| NotJudged::BelowEmptyPass),
+        Metric::Time if c.key.pass != CPU_FRAME && c.key.pass != GPU_TOTAL => {
+            time_floor(&c.key.scene)
+                .filter(|&floor| b.median < floor)
+                .map(|_| NotJudged::BelowEmptyPass)
+        }
         _ => None,
     };
     let mut matched = Vec::new();
@@ -293,9 +411,18 @@ pub fn compare(
     for c in &current_rows {
         match baseline_rows.iter().find(|b| same(b, c)) {
             Some(b) => {
-                let usable = b.median > 0.0 && b.median.is_finite() && c.median.is_finite();
+                let usable = b.median > 0.0
+                    && b.median.is_finite()
+                    && c.median >= 0.0
+                    && c.median.is_finite();
                 let interval = if !usable || c.samples.is_empty() {
                     None
+                } else if same_values(&c.samples, &b.samples) {
+                    // One set of frames on both sides (a report compared
+                    // with itself or a copy): resampling it twice, each
+                    // side on its own, would invent a difference where
+                    // there is none. The ratio is its medians'.
+                    Some(Interval::point(c.median / b.median))
                 } else if b.samples.is_empty() {
                     ratio_interval(&c.samples, &[b.median])
                         .map(|i| around(i, &c.samples, &[b.median], c.median / b.median))
@@ -331,11 +458,22 @@ pub fn compare(
     }
 }
 
+/// Whether `a` and `b` hold the same values, in any order.
+fn same_values(a: &[f64], b: &[f64]) -> bool {
+    let sorted = |x: &[f64]| {
+        let mut v = x.to_vec();
+        v.sort_unstable_by(f64::total_cmp);
+        v
+    };
+    a.len() == b.len() && sorted(a) == sorted(b)
+}
+
 /// The interval `i` of the ratio of the samples' medians, moved to be
 /// about `ratio`, the ratio of the reports' medians: the samples give the
 /// interval's relative width, the medians its place. The two agree in
-/// every report `bench` writes; they differ only in an edited report,
-/// whose stated medians are then what is judged.
+/// every report `bench` writes and every report it loads (a median that
+/// is not its samples' is refused on loading); they can differ only in
+/// reports built in code.
 fn around(i: Interval, a: &[f64], b: &[f64], ratio: f64) -> Interval {
     let median = |x: &[f64]| {
         let mut v = x.to_vec();

@@ -8,6 +8,7 @@
 //! `aerial bench` subcommand only parses arguments and prints.
 
 pub mod baseline;
+pub mod child;
 pub mod report;
 
 pub use baseline::{compare, BaselineComparison, RatioRow, RowKey, Verdict};
@@ -49,6 +50,9 @@ pub enum BenchError {
     },
     #[error("{}: {reason}", .path.display())]
     Json { path: PathBuf, reason: String },
+    /// An input that is not a regular file, or is longer than its bound.
+    #[error("{}: {reason}", .path.display())]
+    Input { path: PathBuf, reason: String },
     #[error(
         "{}: given twice (also as {}); each scene file may appear once",
         .second.display(),
@@ -89,20 +93,17 @@ pub struct BenchScene {
 
 impl BenchScene {
     /// Reads the file once, so the hash is of exactly the bytes parsed.
+    /// The file must be a regular file of at most
+    /// [`MAX_SCENE_FILE_BYTES`](crate::scene::MAX_SCENE_FILE_BYTES), as
+    /// for `aerial render`.
     pub fn load(path: &Path) -> Result<BenchScene, BenchError> {
         let file = path.display().to_string();
-        let io = |reason| SceneError::Io {
-            file: file.clone(),
-            reason,
-        };
-        let bytes = std::fs::read(path).map_err(io)?;
-        let text = std::str::from_utf8(&bytes)
-            .map_err(|e| io(std::io::Error::new(std::io::ErrorKind::InvalidData, e)))?;
+        let text = read_bounded_text(path, crate::scene::MAX_SCENE_FILE_BYTES, "a scene file")?;
         let base_dir = path.parent().unwrap_or_else(|| Path::new(""));
-        let scene = Scene::from_toml(text, &file, base_dir)?;
+        let scene = Scene::from_toml(&text, &file, base_dir)?;
         Ok(BenchScene {
             path: path.to_path_buf(),
-            sha256: sha256_hex(&bytes),
+            sha256: sha256_hex(text.as_bytes()),
             scene,
         })
     }
@@ -113,6 +114,44 @@ impl BenchScene {
             height: self.scene.output.height,
         }
     }
+}
+
+/// The text of the input file `path` (`what` names it in messages, e.g.
+/// "a benchmark report"), read up to `limit` bytes. A path that is not a
+/// regular file (a folder, a FIFO, a device such as `/dev/zero`, a link to
+/// one) is refused before it is opened, so an endless or blocking input
+/// can neither fill memory nor hang the run; a longer file is refused
+/// naming the bound.
+pub(crate) fn read_bounded_text(path: &Path, limit: u64, what: &str) -> Result<String, BenchError> {
+    use crate::files::TextReadError;
+    let bound = crate::budget::Bytes(limit);
+    let refuse = |reason: String| BenchError::Input {
+        path: path.to_path_buf(),
+        reason,
+    };
+    if let Some(problem) = crate::files::input_file_problem(path) {
+        // The problem ends with the path, which the error starts with.
+        let shown = path.display().to_string();
+        let problem = problem
+            .strip_suffix(&shown)
+            .map_or(problem.as_str(), |p| p.trim_end_matches([':', ' ']));
+        // Something is there, but not a file to read: say what is read.
+        return Err(refuse(if std::fs::metadata(path).is_ok() {
+            format!("{problem}; {what} is read from a regular file of at most {bound}")
+        } else {
+            problem.to_string()
+        }));
+    }
+    crate::files::read_text(path, limit).map_err(|e| match e {
+        TextReadError::Io(error) => BenchError::Io {
+            path: path.to_path_buf(),
+            error,
+        },
+        TextReadError::TooLong(_) => refuse(format!(
+            "longer than {bound}, the most read of {what} (reading stopped there)"
+        )),
+        e @ TextReadError::NotUtf8 { .. } => refuse(format!("{e}; {what} is UTF-8 text")),
+    })
 }
 
 /// Lowercase hex SHA-256 of `bytes`.

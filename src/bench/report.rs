@@ -18,6 +18,14 @@ use std::path::Path;
 /// compared wrongly.
 pub const FORMAT: &str = "aerial-bench/1";
 
+/// The largest report [`BenchReport::load`] reads: a report of 30 frames
+/// per scene is a few kilobytes, and this holds millions of samples.
+pub const MAX_REPORT_BYTES: u64 = 64 << 20;
+
+/// The shortest non-zero time a report may hold, in ms: 1 ns, finer than
+/// any timestamp or CPU clock this program reads resolves.
+pub const MIN_NONZERO_MS: f64 = 1e-6;
+
 /// Name of the row with the sum of a frame's pass times.
 pub const GPU_TOTAL: &str = "gpu total";
 /// Name of the row with a frame's CPU time (submit to fence signalled).
@@ -251,12 +259,38 @@ impl EmptyPassReport {
 impl BenchReport {
     /// Reads a report written by [`BenchReport::save`], rejecting other
     /// formats with an error naming the file and the `format` field.
+    ///
+    /// The file must be a regular file of at most [`MAX_REPORT_BYTES`]: a
+    /// device, FIFO or folder is refused before it is opened, and reading
+    /// stops at the bound, so `/dev/zero` or a pipe neither fills memory
+    /// nor hangs the run.
     pub fn load(path: &Path) -> Result<BenchReport, BenchError> {
-        let text = std::fs::read_to_string(path).map_err(|error| BenchError::Io {
-            path: path.to_path_buf(),
-            error,
-        })?;
+        let text = super::read_bounded_text(path, MAX_REPORT_BYTES, "a benchmark report")?;
         BenchReport::from_json(&text, path)
+    }
+
+    /// [`BenchReport::load`] of a report another process wrote into a
+    /// temporary file (a round of `--against`, the counting run under
+    /// valgrind): errors name `name` instead of the temporary path.
+    pub fn load_named(path: &Path, name: &str) -> Result<BenchReport, BenchError> {
+        let rename = |e: BenchError| match e {
+            BenchError::Io { error, .. } => BenchError::Io {
+                path: name.into(),
+                error,
+            },
+            BenchError::Json { reason, .. } => BenchError::Json {
+                path: name.into(),
+                reason,
+            },
+            BenchError::Input { reason, .. } => BenchError::Input {
+                path: name.into(),
+                reason: reason.replace(&path.display().to_string(), name),
+            },
+            other => other,
+        };
+        let text = super::read_bounded_text(path, MAX_REPORT_BYTES, "a benchmark report")
+            .map_err(rename)?;
+        BenchReport::from_json(&text, Path::new(name))
     }
 
     /// Parses a report; `path` is only used in error messages.
@@ -293,10 +327,13 @@ impl BenchReport {
                     path: path.to_path_buf(),
                     reason: format!("{}: {}", e.path(), e.inner()),
                 })?;
-        report.check_unique().map_err(|reason| BenchError::Json {
-            path: path.to_path_buf(),
-            reason,
-        })?;
+        report
+            .check_unique()
+            .and_then(|()| report.check_values())
+            .map_err(|reason| BenchError::Json {
+                path: path.to_path_buf(),
+                reason,
+            })?;
         Ok(report)
     }
 
@@ -321,6 +358,40 @@ impl BenchReport {
                     "scenes[{s}].passes[{i}].name: '{name}' appears twice in {}",
                     scene.file
                 ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Refuses values no measurement gives, naming the field: a frame's
+    /// time or count that is negative; 0 in a row that always costs
+    /// something (an empty pass, a frame's GPU total, a CPU frame); a
+    /// non-zero time under [`MIN_NONZERO_MS`]; a summary of no frames, or
+    /// of another number of frames than the row keeps; a value that is not
+    /// a finite number. Summaries are kept as stated: a gate judges a
+    /// baseline's medians, and refuses those it cannot divide by (see
+    /// [`super::baseline::Unjudgeable`]).
+    fn check_values(&self) -> Result<(), String> {
+        for (i, e) in self.empty_passes.iter().enumerate() {
+            if let Some(gpu) = &e.gpu {
+                check_row(&format!("empty_passes[{i}].gpu"), gpu, true)?;
+            }
+            check_row(&format!("empty_passes[{i}].cpu_frame"), &e.cpu_frame, true)?;
+        }
+        for (s, scene) in self.scenes.iter().enumerate() {
+            for (i, p) in scene.passes.iter().enumerate() {
+                check_row(&format!("scenes[{s}].passes[{i}]"), p, false)?;
+            }
+            if let Some(total) = &scene.gpu_total {
+                check_row(&format!("scenes[{s}].gpu_total"), total, true)?;
+            }
+            check_row(&format!("scenes[{s}].cpu_frame"), &scene.cpu_frame, true)?;
+            if let Some(floor) = &scene.empty_pass_between_frames {
+                check_row(
+                    &format!("scenes[{s}].empty_pass_between_frames"),
+                    floor,
+                    true,
+                )?;
             }
         }
         Ok(())
@@ -352,4 +423,134 @@ impl BenchReport {
             .iter()
             .find(|e| e.resolution == resolution)
     }
+}
+
+/// What a value of a row is, for [`check_row`]'s messages and bounds.
+#[derive(Clone, Copy)]
+struct Quantity {
+    /// "time" or "instruction count".
+    what: &'static str,
+    /// 0 is impossible (see [`BenchReport::check_values`]).
+    positive: bool,
+    /// The smallest non-zero value ([`MIN_NONZERO_MS`] for times).
+    min_nonzero: f64,
+}
+
+/// Checks one row: its times, its multiple, its instruction counts.
+/// `positive` says the row always costs something. Errors start with the
+/// field's path (`scenes[0].passes[1].ms.median`) and name the row.
+fn check_row(field: &str, row: &PassReport, positive: bool) -> Result<(), String> {
+    let named = |e: String| format!("{field}{e} (row '{}')", row.name);
+    let time = Quantity {
+        what: "time",
+        positive,
+        min_nonzero: MIN_NONZERO_MS,
+    };
+    check_samples(".ms", ".samples_ms", &row.ms, &row.samples_ms, time).map_err(named)?;
+    if let Some(m) = row.empty_pass_multiple {
+        check_number(".empty_pass_multiple", m).map_err(named)?;
+    }
+    if let Some(c) = &row.instructions {
+        let count = Quantity {
+            what: "instruction count",
+            positive,
+            min_nonzero: 0.0,
+        };
+        let samples: Vec<f64> = c.samples.iter().map(|&n| n as f64).collect();
+        check_samples(
+            ".instructions.summary",
+            ".instructions.samples",
+            &c.summary,
+            &samples,
+            count,
+        )
+        .map_err(named)?;
+        check_number(".instructions.spread", c.spread).map_err(named)?;
+        if let Some(m) = c.empty_pass_multiple {
+            check_number(".instructions.empty_pass_multiple", m).map_err(named)?;
+        }
+    }
+    Ok(())
+}
+
+/// A finite number, at least 0.
+fn check_number(field: &str, value: f64) -> Result<(), String> {
+    if !value.is_finite() {
+        return Err(format!("{field}: {} is not a finite number", show(value)));
+    }
+    if value < 0.0 {
+        return Err(format!("{field}: {} is negative", show(value)));
+    }
+    Ok(())
+}
+
+/// A value for a message: plain, or with an exponent when far from 1.
+fn show(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e9).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// One value of a row: finite, not negative, not 0 where the row always
+/// costs something, and not below the smallest non-zero value.
+fn check_value(field: &str, value: f64, q: Quantity) -> Result<(), String> {
+    check_number(field, value).map_err(|e| format!("{e}; a {} is at least 0", q.what))?;
+    if value == 0.0 && q.positive {
+        return Err(format!(
+            "{field}: 0; this row always costs something (an empty pass, a frame's GPU \
+             total or its CPU time), so a {} of 0 is not a measurement",
+            q.what
+        ));
+    }
+    if value > 0.0 && value < q.min_nonzero {
+        return Err(format!(
+            "{field}: {} ms is shorter than 1 ns, finer than any clock this program \
+             reads resolves",
+            show(value)
+        ));
+    }
+    Ok(())
+}
+
+/// Checks a summary and the samples it summarises (none in old reports).
+fn check_samples(
+    at: &str,
+    samples_at: &str,
+    s: &Summary,
+    samples: &[f64],
+    q: Quantity,
+) -> Result<(), String> {
+    for (k, &v) in samples.iter().enumerate() {
+        check_value(&format!("{samples_at}[{k}]"), v, q)?;
+    }
+    if s.count == 0 {
+        return Err(format!("{at}.count: 0; a summary is of at least one frame"));
+    }
+    if !samples.is_empty() && s.count != samples.len() {
+        return Err(format!(
+            "{at}.count: {}, but {} holds {} values",
+            s.count,
+            &samples_at[1..],
+            samples.len()
+        ));
+    }
+    // The summary's values are what a gate divides, as stated (a
+    // baseline's medians may be edited to move it): only what no
+    // comparison can use is refused here; a median the gate cannot divide
+    // by is refused by the gate, naming the row (`baseline::Unjudgeable`).
+    for (name, v) in [
+        ("min", s.min),
+        ("median", s.median),
+        ("p95", s.p95),
+        ("max", s.max),
+        ("mean", s.mean),
+        ("std_dev", s.std_dev),
+    ] {
+        if !v.is_finite() {
+            return Err(format!("{at}.{name}: {v} is not a finite number"));
+        }
+    }
+    Ok(())
 }

@@ -341,3 +341,270 @@ fn reports_with_duplicate_entries_are_refused() {
         .to_string();
     assert!(e.contains("empty_passes[1]") && e.contains("64x48"), "{e}");
 }
+
+/// A report with frames kept in every row, as `bench` writes them.
+fn sampled_report() -> BenchReport {
+    let mut r = report();
+    let fill = |row: &mut PassReport, centre: f64| {
+        *row = sampled(&row.name.clone(), &wobbly(centre, 0.3, 9));
+    };
+    fill(r.empty_passes[0].gpu.as_mut().unwrap(), 0.5);
+    fill(&mut r.empty_passes[0].cpu_frame, 0.7);
+    let s = &mut r.scenes[0];
+    fill(&mut s.passes[0], 2.0);
+    fill(&mut s.passes[1], 1.0);
+    fill(s.gpu_total.as_mut().unwrap(), 3.0);
+    fill(&mut s.cpu_frame, 3.5);
+    fill(s.empty_pass_between_frames.as_mut().unwrap(), 0.6);
+    r
+}
+
+/// A report compared with itself (or a copy) passes at any limit of at
+/// least 1: the frames are one measurement on both sides, so each ratio
+/// is exactly 1, not an interval of resampled noise around it.
+#[test]
+fn a_report_equal_to_its_baseline_passes() {
+    let r = sampled_report();
+    let mut counted = r.clone();
+    counted.scenes[0].passes[0].instructions =
+        CountReport::of(vec![10_000_000, 10_002_000, 9_998_000, 10_001_000]);
+    let both = [Metric::Time, Metric::Instructions];
+    for (r, metrics) in [
+        (&r, &both[..1]),
+        (&counted, &both[..1]),
+        (&counted, &both[..]),
+        (&counted, &both[1..]),
+    ] {
+        let c = compare(r, &r.clone(), metrics);
+        assert!(!c.rows.is_empty());
+        for row in &c.rows {
+            assert_eq!(row.ratio, Some(1.0), "{row:?}");
+            let i = row.interval.expect("an interval");
+            assert_eq!((i.low, i.high), (1.0, 1.0), "{row:?}");
+        }
+        assert_eq!(c.verdict(1.0), Verdict::Pass);
+        c.judgeable(metrics).unwrap();
+    }
+    // The same frames in another order are the same measurement.
+    let r = sampled_report();
+    let mut shuffled = r.clone();
+    shuffled.scenes[0].passes[0].samples_ms.reverse();
+    let c = compare(&shuffled, &r, &[Metric::Time]);
+    assert_eq!(c.verdict(1.0), Verdict::Pass);
+    // One frame changed: an interval again, which a limit of 1 straddles.
+    let mut other = r.clone();
+    other.scenes[0].passes[0].samples_ms[0] *= 1.01;
+    let c = compare(&other, &r, &[Metric::Time]);
+    let opaque = c.rows.iter().find(|r| r.key.pass == "opaque").unwrap();
+    assert_eq!(opaque.verdict(1.0), Verdict::Inconclusive, "{opaque:?}");
+}
+
+/// Reports are checked on loading: frames no measurement gives are
+/// refused, naming the file, the field and the row, however the report
+/// was edited. (Medians are judged as stated; the gate refuses those it
+/// cannot divide by: see the next tests.)
+#[test]
+fn reports_with_impossible_values_are_refused_naming_the_field() {
+    type Edit = fn(&mut serde_json::Value);
+    let cases: [(Edit, &str); 8] = [
+        (
+            |v| v["scenes"][0]["gpu_total"]["samples_ms"][3] = (-2.5).into(),
+            "scenes[0].gpu_total.samples_ms[3]: -2.5 is negative",
+        ),
+        (
+            |v| v["scenes"][0]["passes"][1]["samples_ms"][0] = (-1e-300).into(),
+            "scenes[0].passes[1].samples_ms[0]: -1e-300 is negative",
+        ),
+        (
+            |v| v["scenes"][0]["cpu_frame"]["samples_ms"][0] = 0.0.into(),
+            "scenes[0].cpu_frame.samples_ms[0]: 0; this row always costs something",
+        ),
+        (
+            |v| v["empty_passes"][0]["gpu"]["samples_ms"][8] = 0.0.into(),
+            "empty_passes[0].gpu.samples_ms[8]: 0; this row always costs something",
+        ),
+        (
+            |v| v["empty_passes"][0]["cpu_frame"]["samples_ms"][1] = 1e-9.into(),
+            "empty_passes[0].cpu_frame.samples_ms[1]: 1e-9 ms is shorter than 1 ns",
+        ),
+        (
+            |v| v["scenes"][0]["passes"][0]["ms"]["count"] = 4.into(),
+            "scenes[0].passes[0].ms.count: 4, but samples_ms holds 9 values",
+        ),
+        (
+            |v| v["scenes"][0]["passes"][0]["ms"]["count"] = 0.into(),
+            "scenes[0].passes[0].ms.count: 0",
+        ),
+        (
+            |v| v["scenes"][0]["passes"][0]["empty_pass_multiple"] = (-3.0).into(),
+            "scenes[0].passes[0].empty_pass_multiple: -3 is negative",
+        ),
+    ];
+    for (edit, expected) in cases {
+        let mut v = serde_json::to_value(sampled_report()).unwrap();
+        edit(&mut v);
+        let e = BenchReport::from_json(&v.to_string(), Path::new("base.json"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("base.json: ") && e.contains(expected),
+            "expected '{expected}' in: {e}"
+        );
+    }
+    // Counts: negative ones are no u64, and 0 is refused where a row
+    // always costs something.
+    let mut counted = sampled_report();
+    counted.scenes[0].gpu_total.as_mut().unwrap().instructions = CountReport::of(vec![0, 0, 0]);
+    let e = BenchReport::from_json(
+        &serde_json::to_string(&counted).unwrap(),
+        Path::new("c.json"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("scenes[0].gpu_total.instructions.samples[0]: 0"),
+        "{e}"
+    );
+    let mut v = serde_json::to_value(sampled_report()).unwrap();
+    v["scenes"][0]["passes"][0]["instructions"] =
+        serde_json::to_value(CountReport::of(vec![5, 6, 7])).unwrap();
+    v["scenes"][0]["passes"][0]["instructions"]["samples"][1] = (-6).into();
+    let e = BenchReport::from_json(&v.to_string(), Path::new("c.json"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("instructions.samples[1]"), "{e}");
+    // A pass may count 0 (a difference of prefixes), and a report as
+    // `bench` writes it loads.
+    let mut fine = sampled_report();
+    fine.scenes[0].passes[1].instructions = CountReport::of(vec![0, 0, 0]);
+    let text = serde_json::to_string(&fine).unwrap();
+    assert_eq!(
+        BenchReport::from_json(&text, Path::new("f.json")).unwrap(),
+        fine
+    );
+}
+
+/// A gate must judge something of each metric it claims: a comparison
+/// whose instruction rows are all too small to resolve, or that lacks the
+/// metric altogether, is an error; so is one with a judged row it cannot
+/// divide. A baseline's empty pass, however slow, never hides the frame:
+/// the GPU total and the CPU frame are always judged.
+#[test]
+fn a_gate_that_cannot_judge_its_metric_is_an_error() {
+    use crate::bench::baseline::{NotJudged, Unjudgeable};
+    let current = sampled_report();
+    // The baseline's empty pass slower than every pass of the scene.
+    let mut slow_floor = sampled_report();
+    *slow_floor.empty_passes[0].gpu.as_mut().unwrap() = sampled("empty", &wobbly(500.0, 0.1, 9));
+    let c = compare(&current, &slow_floor, &[Metric::Time]);
+    for row in c.rows.iter().filter(|r| r.key.scene == "a.toml") {
+        let pass = row.key.pass.as_str();
+        let judged = pass == GPU_TOTAL || pass == CPU_FRAME;
+        let expected = (!judged).then_some(NotJudged::BelowEmptyPass);
+        assert_eq!(row.not_judged, expected, "{row:?}");
+    }
+    c.judgeable(&[Metric::Time]).unwrap();
+    // Instructions asked for, but no row has them on both sides.
+    let c = compare(&current, &current, &[Metric::Time, Metric::Instructions]);
+    let e = c
+        .judgeable(&[Metric::Time, Metric::Instructions])
+        .unwrap_err();
+    assert!(matches!(e, Unjudgeable::MetricMissing { .. }), "{e}");
+    assert!(e.to_string().contains("--metric instructions"), "{e}");
+    // Instruction rows all under the resolvable size.
+    let mut small = sampled_report();
+    for p in &mut small.scenes[0].passes {
+        p.instructions = CountReport::of(vec![1_000_000, 1_000_100, 1_000_050]);
+    }
+    let c = compare(&small, &small, &[Metric::Instructions]);
+    let e = c.judgeable(&[Metric::Instructions]).unwrap_err();
+    assert!(e.to_string().contains("under 3.5e6 instructions"), "{e}");
+    // Nothing matched, or only the empty passes.
+    let mut elsewhere = sampled_report();
+    elsewhere.scenes[0].file = "b.toml".into();
+    let c = compare(&current, &elsewhere, &[Metric::Time]);
+    assert_eq!(
+        c.judgeable(&[Metric::Time]),
+        Err(Unjudgeable::OnlyEmptyPasses)
+    );
+    elsewhere.empty_passes.clear();
+    let c = compare(&current, &elsewhere, &[Metric::Time]);
+    assert_eq!(
+        c.judgeable(&[Metric::Time]),
+        Err(Unjudgeable::NothingMatched)
+    );
+    // Medians edited (frames kept), of the scenes or of every row, and
+    // the floor's: a median of 0 or below is refused, any other is judged
+    // as stated (the frame's total among them), never hidden under the
+    // floor.
+    fn scene_medians(r: &mut BenchReport, to: f64) {
+        let s = &mut r.scenes[0];
+        for row in s
+            .passes
+            .iter_mut()
+            .chain(&mut s.gpu_total)
+            .chain([&mut s.cpu_frame])
+        {
+            row.ms.median = to;
+        }
+    }
+    fn every_median(r: &mut BenchReport, to: f64) {
+        scene_medians(r, to);
+        let e = &mut r.empty_passes[0];
+        e.gpu.as_mut().unwrap().ms.median = to;
+        e.cpu_frame.ms.median = to;
+        let floor = r.scenes[0].empty_pass_between_frames.as_mut().unwrap();
+        floor.ms.median = to;
+    }
+    fn floor_median(r: &mut BenchReport, to: f64) {
+        r.empty_passes[0].gpu.as_mut().unwrap().ms.median = to;
+    }
+    type Edit = fn(&mut BenchReport, f64);
+    for (edit, to) in [
+        (scene_medians as Edit, 0.0),
+        (scene_medians, -1.0),
+        (every_median, 0.0),
+        (every_median, -1.0),
+    ] {
+        let mut baseline = sampled_report();
+        edit(&mut baseline, to);
+        let c = compare(&current, &baseline, &[Metric::Time]);
+        let e = c.judgeable(&[Metric::Time]).unwrap_err().to_string();
+        assert!(e.contains("no usable baseline median"), "{to}: {e}");
+        assert!(e.contains("a.toml / gpu total (baseline"), "{to}: {e}");
+    }
+    for (edit, to, verdict) in [
+        (scene_medians as Edit, 1e-300, Verdict::Fail),
+        (floor_median, 1e300, Verdict::Pass),
+    ] {
+        let mut baseline = sampled_report();
+        edit(&mut baseline, to);
+        let c = compare(&current, &baseline, &[Metric::Time]);
+        c.judgeable(&[Metric::Time]).unwrap();
+        let total = c.rows.iter().find(|r| r.key.pass == GPU_TOTAL).unwrap();
+        assert_eq!(total.not_judged, None, "{to}");
+        assert_eq!(c.verdict(1.5), verdict, "{to}");
+    }
+    // A median of this run below 0 (an edited report) is not compared.
+    let mut odd = sampled_report();
+    odd.scenes[0].passes[0].ms.median = -1.0;
+    let c = compare(&odd, &current, &[Metric::Time]);
+    let e = c.judgeable(&[Metric::Time]).unwrap_err();
+    assert!(
+        matches!(e, Unjudgeable::NoUsableCurrentMedian { .. }),
+        "{e}"
+    );
+    assert!(
+        e.to_string().contains("a.toml / opaque (this run -1)"),
+        "{e}"
+    );
+    // A device without timestamps: CPU frame rows are all there is, and
+    // they are judged.
+    let mut no_timestamps = sampled_report();
+    no_timestamps.empty_passes[0].gpu = None;
+    no_timestamps.scenes[0].passes.clear();
+    no_timestamps.scenes[0].gpu_total = None;
+    no_timestamps.scenes[0].empty_pass_between_frames = None;
+    let c = compare(&no_timestamps, &no_timestamps, &[Metric::Time]);
+    c.judgeable(&[Metric::Time]).unwrap();
+}

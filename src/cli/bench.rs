@@ -3,6 +3,7 @@
 //! optionally gate against a baseline or another build on the interval of
 //! each median ratio.
 
+use aerial::bench::child::{self, Limit};
 use aerial::bench::{
     self, compare, BaselineComparison, BenchReport, BenchScene, BenchSettings, Metric, PassReport,
     Progress, Verdict,
@@ -13,8 +14,9 @@ use anyhow::{bail, Context as _};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::ffi::OsString;
 use std::io::IsTerminal as _;
-use std::path::PathBuf;
-use std::process::ExitCode;
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode, Stdio};
+use std::time::Duration;
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
@@ -62,6 +64,12 @@ pub struct BenchArgs {
     /// goes first.
     #[arg(long, default_value_t = 4, requires = "against")]
     rounds: u32,
+    /// Time limit of each run of either build in --against, in seconds
+    /// (the other build must also answer --version within it, or within
+    /// 30 s if that is shorter): a build that takes longer is stopped and
+    /// the comparison fails.
+    #[arg(long, value_name = "SECONDS", default_value_t = DEFAULT_ROUND_TIMEOUT_S, requires = "against")]
+    round_timeout: f64,
     /// Compare with a baseline written by --json: print each row's median
     /// ratio (this run / baseline) and fail if one exceeds --max-ratio.
     #[arg(long, value_name = "BASELINE", requires = "max_ratio")]
@@ -84,6 +92,14 @@ pub struct BenchArgs {
     #[command(flatten)]
     gpu: super::GpuArgs,
 }
+
+/// The default `--round-timeout`: half an hour per run of a build, far
+/// above a counted run of the example scenes at 640x360 (about 3 minutes).
+const DEFAULT_ROUND_TIMEOUT_S: f64 = 1800.0;
+
+/// The longest the other build of `--against` may take to answer
+/// `--version`.
+const PROBE_TIMEOUT: Duration = Duration::from_secs(30);
 
 /// Exit status when the gate measured a slowdown past `--max-ratio`: 1, as
 /// `compare` uses for a threshold, so CI can tell it from an error (2).
@@ -125,7 +141,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     );
     if let Some(json) = &args.json {
         // Checked before measuring: a bad path must not cost the run.
-        aerial::files::check_destination(json).context("--json")?;
+        check_json_output(json)?;
     }
     if let Some(other) = &args.against {
         return against(&args, other);
@@ -152,6 +168,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         let gated = gated_metrics(&args.metrics);
         return gate(
             &compare(&report, baseline, &gated),
+            &gated,
             path,
             baseline,
             max_ratio,
@@ -245,7 +262,7 @@ fn measure(args: &BenchArgs) -> anyhow::Result<BenchReport> {
     }
     aerial::files::protect_inputs(scenes.iter().flat_map(|s| &s.scene.files));
     if let Some(json) = &args.json {
-        aerial::files::check_destination(json).context("--json")?;
+        check_json_output(json)?;
     }
     if cfg!(debug_assertions) {
         eprintln!("note: this is a debug build; users run release builds (cargo build --release)");
@@ -270,14 +287,45 @@ fn measure(args: &BenchArgs) -> anyhow::Result<BenchReport> {
     progress.bar.finish_and_clear();
     let mut report = report?;
     if args.metrics.contains(&Metric::Instructions) {
+        // An interrupt waits for valgrind to be stopped and the folder
+        // to be removed (see `child`), also between the steps.
+        let _busy = aerial::interrupt::Busy::start();
+        aerial::interrupt::check()?;
         eprintln!("counting instructions under valgrind (a few seconds per frame and pass)...");
         let dir = tempfile::tempdir().context("a folder for valgrind's files")?;
         let json = dir.path().join("instructions.json");
         spawn_counting_run(&run_args(args, &[Metric::Instructions], &json), dir.path())?;
-        let counted = BenchReport::load(&json)?;
+        let counted = BenchReport::load_named(&json, "the counting run's report")?;
         bench::merge_counts(&mut report, &counted);
     }
     Ok(report)
+}
+
+/// Checks `--json` before any work: a file it can write, named as a file
+/// (`o.json/` names a folder, which the report cannot be written as).
+fn check_json_output(json: &Path) -> anyhow::Result<()> {
+    if names_a_folder(json) {
+        bail!(
+            "--json {}: the path ends in '/', '.' or '..', so it names a folder; the \
+             report is written as a file: name it like bench.json",
+            json.display()
+        );
+    }
+    aerial::files::check_destination(json).context("--json")?;
+    Ok(())
+}
+
+/// Whether `path` as written can only name a folder: it ends in `/`, `/.`
+/// or `/..` (which `Path` itself would drop from the file name).
+fn names_a_folder(path: &Path) -> bool {
+    use std::os::unix::ffi::OsStrExt as _;
+    let last = path
+        .as_os_str()
+        .as_bytes()
+        .rsplit(|&b| b == b'/')
+        .next()
+        .unwrap_or_default();
+    matches!(last, b"" | b"." | b"..")
 }
 
 /// The name a value is given by on the command line.
@@ -289,23 +337,46 @@ fn value_name(v: &impl clap::ValueEnum) -> String {
 
 /// `--against`: both builds on the same scenes in `rounds` interleaved
 /// rounds, then each row's ratio this / other with its interval.
-fn against(args: &BenchArgs, other: &std::path::Path) -> anyhow::Result<ExitCode> {
+///
+/// The other build is run from exactly the file named (made absolute:
+/// never looked up in `PATH`), after it answers `--version` as an aerial
+/// build. Every run is a child that dies with this one (see `child`),
+/// stopped after `--round-timeout`; its temporary files and messages stay
+/// in a temporary folder, shown only when it fails.
+fn against(args: &BenchArgs, other: &Path) -> anyhow::Result<ExitCode> {
     if args.rounds == 0 {
         bail!("--rounds: must be at least 1");
     }
-    if !other.is_file() {
-        bail!("--against {}: not a file", other.display());
+    let timeout = args.round_timeout;
+    if !(timeout.is_finite() && timeout > 0.0 && timeout <= 1e9) {
+        bail!("--round-timeout: {timeout} is not a number of seconds between 0 and 1e9");
     }
+    let other = resolve_build(other)?;
     let this = std::env::current_exe().context("this binary's path")?;
+    // Held throughout, so an interrupt between the runs also waits for the
+    // temporary folder to be removed.
+    let _busy = aerial::interrupt::Busy::start();
     let dir = tempfile::tempdir().context("a folder for the rounds' reports")?;
+    let limit = Limit {
+        after: Duration::from_secs_f64(timeout),
+        hint: " (--round-timeout)".to_string(),
+    };
+    probe_build(&other, dir.path(), &limit)?;
+    let names = [
+        format!("this build ({})", this.display()),
+        format!("the other build ({})", other.display()),
+    ];
     let mut reports: [Vec<BenchReport>; 2] = [Vec::new(), Vec::new()];
     for round in 0..args.rounds {
         // ABBA: the build that went second goes first in the next round, so
         // a drift of the machine's speed over the sitting cancels.
         let order = if round % 2 == 0 { [0, 1] } else { [1, 0] };
         for which in order {
-            let binary = if which == 0 { &this } else { other };
+            aerial::interrupt::check()?;
+            let binary = if which == 0 { &this } else { &other };
+            let name = &names[which];
             let json = dir.path().join(format!("round{round}-{which}.json"));
+            let log = dir.path().join(format!("round{round}-{which}.log"));
             eprintln!(
                 "round {}/{}: {}",
                 round + 1,
@@ -316,15 +387,25 @@ fn against(args: &BenchArgs, other: &std::path::Path) -> anyhow::Result<ExitCode
                     "other build"
                 }
             );
-            let status = std::process::Command::new(binary)
+            let mut command = Command::new(binary);
+            command
                 .args(run_args(args, &args.metrics, &json))
-                .stdout(std::process::Stdio::null())
-                .status()
-                .with_context(|| format!("running {}", binary.display()))?;
+                .env("TMPDIR", dir.path())
+                .stdin(Stdio::null())
+                .stdout(Stdio::null())
+                .stderr(std::fs::File::create(&log).context("a file for a round's messages")?);
+            let what = format!("{name}, round {}", round + 1);
+            let status = child::run(&mut command, &what, Some(limit.clone()))?;
             if !status.success() {
-                bail!("{}: bench failed ({status})", binary.display());
+                bail!(
+                    "{what}: bench failed ({status}){}",
+                    shown_log(&log, dir.path())
+                );
             }
-            reports[which].push(BenchReport::load(&json)?);
+            reports[which].push(BenchReport::load_named(
+                &json,
+                &format!("the report of {what}"),
+            )?);
         }
     }
     let [mine, theirs] = reports;
@@ -346,6 +427,76 @@ fn against(args: &BenchArgs, other: &std::path::Path) -> anyhow::Result<ExitCode
     );
     print_ratios(&c, None);
     Ok(ExitCode::SUCCESS)
+}
+
+/// The `--against` build as an absolute path to an executable file: the
+/// file checked is the file run (a bare `NAME` is `./NAME`, not a program
+/// from `PATH`).
+fn resolve_build(given: &Path) -> anyhow::Result<PathBuf> {
+    use std::os::unix::fs::PermissionsExt as _;
+    let path = std::fs::canonicalize(given).map_err(|e| {
+        anyhow::anyhow!(
+            "--against {}: {} (give the path of another aerial binary, e.g. \
+             ../before/target/release/aerial; it is not looked up in PATH)",
+            given.display(),
+            match aerial::files::input_file_problem(given) {
+                Some(problem) => problem,
+                None => e.to_string(),
+            }
+        )
+    })?;
+    let meta =
+        std::fs::metadata(&path).with_context(|| format!("--against {}", given.display()))?;
+    if !meta.is_file() {
+        bail!("--against {}: not a file", given.display());
+    }
+    if meta.permissions().mode() & 0o111 == 0 {
+        bail!("--against {}: not executable", given.display());
+    }
+    Ok(path)
+}
+
+/// Asks the other build for `--version` (within `limit`, at most
+/// [`PROBE_TIMEOUT`]) and refuses a program that is not aerial.
+fn probe_build(other: &Path, dir: &Path, limit: &Limit) -> anyhow::Result<()> {
+    let out = dir.join("version.txt");
+    let limit = Limit {
+        after: limit.after.min(PROBE_TIMEOUT),
+        hint: limit.hint.clone(),
+    };
+    let mut command = Command::new(other);
+    command
+        .arg("--version")
+        .env("TMPDIR", dir)
+        .stdin(Stdio::null())
+        .stdout(std::fs::File::create(&out).context("a file for the other build's version")?)
+        .stderr(Stdio::null());
+    let what = format!("the other build ({}) answering --version", other.display());
+    let status = child::run(&mut command, &what, Some(limit))?;
+    let text = child::tail_of(&out, 4096);
+    let version = text.trim();
+    match version.strip_prefix("aerial ") {
+        Some(_) if status.success() => Ok(()),
+        _ => bail!(
+            "--against {}: not an aerial build (`--version` {}: '{}')",
+            other.display(),
+            status,
+            version.chars().take(200).collect::<String>()
+        ),
+    }
+}
+
+/// The end of a failed run's messages, for its error, with the temporary
+/// folder's name (gone once the command ends) left out.
+fn shown_log(log: &Path, dir: &Path) -> String {
+    let text =
+        child::tail_of(log, 16 << 10).replace(&dir.display().to_string(), "(temporary folder)");
+    let text = text.trim();
+    if text.is_empty() {
+        String::new()
+    } else {
+        format!(":\n{text}")
+    }
 }
 
 /// A progress bar on stderr over all frames of the benchmark, hidden when
@@ -520,8 +671,15 @@ fn print_ratios(c: &BaselineComparison, max_ratio: Option<f64>) {
             Metric::Instructions => "instructions",
             Metric::Work => "work",
         };
+        // Instruction counts are whole numbers (a median of an even
+        // number of frames may end in .5, shown rounded).
+        let digits = if r.metric == Metric::Instructions {
+            0
+        } else {
+            4
+        };
         println!(
-            "{:<width$}  {:<12} {:<12} {:>14.4} {:>14.4} {:>7} {:>17}{flag}",
+            "{:<width$}  {:<12} {:<12} {:>14.digits$} {:>14.digits$} {:>7} {:>17}{flag}",
             r.key.scene, r.key.pass, metric, r.baseline, r.current, ratio, interval
         );
     }
@@ -529,10 +687,14 @@ fn print_ratios(c: &BaselineComparison, max_ratio: Option<f64>) {
 
 /// Prints the comparison and decides on each row's interval: fails (1) if
 /// any lies wholly above `max_ratio`, is inconclusive (3) if any straddles
-/// it, and errs (2) if nothing of the workload was compared (a gate that
-/// checked nothing must not pass).
+/// it, and errs (2) if the rows cannot back a verdict on the `gated`
+/// metrics (see `BaselineComparison::judgeable`: a gate that checked
+/// nothing, or less than it claims, must not pass). When one metric's rows
+/// are all too small to judge, a failure of another's is still reported as
+/// one.
 fn gate(
     c: &BaselineComparison,
+    gated: &[Metric],
     path: &std::path::Path,
     baseline: &BenchReport,
     max_ratio: f64,
@@ -554,49 +716,14 @@ fn gate(
     for k in &c.new {
         eprintln!("warning: not in the baseline: {k}");
     }
-    if c.rows.is_empty() {
-        bail!(
-            "nothing to compare: no scene and pass of this run is in {}",
-            path.display()
-        );
-    }
-    let workload =
-        |r: &&bench::RatioRow| !r.key.scene.starts_with(bench::baseline::EMPTY_PASS_PREFIX);
-    if !c.rows.iter().any(|r| workload(&r)) {
-        bail!(
-            "nothing of the workload was compared: only empty-pass rows of this run are in {}",
-            path.display()
-        );
-    }
-    if !c
-        .rows
-        .iter()
-        .filter(workload)
-        .any(|r| r.not_judged.is_none())
-    {
-        bail!(
-            "nothing large enough to judge: every matched scene row of {} is under \
-             3.5 million instructions or faster than the empty pass (render larger images)",
-            path.display()
-        );
-    }
-    // A row without a ratio (a baseline median that is zero, negative or
-    // not a number) was not compared; a gate that compared less than it
-    // claims must not pass.
-    let unjudged: Vec<String> = c
-        .rows
-        .iter()
-        .filter(|r| r.not_judged.is_none() && r.ratio.is_none())
-        .map(|r| format!("{} (baseline {})", r.key, r.baseline))
-        .collect();
-    if !unjudged.is_empty() {
-        bail!(
-            "{} row(s) of {} have no usable baseline median (must be a positive number), \
-             so they cannot be compared: {}",
-            unjudged.len(),
-            path.display(),
-            unjudged.join(", ")
-        );
+    match c.judgeable(gated) {
+        Ok(()) => {}
+        // A metric had no row large enough to judge (instructions under
+        // 3.5e6), but a row of another is slower beyond doubt: that
+        // slowdown stands. Anything else is no verdict.
+        Err(bench::baseline::Unjudgeable::NothingJudged { .. })
+            if c.verdict(max_ratio) == Verdict::Fail => {}
+        Err(e) => bail!("{}: {e}", path.display()),
     }
     let list = |v: Verdict| -> Vec<String> {
         c.rows

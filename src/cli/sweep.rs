@@ -97,8 +97,45 @@ enum Reference {
     Cpu,
 }
 
-/// Refuses an output folder the sweep's files cannot be written to.
+/// Refuses an output folder the sweep's files cannot be written to, before
+/// any work: besides what `check_output_dir` refuses, a path on the way
+/// that is a symbolic link to a missing target (creating the folder would
+/// fail after the work) or a file (`o.png/` naming an existing file).
 fn check_out_dir(dir: &Path) -> anyhow::Result<()> {
+    // The path as components: `o.png/` is checked as `o.png`, which the
+    // folder would have to be.
+    let clean: PathBuf = dir.components().collect();
+    for probe in clean.ancestors().filter(|p| !p.as_os_str().is_empty()) {
+        let Ok(link) = std::fs::symlink_metadata(probe) else {
+            continue;
+        };
+        let refuse = |reason: String| {
+            anyhow::anyhow!("--out-dir {}: {reason}; nothing was run", dir.display())
+        };
+        match std::fs::metadata(probe) {
+            Ok(meta) if meta.is_dir() => break,
+            Ok(_) if probe == clean => {
+                return Err(refuse("it exists and is not a folder".to_string()))
+            }
+            Ok(_) => {
+                return Err(refuse(format!(
+                    "{} is not a folder, so the folder cannot be created",
+                    probe.display()
+                )))
+            }
+            Err(_) if link.file_type().is_symlink() => {
+                let target = std::fs::read_link(probe)
+                    .map(|t| t.display().to_string())
+                    .unwrap_or_default();
+                return Err(refuse(format!(
+                    "{} is a symbolic link to a missing target ({target}), so the folder \
+                     cannot be created there",
+                    probe.display()
+                )));
+            }
+            Err(e) => return Err(refuse(format!("{}: {e}", probe.display()))),
+        }
+    }
     aerial::files::check_output_dir(dir)?;
     for name in ["sweep.csv", "sweep.json", "sweep.svg"] {
         let path = dir.join(name);
@@ -122,11 +159,28 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         .as_deref()
         .map(|spec| Shard::parse(spec, |var| std::env::var(var).ok()))
         .transpose()?;
+    // A FIFO or device would block or never end: refused before opening.
+    if let Some(problem) = aerial::files::input_file_problem(&scene_path) {
+        if std::fs::metadata(&scene_path).is_ok() {
+            anyhow::bail!(
+                "{problem}; a scene is read from a regular file of at most {}",
+                aerial::budget::Bytes(aerial::scene::MAX_SCENE_FILE_BYTES)
+            );
+        }
+        anyhow::bail!("{problem}");
+    }
     let scene = Scene::load(&scene_path)?;
     args.strict.apply(&scene)?;
     aerial::files::protect_inputs(&scene.files);
-    let scene_bytes = std::fs::read(&scene_path)
-        .with_context(|| format!("cannot read {}", scene_path.display()))?;
+    let scene_bytes = aerial::files::read_limited(&scene_path, aerial::scene::MAX_SCENE_FILE_BYTES)
+        .map_err(|e| match e {
+            Some(e) => anyhow::anyhow!("cannot read {}: {e}", scene_path.display()),
+            None => anyhow::anyhow!(
+                "{}: longer than {} (reading stopped there)",
+                scene_path.display(),
+                aerial::budget::Bytes(aerial::scene::MAX_SCENE_FILE_BYTES)
+            ),
+        })?;
     // Before the work: a sweep takes minutes, a bad folder must not.
     check_out_dir(&args.out_dir)?;
     let axes = args
@@ -150,6 +204,16 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     )?;
     sweep.set_scene_hash(sweep::scene_hash(&scene_bytes));
     let all = sweep.combinations().len();
+    if let (Some(s), Some(spec)) = (shard, &args.shard) {
+        if s.count > all {
+            anyhow::bail!(
+                "--shard {spec}: {} shards{}, but the sweep has only {all} combinations, so \
+                 some shards would have none (use at most {all} shards)",
+                s.count,
+                Shard::source(spec)
+            );
+        }
+    }
     let total = match shard {
         Some(s) => {
             let mine = s.combinations(all).len();

@@ -21,6 +21,7 @@ mod renderer;
 mod scene_resources;
 pub mod shader_ids;
 pub mod sky_resources;
+mod sun_tables;
 mod static_lights;
 pub mod tiles;
 

@@ -35,6 +35,9 @@ pub const SPEC_TABLE_FILTER: u32 = 1;
 pub const SPEC_OZONE_EXACT: u32 = 2;
 pub const SPEC_SKY_VIEW_HARDWARE_FILTER: u32 = 3;
 pub const SPEC_TRANSPARENT_OVER_SKY: u32 = 4;
+/// Whether the multiple-scattering and sky-irradiance tables are read
+/// through the sampler's bilinear filter.
+pub const SPEC_SUN_TABLES_LINEAR_FILTER: u32 = 5;
 /// The first of the sky block's unchanging fields, 4 ids per field
 /// (`sky_resources::static_constants`).
 pub const SPEC_SKY_STATIC: u32 = 8;
@@ -80,6 +83,10 @@ mod tests {
                 SPEC_SKY_VIEW_HARDWARE_FILTER,
             ),
             ("SPEC_TRANSPARENT_OVER_SKY", SPEC_TRANSPARENT_OVER_SKY),
+            (
+                "SPEC_SUN_TABLES_LINEAR_FILTER",
+                SPEC_SUN_TABLES_LINEAR_FILTER,
+            ),
             ("SPEC_SKY_STATIC", SPEC_SKY_STATIC),
         ];
         let glsl = include_str!("../../glsl/include/constants.glsl");

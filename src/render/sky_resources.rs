@@ -2,7 +2,9 @@
 //! (the sky-view table's compute pass and the atmosphere subpass): the
 //! uniform block, the [`OpticalDepthTable`] baked on the CPU and uploaded
 //! as an RGBA32F image (read texel by texel and filtered by hand in the
-//! shaders), and the sky-view table's image, written on the device.
+//! shaders), and the sky-view table's image, written on the device; with
+//! multiple scattering, the two tables of [`SunTables`], baked on the
+//! device here.
 //!
 //! Tables are images, not storage buffers: lavapipe turns a storage-buffer
 //! read at a per-pixel index into a bounds-checked loop over the SIMD
@@ -13,6 +15,7 @@
 
 use super::plan::FramePlan;
 use super::shader_ids::{float_constants, SPEC_SKY_STATIC};
+use super::sun_tables::{self, SunTables};
 use super::RenderError;
 use crate::atmosphere::OpticalDepthTable;
 use crate::scene::{Camera, Sky, TableFilter};
@@ -169,7 +172,9 @@ const TABLE_FORMAT: Format = Format::R32G32B32A32_SFLOAT;
 /// pipelines that use it (owned by the passes, dropped first).
 pub struct SkyResources {
     /// Binding 0: uniforms; 1: optical-depth table; 2: the sky-view table
-    /// written (compute); 3: the sky-view table read (fragment).
+    /// written (compute); 3: the sky-view table read (fragment); 4 and 5:
+    /// the multiple-scattering and sky-irradiance tables, with multiple
+    /// scattering.
     pub set: DescriptorSet,
     _pool: DescriptorPool,
     pub layout: DescriptorSetLayout,
@@ -178,7 +183,8 @@ pub struct SkyResources {
     table_size: (u32, u32),
     _table: Image,
     /// The sky-view table, when the scene has one: three panels of
-    /// width × height (Rayleigh, Mie, transmittance) side by side.
+    /// width × height (Rayleigh, Mie, transmittance) side by side, and a
+    /// fourth (the higher orders) with multiple scattering.
     pub sky_view_image: Option<Image>,
     _sampler: Sampler,
     /// The sky-view table's bilinear sampler, where there is a table and
@@ -193,6 +199,22 @@ pub struct SkyResources {
     pub table_bake_seconds: f64,
     /// The block's unchanging fields the pipelines hold as constants.
     static_fields: [[f32; 4]; 9],
+    /// The multiple-scattering and sky-irradiance tables, with multiple
+    /// scattering.
+    sun_tables: Option<SunTables>,
+    /// The tables' sizes these resources were made for, with multiple
+    /// scattering (a change needs new tables and shader variants).
+    sun_table_sizes: Option<((u32, u32), (u32, u32))>,
+    /// Whether the device filters the tables' format linearly.
+    linear_filter: bool,
+    /// The sampler of the multiple-scattering and sky-irradiance tables.
+    _sun_table_sampler: Option<Sampler>,
+}
+
+/// The multiple-scattering settings a set of resources is made for.
+fn sun_table_sizes(sky: &Sky) -> Option<((u32, u32), (u32, u32))> {
+    sky.multiple_scattering
+        .then_some((sky.ms_table_size, sky.irradiance_table_size))
 }
 
 impl SkyUniforms {
@@ -215,9 +237,18 @@ impl SkyUniforms {
 
 impl SkyResources {
     /// The specialization constants that carry the sky block's unchanging
-    /// fields, as the atmosphere shaders read them.
+    /// fields, as the atmosphere shaders read them, and how they filter the
+    /// multiple-scattering and sky-irradiance tables.
     pub fn static_constants(&self) -> Vec<(u32, u32)> {
-        float_constants(SPEC_SKY_STATIC, self.static_fields.into_iter().flatten()).collect()
+        float_constants(SPEC_SKY_STATIC, self.static_fields.into_iter().flatten())
+            .chain([sun_tables::filter_constant(self.linear_filter)])
+            .collect()
+    }
+
+    /// Whether these resources hold the multiple-scattering tables (the
+    /// shaders' MULTIPLE_SCATTERING variants read them).
+    pub fn multiple_scattering(&self) -> bool {
+        self.sun_tables.is_some()
     }
 
     /// Whether `sky` seen by `camera` in `plan` keeps the fields these
@@ -226,6 +257,7 @@ impl SkyResources {
     pub fn keeps_static_fields(&self, sky: &Sky, camera: &Camera, plan: &FramePlan) -> bool {
         let block = uniforms(sky, camera, plan.width, plan.height, self.table_size);
         block.static_fields() == self.static_fields
+            && sun_table_sizes(sky) == self.sun_table_sizes
     }
 
     /// Whether the atmosphere pass reads the sky-view table through its
@@ -302,7 +334,7 @@ impl SkyResources {
                     ctx,
                     "sky-view table",
                     ImageDesc {
-                        width: 3 * w,
+                        width: if sky.multiple_scattering { 4 * w } else { 3 * w },
                         height: h,
                         format: TABLE_FORMAT,
                         usage: ImageUsageFlags::STORAGE | ImageUsageFlags::SAMPLED,
@@ -361,6 +393,15 @@ impl SkyResources {
                 stages: ShaderStageFlags::FRAGMENT,
             });
         }
+        if sky.multiple_scattering {
+            for binding in [4, 5] {
+                bindings.push(DescriptorBinding {
+                    binding,
+                    kind: DescriptorType::COMBINED_IMAGE_SAMPLER,
+                    stages: both,
+                });
+            }
+        }
         let layout = DescriptorSetLayout::new(ctx, &bindings)?;
         let pool = DescriptorPool::for_layouts(ctx, &[&layout])?;
         let set = pool.allocate(&layout)?;
@@ -375,7 +416,37 @@ impl SkyResources {
             set.write_storage_image(2, image);
             set.write_sampled_image(3, image, sky_view_sampler.as_ref().unwrap_or(&sampler));
         }
+        // The multiple-scattering and sky-irradiance tables are read
+        // through the sampler's filter where the device can filter their
+        // format, by four fetches and a blend where it cannot.
+        let linear_filter = crate::vk::supports_linear_sampling(ctx, sun_tables::FORMAT);
+        let static_fields = block.static_fields();
+        let (sun_tables, sun_table_sampler) = if sky.multiple_scattering {
+            let sampler = Sampler::clamped(
+                ctx,
+                if linear_filter {
+                    SamplerFilter::Bilinear
+                } else {
+                    SamplerFilter::Nearest
+                },
+            )?;
+            let constants = [
+                &crate::render::passes::atmosphere::table_constants(sky)[..],
+                &float_constants(SPEC_SKY_STATIC, static_fields.into_iter().flatten())
+                    .collect::<Vec<_>>(),
+                &[sun_tables::filter_constant(linear_filter)],
+            ]
+            .concat();
+            let tables = SunTables::bake(ctx, sky, &layout, &set, &sampler, &constants)?;
+            (Some(tables), Some(sampler))
+        } else {
+            (None, None)
+        };
         Ok(SkyResources {
+            sun_tables,
+            sun_table_sizes: sun_table_sizes(sky),
+            linear_filter,
+            _sun_table_sampler: sun_table_sampler,
             set,
             _pool: pool,
             layout,
@@ -388,7 +459,7 @@ impl SkyResources {
             sky_view: sky.sky_view,
             table_bytes: table.bytes(),
             table_bake_seconds: table.bake_seconds,
-            static_fields: block.static_fields(),
+            static_fields,
         })
     }
 }

@@ -2,8 +2,13 @@
 //! combination a labelled point, the Pareto front connected and
 //! highlighted. Drawn with `plotters` into an SVG string.
 //!
-//! Two things plotters does not do for us:
+//! Three things plotters does not do for us:
 //!
+//! - Any finite value has a place. The error axis is drawn linear in the
+//!   error's base-10 exponent, and both axes' ticks are chosen here, a
+//!   bounded number of them: plotters' own tick search never ends on a
+//!   range that reaches infinity (an error of 1e305 with half a decade of
+//!   room above it) or spans more decades than a float's ratio holds.
 //! - Error 0 (the reference itself) has no place on a log axis. Such points
 //!   are drawn on a floor one decade below the smallest non-zero error, on a
 //!   line labelled as such, with their own marker. When every error is
@@ -86,55 +91,218 @@ pub fn error_vs_time_svg(plot: &Plot<'_>) -> Result<String, PlotError> {
         });
     }
 
-    // The floor for error 0: a decade below the smallest non-zero error
-    // (rounded down to a power of ten, so it sits on a grid line).
-    let min_positive = points
-        .iter()
-        .map(|p| p.y)
-        .filter(|&y| y > 0.0)
-        .fold(f64::INFINITY, f64::min);
-    let floor = if min_positive.is_finite() {
-        10f64.powf(min_positive.log10().floor() - 1.0)
-    } else {
-        1e-6
-    };
-    let y_of = |p: &PlotPoint| if p.y > 0.0 { p.y } else { floor };
-    let y_max = points.iter().map(y_of).fold(floor, f64::max);
-    // Half a decade of room below the lowest point and above the highest.
-    let y_min = if points.iter().any(|p| p.y <= 0.0) {
-        floor
-    } else {
-        min_positive
-    };
-    let y_range = y_min / 3.0..y_max * 3.0;
-
-    let (x_min, x_max) = points
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(p.x), hi.max(p.x))
-        });
-    let span = if x_max > x_min {
-        x_max - x_min
-    } else {
-        x_max.max(1.0) * 0.2
-    };
-    // Extra room on the right for the labels of the slowest points.
-    let x_range = (x_min - 0.1 * span).max(0.0)..x_max + 0.25 * span;
-
+    let axes = Axes::of(points);
     let mut svg = String::new();
-    draw(plot, floor, x_range, y_range, &mut svg).map_err(|e| PlotError::Draw(e.to_string()))?;
+    draw(plot, &axes, &mut svg).map_err(|e| PlotError::Draw(e.to_string()))?;
     Ok(svg)
 }
 
-fn draw(
-    plot: &Plot<'_>,
-    floor: f64,
-    x_range: std::ops::Range<f64>,
-    y_range: std::ops::Range<f64>,
-    svg: &mut String,
-) -> Result<(), Box<dyn std::error::Error>> {
+/// The plot's coordinates: x as given, y as its base-10 logarithm (the
+/// error axis is drawn linear in the exponent), with their ranges and
+/// ticks. Any finite, non-negative points give finite ranges and at most a
+/// dozen ticks per axis, whatever their magnitude (1e-320 or 1e305 alike).
+#[derive(Clone, Debug, PartialEq)]
+struct Axes {
+    /// The exponent errors of 0 are drawn at: a decade below the smallest
+    /// non-zero error, rounded down to a whole decade.
+    floor_exp: f64,
+    x: std::ops::Range<f64>,
+    y: std::ops::Range<f64>,
+    x_ticks: Vec<f64>,
+    /// Exponents (log10 of the error).
+    y_ticks: Vec<f64>,
+}
+
+/// The most ticks an axis gets.
+const MAX_TICKS: usize = 12;
+
+impl Axes {
+    /// The axes for `points` (finite and non-negative: checked by the
+    /// caller).
+    fn of(points: &[PlotPoint]) -> Axes {
+        // log10 of the smallest non-zero error; denormals included, so it
+        // is at least about -324.
+        let min_exp = points
+            .iter()
+            .filter(|p| p.y > 0.0)
+            .map(|p| p.y.log10())
+            .fold(f64::INFINITY, f64::min);
+        let floor_exp = if min_exp.is_finite() {
+            min_exp.floor() - 1.0
+        } else {
+            -6.0
+        };
+        let exp_of = |p: &PlotPoint| if p.y > 0.0 { p.y.log10() } else { floor_exp };
+        let y_max = points.iter().map(exp_of).fold(floor_exp, f64::max);
+        let y_min = if points.iter().any(|p| p.y <= 0.0) {
+            floor_exp
+        } else {
+            min_exp
+        };
+        // Half a decade of room below the lowest point and above the
+        // highest (a factor of 3).
+        let pad = 3f64.log10();
+        let y = y_min - pad..y_max + pad;
+
+        let (x_min, x_max) = points
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p.x), hi.max(p.x))
+            });
+        // A span too small for its magnitude (one point, or points equal
+        // to the last digits) is widened to a fifth of the largest value.
+        let span = if x_max - x_min > x_max * 1e-9 {
+            x_max - x_min
+        } else {
+            x_max.max(1.0) * 0.2
+        };
+        // Extra room on the right for the labels of the slowest points;
+        // the right end stays finite however large the times.
+        let x_end = x_max + 0.25 * span;
+        let x_end = if x_end.is_finite() { x_end } else { f64::MAX };
+        let x = (x_min - 0.1 * span).max(0.0)..x_end;
+        Axes {
+            floor_exp,
+            x_ticks: linear_ticks(x.start, x.end),
+            y_ticks: decade_ticks(y.start, y.end),
+            x,
+            y,
+        }
+    }
+
+    /// Where point `p` is drawn.
+    fn at(&self, p: &PlotPoint) -> (f64, f64) {
+        (
+            p.x,
+            if p.y > 0.0 {
+                p.y.log10()
+            } else {
+                self.floor_exp
+            },
+        )
+    }
+}
+
+/// Ticks at round multiples (1, 2 or 5 times a power of ten) inside
+/// `lo..hi`, at most [`MAX_TICKS`]; the two ends when no such step fits
+/// (a range too narrow or too wide for its magnitude).
+fn linear_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let span = hi - lo;
+    if !(span.is_finite() && span > 0.0) {
+        return vec![lo];
+    }
+    let rough = span / MAX_TICKS as f64;
+    let power = 10f64.powf(rough.log10().floor());
+    for step in [power, 2.0 * power, 5.0 * power, 10.0 * power] {
+        if !(step.is_finite() && step > 0.0) {
+            break;
+        }
+        let first = (lo / step).ceil();
+        let last = (hi / step).floor();
+        let count = last - first + 1.0;
+        if count.is_finite() && count >= 1.0 && count <= MAX_TICKS as f64 {
+            // At most MAX_TICKS steps: the loop is bounded by the check.
+            return (0..count as usize)
+                .map(|i| (first + i as f64) * step)
+                .filter(|v| v.is_finite())
+                .collect();
+        }
+    }
+    vec![lo, hi]
+}
+
+/// Ticks at whole decades inside `lo..hi` (exponents), every k-th so at
+/// most [`MAX_TICKS`]; with fewer than three decades, also 2 and 5 times
+/// each decade.
+fn decade_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let first = lo.ceil();
+    let last = hi.floor();
+    // The exponents of finite numbers lie within about ±330.
+    let count = (last - first + 1.0).clamp(0.0, 1000.0) as usize;
+    let every = count.div_ceil(MAX_TICKS).max(1);
+    let mut ticks: Vec<f64> = (0..count)
+        .step_by(every)
+        .map(|i| first + i as f64)
+        .collect();
+    if count < 3 {
+        let decades = (lo.floor() as i32)..=(hi.floor() as i32);
+        ticks = decades
+            .flat_map(|d| [1f64, 2.0, 5.0].map(|m| f64::from(d) + m.log10()))
+            .filter(|v| (lo..=hi).contains(v))
+            .collect();
+    }
+    ticks
+}
+
+/// A linear axis whose ticks are given (plotters' own are not searched
+/// for: see the module docs).
+struct Ticked {
+    inner: plotters::coord::types::RangedCoordf64,
+    ticks: Vec<f64>,
+}
+
+impl Ticked {
+    fn new(range: std::ops::Range<f64>, ticks: &[f64]) -> Ticked {
+        Ticked {
+            inner: range.into(),
+            ticks: ticks.to_vec(),
+        }
+    }
+}
+
+impl plotters::coord::ranged1d::Ranged for Ticked {
+    type FormatOption = plotters::coord::ranged1d::DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        self.inner.map(value, limit)
+    }
+
+    fn key_points<Hint: plotters::coord::ranged1d::KeyPointHint>(&self, hint: Hint) -> Vec<f64> {
+        if hint.max_num_points() == 0 {
+            Vec::new()
+        } else {
+            self.ticks.clone()
+        }
+    }
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.inner.range()
+    }
+}
+
+/// The label of the tick at exponent `v`: `1e-3`, `2e-3`, `5e-3`, ...
+fn decade_label(v: f64) -> String {
+    let exp = v.floor();
+    let mantissa = 10f64.powf(v - exp).round();
+    // 10^(v - exp) rounds to 10 just below a decade.
+    if mantissa >= 10.0 {
+        format!("1e{}", exp + 1.0)
+    } else {
+        format!("{mantissa}e{exp}")
+    }
+}
+
+/// The label of the x tick `v`, with as many decimals as the ticks' step
+/// needs and exponent notation for very large or small values.
+fn x_label(v: f64, step: f64) -> String {
+    let a = v.abs();
+    if a != 0.0 && !(1e-3..1e7).contains(&a) {
+        format!("{v:.1e}")
+    } else {
+        let decimals = if step > 0.0 && step < 1.0 {
+            ((-step.log10()).ceil() as usize).min(6)
+        } else {
+            0
+        };
+        format!("{v:.decimals$}")
+    }
+}
+
+fn draw(plot: &Plot<'_>, axes: &Axes, svg: &mut String) -> Result<(), Box<dyn std::error::Error>> {
     let points = plot.points;
-    let y_of = |p: &PlotPoint| if p.y > 0.0 { p.y } else { floor };
+    let at = |p: &PlotPoint| axes.at(p);
+    let floor = axes.floor_exp;
     let root = SVGBackend::with_string(svg, (WIDTH, HEIGHT)).into_drawing_area();
     root.fill(&WHITE)?;
     root.draw(&Text::new(
@@ -155,13 +323,20 @@ fn draw(
         .margin_bottom(16)
         .x_label_area_size(52)
         .y_label_area_size(84)
-        .build_cartesian_2d(x_range, y_range.log_scale())?;
+        .build_cartesian_2d(
+            Ticked::new(axes.x.clone(), &axes.x_ticks),
+            Ticked::new(axes.y.clone(), &axes.y_ticks),
+        )?;
+    let x_step = match axes.x_ticks.as_slice() {
+        [a, b, ..] => b - a,
+        _ => 0.0,
+    };
     chart
         .configure_mesh()
         .x_desc(plot.x_label)
         .y_desc(plot.y_label)
-        .x_label_formatter(&|v| format!("{v:.1}"))
-        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .x_label_formatter(&|v| x_label(*v, x_step))
+        .y_label_formatter(&|v| decade_label(*v))
         .label_style((FONT, 14))
         .axis_desc_style((FONT, 16))
         .light_line_style(WHITE)
@@ -170,10 +345,7 @@ fn draw(
 
     // The floor line, only when something sits on it.
     let any_zero = points.iter().any(|p| p.y <= 0.0);
-    let (x0, x1) = {
-        let r = chart.x_range();
-        (r.start, r.end)
-    };
+    let (x0, x1) = (axes.x.start, axes.x.end);
     if any_zero {
         chart.draw_series(LineSeries::new(
             [(x0, floor), (x1, floor)],
@@ -186,7 +358,7 @@ fn draw(
     front.sort_by(|a, b| a.x.total_cmp(&b.x));
     chart
         .draw_series(LineSeries::new(
-            front.iter().map(|p| (p.x, y_of(p))),
+            front.iter().map(|p| at(p)),
             FRONT.stroke_width(2),
         ))?
         .label(FRONT_LABEL)
@@ -196,25 +368,22 @@ fn draw(
             points
                 .iter()
                 .filter(|p| !p.pareto)
-                .map(|p| Circle::new((p.x, y_of(p)), 4, OTHER.filled())),
+                .map(|p| Circle::new(at(p), 4, OTHER.filled())),
         )?
         .label("other combinations")
         .legend(|(x, y)| Circle::new((x + 12, y), 4, OTHER.filled()));
-    chart.draw_series(
-        front
-            .iter()
-            .map(|p| Circle::new((p.x, y_of(p)), 5, FRONT.filled())),
-    )?;
+    chart.draw_series(front.iter().map(|p| Circle::new(at(p), 5, FRONT.filled())))?;
     if points.iter().any(|p| p.reference) {
         chart
             .draw_series(
                 points
                     .iter()
                     .filter(|p| p.reference)
-                    .map(|p| Circle::new((p.x, y_of(p)), 9, BLACK.stroke_width(2))),
+                    .map(|p| Circle::new(at(p), 9, BLACK.stroke_width(2))),
             )?
             .label(format!(
-                "reference: error 0, drawn at {floor:.0e} (grey line)"
+                "reference: error 0, drawn at {} (grey line)",
+                decade_label(floor)
             ))
             .legend(|(x, y)| Circle::new((x + 12, y), 7, BLACK.stroke_width(2)));
     }
@@ -228,10 +397,7 @@ fn draw(
 
     // Labels, in pixels of the whole picture (chart coordinates map to the
     // same backend pixels).
-    let pixel: Vec<(i32, i32)> = points
-        .iter()
-        .map(|p| chart.backend_coord(&(p.x, y_of(p))))
-        .collect();
+    let pixel: Vec<(i32, i32)> = points.iter().map(|p| chart.backend_coord(&at(p))).collect();
     let (xs, ys) = chart.plotting_area().get_pixel_range();
     let area = Rect {
         x0: xs.start,
@@ -468,6 +634,78 @@ mod tests {
         // One point, or all at error 0, still has axes to draw.
         plot(&[point(2.0, 0.0, "only", true)]).unwrap();
         plot(&[point(2.0, 0.1, "a", true), point(2.0, 0.1, "b", true)]).unwrap();
+    }
+
+    /// Plots `points` on another thread: `None` if it has not finished
+    /// within a minute (plotters' tick search looped forever on huge
+    /// values), instead of hanging the test run.
+    fn plot_in_time(points: Vec<PlotPoint>) -> Option<Result<String, PlotError>> {
+        let (send, receive) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let _ = send.send(plot(&points));
+        });
+        receive
+            .recv_timeout(std::time::Duration::from_secs(60))
+            .ok()
+    }
+
+    #[test]
+    fn any_finite_values_plot_with_bounded_axes() {
+        let cases: [&[(f64, f64)]; 8] = [
+            &[(1.0, 1e305), (2.0, 0.5)],
+            &[(1.0, f64::MAX), (2.0, 0.0)],
+            &[(1.0, 5e-324), (2.0, f64::MAX)],
+            &[(1.0, 1e-300), (3.0, 1e300)],
+            &[(1e308, 0.1), (f64::MAX, 0.2)],
+            &[(0.0, 0.1), (f64::MAX, 0.0)],
+            &[(5e-324, 0.1), (1e-300, 0.2)],
+            &[(1e300, 1e300), (1e300, 1e300)],
+        ];
+        for case in cases {
+            let points: Vec<PlotPoint> = case
+                .iter()
+                .enumerate()
+                .map(|(i, &(x, y))| point(x, y, &format!("p{i}"), i == 0))
+                .collect();
+            let axes = Axes::of(&points);
+            for r in [&axes.x, &axes.y] {
+                assert!(
+                    r.start.is_finite() && r.end.is_finite() && r.start < r.end,
+                    "{case:?}: {axes:?}"
+                );
+            }
+            for ticks in [&axes.x_ticks, &axes.y_ticks] {
+                assert!(
+                    !ticks.is_empty() && ticks.len() <= MAX_TICKS,
+                    "{case:?}: {axes:?}"
+                );
+                assert!(ticks.iter().all(|t| t.is_finite()), "{case:?}: {axes:?}");
+            }
+            let svg = plot_in_time(points)
+                .unwrap_or_else(|| panic!("{case:?}: the plot did not finish"))
+                .unwrap_or_else(|e| panic!("{case:?}: {e}"));
+            assert!(svg.contains("p0") && svg.contains("p1"), "{case:?}");
+        }
+    }
+
+    #[test]
+    fn ticks_are_round_and_labelled_by_their_decade() {
+        assert_eq!(
+            linear_ticks(0.0, 10.0),
+            [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0]
+        );
+        assert_eq!(linear_ticks(0.5, 3.1), [0.5, 1.0, 1.5, 2.0, 2.5, 3.0]);
+        assert_eq!(decade_ticks(-4.5, 0.5), [-4.0, -3.0, -2.0, -1.0, 0.0]);
+        // Under three decades, 2 and 5 times each decade too.
+        let t = decade_ticks(-1.2, 0.2);
+        let labels: Vec<String> = t.iter().map(|&v| decade_label(v)).collect();
+        assert_eq!(labels, ["1e-1", "2e-1", "5e-1", "1e0"]);
+        // 600 decades: every 50th, at most a dozen.
+        let t = decade_ticks(-300.0, 300.0);
+        assert!(t.len() <= MAX_TICKS && t.first() == Some(&-300.0), "{t:?}");
+        assert_eq!(decade_label(-4.0), "1e-4");
+        assert_eq!(x_label(2.5, 0.5), "2.5");
+        assert_eq!(x_label(1e300, 1e299), "1.0e300");
     }
 
     #[test]

@@ -293,6 +293,54 @@ pub const KNOBS: &[Knob] = &[
         },
     },
     Knob {
+        name: "multiple_scattering",
+        best: Best::Fixed("on"),
+        values: "on | off: every order of scattering and the sky's light on the ground, or single scattering alone",
+        apply: |s, v| {
+            sky_mut(s)?.multiple_scattering = match v {
+                "on" => true,
+                "off" => false,
+                _ => return Err(format!("expected on or off, got '{v}'")),
+            };
+            Ok(())
+        },
+        read: |s| match &s.sky {
+            Some(sky) => on_off(sky.multiple_scattering).into(),
+            None => "-".into(),
+        },
+    },
+    Knob {
+        name: "ms_table_size",
+        best: Best::LastListed,
+        values: "WIDTHxHEIGHT: multiple-scattering table texels, sun angle x altitude (2..=512 each)",
+        apply: |s, v| {
+            let (w, h) = sun_table_size(v)?;
+            sky_mut(s)?.ms_table_size = (w, h);
+            Ok(())
+        },
+        read: |s| match &s.sky {
+            Some(sky) => format!("{}x{}", sky.ms_table_size.0, sky.ms_table_size.1),
+            None => "-".into(),
+        },
+    },
+    Knob {
+        name: "irradiance_table_size",
+        best: Best::LastListed,
+        values: "WIDTHxHEIGHT: sky-irradiance table texels, sun angle x altitude (2..=512 each)",
+        apply: |s, v| {
+            let (w, h) = sun_table_size(v)?;
+            sky_mut(s)?.irradiance_table_size = (w, h);
+            Ok(())
+        },
+        read: |s| match &s.sky {
+            Some(sky) => format!(
+                "{}x{}",
+                sky.irradiance_table_size.0, sky.irradiance_table_size.1
+            ),
+            None => "-".into(),
+        },
+    },
+    Knob {
         name: "od_filter",
         best: Best::Fixed("manual"),
         values: "manual | nearest | hardware: how the atmosphere pass reads the optical-depth table",
@@ -319,6 +367,24 @@ pub const KNOBS: &[Knob] = &[
         },
     },
 ];
+
+/// "on" or "off".
+fn on_off(on: bool) -> &'static str {
+    if on {
+        "on"
+    } else {
+        "off"
+    }
+}
+
+/// A multiple-scattering or sky-irradiance table size, `WIDTHxHEIGHT`.
+fn sun_table_size(v: &str) -> Result<(u32, u32), String> {
+    let (w, h) = v.split_once('x').ok_or("expected WIDTHxHEIGHT")?;
+    let parse = |t: &str| t.trim().parse::<u32>().map_err(|e| format!("'{t}': {e}"));
+    let (w, h) = (parse(w)?, parse(h)?);
+    crate::atmosphere::model::check_sun_table_size(w, h)?;
+    Ok((w, h))
+}
 
 /// A knob whose values are the variants of an enum, by the names the scene
 /// file spells them with (each enum's serde `rename_all = "lowercase"`).

@@ -76,6 +76,9 @@ pub(super) struct AtmosphereFile {
     od_filter: Option<TableFilter>,
     od_ozone: Option<OzoneDepth>,
     sky_view: Option<SkyViewField>,
+    multiple_scattering: Option<bool>,
+    ms_table_size: Option<[u32; 2]>,
+    irradiance_table_size: Option<[u32; 2]>,
 }
 
 /// `atmosphere.sky_view`: `[width, height]` or `"off"`.
@@ -419,8 +422,27 @@ impl Check<'_> {
                 Some((w, h))
             }
         };
+        let sun_table = |field: &str, size: Option<[u32; 2]>, default: (u32, u32)| {
+            let size = size.map_or(default, |[w, h]| (w, h));
+            check_sun_table_size(size.0, size.1)
+                .map(|()| size)
+                .map_err(|e| self.invalid(field, e))
+        };
+        let ms_table_size = sun_table(
+            "atmosphere.ms_table_size",
+            atmosphere.ms_table_size,
+            DEFAULT_MS_TABLE_SIZE,
+        )?;
+        let irradiance_table_size = sun_table(
+            "atmosphere.irradiance_table_size",
+            atmosphere.irradiance_table_size,
+            DEFAULT_IRRADIANCE_TABLE_SIZE,
+        )?;
         Ok(Some(Sky {
             sky_view,
+            multiple_scattering: atmosphere.multiple_scattering.unwrap_or(true),
+            ms_table_size,
+            irradiance_table_size,
             table_size,
             table_mapping: match atmosphere.od_table_mapping {
                 None | Some(TableMappingField::Horizon) => TableMapping::Horizon,

@@ -506,7 +506,7 @@ fn srgb(p: &Pixels<u8>) -> ImageRef<'_> {
 }
 
 /// The reference's values for a combination's `values`: see the module docs.
-fn reference_values(axes: &[Axis], values: &[String]) -> Vec<String> {
+pub(super) fn reference_values(axes: &[Axis], values: &[String]) -> Vec<String> {
     axes.iter()
         .zip(values)
         .map(|(axis, own)| match axis.knob.best {

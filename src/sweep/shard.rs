@@ -52,6 +52,26 @@ pub enum ShardError {
         path: PathBuf,
         error: std::io::Error,
     },
+    /// Not a regular file, or longer than [`MAX_SWEEP_JSON_BYTES`].
+    #[error("{}: {reason}", path.display())]
+    Input { path: PathBuf, reason: String },
+    /// A row that contradicts its sweep or holds a value no measurement
+    /// gives.
+    #[error("{}: rows[{row}] (combination {index}): {field}: {reason}", path.display())]
+    BadRow {
+        path: PathBuf,
+        row: usize,
+        index: usize,
+        field: String,
+        reason: String,
+    },
+    /// A field of the whole result that contradicts the rest.
+    #[error("{}: {field}: {reason}", path.display())]
+    BadField {
+        path: PathBuf,
+        field: &'static str,
+        reason: String,
+    },
     #[error("{} is not a sweep's JSON: {error}", path.display())]
     Parse {
         path: PathBuf,
@@ -127,7 +147,9 @@ impl Shard {
         let count = |n: &str| -> Result<usize, ShardError> {
             n.trim().parse().map_err(|_| bad("N is not a whole number"))
         };
-        let (index, count) = if spec.trim() == "slurm" {
+        // Where each number came from, for the messages: a scheduler's
+        // variable is named, so a job's wrong setting is found at once.
+        let (index, count, index_from, count_from) = if spec.trim() == "slurm" {
             let id = var("SLURM_ARRAY_TASK_ID")?;
             let min = var("SLURM_ARRAY_TASK_MIN")?;
             let count = var("SLURM_ARRAY_TASK_COUNT")?;
@@ -136,28 +158,53 @@ impl Shard {
                 var: "SLURM_ARRAY_TASK_ID",
                 problem: format!("{id}, below SLURM_ARRAY_TASK_MIN ({min})"),
             })?;
-            (index, count)
+            (
+                index,
+                count,
+                format!(" (SLURM_ARRAY_TASK_ID {id} - SLURM_ARRAY_TASK_MIN {min})"),
+                format!(" (SLURM_ARRAY_TASK_COUNT {count})"),
+            )
         } else {
             let (i, n) = spec.split_once('/').ok_or_else(|| bad("no '/'"))?;
             let n = count(n)?;
-            let i = match i.trim() {
-                "kubernetes" => var("JOB_COMPLETION_INDEX")?,
-                i => i
-                    .parse()
-                    .map_err(|_| bad("I is not a whole number, 'kubernetes' or 'slurm'"))?,
+            let (i, from) = match i.trim() {
+                "kubernetes" => {
+                    let i = var("JOB_COMPLETION_INDEX")?;
+                    (i, format!(" (JOB_COMPLETION_INDEX {i})"))
+                }
+                i => (
+                    i.parse()
+                        .map_err(|_| bad("I is not a whole number, 'kubernetes' or 'slurm'"))?,
+                    String::new(),
+                ),
             };
-            (i, n)
+            (i, n, from, String::new())
         };
         if count == 0 {
-            return Err(bad("there must be at least 1 shard"));
+            return Err(bad(&format!("there must be at least 1 shard{count_from}")));
         }
         if index >= count {
             return Err(bad(&format!(
-                "shard index {index} is out of range for {count} shards (indices are 0-based: 0 to {})",
+                "shard index {index}{index_from} is out of range for {count} shards{count_from} \
+                 (indices are 0-based: 0 to {})",
                 count - 1
             )));
         }
         Ok(Shard { index, count })
+    }
+
+    /// Where `spec` takes its numbers from, for messages about them: the
+    /// scheduler's variables of `kubernetes/N` and `slurm`, nothing for
+    /// `I/N`.
+    pub fn source(spec: &str) -> &'static str {
+        match spec.trim() {
+            "slurm" => {
+                " (I from SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN, N from \
+                 SLURM_ARRAY_TASK_COUNT)"
+            }
+            s if s.starts_with("kubernetes/") => " (I from JOB_COMPLETION_INDEX)",
+            _ => "",
+        }
     }
 
     /// Whether combination `k` belongs to this shard.
@@ -180,12 +227,45 @@ pub fn scene_hash(bytes: &[u8]) -> String {
     format!("{hash:016x}")
 }
 
-/// Reads `dir/sweep.json`, the output of one shard.
+/// The largest `sweep.json` [`read_shard`] reads: a row takes about a
+/// kilobyte, and a sweep has at most a few thousand.
+pub const MAX_SWEEP_JSON_BYTES: u64 = 64 << 20;
+
+/// Reads `dir/sweep.json`, the output of one shard. The file must be a
+/// regular file of at most [`MAX_SWEEP_JSON_BYTES`]: a device (a link to
+/// `/dev/zero`), FIFO or folder is refused before it is opened, and
+/// reading stops at the bound.
 pub fn read_shard(dir: &Path) -> Result<(PathBuf, SweepResult), ShardError> {
+    use crate::files::TextReadError;
     let path = dir.join("sweep.json");
-    let text = std::fs::read_to_string(&path).map_err(|error| ShardError::Read {
+    let bound = crate::budget::Bytes(MAX_SWEEP_JSON_BYTES);
+    let input = |reason: String| ShardError::Input {
         path: path.clone(),
-        error,
+        reason,
+    };
+    if let Some(problem) = crate::files::input_file_problem(&path) {
+        let shown = path.display().to_string();
+        let problem = problem
+            .strip_suffix(&shown)
+            .map_or(problem.as_str(), |p| p.trim_end_matches([':', ' ']))
+            .to_string();
+        return Err(input(if std::fs::metadata(&path).is_ok() {
+            format!(
+                "{problem}; a shard's sweep.json is read from a regular file of at most {bound}"
+            )
+        } else {
+            problem
+        }));
+    }
+    let text = crate::files::read_text(&path, MAX_SWEEP_JSON_BYTES).map_err(|e| match e {
+        TextReadError::Io(error) => ShardError::Read {
+            path: path.clone(),
+            error,
+        },
+        TextReadError::TooLong(_) => input(format!(
+            "longer than {bound}, the most read of a sweep.json (reading stopped there)"
+        )),
+        e @ TextReadError::NotUtf8 { .. } => input(format!("{e}; a sweep.json is UTF-8 text")),
     })?;
     // A shard's file has a "shard" object; say so plainly rather than
     // through a missing-field error when given a whole sweep or an older
@@ -282,6 +362,9 @@ pub fn merge(shards: Vec<(PathBuf, SweepResult)>) -> Result<SweepResult, ShardEr
     if !missing.is_empty() {
         return Err(ShardError::Missing { missing, count });
     }
+    for (path, result) in &shards {
+        check_rows(path, result)?;
+    }
 
     let first = &shards[0].1;
     let mut sources = Vec::with_capacity(count);
@@ -334,4 +417,205 @@ pub fn merge(shards: Vec<(PathBuf, SweepResult)>) -> Result<SweepResult, ShardEr
         asset_warnings: first.asset_warnings,
         rows,
     })
+}
+
+/// Checks every row of a shard's result against the sweep it claims to
+/// belong to: its settings must be the combination its index names (the
+/// axes listed in the file, the last changing fastest), its reference the
+/// one that combination is compared with, and every measured value a
+/// finite number of its range (times and errors at least 0, FLIP at most
+/// 1, the floor above 0, `gpu_x_empty` the GPU median over the floor). A
+/// row that contradicts its index would be merged under another label.
+fn check_rows(path: &Path, result: &SweepResult) -> Result<(), ShardError> {
+    use super::run::{reference_values, Axis};
+    use super::ReferenceKind;
+    let field_error = |field: &'static str, reason: String| ShardError::BadField {
+        path: path.to_path_buf(),
+        field,
+        reason,
+    };
+    let axes = result
+        .axes
+        .iter()
+        .map(|a| Axis::parse(a))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| field_error("axes", e.to_string()))?;
+    let names: Vec<&str> = axes.iter().map(|a| a.knob.name).collect();
+    if result.knobs != names {
+        return Err(field_error(
+            "knobs",
+            format!(
+                "{} do not match the axes' knobs {}",
+                result.knobs.join(", "),
+                names.join(", ")
+            ),
+        ));
+    }
+    let total = axes
+        .iter()
+        .try_fold(1usize, |n, a| n.checked_mul(a.values.len()));
+    if total != Some(result.combinations) {
+        return Err(field_error(
+            "combinations",
+            format!(
+                "{}, but the axes make {}",
+                result.combinations,
+                total.map_or_else(|| "too many".to_string(), |t| t.to_string())
+            ),
+        ));
+    }
+    for (n, row) in result.rows.iter().enumerate() {
+        let bad = |field: &str, reason: String| ShardError::BadRow {
+            path: path.to_path_buf(),
+            row: n,
+            index: row.index,
+            field: field.to_string(),
+            reason,
+        };
+        if row.index >= result.combinations {
+            return Err(bad(
+                "index",
+                format!("beyond the sweep's {} combinations", result.combinations),
+            ));
+        }
+        // The combination's values: the index in mixed radix, the last
+        // axis the fastest digit.
+        let mut values = vec![String::new(); axes.len()];
+        let mut rest = row.index;
+        for (slot, axis) in values.iter_mut().zip(&axes).rev() {
+            *slot = axis.values[rest % axis.values.len()].clone();
+            rest /= axis.values.len();
+        }
+        let show = |pairs: &[(String, String)]| {
+            pairs
+                .iter()
+                .map(|(k, v)| format!("{k}={v}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        let pairs = |values: &[String]| -> Vec<(String, String)> {
+            names
+                .iter()
+                .zip(values)
+                .map(|(k, v)| (k.to_string(), v.clone()))
+                .collect()
+        };
+        let expected = pairs(&values);
+        if row.settings != expected {
+            return Err(bad(
+                "settings",
+                format!(
+                    "'{}' contradicts the row's index, which is '{}' in this sweep",
+                    show(&row.settings),
+                    show(&expected)
+                ),
+            ));
+        }
+        let reference_of = match result.reference {
+            ReferenceKind::GpuBest => reference_values(&axes, &values),
+            ReferenceKind::Cpu => values.clone(),
+        };
+        let reference = pairs(&reference_of);
+        if row.reference != reference {
+            return Err(bad(
+                "reference",
+                format!(
+                    "'{}', but this combination's reference is '{}'",
+                    show(&row.reference),
+                    show(&reference)
+                ),
+            ));
+        }
+        let own = result.reference == ReferenceKind::GpuBest && values == reference_of;
+        if row.is_reference != own {
+            return Err(bad(
+                "is_reference",
+                format!(
+                    "{}, but this combination {} its own reference",
+                    row.is_reference,
+                    if own { "is" } else { "is not" }
+                ),
+            ));
+        }
+        let number = |field: &str, v: f64, max: f64| -> Result<(), ShardError> {
+            if !v.is_finite() || v < 0.0 || v > max {
+                let range = if max.is_finite() {
+                    format!("a number from 0 to {max}")
+                } else {
+                    "a finite number, at least 0".to_string()
+                };
+                return Err(bad(field, format!("{v} is not {range}")));
+            }
+            Ok(())
+        };
+        let any = f64::INFINITY;
+        number("rmse", row.rmse, any)?;
+        number("max_rel_error", row.max_rel_error, any)?;
+        number("flip_mean", row.flip_mean, 1.0)?;
+        number("flip_p99", row.flip_p99, 1.0)?;
+        if own && (row.rmse, row.max_rel_error, row.flip_mean, row.flip_p99) != (0.0, 0.0, 0.0, 0.0)
+        {
+            return Err(bad(
+                "rmse",
+                "a combination compared with itself has every error 0".to_string(),
+            ));
+        }
+        for (name, s) in [("gpu_ms", &row.gpu_ms), ("cpu_ms", &row.cpu_ms)] {
+            for (stat, v) in [
+                ("min", s.min),
+                ("median", s.median),
+                ("p95", s.p95),
+                ("max", s.max),
+                ("mean", s.mean),
+                ("std_dev", s.std_dev),
+            ] {
+                number(&format!("{name}.{stat}"), v, any)?;
+            }
+            if s.count == 0 {
+                return Err(bad(&format!("{name}.count"), "0 frames".to_string()));
+            }
+            if !(s.min <= s.median && s.median <= s.p95 && s.p95 <= s.max) {
+                return Err(bad(
+                    name,
+                    format!(
+                        "min {} <= median {} <= p95 {} <= max {} does not hold",
+                        s.min, s.median, s.p95, s.max
+                    ),
+                ));
+            }
+        }
+        for (pass, ms) in &row.pass_median_ms {
+            number(&format!("pass_median_ms.{pass}"), *ms, any)?;
+        }
+        for (name, v) in &row.setup {
+            number(&format!("setup.{name}"), *v, any)?;
+        }
+        match (row.empty_median_ms, row.gpu_x_empty) {
+            (None, None) => {}
+            (Some(floor), Some(x)) => {
+                number("empty_median_ms", floor, any)?;
+                if floor == 0.0 {
+                    return Err(bad(
+                        "empty_median_ms",
+                        "0; the empty pass always takes time".to_string(),
+                    ));
+                }
+                number("gpu_x_empty", x, any)?;
+                let expected = row.gpu_ms.median / floor;
+                if (x - expected).abs() > 1e-9 * expected.abs().max(x.abs()) {
+                    return Err(bad(
+                        "gpu_x_empty",
+                        format!("{x} is not gpu_ms.median / empty_median_ms ({expected})"),
+                    ));
+                }
+            }
+            (floor, x) => {
+                return Err(bad(
+                    "gpu_x_empty",
+                    format!("{x:?} with empty_median_ms {floor:?}: one is given without the other"),
+                ))
+            }
+        }
+    }
+    Ok(())
 }

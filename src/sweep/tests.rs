@@ -664,10 +664,11 @@ fn shard_specs_and_their_errors() {
         ("a/3", &[], "I is not a whole number"),
         ("0/x", &[], "N is not a whole number"),
         ("kubernetes/3", &[], "JOB_COMPLETION_INDEX is not set"),
+        // A number from a scheduler's variable names the variable.
         (
             "kubernetes/3",
             &[("JOB_COMPLETION_INDEX", "3")],
-            "shard index 3 is out of range",
+            "shard index 3 (JOB_COMPLETION_INDEX 3) is out of range",
         ),
         (
             "kubernetes/3",
@@ -682,7 +683,22 @@ fn shard_specs_and_their_errors() {
     assert!(slurm("0", "1", "3")
         .unwrap_err()
         .contains("below SLURM_ARRAY_TASK_MIN"));
-    assert!(slurm("4", "1", "3").unwrap_err().contains("out of range"));
+    let e = slurm("4", "1", "3").unwrap_err();
+    assert!(
+        e.contains("out of range")
+            && e.contains("SLURM_ARRAY_TASK_ID 4 - SLURM_ARRAY_TASK_MIN 1")
+            && e.contains("SLURM_ARRAY_TASK_COUNT 3"),
+        "{e}"
+    );
+    let e = slurm("1", "1", "0").unwrap_err();
+    assert!(
+        e.contains("at least 1 shard (SLURM_ARRAY_TASK_COUNT 0)"),
+        "{e}"
+    );
+    // Given by hand, the numbers need no source.
+    assert_eq!(Shard::source("3/4"), "");
+    assert!(Shard::source("kubernetes/4").contains("JOB_COMPLETION_INDEX"));
+    assert!(Shard::source(" slurm").contains("SLURM_ARRAY_TASK_COUNT"));
 }
 
 fn shard_sweep() -> Sweep {
@@ -887,4 +903,107 @@ fn merge_refuses_what_is_not_one_whole_sweep() {
         e.contains("w/sweep.json is not the output of one shard"),
         "{e}"
     );
+}
+
+/// Rows are checked against the sweep they claim to belong to: a row
+/// whose settings, reference or values contradict it is refused naming
+/// the file, the row, the combination and the field, whichever way it was
+/// changed.
+#[test]
+fn merge_refuses_rows_that_contradict_their_sweep() {
+    type Change = fn(&mut SweepResult);
+    let changes: [(Change, &str); 16] = [
+        // Shard 1 of 3 holds combinations 1 and 4: their labels swapped.
+        (
+            |r| {
+                let a = r.rows[0].settings.clone();
+                r.rows[0].settings = r.rows[1].settings.clone();
+                r.rows[1].settings = a;
+            },
+            "rows[0] (combination 1): settings: 'size=32x16 tessellation=1 hdr_format=rgba16f' \
+             contradicts the row's index, which is 'size=32x16 tessellation=0.25 \
+             hdr_format=rgba32f'",
+        ),
+        (
+            |r| r.rows[1].settings[1].1 = "2".into(),
+            "rows[1] (combination 4): settings",
+        ),
+        (
+            |r| r.rows[1].settings[0].0 = "width".into(),
+            "rows[1] (combination 4): settings",
+        ),
+        (
+            |r| {
+                r.rows[0].settings.pop();
+            },
+            "rows[0] (combination 1): settings",
+        ),
+        (
+            |r| r.rows[0].reference[2].1 = "rgba16f".into(),
+            "rows[0] (combination 1): reference",
+        ),
+        (
+            |r| r.rows[0].is_reference = true,
+            "rows[0] (combination 1): is_reference: true",
+        ),
+        (
+            |r| r.rows[1].rmse = -1.0,
+            "rows[1] (combination 4): rmse: -1 is not",
+        ),
+        (|r| r.rows[1].rmse = f64::NAN, "rmse: NaN is not"),
+        (
+            |r| r.rows[0].flip_mean = 1.5,
+            "flip_mean: 1.5 is not a number from 0 to 1",
+        ),
+        (
+            |r| r.rows[0].max_rel_error = f64::INFINITY,
+            "max_rel_error: inf",
+        ),
+        (|r| r.rows[0].gpu_ms.median = -0.5, "gpu_ms.median: -0.5"),
+        (|r| r.rows[0].cpu_ms.max = 0.0, "cpu_ms: min"),
+        (
+            |r| r.rows[0].pass_median_ms[0].1 = -2.0,
+            "pass_median_ms.opaque: -2",
+        ),
+        (
+            |r| r.rows[0].empty_median_ms = Some(0.0),
+            "empty_median_ms: 0",
+        ),
+        (
+            |r| r.rows[0].gpu_x_empty = Some(123.0),
+            "gpu_x_empty: 123 is not gpu_ms.median",
+        ),
+        (|r| r.knobs.swap(0, 1), "knobs: "),
+    ];
+    for (change, expected) in changes {
+        let mut odd = run_shard(1, 3);
+        change(&mut odd.1);
+        let e = merge(vec![run_shard(0, 3), odd, run_shard(2, 3)])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("s1/sweep.json: ") && e.contains(expected),
+            "expected '{expected}' in: {e}"
+        );
+    }
+    // Unchanged, the same shards merge.
+    assert!(merge(vec![run_shard(0, 3), run_shard(1, 3), run_shard(2, 3)]).is_ok());
+}
+
+/// A merged sweep with errors near the largest float still plots (the
+/// plot's axes once looped forever past 1e305).
+#[test]
+fn merged_rows_with_huge_errors_plot() {
+    let mut odd = run_shard(1, 3);
+    odd.1.rows[0].rmse = 1e306;
+    odd.1.rows[1].rmse = f64::MAX;
+    let merged = merge(vec![run_shard(0, 3), odd, run_shard(2, 3)]).unwrap();
+    let (send, receive) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = send.send(to_svg(&merged).map(|svg| svg.len()));
+    });
+    let svg = receive
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .expect("the plot did not finish");
+    assert!(svg.unwrap() > 0);
 }

@@ -21,12 +21,13 @@ fn example(name: &str) -> Scene {
 }
 
 /// A sky-only scene: camera at `eye` looking at `look_at`, sun towards
-/// `sun`, Earth's atmosphere.
+/// `sun`, Earth's atmosphere, single scattering (what `reference::radiance`
+/// integrates; tests/suite/multiple_scattering.rs checks every order).
 fn sky_scene(eye: [f64; 3], look_at: [f64; 3], fov: f64, sun: [f64; 3]) -> Scene {
     common::scene(&format!(
         "[output]\nwidth = 96\nheight = 64\nhdr_format = \"rgba32f\"\n\
          [camera]\neye = {eye:?}\nlook_at = {look_at:?}\nfov_y = {fov}\n\
-         [sun]\ndirection = {sun:?}\n[atmosphere]\n"
+         [sun]\ndirection = {sun:?}\n[atmosphere]\nmultiple_scattering = false\n"
     ))
 }
 
@@ -321,6 +322,7 @@ fn sky_error_against_sky_view_size() {
 fn the_limb_glows_from_orbit() {
     let mut scene = example("earth_orbit.toml");
     scene.set_output_size(Some(96), Some(64)).unwrap();
+    scene.sky.as_mut().unwrap().multiple_scattering = false;
     let hdr = common::render(&scene, true).hdr.unwrap();
     assert_finite_non_negative("orbit", &hdr);
     let sky = scene.sky.as_ref().unwrap();
@@ -412,6 +414,7 @@ fn table_settings_order_as_their_error_says() {
         let sky = s.sky.as_mut().unwrap();
         sky.samples = 128;
         sky.sky_view = None;
+        sky.multiple_scattering = false;
         s
     };
     let error = |label: &str, change: &dyn Fn(&mut aerial::scene::Sky)| {

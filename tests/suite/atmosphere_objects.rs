@@ -54,7 +54,7 @@ fn panel_scene(sun: [f64; 3], lighting: &str) -> (Scene, DVec3) {
          [[objects]]\nname = \"panel\"\nmaterial = \"grey\"\n\
          shape = {{ type = \"plane\", width = 1.0, depth = 1.0 }}\n\
          translate = {CENTRE:?}\nrotate = {{ axis = [0.0, 0.0, 1.0], degrees = {degrees} }}\n\
-         [sun]\ndirection = {sun:?}\n[atmosphere]\n",
+         [sun]\ndirection = {sun:?}\n[atmosphere]\nmultiple_scattering = false\n",
         eye.to_array(),
         CENTRE,
     ));

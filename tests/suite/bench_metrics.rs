@@ -1,6 +1,8 @@
 //! `aerial bench --metric work|instructions`: exact counts per pass, their
-//! repeatability, their sensitivity to 3 % more work, and the gate that
-//! decides on intervals. Every run is under validation.
+//! repeatability, their sensitivity to 3 % more work and the 2 % gate on
+//! them, and `--against`. Every run is under validation. Only counts are
+//! gated here: the gate's verdicts on times are tested on hand-built
+//! reports in `bench.rs`, where no load can change them.
 
 use crate::common;
 
@@ -225,25 +227,6 @@ fn instruction_counts_repeat_and_see_three_percent_more_pixels() {
         .unwrap();
     assert_eq!(code(&gate), Some(1), "{}", show(&gate));
     assert!(String::from_utf8_lossy(&gate.stderr).contains("tonemap"));
-}
-
-#[test]
-fn a_gate_whose_interval_straddles_the_limit_is_inconclusive() {
-    // Time ratios of a run with itself hold 1, and wobble: a limit of 1.0
-    // lies inside the interval, which is neither a pass nor a failure.
-    let dir = tempfile::tempdir().unwrap();
-    let json = dir.path().join("t.json");
-    measured(64, "time", &json);
-    let gate = common::aerial()
-        .args(["bench", "--from-json"])
-        .arg(&json)
-        .arg("--compare")
-        .arg(&json)
-        .args(["--max-ratio", "1.0"])
-        .output()
-        .unwrap();
-    assert_eq!(code(&gate), Some(3), "{}", show(&gate));
-    assert!(String::from_utf8_lossy(&gate.stderr).contains("inconclusive"));
 }
 
 #[test]

@@ -21,12 +21,13 @@ use aerial::scene::Scene;
 use glam::DVec3;
 
 /// A sky-only 96×64 scene: camera at `eye` looking at `look_at`, sun
-/// towards `sun`, `[atmosphere]` fields `atmosphere`.
+/// towards `sun`, `[atmosphere]` fields `atmosphere`, single scattering
+/// (what `reference::radiance` integrates).
 fn scene(eye: [f64; 3], look_at: [f64; 3], fov: f64, sun: [f64; 3], atmosphere: &str) -> Scene {
     common::scene(&format!(
         "[output]\nwidth = 96\nheight = 64\nhdr_format = \"rgba32f\"\n\
          [camera]\neye = {eye:?}\nlook_at = {look_at:?}\nfov_y = {fov}\nnear = 0.1\n\
-         [sun]\ndirection = {sun:?}\n[atmosphere]\n{atmosphere}"
+         [sun]\ndirection = {sun:?}\n[atmosphere]\nmultiple_scattering = false\n{atmosphere}"
     ))
 }
 

@@ -36,7 +36,7 @@ pub struct AtmospherePass {
 /// The specialization constants the atmosphere shaders share: the
 /// optical-depth table's mapping and filter, and where the ozone's
 /// integral comes from, select code paths once, at pipeline creation.
-pub(super) fn table_constants(sky: &crate::scene::Sky) -> [(u32, u32); 3] {
+pub(crate) fn table_constants(sky: &crate::scene::Sky) -> [(u32, u32); 3] {
     let mapping = match sky.table_mapping {
         TableMapping::Horizon => 0,
         TableMapping::Linear => 1,
@@ -87,15 +87,21 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     } else {
         &[(&[], None)]
     };
+    let multiple: &[&str] = if resources.multiple_scattering() {
+        &["MULTIPLE_SCATTERING"]
+    } else {
+        &[]
+    };
     let pipelines = draws
         .iter()
         .map(|(features, test)| {
+            let features = [features, multiple].concat();
             fullscreen_pipeline(
                 setup.ctx,
                 &layout,
                 &setup.render_pass()?.render_pass,
                 setup.subpass,
-                shaders::ATMOSPHERE_FRAG.spirv(features),
+                shaders::ATMOSPHERE_FRAG.spirv(&features),
                 &constants,
                 *test,
             )
