@@ -87,15 +87,15 @@ impl Check<'_> {
     ) -> Result<Vec<Object>> {
         let field = |name: &str| format!("{}.{name}", model.field);
         let resolved = &model.path;
-        // A model is parsed, smoothed and given frames when the scene is
-        // loaded, before the renderer's own memory estimate: refuse here,
-        // from the file's size, what cannot fit the budget.
         // A bad budget setting is the setting's fault, not the model's: its
         // error names the setting alone.
         let model_error = |e: obj::ObjError| match e {
             obj::ObjError::Budget(_) => SceneError::Model(e),
             e => self.invalid(field("shape.path"), e.to_string()),
         };
+        // A model is parsed, smoothed and given frames when the scene is
+        // loaded, before the renderer's own memory estimate: refuse here,
+        // from the file's size, what cannot fit the budget.
         if let Ok(meta) = std::fs::metadata(resolved) {
             let budget = crate::budget::MemoryBudget::from_env()
                 .map_err(|e| model_error(obj::ObjError::Budget(e)))?;
