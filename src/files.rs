@@ -13,10 +13,15 @@
 //!   target is replaced, the link stays).
 //! - A run that writes several files prepares all of them first and commits
 //!   them together with [`commit_all`], so a failure leaves none of them.
+//! - No output is ever one of the run's inputs: [`protect_inputs`] records
+//!   them, and once [`protect_inputs_as_read`] is on, every file read
+//!   through this crate's readers is recorded as it is read.
+//! - Messages name the path the caller gave, never the temporary file.
 
 use std::collections::HashSet;
 use std::fs::File;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 
 /// Why an output file could not be written.
@@ -98,26 +103,64 @@ impl FileId {
 /// were given as (for messages). See [`protect_inputs`].
 static INPUTS: Mutex<Vec<(FileId, PathBuf)>> = Mutex::new(Vec::new());
 
+/// Whether every file read through this crate is recorded as an input
+/// (see [`protect_inputs_as_read`]).
+static PROTECT_READS: AtomicBool = AtomicBool::new(false);
+
+/// True when the input recorded as `given` with identity `id` is still
+/// that file. An input removed since it was read is no longer one, and
+/// its inode number may be reused by a new file (a long-running program
+/// reads and removes many files), which must not be taken for it.
+fn still_input(id: &FileId, given: &Path) -> bool {
+    FileId::of(given).as_ref() == Some(id)
+}
+
 /// Records `paths` as inputs of the running command (its scene, models,
 /// MTL libraries, textures, height maps, scripts, baselines, images to
 /// compare...): from then on no output may be one of them.
 /// [`check_destination`], and so every write through this module, refuses
 /// a destination that is the same file as an input, whatever the path
-/// names it by (symbolic links, hard links, `./` and `..`). Paths that do
-/// not exist are skipped: they cannot be overwritten by accident.
+/// names it by (symbolic links, hard links, `./` and `..`, a link to its
+/// folder). Paths that do not exist are skipped: they cannot be
+/// overwritten by accident.
 ///
 /// Commands protect their inputs once they are parsed and then check
 /// their outputs, so the refusal comes before any work; the same check
-/// when each file is committed catches any output checked too early.
+/// when each file is committed catches any output checked too early, and
+/// with [`protect_inputs_as_read`] any input found only while loading.
 pub fn protect_inputs<P: AsRef<Path>>(paths: impl IntoIterator<Item = P>) {
     let mut inputs = INPUTS.lock().unwrap_or_else(|p| p.into_inner());
     for path in paths {
         let path = path.as_ref();
         if let Some(id) = FileId::of(path) {
-            if !inputs.iter().any(|(known, _)| *known == id) {
+            if !inputs
+                .iter()
+                .any(|(known, given)| *known == id && still_input(known, given))
+            {
                 inputs.push((id, path.to_path_buf()));
             }
         }
+    }
+}
+
+/// From now on, every file this process reads through the crate's readers
+/// (scene files and scripts, OBJ models with their MTL libraries and the
+/// textures those name, images) is recorded as an input the moment it is
+/// read, as if given to [`protect_inputs`]. Then an input a command learns
+/// of only while loading (a library named inside a model, a texture named
+/// inside a library) can never be replaced by one of its outputs, whether
+/// or not the command lists it. Every command turns it on first; a program
+/// that means to write over files it has read (a test regenerating its
+/// references) leaves it off.
+pub fn protect_inputs_as_read() {
+    PROTECT_READS.store(true, Ordering::SeqCst);
+}
+
+/// What the crate's readers call with each file they read: recorded as an
+/// input when [`protect_inputs_as_read`] is on, otherwise nothing.
+pub fn note_inputs<P: AsRef<Path>>(paths: impl IntoIterator<Item = P>) {
+    if PROTECT_READS.load(Ordering::SeqCst) {
+        protect_inputs(paths);
     }
 }
 
@@ -127,29 +170,40 @@ fn protected_input(path: &Path) -> Option<PathBuf> {
     let inputs = INPUTS.lock().unwrap_or_else(|p| p.into_inner());
     inputs
         .iter()
-        .find(|(known, _)| *known == id)
+        .find(|(known, given)| *known == id && still_input(known, given))
         .map(|(_, given)| given.clone())
 }
 
-/// Checks that `path` can be an output: it names a file in an existing
-/// folder, is not a folder, device, FIFO or socket, and is not one of the
-/// command's inputs ([`protect_inputs`]). Returns the path to replace (the
-/// target when `path` is a symbolic link). Call it before long work, so a
-/// bad output path fails in seconds, not after the render.
+/// Checks that `path` can be an output: it names a file (not a folder:
+/// no trailing `/`) in an existing folder where this process can create
+/// files, is not a folder, device, FIFO, pipe or socket, and is not one of
+/// the command's inputs ([`protect_inputs`]). Returns the path to replace
+/// (the target when `path` is a symbolic link). Call it before long work,
+/// so a bad output path fails in seconds, not after the render.
+///
+/// A file is created in the folder and removed again, the way the output
+/// will be written: what permission bits cannot tell (a read-only mount,
+/// `/proc` or `/sys`) is found here.
 pub fn check_destination(path: &Path) -> Result<PathBuf, FileError> {
+    destination(path, true)
+}
+
+/// [`check_destination`], creating the trial file in the folder only when
+/// `probe` (the commit's own check needs none: its file is there).
+fn destination(path: &Path, probe: bool) -> Result<PathBuf, FileError> {
     let refuse = |reason: String| FileError::Refused {
         path: path.to_path_buf(),
         reason,
     };
-    if path.file_name().is_none() {
-        return Err(refuse("the path does not name a file".into()));
+    if let Some(reason) = not_a_file_name(path) {
+        return Err(refuse(reason));
     }
     let mut dest = path.to_path_buf();
     if let Ok(meta) = std::fs::symlink_metadata(path) {
         if meta.file_type().is_symlink() {
             dest = std::fs::canonicalize(path).map_err(|e| match anonymous_link(path) {
                 Some(target) => refuse(format!(
-                    "it is a pipe ({target}), not a file; outputs are written to a \
+                    "it is a pipe or socket ({target}), not a file; outputs are written to a \
                      temporary file and renamed into place, so name a file"
                 )),
                 None => refuse(format!("symbolic link to a missing target ({e})")),
@@ -183,10 +237,150 @@ pub fn check_destination(path: &Path) -> Result<PathBuf, FileError> {
     check_writable(&dest).map_err(refuse)?;
     let dir = parent(&dest);
     match std::fs::metadata(dir) {
-        Ok(m) if m.is_dir() => Ok(dest),
-        Ok(_) => Err(refuse(format!("{} is not a folder", dir.display()))),
-        Err(e) => Err(refuse(format!("folder {}: {e}", dir.display()))),
+        Ok(m) if m.is_dir() => {}
+        Ok(_) => return Err(refuse(format!("{} is not a folder", dir.display()))),
+        Err(e) => return Err(refuse(format!("folder {}: {e}", dir.display()))),
     }
+    if probe {
+        probe_folder(dir).map_err(|e| {
+            refuse(format!(
+                "cannot create a file in folder {}: {e}",
+                dir.display()
+            ))
+        })?;
+    }
+    Ok(dest)
+}
+
+/// Why `path` cannot name an output file, if it cannot: it names no file
+/// (`/`, `..`), or it ends in `/` or `/.`, which names a folder (the
+/// system refuses to create a file there, but only when the file is
+/// finally renamed into place, after the work).
+fn not_a_file_name(path: &Path) -> Option<String> {
+    use std::os::unix::ffi::OsStrExt as _;
+    let bytes = path.as_os_str().as_bytes();
+    if let Some(end) = ["/", "/."]
+        .into_iter()
+        .find(|end| bytes.ends_with(end.as_bytes()))
+    {
+        return Some(format!(
+            "the path ends in \"{end}\", so it names a folder, not a file; an output is a \
+             file: name it without the trailing \"{end}\""
+        ));
+    }
+    if path.file_name().is_none() {
+        return Some("the path does not name a file".into());
+    }
+    None
+}
+
+/// Creates a temporary file in `dir` and removes it again: whether an
+/// output can be written there, as far as creating it goes.
+fn probe_folder(dir: &Path) -> std::io::Result<()> {
+    // Under the lock of the pending files: an interrupt that ends the
+    // process waits until the trial file is gone.
+    let _guard = pending();
+    let file = tempfile::Builder::new()
+        .prefix(".aerial-probe.")
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map_err(without_temporary_name)?;
+    file.close().map_err(without_temporary_name)
+}
+
+/// `error` without the name of the temporary file it may carry (the
+/// `tempfile` crate appends `at path "..."`): messages name the output
+/// the user gave, never the hidden file it is written through.
+fn without_temporary_name(error: std::io::Error) -> std::io::Error {
+    if let Some(code) = error.raw_os_error() {
+        return std::io::Error::from_raw_os_error(code);
+    }
+    let text = error.to_string();
+    match text.find(" at path ") {
+        Some(at) => std::io::Error::new(error.kind(), text[..at].to_string()),
+        None => error,
+    }
+}
+
+/// Free space needed by outputs about to be written, checked before the
+/// work: each `(path, bytes)` is an output and an upper bound of its
+/// size. Outputs on one file system are added up. Refuses, naming the
+/// output, the space it needs and the space there is, when a file system
+/// has less room than its outputs need (space kept for the superuser does
+/// not count, as this process may not be able to use it).
+pub fn check_room(outputs: &[(&Path, u64)]) -> Result<(), FileError> {
+    use std::os::unix::ffi::OsStrExt as _;
+    let mut by_device: Vec<(u64, u64, &Path)> = Vec::new();
+    for &(path, bytes) in outputs {
+        let dest = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+        let dir = parent(&dest);
+        let Ok(c) = std::ffi::CString::new(dir.as_os_str().as_bytes()) else {
+            continue;
+        };
+        // SAFETY: statvfs(3) fills the zeroed struct for the NUL-terminated
+        // path; it is read only when the call succeeds.
+        let mut fs: libc::statvfs = unsafe { std::mem::zeroed() };
+        if unsafe { libc::statvfs(c.as_ptr(), &mut fs) } != 0 || fs.f_blocks == 0 {
+            // Unknown (or a file system without blocks, such as /proc):
+            // nothing to say here.
+            continue;
+        }
+        #[allow(clippy::unnecessary_cast)] // the field types differ between systems
+        let free = (fs.f_bavail as u64).saturating_mul(fs.f_frsize as u64);
+        let device = {
+            use std::os::unix::fs::MetadataExt as _;
+            std::fs::metadata(dir).map_or(0, |m| m.dev())
+        };
+        let total = match by_device.iter_mut().find(|(d, _, _)| *d == device) {
+            Some(entry) => {
+                entry.1 = entry.1.saturating_add(bytes);
+                entry.1
+            }
+            None => {
+                by_device.push((device, bytes, path));
+                bytes
+            }
+        };
+        if total > free {
+            let together = if total > bytes {
+                format!(
+                    " (with the other outputs on that file system, {})",
+                    crate::budget::Bytes(total)
+                )
+            } else {
+                String::new()
+            };
+            return Err(FileError::Refused {
+                path: path.to_path_buf(),
+                reason: format!(
+                    "the file system of {} has {} free, and this output may take up to {}{together}",
+                    dir.display(),
+                    crate::budget::Bytes(free),
+                    crate::budget::Bytes(bytes),
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// An upper bound of the size of a PNG of `width` x `height` RGBA8 pixels
+/// as [`crate::image_io::png_file`] writes it: the filtered rows stored
+/// uncompressed (what the compressor falls back to for noise), the
+/// compressor's and the chunks' framing, and room for the header and the
+/// metadata text.
+pub fn png_size_bound(width: u32, height: u32) -> u64 {
+    let raw = u64::from(height) * (1 + 4 * u64::from(width));
+    raw + raw / 64 + (16 << 10)
+}
+
+/// An upper bound of the size of an OpenEXR of `width` x `height` RGBA
+/// 32-bit float pixels as [`crate::image_io::exr_file`] writes it: the
+/// pixels uncompressed (the lossless compression falls back to that), the
+/// chunk offset table and headers.
+pub fn exr_size_bound(width: u32, height: u32) -> u64 {
+    let raw = u64::from(width) * u64::from(height) * 16;
+    raw + raw / 64 + u64::from(height) * 16 + (16 << 10)
 }
 
 /// The file formats this crate writes images in. The name of an output
@@ -259,7 +453,16 @@ pub fn check_output_dir(dir: &Path) -> Result<(), FileError> {
     let mut probe = dir;
     loop {
         match std::fs::metadata(probe) {
-            Ok(m) if m.is_dir() => return Ok(()),
+            // The folder, or the one it will be created in: a file must be
+            // creatable there (not so in /proc or on a read-only mount).
+            Ok(m) if m.is_dir() => {
+                return probe_folder(probe).map_err(|e| {
+                    refuse(format!(
+                        "cannot create a file in folder {}: {e}",
+                        probe.display()
+                    ))
+                })
+            }
             Ok(_) if probe == dir => return Err(refuse("it exists and is not a folder".into())),
             Ok(_) => {
                 return Err(refuse(format!(
@@ -267,11 +470,26 @@ pub fn check_output_dir(dir: &Path) -> Result<(), FileError> {
                     probe.display()
                 )))
             }
+            // A symbolic link to nothing: the folder cannot be made there
+            // (creating it fails, after the work).
+            Err(_) if std::fs::symlink_metadata(probe).is_ok() => {
+                let target = std::fs::read_link(probe)
+                    .map_or_else(|_| "?".into(), |t| t.display().to_string());
+                return Err(refuse(format!(
+                    "{} is a symbolic link to a missing target ({target}), so the folder \
+                     cannot be created; make the folder it names or remove the link",
+                    probe.display()
+                )));
+            }
             Err(_) => match probe.parent() {
                 Some(p) if !p.as_os_str().is_empty() => probe = p,
                 // A relative path whose first component is missing: it is
                 // created in the current folder.
-                _ => return Ok(()),
+                _ => {
+                    return probe_folder(Path::new(".")).map_err(|e| {
+                        refuse(format!("cannot create a file in the current folder: {e}"))
+                    })
+                }
             },
         }
     }
@@ -374,7 +592,7 @@ impl PendingFile {
             .tempfile_in(parent(&dest))
             .map_err(|error| FileError::Io {
                 path: path.to_path_buf(),
-                error,
+                error: without_temporary_name(error),
             })?;
         guard
             .get_or_insert_with(HashSet::new)
@@ -400,7 +618,7 @@ impl PendingFile {
     pub fn io_error(&self, error: std::io::Error) -> FileError {
         FileError::Io {
             path: self.path.clone(),
-            error,
+            error: without_temporary_name(error),
         }
     }
 
@@ -423,7 +641,7 @@ impl PendingFile {
             error,
         };
         tmp.as_file().sync_all().map_err(io)?;
-        let dest = check_destination(&self.path)?;
+        let dest = destination(&self.path, false)?;
         if let Ok(meta) = std::fs::metadata(&dest) {
             // Replacing a file keeps its permissions.
             let _ = tmp.as_file().set_permissions(meta.permissions());
@@ -456,7 +674,7 @@ impl Ready {
         // On failure `PersistError` hands the file back; dropping it removes it.
         result.map_err(|e| FileError::Io {
             path: self.path.clone(),
-            error: e.error,
+            error: without_temporary_name(e.error),
         })?;
         WRITTEN
             .lock()
@@ -569,13 +787,30 @@ fn kind_of(meta: &std::fs::Metadata) -> &'static str {
     }
 }
 
-/// The target of a symbolic link that names an anonymous pipe or socket
-/// (`/dev/fd/N` of a shell's process substitution links to `pipe:[N]`),
-/// which no path can open again.
+/// The end of the chain of symbolic links at `path` when it is an
+/// anonymous pipe or socket, which no path can open again: `/dev/stdout`
+/// links to `/proc/self/fd/1`, which links to `pipe:[N]` when the output
+/// goes into a pipe (so do the `/dev/fd/N` of a shell's process
+/// substitution).
 fn anonymous_link(path: &Path) -> Option<String> {
-    let target = std::fs::read_link(path).ok()?;
-    let target = target.to_string_lossy();
-    (target.starts_with("pipe:") || target.starts_with("socket:")).then(|| target.into_owned())
+    let mut link = path.to_path_buf();
+    // The kernel's own limit on links followed in one lookup.
+    for _ in 0..40 {
+        let target = std::fs::read_link(&link).ok()?;
+        let text = target.to_string_lossy();
+        if ["pipe:", "socket:", "anon_inode:"]
+            .iter()
+            .any(|kind| text.starts_with(kind))
+        {
+            return Some(text.into_owned());
+        }
+        link = if target.is_absolute() {
+            target
+        } else {
+            parent(&link).join(target)
+        };
+    }
+    None
 }
 
 /// Why `path` cannot be read as an input file, or `None` when it is a
@@ -594,7 +829,10 @@ pub fn input_file_problem(path: &Path) -> Option<String> {
             path.display()
         )),
         Err(_) if link.file_type().is_symlink() => Some(match anonymous_link(path) {
-            Some(target) => format!("a pipe ({target}), not a regular file: {}", path.display()),
+            Some(target) => format!(
+                "a pipe or socket ({target}), not a regular file: {}",
+                path.display()
+            ),
             None => format!("a symbolic link to a missing target: {}", path.display()),
         }),
         Err(e) => Some(format!("cannot read {}: {e}", path.display())),
@@ -602,10 +840,12 @@ pub fn input_file_problem(path: &Path) -> Option<String> {
 }
 
 /// Reads at most `limit` bytes of `path`: the file, or `Err(None)` when it
-/// is longer (an endless device such as `/dev/zero` included).
+/// is longer (an endless device such as `/dev/zero` included). The file is
+/// an input from then on (see [`note_inputs`]).
 pub fn read_limited(path: &Path, limit: u64) -> Result<Vec<u8>, Option<std::io::Error>> {
     use std::io::Read as _;
     let file = File::open(path).map_err(Some)?;
+    note_inputs([path]);
     let mut bytes = Vec::new();
     file.take(limit.saturating_add(1))
         .read_to_end(&mut bytes)
@@ -650,8 +890,13 @@ pub fn read_text(path: &Path, limit: u64) -> Result<String, TextReadError> {
     })
 }
 
-/// True when `a` and `b` name the same file (or would, once created).
+/// True when `a` and `b` name the same file (or would, once created):
+/// the same device and inode when both exist (so a hard link counts),
+/// otherwise the same resolved path.
 pub fn same_file(a: &Path, b: &Path) -> bool {
+    if let (Some(x), Some(y)) = (FileId::of(a), FileId::of(b)) {
+        return x == y;
+    }
     let resolve = |p: &Path| {
         std::fs::canonicalize(p).unwrap_or_else(|_| {
             let dir = std::fs::canonicalize(parent(p)).unwrap_or_else(|_| parent(p).into());
@@ -698,6 +943,11 @@ mod tests {
         std::fs::write(d.join("f"), b"").unwrap();
         assert!(check_output_dir(&d.join("f")).is_err());
         assert!(check_output_dir(&d.join("f/sub")).is_err());
+        std::os::unix::fs::symlink(d.join("gone"), d.join("dangling")).unwrap();
+        for out in [d.join("dangling"), d.join("dangling/sub")] {
+            let msg = check_output_dir(&out).unwrap_err().to_string();
+            assert!(msg.contains("missing target"), "{msg}");
+        }
         std::fs::remove_dir_all(&d).ok();
     }
 
@@ -725,6 +975,39 @@ mod tests {
         write_bytes(&d.join("other.png"), b"new").unwrap();
         write_bytes(&d.join("missing.toml"), b"new").unwrap();
         std::fs::remove_dir_all(&d).ok();
+    }
+
+    #[test]
+    fn files_match_inputs_only_while_their_path_leads_to_them() {
+        let d = dir("stale");
+        std::fs::write(d.join("in.obj"), b"input").unwrap();
+        std::fs::hard_link(d.join("in.obj"), d.join("hard.json")).unwrap();
+        assert!(same_file(&d.join("in.obj"), &d.join("hard.json")));
+        assert!(same_file(&d.join("x.png"), &d.join("./x.png")));
+        assert!(!same_file(&d.join("in.obj"), &d.join("x.png")));
+        protect_inputs([d.join("in.obj")]);
+        assert!(check_destination(&d.join("hard.json")).is_err());
+        // The input is removed: its inode may be reused by a new file,
+        // which is no input. The hard link is the only name left.
+        std::fs::remove_file(d.join("in.obj")).unwrap();
+        std::fs::rename(d.join("hard.json"), d.join("new.json")).unwrap();
+        assert!(check_destination(&d.join("new.json")).is_ok());
+        std::fs::remove_dir_all(&d).ok();
+    }
+
+    #[test]
+    fn files_refuse_names_of_folders_and_hide_temporary_names() {
+        for name in ["o.png/", "o.png/.", "a/b//", "/"] {
+            let msg = check_destination(Path::new(name)).unwrap_err().to_string();
+            assert!(msg.contains(name), "{name}: {msg}");
+        }
+        assert!(not_a_file_name(Path::new("./o.png")).is_none());
+        let tagged = std::io::Error::new(
+            std::io::ErrorKind::NotFound,
+            "No such file or directory (os error 2) at path \"/proc/.o.png.x1.tmp\"",
+        );
+        let plain = without_temporary_name(tagged).to_string();
+        assert_eq!(plain, "No such file or directory (os error 2)");
     }
 
     #[test]

@@ -109,9 +109,15 @@ pub fn run(args: CompareArgs) -> anyhow::Result<ExitCode> {
         args.window_threshold,
     )?;
     // The diff image may be neither of the images compared.
+    files::protect_inputs_as_read();
     files::protect_inputs([&args.reference, &args.test]);
     if let Some(diff) = &args.diff {
         files::check_output(diff, files::Format::Png).context("--diff")?;
+        // The diff has the reference's size: room for it, before the work
+        // (an unreadable reference is reported by the comparison).
+        if let Ok((width, height)) = image_io::image_size(&args.reference) {
+            files::check_room(&[(diff, files::png_size_bound(width, height))]).context("--diff")?;
+        }
     }
     // The library's errors name the file and the reason, and also carry
     // the reason as their `source`; converting through Display keeps

@@ -46,6 +46,8 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
     if !(args.weld.is_finite() && (0.0..=1e-3).contains(&args.weld)) {
         bail!("--weld: must be between 0 and 1e-3, got {}", args.weld);
     }
+    // The model, its MTL libraries and the textures they name are inputs.
+    aerial::files::protect_inputs_as_read();
     aerial::files::protect_inputs([&args.model]);
     if let Some(json) = &args.json {
         aerial::files::check_destination(json).context("--json")?;
@@ -60,7 +62,7 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
         },
     )?;
     if let Some(w) = report.asset_warnings.first().filter(|_| args.strict.strict) {
-        bail!("{}", w.problem);
+        return Err(super::strict_error(&w.problem, &w.fallback));
     }
     for w in &report.warnings {
         eprintln!("warning: {w}");
@@ -80,10 +82,17 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
         "welded boundary points     {}",
         report.welded_boundary_points
     );
-    println!("collapsed triangles        {}", report.collapsed_triangles);
     println!(
-        "zero-area/zero-UV triangles {}",
-        report.degenerate_triangles
+        "zero-area triangles        {} (collapsed to a line or a point; left out)",
+        report.collapsed_triangles
+    );
+    println!(
+        "zero-UV-area triangles     {} (their UVs give no tangent; frames from the normal)",
+        report.zero_uv_area_triangles
+    );
+    println!(
+        "triangles without UVs      {} (frames from the normal; nothing to fix)",
+        report.triangles_without_uvs
     );
     println!("mirrored triangles         {}", report.mirrored_triangles);
     println!(

@@ -46,16 +46,28 @@ pub struct StrictArgs {
 }
 
 impl StrictArgs {
-    /// Under `--strict` the first warning of `scene` as an error; otherwise
-    /// its warnings printed to stderr (once each).
+    /// Under `--strict` the first warning of `scene` as an error (saying
+    /// that `--strict` made it one); otherwise its warnings printed to
+    /// stderr (once each).
     pub fn apply(&self, scene: &Scene) -> anyhow::Result<()> {
         if self.strict {
-            scene.strict()?;
+            if let Some(w) = scene.warnings.first() {
+                return Err(strict_error(w.to_error(), &w.warning.fallback));
+            }
         } else {
             scene.print_warnings();
         }
         Ok(())
     }
+}
+
+/// An asset warning turned into an error by `--strict`: the warning's
+/// problem, then that `--strict` made it an error and what the run would
+/// have done without it.
+pub fn strict_error(problem: impl std::fmt::Display, fallback: &str) -> anyhow::Error {
+    anyhow::anyhow!(
+        "{problem} (an error because of --strict; without --strict this is a warning and {fallback})"
+    )
 }
 
 /// The materials of a scene made from a model.

@@ -36,11 +36,14 @@ pub fn run(args: NormalMapArgs) -> anyhow::Result<()> {
     if !(args.scale.is_finite() && args.scale > 0.0) {
         bail!("--scale: must be finite and > 0, got {}", args.scale);
     }
+    files::protect_inputs_as_read();
     files::protect_inputs([&args.input]);
     files::check_output(&args.out, files::Format::Png).context("--out")?;
     // The size from the header first: refuse what does not fit the memory
-    // budget before decoding.
+    // budget, or the output's file system, before decoding.
     let info = preflight::inspect_texture(&args.input)?;
+    files::check_room(&[(&args.out, files::png_size_bound(info.width, info.height))])
+        .context("--out")?;
     MemoryBudget::from_env()?.check(
         format!(
             "height map {} ({}x{})",

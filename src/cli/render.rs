@@ -43,6 +43,8 @@ pub struct RenderArgs {
 }
 
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
+    // Every file the scene reads is an input, found while it loads.
+    files::protect_inputs_as_read();
     let mut scene = super::load_scene(
         args.scene.as_deref(),
         &args.model,
@@ -66,6 +68,19 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
         files::check_output(hdr, files::Format::Exr).context("--hdr")?;
     }
+    // Room for both on their file systems, before the work.
+    let (width, height) = (scene.output.width, scene.output.height);
+    let mut sizes = vec![(args.out.as_path(), files::png_size_bound(width, height))];
+    if let Some(hdr) = &args.hdr {
+        sizes.push((hdr.as_path(), files::exr_size_bound(width, height)));
+    }
+    files::check_room(&sizes).map_err(|e| {
+        let flag = match &e {
+            files::FileError::Refused { path, .. } if Some(path) == args.hdr.as_ref() => "--hdr",
+            _ => "--out",
+        };
+        anyhow::Error::new(e).context(flag)
+    })?;
     let scene_name = match &args.scene {
         Some(path) => path.display().to_string(),
         None => "the default scene".to_string(),

@@ -3,6 +3,7 @@
 //! exposure on a `render --hdr` output without rendering again.
 
 use aerial::app::{self, RenderSettings, RunSource};
+use aerial::budget::MemoryBudget;
 use aerial::files;
 use aerial::image_io;
 use aerial::scene::{ToneMap, ToneMapOperator};
@@ -37,8 +38,18 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         bail!("--exposure: must be finite and > 0, got {}", args.exposure);
     }
+    files::protect_inputs_as_read();
     files::protect_inputs([&args.input]);
     files::check_output(&args.out, files::Format::Png).context("--out")?;
+    // From the header alone: the output's room on its file system, and the
+    // whole run's memory (reading, the GPU's copies, the PNG) against the
+    // budget, before anything is decoded.
+    let (width, height) = image_io::exr_size(&args.input)?;
+    files::check_room(&[(&args.out, files::png_size_bound(width, height))]).context("--out")?;
+    MemoryBudget::from_env()?.check(
+        format!("tone-mapping {} ({width}x{height})", args.input.display()),
+        image_io::tonemap_memory(width, height),
+    )?;
     let image = image_io::read_exr(&args.input)?;
     let tone_map = ToneMap {
         operator: match args.operator {

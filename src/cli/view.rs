@@ -34,6 +34,8 @@ pub struct ViewArgs {
 }
 
 pub fn run(args: ViewArgs) -> anyhow::Result<()> {
+    // Every file the scene and the script read is an input.
+    aerial::files::protect_inputs_as_read();
     let scene = super::load_scene(
         args.scene.as_deref(),
         &args.model,

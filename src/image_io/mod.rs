@@ -6,15 +6,20 @@
 
 mod files;
 
-pub use files::{exr_file, png_file, read_exr, read_png_text, write_exr, write_png};
+pub use files::{
+    exr_file, exr_size, image_size, png_file, read_exr, read_png_text, tonemap_memory, write_exr,
+    write_png, READ_EXR_BYTES_PER_PIXEL, TONEMAP_BUFFER_BYTES_PER_PIXEL,
+};
 
 use image::{DynamicImage, ImageReader};
 use std::io::BufReader;
 use std::path::Path;
 
 /// Opens `path` with its format guessed from its first bytes. The error is
-/// the reason alone; callers name the file in their own error type.
+/// the reason alone; callers name the file in their own error type. The
+/// file is an input from then on (see [`crate::files::note_inputs`]).
 pub fn open(path: &Path) -> Result<ImageReader<BufReader<std::fs::File>>, String> {
+    crate::files::note_inputs([path]);
     ImageReader::open(path)
         .map_err(|e| e.to_string())?
         .with_guessed_format()
@@ -35,9 +40,11 @@ pub enum FileFormat {
     Unknown,
 }
 
-/// The format of the file at `path`, from its first bytes.
+/// The format of the file at `path`, from its first bytes (an input from
+/// then on, as for [`open`]).
 pub fn sniff_file(path: &Path) -> std::io::Result<FileFormat> {
     use std::io::Read as _;
+    crate::files::note_inputs([path]);
     let mut head = [0u8; 8];
     let n = std::fs::File::open(path)?.read(&mut head)?;
     Ok(sniff(&head[..n]))

@@ -1,6 +1,7 @@
 //! What the OBJ loader makes of a model file, for `aerial mesh`: counts of
 //! objects, triangles and vertices, how many boundary points were welded
-//! across objects, degenerate and mirrored triangles, non-finite
+//! across objects, triangles of zero area and of zero UV area, triangles
+//! without texture coordinates, mirrored triangles, non-finite
 //! attributes, the worst tangent-frame error, and the time of each stage.
 
 use super::heap::HeapReuse;
@@ -8,7 +9,7 @@ use super::obj::{
     load_obj, model_frames_numbered, model_normals_numbered, AssetWarning, ModelOptions, ObjError,
 };
 use super::smoothing::weld;
-use super::tangents::max_orthonormality_error;
+use super::tangents::{is_collapsed, max_orthonormality_error};
 use std::path::Path;
 use std::time::Instant;
 
@@ -40,10 +41,16 @@ pub struct MeshReport {
     /// Weld points shared by corners of more than one object: the
     /// boundaries `model` smoothing joins.
     pub welded_boundary_points: usize,
-    /// Triangles collapsed to a line or a point (left out).
+    /// Triangles of zero area, collapsed to a line or a point (left out).
     pub collapsed_triangles: usize,
-    /// Triangles with zero area or zero UV area (no tangent contribution).
-    pub degenerate_triangles: usize,
+    /// Triangles kept (not collapsed) with texture coordinates whose UV
+    /// area is zero: their UVs give no tangent direction, so their frames
+    /// come from the normal alone.
+    pub zero_uv_area_triangles: usize,
+    /// Triangles of objects without texture coordinates (any face of the
+    /// file without them leaves them all out). Not a defect: their frames
+    /// come from the normal, as nothing needs UVs there.
+    pub triangles_without_uvs: usize,
     /// Triangles whose UVs are mirrored (handedness −1).
     pub mirrored_triangles: usize,
     /// Vertex attribute values that are NaN or infinite (0 by design).
@@ -124,7 +131,8 @@ pub fn inspect(path: &Path, options: &ModelOptions) -> Result<MeshReport, ObjErr
         vertices: 0,
         welded_boundary_points: shared.iter().filter(|&&s| s).count(),
         collapsed_triangles: 0,
-        degenerate_triangles: 0,
+        zero_uv_area_triangles: 0,
+        triangles_without_uvs: 0,
         mirrored_triangles: 0,
         non_finite_attributes: 0,
         max_orthonormality_error: 0.0,
@@ -145,7 +153,6 @@ pub fn inspect(path: &Path, options: &ModelOptions) -> Result<MeshReport, ObjErr
     for (mesh, stats) in &meshes {
         report.vertices += mesh.vertices.len();
         report.collapsed_triangles += stats.collapsed;
-        report.degenerate_triangles += stats.degenerate;
         report.mirrored_triangles += stats.mirrored;
         report.non_finite_attributes += mesh
             .vertices
@@ -164,7 +171,31 @@ pub fn inspect(path: &Path, options: &ModelOptions) -> Result<MeshReport, ObjErr
             .max_orthonormality_error
             .max(max_orthonormality_error(mesh));
     }
+    for part in &model.parts {
+        let kept = part
+            .positions
+            .chunks_exact(3)
+            .map(|t| !is_collapsed(t[0], t[1], t[2]));
+        match &part.uvs {
+            None => report.triangles_without_uvs += kept.filter(|&k| k).count(),
+            Some(uvs) => {
+                report.zero_uv_area_triangles += kept
+                    .zip(uvs.chunks_exact(3))
+                    .filter(|&(k, uv)| k && zero_uv_area(uv[0], uv[1], uv[2]))
+                    .count()
+            }
+        }
+    }
     Ok(report)
+}
+
+/// Whether a triangle's texture coordinates span no area (to the same
+/// tolerance the tangent frames use): they give no tangent direction.
+fn zero_uv_area(a: glam::Vec2, b: glam::Vec2, c: glam::Vec2) -> bool {
+    let (d1, d2) = ((b - a).as_dvec2(), (c - a).as_dvec2());
+    let det = d1.perp_dot(d2);
+    let scale = d1.length_squared().max(d2.length_squared());
+    !(det.is_finite() && det.abs() > 1e-12 * scale)
 }
 
 /// Processor time of this process so far, over every thread: on a shared

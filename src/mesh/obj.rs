@@ -15,7 +15,7 @@
 
 use std::path::{Path, PathBuf};
 
-use glam::{Vec2, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 
 use super::mikktspace::build_mesh_mikktspace;
 use super::smoothing::{smooth_normals_indexed, PositionNumbers, Smoothing, SmoothingOptions};
@@ -53,6 +53,11 @@ pub enum ObjError {
         /// What is wrong.
         reason: String,
     },
+    /// The memory budget cannot be read: its setting
+    /// ([`crate::budget::ENV`]) is bad. No fault of the model's, so the
+    /// message names the setting alone.
+    #[error(transparent)]
+    Budget(crate::budget::BudgetError),
     /// The smoothing mode asked for does not suit the file (`file`
     /// normals where faces have none): the option is at fault, not the
     /// file.
@@ -157,6 +162,14 @@ pub struct ObjModel {
     /// (when loaded with [`load_obj`]), its MTL libraries and their
     /// textures. A command must never write over one of them.
     pub files: Vec<PathBuf>,
+    /// What the positions are measured from: the file's coordinates are
+    /// `origin + position`, in f64. Zero, unless the model lies far from
+    /// the file's origin for its size ([`RECENTRE_RATIO`]): then the centre
+    /// of its bounding box, subtracted in f64 before the positions are
+    /// rounded to 32 bits, so a model a billion metres out keeps the
+    /// detail it has at the origin. Whoever places the model adds it back
+    /// in f64 (as `crate::scene` does in the object's translation).
+    pub origin: DVec3,
 }
 
 impl ObjModel {
@@ -206,11 +219,9 @@ pub fn memory_needed(file_bytes: u64, triangles: u64) -> u64 {
         .saturating_add(triangles.saturating_mul(MEMORY_PER_TRIANGLE))
 }
 
-fn budget(file: &str) -> Result<crate::budget::MemoryBudget, ObjError> {
-    crate::budget::MemoryBudget::from_env().map_err(|e| ObjError::File {
-        file: file.to_owned(),
-        reason: e.to_string(),
-    })
+/// The memory budget; a bad setting of it is [`ObjError::Budget`].
+fn budget() -> Result<crate::budget::MemoryBudget, ObjError> {
+    crate::budget::MemoryBudget::from_env().map_err(ObjError::Budget)
 }
 
 /// The bytes of `path` if the memory budget allows reading them at
@@ -221,7 +232,7 @@ fn read_within_budget(
     what: &str,
     per_byte: u64,
 ) -> Result<Vec<u8>, ObjError> {
-    let budget = budget(file)?;
+    let budget = budget()?;
     let limit = budget.bytes / per_byte;
     crate::files::read_limited(path, limit).map_err(|e| match e {
         Some(reason) => ObjError::Io {
@@ -252,18 +263,30 @@ pub fn load_obj(path: &Path) -> Result<ObjModel, ObjError> {
         file: file.clone(),
         reason,
     })?;
-    let triangles = prescan(&text, &file)?.triangles;
-    let need = memory_needed(bytes.len() as u64, triangles);
+    let corners = prescan(&text, &file)?;
+    let triangles = corners.triangles;
+    let origin = corners.origin(&text);
+    // A far-off model's text is written again with its positions
+    // re-centred (see `rewritten`): at most this much more.
+    let rewrite = if origin == DVec3::ZERO {
+        0
+    } else {
+        (text.len() as u64).saturating_add((corners.used.len() as u64).saturating_mul(64))
+    };
+    let need = memory_needed(bytes.len() as u64, triangles).saturating_add(rewrite);
     drop(bytes);
-    budget(&file)?
+    budget()?
         .check(format!("model {file} ({triangles} triangles)"), need)
         .map_err(|e| ObjError::File {
             file: file.clone(),
             reason: e.to_string(),
         })?;
     let base_dir = path.parent().unwrap_or_else(|| Path::new(""));
-    let mut model = parse_obj(&text, &file, base_dir)?;
+    let mut model = parse_scanned(&text, &file, base_dir, corners, origin)?;
     model.files.insert(0, path.to_path_buf());
+    // Its MTL libraries and the textures they name are inputs too, read or
+    // not (see `crate::files::note_inputs`).
+    crate::files::note_inputs(&model.files);
     Ok(model)
 }
 
@@ -295,6 +318,19 @@ pub fn decode_text(bytes: &[u8]) -> Result<String, String> {
         [0xEF, 0xBB, 0xBF, rest @ ..] => Ok(String::from_utf8_lossy(rest).into_owned()),
         _ => Ok(String::from_utf8_lossy(bytes).into_owned()),
     }
+}
+
+/// The MTL libraries an `mtllib` statement names (`names`, the rest of its
+/// line): the names separated by white space, as the format has it (`mtllib
+/// a.mtl b.mtl` names two), or the whole rest of the line when a file of
+/// that name exists (exporters write names with spaces in them).
+fn library_names(names: &Path, base_dir: &Path) -> Vec<PathBuf> {
+    let whole = names.to_string_lossy();
+    let words: Vec<&str> = whole.split_whitespace().collect();
+    if words.len() <= 1 || base_dir.join(whole.replace('\\', "/")).is_file() {
+        return vec![names.to_path_buf()];
+    }
+    words.into_iter().map(PathBuf::from).collect()
 }
 
 /// Reads the MTL library `name` (as written after `mtllib`) from `base_dir`:
@@ -329,6 +365,10 @@ fn read_mtl(
         Ok(bytes) => bytes,
         Err(ObjError::Io { reason, .. }) => {
             warnings.push(failed(reason.to_string()));
+            return nothing();
+        }
+        Err(e @ ObjError::Budget(_)) => {
+            warnings.push(failed(e.to_string()));
             return nothing();
         }
         Err(e) => {
@@ -460,12 +500,23 @@ fn read_mtl(
 /// `base_dir` is where MTL libraries and textures are looked for.
 pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, ObjError> {
     let corners = prescan(text, file)?;
+    let origin = corners.origin(text);
+    parse_scanned(text, file, base_dir, corners, origin)
+}
+
+/// [`parse_obj`] after the pre-scan, with the positions measured from
+/// `origin` (see [`ObjModel::origin`]).
+fn parse_scanned(
+    text: &str,
+    file: &str,
+    base_dir: &Path,
+    corners: Corners,
+    origin: DVec3,
+) -> Result<ObjModel, ObjError> {
     // `tobj` refuses a `usemtl` without a name; it names no material, so
     // the line is left out (its faces keep the material before it).
     let mut warnings = Vec::new();
-    let text: std::borrow::Cow<str> = if corners.empty_usemtl.is_empty() {
-        text.into()
-    } else {
+    if !corners.empty_usemtl.is_empty() {
         let lines: Vec<String> = corners
             .empty_usemtl
             .iter()
@@ -478,19 +529,13 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
             ),
             fallback: "left out: the faces after it keep the material before it".into(),
         });
-        text.lines()
-            .enumerate()
-            .map(|(n, line)| {
-                if corners.empty_usemtl.contains(&n) {
-                    "#"
-                } else {
-                    line
-                }
-            })
-            .collect::<Vec<_>>()
-            .join("\n")
-            .into()
+    }
+    let text: std::borrow::Cow<str> = if corners.empty_usemtl.is_empty() && origin == DVec3::ZERO {
+        text.into()
+    } else {
+        rewritten(text, &corners.empty_usemtl, origin).into()
     };
+    drop(corners.used);
     let options = tobj::LoadOptions {
         triangulate: true,
         ignore_points: true,
@@ -505,17 +550,31 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
     // Each loaded material's `library:line`, in the order `tobj` appends
     // the materials (every library's `newmtl`s in file order).
     let origins = std::cell::RefCell::new(Vec::new());
-    let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |mtl| {
-        libraries
-            .borrow_mut()
-            .push(base_dir.join(mtl.to_string_lossy().replace('\\', "/")));
-        read_mtl(
-            file,
-            mtl,
-            base_dir,
-            &mut warnings.borrow_mut(),
-            &mut origins.borrow_mut(),
-        )
+    let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |names| {
+        // One `mtllib` may name several libraries: read each, their
+        // materials in order as if named on lines of their own.
+        let read = |mtl: &Path| {
+            libraries
+                .borrow_mut()
+                .push(base_dir.join(mtl.to_string_lossy().replace('\\', "/")));
+            read_mtl(
+                file,
+                mtl,
+                base_dir,
+                &mut warnings.borrow_mut(),
+                &mut origins.borrow_mut(),
+            )
+        };
+        let mut libraries = library_names(names, base_dir).into_iter();
+        let first = libraries.next().unwrap_or_default();
+        let (mut materials, mut by_name) = read(&first)?;
+        for mtl in libraries {
+            let (mut more, more_by_name) = read(&mtl)?;
+            let offset = materials.len();
+            by_name.extend(more_by_name.into_iter().map(|(k, i)| (k, i + offset)));
+            materials.append(&mut more);
+        }
+        Ok((materials, by_name))
     })
     .map_err(|e| ObjError::File {
         file: file.to_owned(),
@@ -628,6 +687,7 @@ pub fn parse_obj(text: &str, file: &str, base_dir: &Path) -> Result<ObjModel, Ob
         materials,
         warnings,
         files,
+        origin,
     })
 }
 
@@ -666,6 +726,102 @@ struct Corners {
     usemtl: Vec<(usize, String)>,
     /// Zero-based numbers of `usemtl` lines without a name.
     empty_usemtl: Vec<usize>,
+    /// The least and greatest coordinates of every `v` line, in f64 as
+    /// written (divided by the weight `w` where there is one).
+    bounds: (DVec3, DVec3),
+    /// Whether each vertex (in file order) is a corner of some face.
+    used: Vec<bool>,
+}
+
+/// A model whose bounding box's centre is farther from the file's origin
+/// than this many times the box's diagonal has its positions measured
+/// from that centre (see [`ObjModel::origin`]). A 32-bit float keeps about
+/// 7 digits, so at this ratio the rounding of positions written relative
+/// to the file's origin is below a millionth of the model's size, well
+/// below the weld tolerance (1e-5 of the diagonal): nearer models are read
+/// exactly as before.
+pub const RECENTRE_RATIO: f64 = 16.0;
+
+impl Corners {
+    /// What the model's positions are measured from: the centre of the
+    /// bounding box of the vertices its faces use, when the model lies
+    /// farther from the file's origin than [`RECENTRE_RATIO`] times its
+    /// size; otherwise the file's origin.
+    fn origin(&self, text: &str) -> DVec3 {
+        let (lo, hi) = if self.used.iter().all(|&u| u) {
+            self.bounds
+        } else {
+            used_bounds(text, &self.used)
+        };
+        if !lo.cmple(hi).all() {
+            return DVec3::ZERO;
+        }
+        let centre = (lo + hi) * 0.5;
+        if centre.abs().max_element() > RECENTRE_RATIO * (hi - lo).length() {
+            centre
+        } else {
+            DVec3::ZERO
+        }
+    }
+}
+
+/// The numbers of a `v` line (already checked by [`prescan`]), or `None`
+/// for any other line.
+fn vertex_numbers(line: &str) -> Option<Vec<f64>> {
+    let code = line.split('#').next().unwrap_or("");
+    let mut words = code.split_whitespace();
+    (words.next() == Some("v")).then(|| words.filter_map(|w| w.parse().ok()).collect())
+}
+
+/// The bounds of the vertices a face uses (`used`, in file order), in f64.
+fn used_bounds(text: &str, used: &[bool]) -> (DVec3, DVec3) {
+    let mut bounds = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    let mut used = used.iter();
+    for line in text.lines() {
+        if let Some(values) = vertex_numbers(line) {
+            if used.next() == Some(&true) {
+                let p = position(&values);
+                bounds = (bounds.0.min(p), bounds.1.max(p));
+            }
+        }
+    }
+    bounds
+}
+
+/// The text `tobj` reads: the lines `comment_out` (zero-based) replaced by
+/// a comment, and, unless `origin` is zero, every position written
+/// relative to `origin`, computed in f64 and only then rounded to the
+/// 32-bit float the parser reads (written so that it reads back exactly).
+/// A colour after the position is kept; a weight is applied. Every line
+/// stays on its line, so the parser's view matches the file's numbering.
+fn rewritten(text: &str, comment_out: &[usize], origin: DVec3) -> String {
+    use std::fmt::Write as _;
+    let mut out = String::with_capacity(text.len());
+    for (n, line) in text.lines().enumerate() {
+        if comment_out.contains(&n) {
+            out.push('#');
+        } else if let Some(values) = vertex_numbers(line).filter(|_| origin != DVec3::ZERO) {
+            let p = (position(&values) - origin).as_vec3();
+            let _ = write!(out, "v {:?} {:?} {:?}", p.x, p.y, p.z);
+            if let [_, _, _, r, g, b] = values[..] {
+                let _ = write!(out, " {r:?} {g:?} {b:?}");
+            }
+        } else {
+            out.push_str(line);
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// The position of a `v` line's numbers (checked: 3, 4 or 6 of them, a
+/// weight not 0): x y z, divided by the weight w when there is one.
+fn position(values: &[f64]) -> DVec3 {
+    let p = DVec3::new(values[0], values[1], values[2]);
+    match values {
+        [_, _, _, w] => p / *w,
+        _ => p,
+    }
 }
 
 /// Checks every `v`, `vt`, `vn` and `f` line: numbers finite, indices
@@ -680,6 +836,8 @@ fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
         usemtl: Vec::new(),
         empty_usemtl: Vec::new(),
         triangles: 0,
+        bounds: (DVec3::INFINITY, DVec3::NEG_INFINITY),
+        used: Vec::new(),
     };
     for (number, line) in text.lines().enumerate() {
         let error = |reason: String| ObjError::Line {
@@ -747,6 +905,10 @@ fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
                                  ({defined} defined so far)"
                             )));
                         }
+                        if k == 0 {
+                            let vertex = if i > 0 { i - 1 } else { defined + i };
+                            all.used[vertex as usize] = true;
+                        }
                     }
                 }
                 if corners < 3 {
@@ -788,6 +950,11 @@ fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
             return Err(error(
                 "vertex weight w is 0 (the position is x/w, y/w, z/w)".into(),
             ));
+        }
+        if slot == 0 {
+            let p = position(&values);
+            all.bounds = (all.bounds.0.min(p), all.bounds.1.max(p));
+            all.used.push(false);
         }
         counts[slot] += 1;
     }

@@ -496,6 +496,7 @@ fn model_diagonal_matches_a_point_at_a_time_fold() {
             materials: Vec::new(),
             warnings: Vec::new(),
             files: Vec::new(),
+            origin: glam::DVec3::ZERO,
         };
         assert_eq!(
             model.diagonal().to_bits(),

@@ -14,7 +14,9 @@ use super::checks::{Check, Result, MAX_COLOUR};
 use super::file::{
     Description, MaterialRef, ModelObject, ObjectDescription, PendingMaterial, DEFAULT_TESSELLATION,
 };
-use super::{AssetWarning, Material, Object, Scene, SceneWarning, ShadingModel, Shape, Texture};
+use super::{
+    AssetWarning, Material, Object, Scene, SceneError, SceneWarning, ShadingModel, Shape, Texture,
+};
 use crate::mesh::obj;
 
 impl Check<'_> {
@@ -85,12 +87,18 @@ impl Check<'_> {
     ) -> Result<Vec<Object>> {
         let field = |name: &str| format!("{}.{name}", model.field);
         let resolved = &model.path;
+        // A bad budget setting is the setting's fault, not the model's: its
+        // error names the setting alone.
+        let model_error = |e: obj::ObjError| match e {
+            obj::ObjError::Budget(_) => SceneError::Model(e),
+            e => self.invalid(field("shape.path"), e.to_string()),
+        };
         // A model is parsed, smoothed and given frames when the scene is
         // loaded, before the renderer's own memory estimate: refuse here,
         // from the file's size, what cannot fit the budget.
         if let Ok(meta) = std::fs::metadata(resolved) {
             let budget = crate::budget::MemoryBudget::from_env()
-                .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
+                .map_err(|e| model_error(obj::ObjError::Budget(e)))?;
             budget
                 .check(
                     format!("model {}", resolved.display()),
@@ -102,18 +110,18 @@ impl Check<'_> {
         // stage before freed, and the free memory goes back to the system
         // once the meshes are made.
         let _reuse = crate::mesh::heap::HeapReuse::enter();
-        let loaded = obj::load_obj(resolved)
-            .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
+        let loaded = obj::load_obj(resolved).map_err(model_error)?;
         files.extend(loaded.files.iter().cloned());
         let meshes = obj::model_meshes(&loaded, &model.options, &resolved.display().to_string())
             .map_err(|e| {
                 // Only a smoothing mode the file cannot satisfy is the
                 // option's fault; anything else is the model's.
-                let at = match e {
-                    obj::ObjError::Smoothing { .. } => "smoothing",
-                    _ => "shape.path",
-                };
-                self.invalid(field(at), e.to_string())
+                match e {
+                    obj::ObjError::Smoothing { .. } => {
+                        self.invalid(field("smoothing"), e.to_string())
+                    }
+                    e => model_error(e),
+                }
             })?;
         let over = match &model.material {
             None => None,
@@ -131,6 +139,13 @@ impl Check<'_> {
         };
         if over.is_none() {
             loaded.warnings.iter().cloned().for_each(&mut warn);
+        }
+        // A far-off model's positions are measured from its centre
+        // (`ObjModel::origin`): the centre goes into the translation, in
+        // f64, where the renderer keeps world positions exact.
+        let mut transform = model.transform;
+        if loaded.origin != glam::DVec3::ZERO {
+            transform.translate = model.transform.matrix_f64().transform_point3(loaded.origin);
         }
         // The model's own materials, added on first use as `name/material`.
         let mut own: HashMap<Option<usize>, usize> = HashMap::new();
@@ -185,7 +200,7 @@ impl Check<'_> {
                 // Unused for a mesh; kept only because every object has one.
                 tessellation: (DEFAULT_TESSELLATION[0], DEFAULT_TESSELLATION[1]),
                 material,
-                transform: model.transform,
+                transform,
             });
         }
         if objects.is_empty() {

@@ -51,10 +51,11 @@ pub(super) fn run(options: ViewOptions) -> ViewOutcome {
     match EventLoop::new() {
         Ok(event_loop) => {
             if let Err(e) = event_loop.run_app(&mut app) {
-                app.error.get_or_insert(ViewerError::Window(e.to_string()));
+                app.error
+                    .get_or_insert(ViewerError::Window(window_error(&e)));
             }
         }
-        Err(e) => app.error = Some(ViewerError::Window(e.to_string())),
+        Err(e) => app.error = Some(ViewerError::Window(window_error(&e))),
     }
     // Tear down in order (renderer and swapchain before the surface, all
     // before the device), then read what the layer said, teardown included.
@@ -70,6 +71,26 @@ pub(super) fn run(options: ViewOptions) -> ViewOutcome {
         validation,
         timings: app.timings,
     }
+}
+
+/// A window system error as a message for the user: the windowing
+/// library's operating-system errors start with the place in its own
+/// source they were made at (`os error at src/...rs:123:`), which says
+/// nothing to the user and names a folder of the machine that built the
+/// program; that part is left out.
+fn window_error(error: &impl std::fmt::Display) -> String {
+    let text = error.to_string();
+    if let Some(rest) = text.strip_prefix("os error at ") {
+        // `FILE:LINE: message`: the message starts after the line number.
+        let mut parts = rest.splitn(3, ':');
+        if let (Some(_file), Some(line), Some(message)) = (parts.next(), parts.next(), parts.next())
+        {
+            if !line.is_empty() && line.bytes().all(|b| b.is_ascii_digit()) {
+                return message.trim_start().to_string();
+            }
+        }
+    }
+    text
 }
 
 struct App {
@@ -127,13 +148,16 @@ impl ApplicationHandler for App {
         }
         match self.open(event_loop) {
             Ok(live) => {
+                let swapchain = match &live.swapchain {
+                    Some(s) => format!("{:?} swapchain", s.format()),
+                    None => "no swapchain yet".to_string(),
+                };
                 println!(
-                    "aerial view: {} at {}x{} on {}; {:?} swapchain, present mode {:?}",
+                    "aerial view: {} at {}x{} on {}; {swapchain}, present mode {:?}",
                     live.scene_name,
                     live.scene.output.width,
                     live.scene.output.height,
                     live.ctx.device_info().name,
-                    live.swapchain.as_ref().map(|s| s.format()),
                     self.options.present_mode
                 );
                 println!("{HELP}\nknobs:\n{}", knobs::listing(&live.scene));
@@ -253,13 +277,13 @@ impl App {
         let window = Arc::new(
             event_loop
                 .create_window(attributes)
-                .map_err(|e| ViewerError::Window(e.to_string()))?,
+                .map_err(|e| ViewerError::Window(window_error(&e)))?,
         );
         let display = {
             use raw_window_handle::HasDisplayHandle;
             window
                 .display_handle()
-                .map_err(|e| ViewerError::Window(e.to_string()))?
+                .map_err(|e| ViewerError::Window(window_error(&e)))?
                 .as_raw()
         };
         // Refuse what does not fit before the device allocates anything.

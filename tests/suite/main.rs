@@ -33,6 +33,7 @@ mod gbuffer_range;
 mod height_maps;
 mod hostile;
 mod hostile_bench;
+mod hostile_io;
 mod interrupt;
 mod limits;
 mod local_defects;

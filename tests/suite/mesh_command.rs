@@ -66,7 +66,11 @@ fn mesh_reports_counts_known_by_construction() {
     assert_eq!(report["vertices"], 11);
     assert_eq!(report["welded_boundary_points"], 2);
     assert_eq!(report["mirrored_triangles"], 2);
-    assert_eq!(report["degenerate_triangles"], 1);
+    // The flat-UV triangle has zero UV area; none has zero area, and every
+    // object has texture coordinates.
+    assert_eq!(report["zero_uv_area_triangles"], 1);
+    assert_eq!(report["collapsed_triangles"], 0);
+    assert_eq!(report["triangles_without_uvs"], 0);
     assert_eq!(report["non_finite_attributes"], 0);
     assert!(report["max_orthonormality_error"].as_f64().unwrap() < 1e-5);
     for stage in ["load", "smoothing", "tangents"] {
@@ -135,4 +139,63 @@ fn mesh_reads_of_endless_inputs_stop_at_the_budget() {
             "{stderr}"
         );
     }
+}
+
+/// A model without texture coordinates is not "degenerate": its triangles
+/// are counted as without UVs, none as of zero UV area; triangles of zero
+/// area (collapsed, left out) and of zero UV area are counted apart, each
+/// only for what it is. Before, every triangle of a model without UVs was
+/// reported as degenerate (69,666 on the Stanford bunny).
+#[test]
+fn mesh_counts_zero_area_zero_uv_area_and_missing_uvs_apart() {
+    let dir = tempfile::tempdir().unwrap();
+    let report = |name: &str, text: &str| -> (serde_json::Value, String) {
+        let model = dir.path().join(format!("{name}.obj"));
+        let json = dir.path().join(format!("{name}.json"));
+        std::fs::write(&model, text).unwrap();
+        let out = common::succeed(
+            common::aerial()
+                .arg("mesh")
+                .arg(&model)
+                .arg("--json")
+                .arg(&json),
+        );
+        let report = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        (report, String::from_utf8_lossy(&out.stdout).into_owned())
+    };
+    let counts = |r: &serde_json::Value| {
+        [
+            "collapsed_triangles",
+            "zero_uv_area_triangles",
+            "triangles_without_uvs",
+        ]
+        .map(|k| r[k].as_u64().unwrap())
+    };
+    // A tetrahedron without UVs (or normals): nothing wrong with it.
+    let tetrahedron = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+    let (r, stdout) = report("no_uvs", tetrahedron);
+    assert_eq!(counts(&r), [0, 0, 4]);
+    assert!(stdout.contains("triangles without UVs      4"), "{stdout}");
+    assert!(!stdout.contains("degenerate"), "{stdout}");
+    // With normals but no UVs, and a polygon split into triangles: the same.
+    let (r, _) = report(
+        "normals_no_uvs",
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1 4//1\n",
+    );
+    assert_eq!(counts(&r), [0, 0, 2]);
+    // A collapsed triangle (three points on a line) among good ones, with
+    // UVs: zero area, and not also counted as zero UV area.
+    let (r, _) = report(
+        "collapsed",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nvt 0 0\nvt 1 0\nvt 0 1\n\
+         f 1/1 2/2 3/3\nf 1/1 2/2 4/3\n",
+    );
+    assert_eq!(counts(&r), [1, 0, 0]);
+    // UVs all equal on one triangle, spread on the other.
+    let (r, _) = report(
+        "flat_uvs",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0.5 0.5\nvt 1 0\nvt 0 1\nvt 1 1\n\
+         f 1/1 2/1 3/1\nf 2/2 4/4 3/3\n",
+    );
+    assert_eq!(counts(&r), [0, 1, 0]);
 }

@@ -576,6 +576,7 @@ fn smoothing_and_tangent_time() {
             materials: Vec::new(),
             warnings: Vec::new(),
             files: Vec::new(),
+            origin: glam::DVec3::ZERO,
         };
         let count: usize = model.parts.iter().map(|p| p.triangle_count()).sum();
         let options = ModelOptions {
@@ -954,4 +955,145 @@ fn a_model_too_large_for_the_memory_budget_is_refused() {
         "{stderr}"
     );
     assert!(!dir.path().join("o.png").exists());
+}
+
+/// One `mtllib` statement may name several libraries (`mtllib a.mtl b.mtl`,
+/// legal OBJ): each is read, and the materials of all of them are found by
+/// `usemtl`, however the names are spaced. A single name with a space in
+/// it, when a file of that name exists, is still one library.
+#[test]
+fn an_mtllib_line_naming_several_libraries_reads_each() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "a.mtl", "newmtl red\nKd 1 0 0\n");
+    write(dir.path(), "b.mtl", "newmtl green\nKd 0 1 0\n");
+    write(dir.path(), "c.mtl", "newmtl blue\nKd 0 0 1\n");
+    write(dir.path(), "my lib.mtl", "newmtl grey\nKd 0.5 0.5 0.5\n");
+    let faces = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n\
+                 usemtl red\nf 1 2 3\nusemtl green\nf 2 4 3\nusemtl blue\nf 1 3 2\n";
+    for (line, libraries) in [
+        ("mtllib a.mtl b.mtl c.mtl", vec!["a.mtl", "b.mtl", "c.mtl"]),
+        (
+            "mtllib  a.mtl   b.mtl c.mtl  ",
+            vec!["a.mtl", "b.mtl", "c.mtl"],
+        ),
+        (
+            "mtllib a.mtl\tb.mtl\tc.mtl",
+            vec!["a.mtl", "b.mtl", "c.mtl"],
+        ),
+        (
+            "mtllib c.mtl a.mtl\nmtllib b.mtl",
+            vec!["c.mtl", "a.mtl", "b.mtl"],
+        ),
+    ] {
+        let path = write(dir.path(), "m.obj", &format!("{line}\n{faces}"));
+        let model = load_obj(&path).unwrap();
+        assert!(model.warnings.is_empty(), "{line:?}: {:?}", model.warnings);
+        let mut names: Vec<&str> = model.materials.iter().map(|m| m.name.as_str()).collect();
+        names.sort_unstable();
+        assert_eq!(names, ["blue", "green", "red"], "{line:?}");
+        // Each face has the material its `usemtl` names.
+        for (part, kd) in model.parts.iter().zip([Vec3::X, Vec3::Y, Vec3::Z]) {
+            let material = &model.materials[part.material.expect("a material")];
+            assert_eq!(material.kd, kd, "{line:?}: {}", material.name);
+        }
+        for library in libraries {
+            assert!(
+                model.files.contains(&dir.path().join(library)),
+                "{line:?}: {library} not among {:?}",
+                model.files
+            );
+        }
+    }
+    let path = write(
+        dir.path(),
+        "m.obj",
+        &format!(
+            "mtllib my lib.mtl\n{}",
+            faces.replace("usemtl red", "usemtl grey")
+        ),
+    );
+    let model = load_obj(&path).unwrap();
+    assert_eq!(model.materials.len(), 1);
+    assert_eq!(model.materials[0].name, "grey");
+    // A missing one among several is a warning naming it; the others load.
+    let path = write(
+        dir.path(),
+        "m.obj",
+        &format!("mtllib a.mtl gone.mtl b.mtl c.mtl\n{faces}"),
+    );
+    let model = load_obj(&path).unwrap();
+    assert_eq!(model.materials.len(), 3);
+    assert!(
+        model.warnings.len() == 1 && model.warnings[0].problem.contains("\"gone.mtl\""),
+        "{:?}",
+        model.warnings
+    );
+}
+
+/// A far-off model's positions are measured from its centre, in f64:
+/// `origin` holds the centre, and `origin + position` is the file's
+/// coordinate to far better than 32-bit floats at that distance; models
+/// near the origin for their size are read exactly as written.
+#[test]
+fn far_off_models_are_read_relative_to_their_centre() {
+    let dir = tempfile::tempdir().unwrap();
+    let triangle = |at: [f64; 3], size: f64, w: Option<f64>| {
+        let mut text = String::new();
+        for (dx, dy) in [(0.0, 0.0), (size, 0.0), (0.0, size)] {
+            let p = [at[0] + dx, at[1] + dy, at[2]];
+            match w {
+                None => writeln!(text, "v {} {} {}", p[0], p[1], p[2]).unwrap(),
+                Some(w) => writeln!(text, "v {} {} {} {w}", p[0] * w, p[1] * w, p[2] * w).unwrap(),
+            }
+        }
+        text.push_str("f 1 2 3\n");
+        text
+    };
+    for (at, size, w) in [
+        ([1e9, 0.0, 0.0], 1.0, None),
+        ([-3e8, 7e7, 123_456_789.125], 0.5, None),
+        ([1e6, 1e6, 1e6], 1e-3, None),
+        ([2e7, 0.0, 0.0], 1.0, Some(2.0)),
+    ] {
+        let path = write(dir.path(), "far.obj", &triangle(at, size, w));
+        let model = load_obj(&path).unwrap();
+        let origin = model.origin;
+        assert!(
+            (origin - glam::DVec3::from(at)).length() <= size,
+            "{at:?}: origin {origin}"
+        );
+        let corners: Vec<glam::DVec3> = model.parts[0]
+            .positions
+            .iter()
+            .map(|p| origin + p.as_dvec3())
+            .collect();
+        for (corner, (dx, dy)) in corners.iter().zip([(0.0, 0.0), (size, 0.0), (0.0, size)]) {
+            let expected = glam::DVec3::new(at[0] + dx, at[1] + dy, at[2]);
+            assert!(
+                (*corner - expected).length() <= size * 1e-6,
+                "{at:?}: {corner} for {expected}"
+            );
+        }
+    }
+    // Near the origin for its size: not moved, the positions as written.
+    for text in [
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        "v 10 0 0\nv 11 0 0\nv 10 1 0\nf 1 2 3\n",
+    ] {
+        let path = write(dir.path(), "near.obj", text);
+        let model = load_obj(&path).unwrap();
+        assert_eq!(model.origin, glam::DVec3::ZERO, "{text}");
+    }
+    // A vertex no face uses does not pull the centre away from the model.
+    let path = write(
+        dir.path(),
+        "stray.obj",
+        "v 0 0 0\nv 1e9 1e9 1e9\nv 1e9 1e9 1.001e9\nv 1e9 1.001e9 1e9\nf 2 3 4\n",
+    );
+    let model = load_obj(&path).unwrap();
+    assert!(
+        (model.origin - glam::DVec3::splat(1e9)).length() < 1e6,
+        "{}",
+        model.origin
+    );
 }

@@ -264,7 +264,8 @@ fn the_other_commands_refuse_to_write_over_their_inputs() {
         );
     }
     // bench: the scene, a texture it names, the baseline (through a hard
-    // link, which the path comparison of --json and --compare misses).
+    // link: `files::same_file` compares device and inode, so the check of
+    // --json against --compare finds it too).
     for json in ["s.toml", "tex.png"] {
         assert_refused(
             &f,
@@ -298,7 +299,7 @@ fn the_other_commands_refuse_to_write_over_their_inputs() {
             os("--json"),
             base_hard.as_os_str(),
         ],
-        &["input", "--json"],
+        &["same file", "--json"],
     );
     // view: a script's screenshot over the scene or the script, refused
     // before any window opens.

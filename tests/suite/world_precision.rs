@@ -13,8 +13,9 @@
 
 use crate::common;
 
+use aerial::render::Pixels;
 use aerial::report::{compare_images, ImageRef, Metric, FLIP_DEFAULT_THRESHOLDS};
-use aerial::scene::{Lighting, Scene};
+use aerial::scene::{Lighting, ModelSceneOptions, Scene};
 use glam::DVec3;
 use std::path::Path;
 
@@ -44,54 +45,53 @@ fn check(lighting: Lighting, offset: DVec3) {
     let moved_scene = common::translated(default_scene(lighting), offset);
     let moved = common::render(&moved_scene, false).output;
     common::assert_not_blank(&moved, 0.5);
-    // For looking at: target/world_precision/<lighting>_<x>.png.
+    let name = format!("{lighting:?}_{:e}_{:e}_{:e}", offset.x, offset.y, offset.z).to_lowercase();
+    assert_same_image(&name, &base, &moved, 2);
+}
+
+fn srgb(p: &Pixels<u8>) -> ImageRef<'_> {
+    ImageRef::Srgb8 {
+        width: p.width,
+        height: p.height,
+        rgba: &p.data,
+    }
+}
+
+/// `moved` is `base` up to rounding: within the regression suite's FLIP
+/// limits and at most `most` 1/255 steps on every channel of every pixel.
+/// Both are saved for looking at: target/world_precision/<name>.png and
+/// <name>_origin.png.
+fn assert_same_image(name: &str, base: &Pixels<u8>, moved: &Pixels<u8>, most: u8) {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("world_precision");
     std::fs::create_dir_all(&dir).unwrap();
-    let name = format!("{lighting:?}_{:e}_{:e}_{:e}", offset.x, offset.y, offset.z).to_lowercase();
-    for (suffix, image) in [("", &moved), ("_origin", &base)] {
+    for (suffix, image) in [("", moved), ("_origin", base)] {
         image::save_buffer(
             dir.join(format!("{name}{suffix}.png")),
             &image.data,
-            WIDTH,
-            HEIGHT,
+            image.width,
+            image.height,
             image::ColorType::Rgba8,
         )
         .unwrap();
     }
     assert_eq!((base.width, base.height), (moved.width, moved.height));
-    let cmp = compare_images(
-        "at the origin",
-        ImageRef::Srgb8 {
-            width: WIDTH,
-            height: HEIGHT,
-            rgba: &base.data,
-        },
-        &format!("moved by {offset}"),
-        ImageRef::Srgb8 {
-            width: WIDTH,
-            height: HEIGHT,
-            rgba: &moved.data,
-        },
-        Metric::Flip,
-    )
-    .unwrap();
+    let cmp = compare_images("at the origin", srgb(base), name, srgb(moved), Metric::Flip).unwrap();
     let largest = largest_difference(&base.data, &moved.data);
     eprintln!(
-        "{lighting:?} moved by {offset}: FLIP mean {:.5}, p99 {:.5}, worst window {:.5}; largest \
-         channel difference {largest}/255",
+        "{name}: FLIP mean {:.5}, p99 {:.5}, worst window {:.5}; largest channel difference \
+         {largest}/255",
         cmp.mean, cmp.p99, cmp.worst_window
     );
     assert!(
         cmp.passes(&FLIP_DEFAULT_THRESHOLDS),
-        "{lighting:?} moved by {offset}: FLIP mean {}, p99 {}, worst window {} beyond the \
-         regression limits",
+        "{name}: FLIP mean {}, p99 {}, worst window {} beyond the regression limits",
         cmp.mean,
         cmp.p99,
         cmp.worst_window
     );
     assert!(
-        largest <= 2,
-        "{lighting:?} moved by {offset}: a channel differs by {largest}/255"
+        largest <= most,
+        "{name}: a channel differs by {largest}/255"
     );
 }
 
@@ -131,5 +131,147 @@ fn other_offsets_render_as_at_the_origin() {
         ),
     ] {
         check(lighting, offset);
+    }
+}
+
+/// A UV sphere of `radius` around `centre` as OBJ text, with its normals,
+/// the coordinates written in full (as an exporter working in f64 writes
+/// a model placed in world coordinates).
+fn sphere_obj(centre: DVec3, radius: f64) -> String {
+    use std::fmt::Write as _;
+    let (rings, segments) = (24, 48);
+    let mut text = String::new();
+    for ring in 0..=rings {
+        let theta = std::f64::consts::PI * f64::from(ring) / f64::from(rings);
+        for segment in 0..segments {
+            let phi = std::f64::consts::TAU * f64::from(segment) / f64::from(segments);
+            let n = DVec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            );
+            let p = centre + n * radius;
+            let _ = writeln!(
+                text,
+                "v {} {} {}\nvn {} {} {}",
+                p.x, p.y, p.z, n.x, n.y, n.z
+            );
+        }
+    }
+    let index = |ring: u32, segment: u32| ring * segments + segment % segments + 1;
+    for ring in 0..rings {
+        for segment in 0..segments {
+            let [a, b, c, d] = [
+                index(ring, segment),
+                index(ring, segment + 1),
+                index(ring + 1, segment + 1),
+                index(ring + 1, segment),
+            ];
+            // Counter-clockwise seen from outside.
+            let _ = writeln!(
+                text,
+                "f {a}//{a} {b}//{b} {c}//{c}\nf {a}//{a} {c}//{c} {d}//{d}"
+            );
+        }
+    }
+    text
+}
+
+/// A scene with the sphere model `model` (at `centre`, of `radius`), the
+/// camera 3.5 radii in front of it (+z) and a key light.
+fn sphere_scene(model: &Path, centre: DVec3, radius: f64) -> Scene {
+    let eye = centre + DVec3::new(0.0, 0.0, 3.5 * radius);
+    let text = format!(
+        "ambient = [0.05, 0.05, 0.05]\n[output]\nwidth = {WIDTH}\nheight = {HEIGHT}\n\
+         [camera]\neye = [{:?}, {:?}, {:?}]\nlook_at = [{:?}, {:?}, {:?}]\nnear = {:?}\n\
+         [[lights]]\ntype = \"directional\"\ndirection = [-0.4, -0.7, -0.6]\n\
+         [[materials]]\nname = \"m\"\nkd = [0.8, 0.3, 0.2]\nks = [0.5, 0.5, 0.5]\nshininess = 32.0\n\
+         [[objects]]\nname = \"ball\"\nmaterial = \"m\"\nshape = {{ type = \"obj\", path = {:?} }}\n",
+        eye.x,
+        eye.y,
+        eye.z,
+        centre.x,
+        centre.y,
+        centre.z,
+        radius * 0.1,
+        model.display().to_string(),
+    );
+    let mut scene = Scene::from_toml(&text, "sphere test scene", Path::new(""))
+        .unwrap_or_else(|e| panic!("{e}"));
+    scene.output.lighting = Lighting::Forward;
+    scene
+}
+
+/// An OBJ model written far from the origin renders as the same model at
+/// the origin (the camera moved along): its positions are read in f64 and
+/// re-centred before they are rounded to 32 bits, as a scene's own
+/// translations are. A unit sphere at 1e7 to 1e9 m on each axis, and a
+/// 1 mm sphere at 1e6 m. Before, the sphere at 1e7 m came out distorted
+/// and from 1e8 m (the 1 mm one from 1e6 m) the image was black.
+#[test]
+fn a_model_written_far_from_the_origin_renders_as_at_the_origin() {
+    let dir = tempfile::tempdir().unwrap();
+    for (radius, offsets) in [
+        (
+            1.0,
+            vec![
+                DVec3::new(1e7, 0.0, 0.0),
+                DVec3::new(0.0, 1e8, 0.0),
+                DVec3::new(1e9, 0.0, 0.0),
+                DVec3::new(-7e8 - 0.37, 3e8 + 0.1, 9e8),
+            ],
+        ),
+        (
+            1e-3,
+            vec![DVec3::new(1e6, 0.0, 0.0), DVec3::new(0.0, 0.0, -1e6)],
+        ),
+    ] {
+        let here = dir.path().join("origin.obj");
+        std::fs::write(&here, sphere_obj(DVec3::ZERO, radius)).unwrap();
+        let base = common::render(&sphere_scene(&here, DVec3::ZERO, radius), false).output;
+        common::assert_not_blank(&base, 0.2);
+        for offset in offsets {
+            let far = dir.path().join("far.obj");
+            std::fs::write(&far, sphere_obj(offset, radius)).unwrap();
+            let moved = common::render(&sphere_scene(&far, offset, radius), false).output;
+            let name = format!(
+                "sphere_{radius:e}_at_{:e}_{:e}_{:e}",
+                offset.x, offset.y, offset.z
+            );
+            assert_same_image(&name, &base, &moved, 2);
+        }
+    }
+}
+
+/// The scene `aerial render MODEL.obj` builds around a far-off model
+/// frames it as it frames the same model at the origin: the camera is
+/// placed in f64 from the model's f64 bounds, and the image is the same.
+#[test]
+fn a_far_off_model_is_framed_as_at_the_origin() {
+    let dir = tempfile::tempdir().unwrap();
+    let options = ModelSceneOptions {
+        width: WIDTH,
+        height: HEIGHT,
+        ..ModelSceneOptions::default()
+    };
+    let here = dir.path().join("origin.obj");
+    std::fs::write(&here, sphere_obj(DVec3::ZERO, 1.0)).unwrap();
+    let base = common::render(&Scene::from_model(&here, &options).unwrap(), false).output;
+    common::assert_not_blank(&base, 0.2);
+    for offset in [DVec3::new(1e8, 0.0, 0.0), DVec3::new(-3e8, 2e8, 9.9e8)] {
+        let far = dir.path().join("far.obj");
+        std::fs::write(&far, sphere_obj(offset, 1.0)).unwrap();
+        let scene = Scene::from_model(&far, &options).unwrap();
+        assert!(
+            (scene.camera.look_at - offset).length() < 1e-6,
+            "{}",
+            scene.camera.look_at
+        );
+        let moved = common::render(&scene, false).output;
+        let name = format!(
+            "model_scene_at_{:e}_{:e}_{:e}",
+            offset.x, offset.y, offset.z
+        );
+        assert_same_image(&name, &base, &moved, 2);
     }
 }
