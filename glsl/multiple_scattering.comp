@@ -8,6 +8,8 @@
 // a geometric series. The march then adds sigma_s(x) Psi_ms at every
 // sample. Per unit solar irradiance; one invocation per texel.
 
+// The bake's own sun (include/sun_frame.glsl).
+#define SUN_DIRECTION vec3(0.0, 1.0, 0.0)
 #include "atmosphere.glsl"
 #include "sun_frame.glsl"
 

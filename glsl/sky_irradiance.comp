@@ -8,6 +8,8 @@
 
 #define MULTIPLE_SCATTERING
 #define BAKING_SKY_IRRADIANCE
+// The bake's own sun (include/sun_frame.glsl).
+#define SUN_DIRECTION vec3(0.0, 1.0, 0.0)
 #include "atmosphere.glsl"
 #include "sun_frame.glsl"
 
@@ -37,7 +39,7 @@ void main() {
             float phi = PI * (float(j) + 0.5) / float(AZIMUTH_STRATA);
             vec3 d = sun_frame_direction(f, cos_zenith, phi);
             Path path = march_from(f.o, f.c_bottom, f.c_top, d, INF, 0);
-            vec2 phase = phases(dot(d, sky.sun_direction.xyz));
+            vec2 phase = phases(dot(d, SUN_DIRECTION));
             vec3 radiance = phase.x * path.rayleigh + phase.y * path.mie + path.multiple;
             if (path.end == END_GROUND) {
                 radiance += path.transmittance * ground_sunlit(f.o + path.t_end * d);

@@ -25,6 +25,13 @@
 #define GROUND_SKY_LIGHT
 #endif
 
+// The direction towards the sun that the march's sun lookups use: the
+// frame's, unless a table bake fixes its own (include/sun_frame.glsl), so
+// that the tables do not depend on the sun a frame happened to have.
+#ifndef SUN_DIRECTION
+#define SUN_DIRECTION sky.sun_direction.xyz
+#endif
+
 layout(std140, set = 0, binding = 0) uniform Sky {
     vec4 forward;          // xyz: camera forward (unit)
     vec4 right;            // xyz: camera right * aspect / f
@@ -375,7 +382,7 @@ float ozone_to_top(SunRay ray) {
 // Optical depth from a point at altitude h (radius r, position p relative
 // to the centre) to the sun; lit is false in the planet's shadow.
 vec3 sun_optical_depth(float h, float r, vec3 p, out bool lit) {
-    SunRay ray = sun_ray(h, dot(p, sky.sun_direction.xyz) / r);
+    SunRay ray = sun_ray(h, dot(p, SUN_DIRECTION) / r);
     lit = ray.mu >= -ray.rho / r;
     if (!lit) {
         return vec3(0.0);
@@ -529,7 +536,7 @@ Path march_from(vec3 o, float c_bottom, float c_top, vec3 d, float t_surface, in
         // test, and the view's transmittance alone.
         vec3 view = exp(-tau) * dt;
         vec3 weight = view * exp(-sun_tau) * (lit ? 1.0 : 0.0);
-        float mu_s = dot(o + t * d, sky.sun_direction.xyz) / r;
+        float mu_s = dot(o + t * d, SUN_DIRECTION) / r;
         vec3 scattering = STATIC_RAYLEIGH.xyz * rho.x + STATIC_MIE_SCATTERING.xyz * rho.y;
         path.multiple += scattering * multiple_scattering(h, mu_s) * view;
 #else
@@ -570,7 +577,7 @@ vec2 phases(float mu) {
 // sky's irradiance.
 vec3 ground_radiance(vec3 p) {
     vec3 normal = normalize(p);
-    vec3 sun = sky.sun_direction.xyz;
+    vec3 sun = SUN_DIRECTION;
     float cos_sun = dot(normal, sun);
     bool lit;
     vec3 sun_tau = sun_optical_depth(0.0, STATIC_RADII.x, p, lit);

@@ -1,9 +1,11 @@
 // A point of the bakes of the multiple-scattering and sky-irradiance
 // tables (multiple_scattering.comp, sky_irradiance.comp): each texel is an
-// altitude h and a cosine mu_s of the sun's zenith angle, placed in the
-// frame's own sun direction (sky.sun_direction) so that the march's sun
-// lookups serve unchanged. The tables depend on (h, mu_s) alone, so they
-// hold for any later sun.
+// altitude h and a cosine mu_s of the sun's zenith angle, placed under a
+// fixed sun (SUN_DIRECTION, defined by each bake before it includes
+// atmosphere.glsl, whose sun lookups then serve unchanged). The tables
+// depend on (h, mu_s) alone, so they hold for any sun, bit for bit: a
+// frame that moves the sun keeps them, and draws what a new renderer
+// would.
 struct SunFrame {
     vec3 o;         // the point, relative to the centre
     float c_bottom; // |o|^2 - Rb^2, exact
@@ -14,7 +16,7 @@ struct SunFrame {
 };
 
 SunFrame sun_frame(float h, float mu_s) {
-    vec3 s = sky.sun_direction.xyz;
+    vec3 s = SUN_DIRECTION;
     vec3 a = abs(s.x) < 0.9 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
     vec3 e = normalize(cross(s, a));
     float sine = sqrt(max(1.0 - mu_s * mu_s, 0.0));
@@ -48,6 +50,6 @@ vec3 sun_transmittance(float h, float r, vec3 p) {
 
 // The ground at p lit by the sun alone, per unit solar irradiance.
 vec3 ground_sunlit(vec3 p) {
-    float cos_sun = max(dot(normalize(p), sky.sun_direction.xyz), 0.0);
+    float cos_sun = max(dot(normalize(p), SUN_DIRECTION), 0.0);
     return STATIC_GROUND_ALBEDO.xyz / PI * cos_sun * sun_transmittance(0.0, STATIC_RADII.x, p);
 }

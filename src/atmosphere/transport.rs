@@ -740,6 +740,21 @@ fn estimate(medium: &Medium, settings: TransportSettings, first_order: u32, star
     total
 }
 
+/// The higher orders alone (2 and up) reaching `origin` from `direction`:
+/// [`full_radiance`]'s `multiple` and `std_error`, without its
+/// single-scattering quadrature (for callers that have L₁ already).
+pub fn multiple_radiance(
+    atmosphere: &Atmosphere,
+    sun: &Sun,
+    origin: DVec3,
+    direction: DVec3,
+    settings: TransportSettings,
+) -> (DVec3, DVec3) {
+    let direction = direction.normalize();
+    let medium = Medium::new(atmosphere, sun);
+    estimate(&medium, settings, 2, &|_: &mut Rng| (origin, direction, 1.0)).mean_and_error()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -29,7 +29,7 @@ pub use empty_pass::EmptyPass;
 pub use frame::PrefixFrames;
 pub use geometry::SceneGeometry;
 pub use plan::{subpass_timing_note, FramePlan, PassKind};
-pub use reference::{render_reference, ReferenceError};
+pub use reference::{render_reference, render_reference_with, ReferenceError, Transport};
 pub use renderer::{FrameTiming, Pixels, Renderer, ViewChange};
 
 use std::path::PathBuf;
