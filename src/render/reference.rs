@@ -15,8 +15,14 @@
 //! ([`crate::atmosphere::reference`], at its image precision): the sky or
 //! the lit ground sphere where no object is hit, plus the attenuated sun
 //! disc; aerial perspective (transmittance and in-scattering over the
-//! distance to the surface) where one is. Rows are shared between the
-//! machine's cores.
+//! distance to the surface) where one is. By default the air's light is
+//! every order of scattering ([`Transport::Full`]: the exact single
+//! scattering plus the Monte Carlo estimate of
+//! [`crate::atmosphere::transport`], seeded per pixel), whatever the
+//! scene's `multiple_scattering`: the reference is the physics, and a
+//! single-scattering render is measured against it like any other
+//! approximation; [`Transport::Single`] gives the exact single-scattering
+//! image. Rows are shared between the machine's cores.
 //!
 //! It lives in `render/` because it is a second renderer (scene in, linear
 //! RGBA out, like [`crate::app::RenderRun::hdr`]); `report/` only compares
