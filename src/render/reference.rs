@@ -147,7 +147,6 @@ pub enum Transport {
 /// that a sweep's RMSE against this reference includes as a floor.
 pub const IMAGE_PATHS: u32 = 1024;
 
-
 /// One object, ready for ray casting.
 #[derive(Clone, Debug, PartialEq)]
 struct ReferenceObject {
@@ -447,9 +446,7 @@ impl ReferenceScene {
                 .sky
                 .as_ref()
                 .map(|sky| (sky.sun.clone(), sky.atmosphere.clone())),
-            transport: Transport::Full {
-                paths: IMAGE_PATHS,
-            },
+            transport: Transport::Full { paths: IMAGE_PATHS },
         })
     }
 
@@ -601,9 +598,8 @@ impl Air<'_> {
         let Some(settings) = self.higher_orders else {
             return single;
         };
-        let higher = |from: DVec3| {
-            multiple_radiance(self.atmosphere, self.sun, from, dir, settings).0
-        };
+        let higher =
+            |from: DVec3| multiple_radiance(self.atmosphere, self.sun, from, dir, settings).0;
         let segment = atmosphere_reference::atmosphere_segment(self.atmosphere, origin, dir);
         let ground = match segment {
             Some((_, end, true)) => Some(end),

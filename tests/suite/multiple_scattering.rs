@@ -129,7 +129,11 @@ fn the_default_sky_matches_full_light_transport() {
     // spread is wide and its own error estimate unreliable where few
     // paths score: only probes it knows to 5 % are judged.
     let known: Vec<(f64, f64)> = twilight.into_iter().filter(|(_, s)| *s <= 0.05).collect();
-    assert!(known.len() >= 10, "{} twilight probes known to 5 %", known.len());
+    assert!(
+        known.len() >= 10,
+        "{} twilight probes known to 5 %",
+        known.len()
+    );
     let (median, max) = median_and_max(&known);
     println!(
         "twilight ({} probes): median {median:.3}, max {max:.3}",
@@ -154,7 +158,10 @@ fn single_scattering_is_too_dark_against_full_transport() {
     let (off_median, _) = median_and_max(&off.errors);
     println!("median error: on {on_median:.3}, off {off_median:.3}");
     assert!(off_median > 0.1, "off {off_median}");
-    assert!(off_median > 3.0 * on_median, "on {on_median}, off {off_median}");
+    assert!(
+        off_median > 3.0 * on_median,
+        "on {on_median}, off {off_median}"
+    );
 }
 
 /// A camera exactly on the ground sees the ground below the horizon: straight
