@@ -888,7 +888,10 @@ pub fn multiple_radiance(
 ) -> (DVec3, DVec3) {
     let direction = direction.normalize();
     let medium = Medium::new(atmosphere, sun);
-    estimate(&medium, settings, 2, &|_: &mut Rng| (origin, direction, 1.0)).mean_and_error()
+    estimate(&medium, settings, 2, &|_: &mut Rng| {
+        (origin, direction, 1.0)
+    })
+    .mean_and_error()
 }
 
 #[cfg(test)]
