@@ -564,13 +564,16 @@ fn print_report(report: &BenchReport) {
     for s in &report.scenes {
         println!();
         println!(
-            "{}  {}  {} triangles  sha256 {}",
+            "{}  {}  {} triangles drawn  sha256 {}",
             s.file,
             s.resolution,
             s.triangles,
             s.sha256.chars().take(12).collect::<String>()
         );
         let knobs: Vec<String> = s.knobs.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        // The tessellation knob's value counts two triangles per cell of
+        // every parametric grid, cells that collapse at a sphere's poles
+        // included; the count above is what the frame draws.
         println!("knobs: {}", knobs.join(", "));
         if s.passes.is_empty() {
             println!("(no GPU timestamps on this device: CPU frame time only)");

@@ -21,8 +21,8 @@ mod renderer;
 mod scene_resources;
 pub mod shader_ids;
 pub mod sky_resources;
-mod sun_tables;
 mod static_lights;
+mod sun_tables;
 pub mod tiles;
 
 pub use empty_pass::EmptyPass;

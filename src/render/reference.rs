@@ -15,8 +15,14 @@
 //! ([`crate::atmosphere::reference`], at its image precision): the sky or
 //! the lit ground sphere where no object is hit, plus the attenuated sun
 //! disc; aerial perspective (transmittance and in-scattering over the
-//! distance to the surface) where one is. Rows are shared between the
-//! machine's cores.
+//! distance to the surface) where one is. By default the air's light is
+//! every order of scattering ([`Transport::Full`]: the exact single
+//! scattering plus the Monte Carlo estimate of
+//! [`crate::atmosphere::transport`], seeded per pixel), whatever the
+//! scene's `multiple_scattering`: the reference is the physics, and a
+//! single-scattering render is measured against it like any other
+//! approximation; [`Transport::Single`] gives the exact single-scattering
+//! image. Rows are shared between the machine's cores.
 //!
 //! It lives in `render/` because it is a second renderer (scene in, linear
 //! RGBA out, like [`crate::app::RenderRun::hdr`]); `report/` only compares
@@ -140,7 +146,6 @@ pub enum Transport {
 /// of about 5 to 10 % of the higher orders, 1 to 3 % of a pixel: noise
 /// that a sweep's RMSE against this reference includes as a floor.
 pub const IMAGE_PATHS: u32 = 1024;
-
 
 /// One object, ready for ray casting.
 #[derive(Clone, Debug, PartialEq)]
@@ -441,9 +446,7 @@ impl ReferenceScene {
                 .sky
                 .as_ref()
                 .map(|sky| (sky.sun.clone(), sky.atmosphere.clone())),
-            transport: Transport::Full {
-                paths: IMAGE_PATHS,
-            },
+            transport: Transport::Full { paths: IMAGE_PATHS },
         })
     }
 
@@ -595,9 +598,8 @@ impl Air<'_> {
         let Some(settings) = self.higher_orders else {
             return single;
         };
-        let higher = |from: DVec3| {
-            multiple_radiance(self.atmosphere, self.sun, from, dir, settings).0
-        };
+        let higher =
+            |from: DVec3| multiple_radiance(self.atmosphere, self.sun, from, dir, settings).0;
         let segment = atmosphere_reference::atmosphere_segment(self.atmosphere, origin, dir);
         let ground = match segment {
             Some((_, end, true)) => Some(end),

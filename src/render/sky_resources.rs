@@ -256,8 +256,7 @@ impl SkyResources {
     /// to it.
     pub fn keeps_static_fields(&self, sky: &Sky, camera: &Camera, plan: &FramePlan) -> bool {
         let block = uniforms(sky, camera, plan.width, plan.height, self.table_size);
-        block.static_fields() == self.static_fields
-            && sun_table_sizes(sky) == self.sun_table_sizes
+        block.static_fields() == self.static_fields && sun_table_sizes(sky) == self.sun_table_sizes
     }
 
     /// Whether the atmosphere pass reads the sky-view table through its
@@ -334,7 +333,11 @@ impl SkyResources {
                     ctx,
                     "sky-view table",
                     ImageDesc {
-                        width: if sky.multiple_scattering { 4 * w } else { 3 * w },
+                        width: if sky.multiple_scattering {
+                            4 * w
+                        } else {
+                            3 * w
+                        },
                         height: h,
                         format: TABLE_FORMAT,
                         usage: ImageUsageFlags::STORAGE | ImageUsageFlags::SAMPLED,

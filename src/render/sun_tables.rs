@@ -22,8 +22,8 @@ use crate::scene::Sky;
 use crate::shaders;
 use crate::vk::{
     CommandBuffer, ComputePipeline, Context, DescriptorBinding, DescriptorPool, DescriptorSet,
-    DescriptorSetLayout, DescriptorType, Format, Image, ImageAspectFlags, ImageDesc, ImageUse,
-    ImageUsageFlags, PipelineLayout, ShaderModule, ShaderStageFlags,
+    DescriptorSetLayout, DescriptorType, Format, Image, ImageAspectFlags, ImageDesc,
+    ImageUsageFlags, ImageUse, PipelineLayout, ShaderModule, ShaderStageFlags,
 };
 use std::sync::Arc;
 use std::time::Instant;
@@ -83,8 +83,7 @@ impl SunTables {
         constants: &[(u32, u32)],
     ) -> Result<SunTables, RenderError> {
         let start = Instant::now();
-        let multiple_scattering =
-            table_image(ctx, "multiple-scattering table", sky.ms_table_size)?;
+        let multiple_scattering = table_image(ctx, "multiple-scattering table", sky.ms_table_size)?;
         let irradiance = table_image(ctx, "sky-irradiance table", sky.irradiance_table_size)?;
         // The frame reads both through set 0. Neither bake statically uses
         // the binding of the table it writes, so pointing them there now
@@ -109,7 +108,10 @@ impl SunTables {
             output.write_storage_image(0, target);
             Ok(Bake { pipeline, output })
         };
-        let ms_bake = bake(shaders::MULTIPLE_SCATTERING_COMP.base(), &multiple_scattering)?;
+        let ms_bake = bake(
+            shaders::MULTIPLE_SCATTERING_COMP.base(),
+            &multiple_scattering,
+        )?;
         let irradiance_bake = bake(shaders::SKY_IRRADIANCE_COMP.base(), &irradiance)?;
         let groups = |(w, h): (u32, u32)| [w.div_ceil(GROUP), h.div_ceil(GROUP), 1];
         CommandBuffer::run_once(ctx, |cmd| {

@@ -134,6 +134,8 @@ pub const KNOBS: &[Knob] = &[
                 .iter()
                 .map(|o| 2 * o.tessellation.0 as u64 * o.tessellation.1 as u64)
                 .sum();
+            // Two per grid cell, the cells that collapse at a sphere's
+            // poles included: more than the frame draws.
             format!("{tris} grid triangles")
         },
     },

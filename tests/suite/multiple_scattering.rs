@@ -86,13 +86,18 @@ fn e3(c: glam::DVec3) -> String {
     format!("[{:.2e}, {:.2e}, {:.2e}]", c.x, c.y, c.z)
 }
 
-/// The median and the maximum of the errors, each less three of its
-/// probe's standard errors (the reference's own noise is not the
+/// The median of the errors as measured (the reference's noise only adds
+/// to it, so judging it is conservative), and their maximum less three of
+/// its probe's standard errors (the reference's own noise is not the
 /// renderer's error).
 fn median_and_max(errors: &[(f64, f64)]) -> (f64, f64) {
-    let mut e: Vec<f64> = errors.iter().map(|(e, s)| (e - 3.0 * s).max(0.0)).collect();
-    e.sort_by(f64::total_cmp);
-    (e[e.len() / 2], *e.last().unwrap())
+    let mut raw: Vec<f64> = errors.iter().map(|(e, _)| *e).collect();
+    raw.sort_by(f64::total_cmp);
+    let max = errors
+        .iter()
+        .map(|(e, s)| (e - 3.0 * s).max(0.0))
+        .fold(0.0, f64::max);
+    (raw[raw.len() / 2], max)
 }
 
 #[test]
@@ -113,6 +118,9 @@ fn the_default_sky_matches_full_light_transport() {
             }
         }
     }
+    // The targets: median 3 %, max 8 %. Measured (4096 paths, the
+    // reference's median standard error 1.1 %): median 1.8 %, max beyond
+    // three standard errors 3.6 %.
     let (median, max) = median_and_max(&day);
     println!("sun 2-90° up: median {median:.3}, max {max:.3}");
     assert!(median <= 0.03, "median {median}");
@@ -121,12 +129,17 @@ fn the_default_sky_matches_full_light_transport() {
     // spread is wide and its own error estimate unreliable where few
     // paths score: only probes it knows to 5 % are judged.
     let known: Vec<(f64, f64)> = twilight.into_iter().filter(|(_, s)| *s <= 0.05).collect();
-    assert!(known.len() >= 10, "{} twilight probes known to 5 %", known.len());
+    assert!(
+        known.len() >= 10,
+        "{} twilight probes known to 5 %",
+        known.len()
+    );
     let (median, max) = median_and_max(&known);
     println!(
         "twilight ({} probes): median {median:.3}, max {max:.3}",
         known.len()
     );
+    // Target 20 %; measured 4.1 % on 21 probes.
     assert!(max <= 0.2, "twilight max {max}");
 }
 
@@ -135,17 +148,20 @@ fn the_default_sky_matches_full_light_transport() {
 /// reference sees the difference.
 #[test]
 fn single_scattering_is_too_dark_against_full_transport() {
-    let on = probe("on", &sky(2.0, 45.0, 150.0, 30.0, ""), 1024);
+    let on = probe("on", &sky(2.0, 45.0, 150.0, 30.0, ""), 4096);
     let off = probe(
         "off",
         &sky(2.0, 45.0, 150.0, 30.0, "multiple_scattering = false\n"),
-        1024,
+        4096,
     );
     let (on_median, _) = median_and_max(&on.errors);
     let (off_median, _) = median_and_max(&off.errors);
     println!("median error: on {on_median:.3}, off {off_median:.3}");
     assert!(off_median > 0.1, "off {off_median}");
-    assert!(off_median > 4.0 * on_median, "on {on_median}, off {off_median}");
+    assert!(
+        off_median > 3.0 * on_median,
+        "on {on_median}, off {off_median}"
+    );
 }
 
 /// A camera exactly on the ground sees the ground below the horizon: straight
