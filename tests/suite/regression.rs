@@ -98,7 +98,7 @@ const REGENERATE: &str = "AERIAL_UPDATE_REFERENCES=1 cargo test --test suite reg
 const PIN_VAR: &str = "GALLIUM_OVERRIDE_CPU_CAPS";
 const PIN: &str = "sse4.1";
 /// The extensions the pin leaves on, which the host must therefore have
-/// for its code to be the reference's (every x86-64 CPU since about 2009).
+/// for its code to be the reference's (Intel CPUs since 2008, AMD since 2011).
 const PIN_KEEPS: [&str; 2] = ["sse4_1", "sse4_2"];
 
 /// PNG text keys of the key (see the module docs).
