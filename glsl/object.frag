@@ -57,6 +57,10 @@ layout(set = MATERIAL_SET, binding = BASE_COLOR_BINDING) uniform sampler2D base_
 layout(set = MATERIAL_SET, binding = NORMAL_MAP_BINDING) uniform sampler2D normal_map;
 #endif
 
+#ifndef GOURAUD
+layout(constant_id = SPEC_TWO_SIDED) const bool TWO_SIDED = false;
+#endif
+
 #ifdef DEBUG_VIEW
 const uint DEBUG_NORMALS = 1u;
 const uint DEBUG_TANGENTS = 2u;
@@ -84,6 +88,10 @@ void main() {
 #else
     // Interpolated normals are shorter than 1: re-normalize per pixel.
     vec3 n = normalize(in_normal);
+    // Two-sided: a face seen from behind is shaded as the other side.
+    if (TWO_SIDED && !gl_FrontFacing) {
+        n = -n;
+    }
 #ifdef NORMAL_MAP
     vec3 m = texture(normal_map, vec2(in_uv.x, 1.0 - in_uv.y)).xyz * 2.0 - 1.0;
     if (object.counts.y != 0u) {

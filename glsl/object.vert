@@ -37,6 +37,9 @@ layout(location = 3) out vec3 out_gouraud;
 #if defined(NORMAL_MAP) || defined(DEBUG_VIEW)
 layout(location = 4) out vec4 out_tangent;
 #endif
+#ifdef GOURAUD
+layout(constant_id = SPEC_TWO_SIDED) const bool TWO_SIDED = false;
+#endif
 
 void main() {
     vec4 world = object.model * vec4(in_position, 1.0);
@@ -57,6 +60,10 @@ void main() {
 #endif
 #ifdef GOURAUD
     vec3 v = normalize(frame.camera_position.xyz - world.xyz);
+    // Two-sided, lit per vertex: the side of the vertex facing the camera.
+    if (TWO_SIDED && dot(n, v) < 0.0) {
+        n = -n;
+    }
     // Gouraud lights with the material colour; the fragment stage
     // multiplies in the texture, which is the classic approximation.
     out_gouraud = blinn_phong(world.xyz, n, v, object.kd.rgb, object.ka.rgb);

@@ -18,6 +18,9 @@
 #define SPEC_LIGHT_ARRAY_LENGTH 2
 #define SPEC_DEBUG_ATTRIBUTE 3
 #define SPEC_SHININESS_EXPONENT 4
+// Object pipelines: both sides drawn, back faces shaded with the normal
+// reversed.
+#define SPEC_TWO_SIDED 6
 // Static lights: whether a pipeline's lights are specialization constants
 // (static_lights.glsl), and the first of their ids, 12 per light.
 #define SPEC_STATIC_LIGHTS 5

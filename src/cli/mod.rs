@@ -144,7 +144,15 @@ pub fn load_scene(
             // Validated like the scene file's output size before use.
             let mut check = Scene::default_scene();
             check.set_output_size(width, height)?;
-            Scene::from_model(path, &model.options(width, height))?
+            let scene = Scene::from_model(path, &model.options(width, height))?;
+            if scene.objects.iter().any(|o| o.two_sided) {
+                eprintln!(
+                    "note: {} has open boundary edges: drawing both sides of its faces \
+                     (two_sided)",
+                    path.display()
+                );
+            }
+            scene
         }
         Some(path) => Scene::load(path)?,
         None => Scene::default_scene(),

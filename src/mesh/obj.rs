@@ -194,6 +194,37 @@ impl ObjModel {
             });
         (high - low).length()
     }
+
+    /// The number of open boundary edges: edges of exactly one triangle,
+    /// corners within `weld_tolerance` times [`Self::diagonal`] of one
+    /// another (in any part) being one point. A closed surface has none;
+    /// a sheet or a band has its rim. A collapsed triangle's edge between
+    /// two corners at one point is no edge.
+    pub fn open_edges(&self, weld_tolerance: f32) -> usize {
+        let points: Vec<Vec3> = self
+            .parts
+            .iter()
+            .flat_map(|p| p.positions.iter().copied())
+            .collect();
+        let group = super::smoothing::weld(&points, weld_tolerance * self.diagonal());
+        drop(points);
+        // Each edge as its two groups, smaller first, packed in one word
+        // (groups are below the number of corners, which fits 32 bits).
+        let mut edges: Vec<u64> = Vec::with_capacity(group.len());
+        for t in group.chunks_exact(3) {
+            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                if a != b {
+                    edges.push(((a.min(b) as u64) << 32) | a.max(b) as u64);
+                }
+            }
+        }
+        drop(group);
+        edges.sort_unstable();
+        edges
+            .chunk_by(|a, b| a == b)
+            .filter(|run| run.len() == 1)
+            .count()
+    }
 }
 
 /// Memory of reading and parsing a model's text, per byte of the file (the

@@ -32,6 +32,10 @@ pub struct PipelineKey {
     /// [`MAX_SHININESS_EXPONENT`], else 0 (specialization constant 4): the
     /// shader then raises to that power by multiplying instead of `pow`.
     pub shininess_exponent: u32,
+    /// Both sides drawn: no back-face culling, and the normal reversed on
+    /// back faces (specialization constant 6, given only when true, so
+    /// one-sided pipelines are created exactly as without it).
+    pub two_sided: bool,
 }
 
 /// The largest shininess the shaders raise to by squaring (nine squarings).
@@ -183,6 +187,7 @@ impl DrawList {
                     } else {
                         shininess_exponent(material.shininess)
                     },
+                    two_sided: object.is_two_sided(material),
                 },
                 texture,
                 normal_map,

@@ -46,7 +46,7 @@
 //!   them.
 //! - Shapes without a closed-form intersection here (torus, flag) and
 //!   material features the formula does not cover (textures, opacity below
-//!   1, Gouraud and toon shading) are refused with an error naming the
+//!   1, two-sided faces, Gouraud and toon shading) are refused with an error naming the
 //!   object, its material and the feature, never approximated.
 
 use glam::{DMat3, DMat4, DQuat, DVec3};
@@ -361,6 +361,9 @@ impl ReferenceScene {
                 Some("a normal map".to_string())
             } else if material.is_transparent() {
                 Some(format!("transparency (opacity {})", material.opacity))
+            } else if object.is_two_sided(material) {
+                // The reference culls back faces, as one-sided draws do.
+                Some("two-sided faces (two_sided)".to_string())
             } else {
                 match material.shading {
                     ShadingModel::Phong => None,

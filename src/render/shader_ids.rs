@@ -18,6 +18,9 @@ pub const SPEC_LIGHT_COUNT: u32 = 1;
 pub const SPEC_LIGHT_ARRAY_LENGTH: u32 = 2;
 pub const SPEC_DEBUG_ATTRIBUTE: u32 = 3;
 pub const SPEC_SHININESS_EXPONENT: u32 = 4;
+/// Whether an object pipeline draws both sides (back faces shaded with
+/// the normal reversed).
+pub const SPEC_TWO_SIDED: u32 = 6;
 /// Whether a pipeline's lights are specialization constants
 /// (`render::static_lights`), and the first of their ids, 12 per light.
 pub const SPEC_STATIC_LIGHTS: u32 = 5;
@@ -70,6 +73,7 @@ mod tests {
             ("SPEC_LIGHT_ARRAY_LENGTH", SPEC_LIGHT_ARRAY_LENGTH),
             ("SPEC_DEBUG_ATTRIBUTE", SPEC_DEBUG_ATTRIBUTE),
             ("SPEC_SHININESS_EXPONENT", SPEC_SHININESS_EXPONENT),
+            ("SPEC_TWO_SIDED", SPEC_TWO_SIDED),
             ("SPEC_STATIC_LIGHTS", SPEC_STATIC_LIGHTS),
             ("SPEC_STATIC_LIGHT_DATA", SPEC_STATIC_LIGHT_DATA),
             ("MAX_STATIC_LIGHTS", MAX_STATIC_LIGHTS),

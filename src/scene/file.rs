@@ -170,6 +170,8 @@ struct MaterialFile {
     opacity: f64,
     #[serde(default = "default_shading")]
     shading: ShadingModel,
+    #[serde(default)]
+    two_sided: bool,
 }
 
 #[derive(Deserialize)]
@@ -192,6 +194,8 @@ struct ObjectFile {
     rotate: Option<RotateFile>,
     #[serde(default = "ones")]
     scale: [f64; 3],
+    #[serde(default)]
+    two_sided: bool,
 }
 
 #[derive(Deserialize)]
@@ -334,6 +338,8 @@ pub(super) struct ModelObject {
     pub(super) options: obj::ModelOptions,
     /// The transform every part shares.
     pub(super) transform: Transform,
+    /// Every part drawn from both sides (`Object::two_sided`).
+    pub(super) two_sided: bool,
 }
 
 /// The materials an object can name while the file is checked.
@@ -703,6 +709,7 @@ impl Check<'_> {
             normal_map_green_down: raw.normal_map_green == Some(GreenFile::Down),
             height_scale,
             shading: raw.shading,
+            two_sided: raw.two_sided,
         })
     }
 
@@ -748,6 +755,7 @@ impl Check<'_> {
             // Replaced when a pending name is resolved.
             material: usize::MAX,
             transform,
+            two_sided: raw.two_sided,
         };
         Ok(match material {
             MaterialRef::Index(i) => {
@@ -848,6 +856,7 @@ impl Check<'_> {
             material,
             options,
             transform,
+            two_sided: raw.two_sided,
         })
     }
 

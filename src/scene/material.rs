@@ -52,6 +52,10 @@ pub struct Material {
     pub height_scale: Option<f32>,
     /// Shading model.
     pub shading: ShadingModel,
+    /// Both sides of every face are drawn (back faces are not culled) and
+    /// a face seen from behind is shaded with its normal reversed, so the
+    /// back of an open sheet is lit as its other side.
+    pub two_sided: bool,
 }
 
 /// Where a base-colour texture comes from.

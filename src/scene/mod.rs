@@ -292,6 +292,7 @@ impl Scene {
     /// shading = "phong"                    # ["phong"] | "gouraud" | "toon"
     /// normal_map = "bumps.png"             # optional tangent-space normal map, relative to the scene file
     /// normal_map_green = "up"              # ["up"] | "down"
+    /// two_sided = false                    # [false]; both sides of the faces drawn
     /// [[objects]]
     /// name = "ball"                        # required, not empty
     /// material = "red"                     # required, a material name
@@ -300,6 +301,7 @@ impl Scene {
     /// translate = [0.0, 1.0, 0.0]          # [0, 0, 0]
     /// rotate = { axis = [0.0, 1.0, 0.0], degrees = 30.0 }  # optional; axis not zero
     /// scale = [1.0, 1.0, 1.0]              # [1, 1, 1]; every component > 0
+    /// two_sided = false                    # [false]; both sides drawn, whatever the material
     /// ```
     ///
     /// Shapes (all lengths > 0): `sphere` (`radius`), `torus`

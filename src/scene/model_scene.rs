@@ -18,6 +18,10 @@
 //!   round, 30 up, 1.0) that outlines the silhouette; plus ambient 0.04,
 //!   and ACES tone mapping;
 //! - the model's MTL materials, or one plain grey material;
+//! - for an open model (one with boundary edges: an edge of exactly one
+//!   triangle, corners welded as the model's object welds them), both
+//!   sides of its faces drawn (`two_sided = true` on the object), so the
+//!   back of a sheet or the inside of a band is lit rather than missing;
 //! - optionally a grey ground plane under the model (at the bottom of its
 //!   bounding box, 16 sphere radii across).
 //!
@@ -265,6 +269,14 @@ pub fn model_scene_toml(model: &Path, options: &ModelSceneOptions) -> Result<Str
     );
     if options.grey {
         let _ = writeln!(s, "material = \"grey\"");
+    }
+    let open_edges = loaded.open_edges(obj::DEFAULT_WELD_TOLERANCE);
+    if open_edges > 0 {
+        let _ = writeln!(
+            s,
+            "# Open model ({open_edges} boundary edges): both sides of its faces drawn.\n\
+             two_sided = true"
+        );
     }
     if let Some(smoothing) = options.smoothing {
         let _ = writeln!(s, "smoothing = \"{}\"", smoothing.name());

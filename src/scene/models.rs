@@ -201,6 +201,7 @@ impl Check<'_> {
                 tessellation: (DEFAULT_TESSELLATION[0], DEFAULT_TESSELLATION[1]),
                 material,
                 transform,
+                two_sided: model.two_sided,
             });
         }
         if objects.is_empty() {
@@ -302,6 +303,7 @@ impl Check<'_> {
             normal_map_green_down: false,
             height_scale: None,
             shading: ShadingModel::Phong,
+            two_sided: false,
         });
         by_name.insert(name, materials.len() - 1);
         Ok(materials.len() - 1)

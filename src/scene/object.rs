@@ -23,6 +23,18 @@ pub struct Object {
     pub material: usize,
     /// Object-to-world transform.
     pub transform: Transform,
+    /// Draw both sides of the object's faces whatever its material says
+    /// (as [`crate::scene::Material::two_sided`]).
+    pub two_sided: bool,
+}
+
+impl Object {
+    /// Whether the object's faces are drawn from both sides: its own
+    /// `two_sided` or its material's (`material`, its entry in
+    /// `Scene::materials`).
+    pub fn is_two_sided(&self, material: &crate::scene::Material) -> bool {
+        self.two_sided || material.two_sided
+    }
 }
 
 /// Object-to-world transform: scale, then rotate, then translate.

@@ -55,6 +55,7 @@ mod sweep_shards;
 mod tall_atmosphere;
 mod texture_filters;
 mod tonemap;
+mod two_sided;
 mod validation;
 mod viewer;
 mod world_precision;

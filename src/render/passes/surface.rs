@@ -135,6 +135,11 @@ impl SurfacePass {
                     (SPEC_DEBUG_ATTRIBUTE, key.debug),
                     (SPEC_SHININESS_EXPONENT, key.shininess_exponent),
                 ];
+                // Only two-sided pipelines carry the constant: one-sided
+                // ones keep its default (false) and their cull mode.
+                if key.two_sided {
+                    specialization.push((SPEC_TWO_SIDED, 1));
+                }
                 specialization.extend(static_lights::constants(
                     setup.scene,
                     resources.light_anchor,
@@ -150,7 +155,11 @@ impl SurfacePass {
                         specialization: &specialization,
                         vertex_stride: std::mem::size_of::<Vertex>() as u32,
                         vertex_attributes: &attributes,
-                        cull_mode: CullModeFlags::BACK,
+                        cull_mode: if key.two_sided {
+                            CullModeFlags::NONE
+                        } else {
+                            CullModeFlags::BACK
+                        },
                         // Reversed-Z: nearer surfaces have larger depth.
                         depth_test: Some(CompareOp::GREATER),
                         // Transparent surfaces test against opaque depth but

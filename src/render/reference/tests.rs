@@ -294,6 +294,7 @@ fn unsupported_features_name_object_material_and_feature() {
             .to_string()
     };
     let sphere = r#"shape = { type = "sphere", radius = 1.0 }"#;
+    let sphere_two_sided = format!("{sphere}\ntwo_sided = true");
     for (object, material, words) in [
         (
             r#"shape = { type = "torus", major_radius = 1.0, minor_radius = 0.2 }"#,
@@ -324,6 +325,16 @@ fn unsupported_features_name_object_material_and_feature() {
             sphere,
             "texture = \"assets/textures/checker.png\"",
             &["'thing'", "'m'", "texture"][..],
+        ),
+        (
+            sphere,
+            "two_sided = true",
+            &["'thing'", "'m'", "two-sided faces (two_sided)"][..],
+        ),
+        (
+            sphere_two_sided.as_str(),
+            "",
+            &["'thing'", "'m'", "two-sided faces (two_sided)"][..],
         ),
     ] {
         let text = error(object, material);
