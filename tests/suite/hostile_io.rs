@@ -805,7 +805,7 @@ fn render_memory_estimate_bounds_the_measured_peak() {
     let out = dir.path().join("o.png");
     let noon = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/earth_noon.toml");
     for scene in [None, Some(noon.as_os_str())] {
-        let render = |side: &str| {
+        let render = |side: &'static str| {
             let mut args = vec![os("render")];
             args.extend(scene);
             args.extend([os("--width"), os(side), os("--height"), os(side)]);
