@@ -540,14 +540,7 @@ fn check_samples(
     // baseline's medians may be edited to move it): only what no
     // comparison can use is refused here; a median the gate cannot divide
     // by is refused by the gate, naming the row (`baseline::Unjudgeable`).
-    for (name, v) in [
-        ("min", s.min),
-        ("median", s.median),
-        ("p95", s.p95),
-        ("max", s.max),
-        ("mean", s.mean),
-        ("std_dev", s.std_dev),
-    ] {
+    for (name, v) in s.named() {
         if !v.is_finite() {
             return Err(format!("{at}.{name}: {v} is not a finite number"));
         }

@@ -169,6 +169,19 @@ pub fn ratio_interval(a: &[f64], b: &[f64]) -> Option<Interval> {
 }
 
 impl Summary {
+    /// The statistics by the names a report's JSON gives them, for checks
+    /// that go through each of them.
+    pub fn named(&self) -> [(&'static str, f64); 6] {
+        [
+            ("min", self.min),
+            ("median", self.median),
+            ("p95", self.p95),
+            ("max", self.max),
+            ("mean", self.mean),
+            ("std_dev", self.std_dev),
+        ]
+    }
+
     /// Summarises `samples` (any order).
     ///
     /// Returns `None` for an empty slice and for any non-finite sample (NaN or

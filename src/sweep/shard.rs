@@ -561,14 +561,7 @@ fn check_rows(path: &Path, result: &SweepResult) -> Result<(), ShardError> {
             ));
         }
         for (name, s) in [("gpu_ms", &row.gpu_ms), ("cpu_ms", &row.cpu_ms)] {
-            for (stat, v) in [
-                ("min", s.min),
-                ("median", s.median),
-                ("p95", s.p95),
-                ("max", s.max),
-                ("mean", s.mean),
-                ("std_dev", s.std_dev),
-            ] {
+            for (stat, v) in s.named() {
                 number(&format!("{name}.{stat}"), v, any)?;
             }
             if s.count == 0 {
