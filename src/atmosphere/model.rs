@@ -103,6 +103,19 @@ pub struct Sky {
     pub irradiance_table_size: (u32, u32),
 }
 
+impl Sky {
+    /// Panels of the sky-view table, side by side: the Rayleigh and Mie
+    /// sums and the transmittance, and the higher orders' sums with
+    /// multiple scattering.
+    pub fn sky_view_panels(&self) -> u32 {
+        if self.multiple_scattering {
+            4
+        } else {
+            3
+        }
+    }
+}
+
 /// How (altitude, direction) maps to the optical-depth table
 /// (`atmosphere.od_table_mapping`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]

@@ -202,11 +202,9 @@ pub fn scene_memory(
         let need = u64::from(w) * u64::from(h) * 16 * 3;
         budget.check(format!("optical-depth table {w}x{h}"), need)?;
         total = total.saturating_add(need);
-        // The sky-view table: three RGBA32F panels of w x h, four with
-        // multiple scattering.
-        let panels = if sky.multiple_scattering { 4 } else { 3 };
+        // The sky-view table: RGBA32F panels of w x h.
         if let Some((w, h)) = sky.sky_view {
-            let need = u64::from(w) * u64::from(h) * 16 * panels;
+            let need = u64::from(w) * u64::from(h) * 16 * u64::from(sky.sky_view_panels());
             budget.check(format!("sky-view table {w}x{h}"), need)?;
             total = total.saturating_add(need);
         }

@@ -165,8 +165,8 @@ pub fn uniforms(
     }
 }
 
-/// Both tables hold four 32-bit floats a texel.
-const TABLE_FORMAT: Format = Format::R32G32B32A32_SFLOAT;
+/// Every table holds four 32-bit floats a texel.
+pub(super) const TABLE_FORMAT: Format = Format::R32G32B32A32_SFLOAT;
 
 /// Fields drop in order: the set before its pool, the layout after the
 /// pipelines that use it (owned by the passes, dropped first).
@@ -202,19 +202,17 @@ pub struct SkyResources {
     /// The multiple-scattering and sky-irradiance tables, with multiple
     /// scattering.
     sun_tables: Option<SunTables>,
-    /// The tables' sizes these resources were made for, with multiple
-    /// scattering (a change needs new tables and shader variants).
-    sun_table_sizes: Option<((u32, u32), (u32, u32))>,
     /// Whether the device filters the tables' format linearly.
     linear_filter: bool,
-    /// The sampler of the multiple-scattering and sky-irradiance tables.
-    _sun_table_sampler: Option<Sampler>,
 }
 
-/// The multiple-scattering settings a set of resources is made for.
-fn sun_table_sizes(sky: &Sky) -> Option<((u32, u32), (u32, u32))> {
-    sky.multiple_scattering
-        .then_some((sky.ms_table_size, sky.irradiance_table_size))
+/// The specialization constants of the atmosphere shaders that carry the
+/// sky block's unchanging fields, and how they filter the
+/// multiple-scattering and sky-irradiance tables.
+fn static_constants(static_fields: [[f32; 4]; 9], linear_filter: bool) -> Vec<(u32, u32)> {
+    float_constants(SPEC_SKY_STATIC, static_fields.into_iter().flatten())
+        .chain([sun_tables::filter_constant(linear_filter)])
+        .collect()
 }
 
 impl SkyUniforms {
@@ -240,15 +238,17 @@ impl SkyResources {
     /// fields, as the atmosphere shaders read them, and how they filter the
     /// multiple-scattering and sky-irradiance tables.
     pub fn static_constants(&self) -> Vec<(u32, u32)> {
-        float_constants(SPEC_SKY_STATIC, self.static_fields.into_iter().flatten())
-            .chain([sun_tables::filter_constant(self.linear_filter)])
-            .collect()
+        static_constants(self.static_fields, self.linear_filter)
     }
 
-    /// Whether these resources hold the multiple-scattering tables (the
-    /// shaders' MULTIPLE_SCATTERING variants read them).
-    pub fn multiple_scattering(&self) -> bool {
-        self.sun_tables.is_some()
+    /// The shader features of the atmosphere shaders that read these
+    /// resources: MULTIPLE_SCATTERING where they hold its tables.
+    pub fn shader_features(&self) -> &'static [&'static str] {
+        if self.sun_tables.is_some() {
+            &["MULTIPLE_SCATTERING"]
+        } else {
+            &[]
+        }
     }
 
     /// Whether `sky` seen by `camera` in `plan` keeps the fields these
@@ -256,7 +256,8 @@ impl SkyResources {
     /// to it.
     pub fn keeps_static_fields(&self, sky: &Sky, camera: &Camera, plan: &FramePlan) -> bool {
         let block = uniforms(sky, camera, plan.width, plan.height, self.table_size);
-        block.static_fields() == self.static_fields && sun_table_sizes(sky) == self.sun_table_sizes
+        block.static_fields() == self.static_fields
+            && SunTables::sizes_for(sky) == self.sun_tables.as_ref().map(SunTables::sizes)
     }
 
     /// Whether the atmosphere pass reads the sky-view table through its
@@ -333,11 +334,7 @@ impl SkyResources {
                     ctx,
                     "sky-view table",
                     ImageDesc {
-                        width: if sky.multiple_scattering {
-                            4 * w
-                        } else {
-                            3 * w
-                        },
+                        width: sky.sky_view_panels() * w,
                         height: h,
                         format: TABLE_FORMAT,
                         usage: ImageUsageFlags::STORAGE | ImageUsageFlags::SAMPLED,
@@ -365,10 +362,9 @@ impl SkyResources {
         // The sky-view table is filtered by the sampler wherever the device
         // can (glsl/atmosphere.frag, SKY_VIEW_HARDWARE_FILTER), and fetched
         // and filtered by hand where it cannot.
+        let linear_filter = crate::vk::supports_linear_sampling(ctx, TABLE_FORMAT);
         let sky_view_sampler = match &sky_view_image {
-            Some(_) if crate::vk::supports_linear_sampling(ctx, TABLE_FORMAT) => {
-                Some(Sampler::clamped(ctx, SamplerFilter::Bilinear)?)
-            }
+            Some(_) if linear_filter => Some(Sampler::clamped(ctx, SamplerFilter::Bilinear)?),
             _ => None,
         };
         let both = ShaderStageFlags::FRAGMENT | ShaderStageFlags::COMPUTE;
@@ -421,35 +417,29 @@ impl SkyResources {
         }
         // The multiple-scattering and sky-irradiance tables are read
         // through the sampler's filter where the device can filter their
-        // format, by four fetches and a blend where it cannot.
-        let linear_filter = crate::vk::supports_linear_sampling(ctx, sun_tables::FORMAT);
+        // format (the other tables' too), by four fetches and a blend where
+        // it cannot.
         let static_fields = block.static_fields();
-        let (sun_tables, sun_table_sampler) = if sky.multiple_scattering {
-            let sampler = Sampler::clamped(
-                ctx,
-                if linear_filter {
-                    SamplerFilter::Bilinear
-                } else {
-                    SamplerFilter::Nearest
-                },
-            )?;
+        let sun_tables = if sky.multiple_scattering {
             let constants = [
                 &crate::render::passes::atmosphere::table_constants(sky)[..],
-                &float_constants(SPEC_SKY_STATIC, static_fields.into_iter().flatten())
-                    .collect::<Vec<_>>(),
-                &[sun_tables::filter_constant(linear_filter)],
+                &static_constants(static_fields, linear_filter),
             ]
             .concat();
-            let tables = SunTables::bake(ctx, sky, &layout, &set, &sampler, &constants)?;
-            (Some(tables), Some(sampler))
+            Some(SunTables::bake(
+                ctx,
+                sky,
+                &layout,
+                &set,
+                linear_filter,
+                &constants,
+            )?)
         } else {
-            (None, None)
+            None
         };
         Ok(SkyResources {
             sun_tables,
-            sun_table_sizes: sun_table_sizes(sky),
             linear_filter,
-            _sun_table_sampler: sun_table_sampler,
             set,
             _pool: pool,
             layout,

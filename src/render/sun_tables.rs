@@ -17,13 +17,14 @@
 //! each writes its table through a set of its own (set 1).
 
 use super::shader_ids::SPEC_SUN_TABLES_LINEAR_FILTER;
+use super::sky_resources::TABLE_FORMAT;
 use super::RenderError;
 use crate::scene::Sky;
 use crate::shaders;
 use crate::vk::{
     CommandBuffer, ComputePipeline, Context, DescriptorBinding, DescriptorPool, DescriptorSet,
-    DescriptorSetLayout, DescriptorType, Format, Image, ImageAspectFlags, ImageDesc,
-    ImageUsageFlags, ImageUse, PipelineLayout, ShaderModule, ShaderStageFlags,
+    DescriptorSetLayout, DescriptorType, Image, ImageAspectFlags, ImageDesc, ImageUsageFlags,
+    ImageUse, PipelineLayout, Sampler, SamplerFilter, ShaderModule, ShaderStageFlags,
 };
 use std::sync::Arc;
 use std::time::Instant;
@@ -31,14 +32,17 @@ use std::time::Instant;
 /// Invocations per workgroup side (`local_size` in both shaders).
 const GROUP: u32 = 8;
 
-/// The tables' texel format: four 32-bit floats, as the other tables.
-pub const FORMAT: Format = Format::R32G32B32A32_SFLOAT;
+/// The sizes of the two tables, multiple scattering then sky irradiance.
+pub type Sizes = ((u32, u32), (u32, u32));
 
 /// The baked tables, sampled by the atmosphere shaders (set 0, bindings 4
-/// and 5); held so they live as long as the set that points at them.
+/// and 5) through their sampler; held so they live as long as the set
+/// that points at them.
 pub struct SunTables {
     _multiple_scattering: Image,
     _irradiance: Image,
+    _sampler: Sampler,
+    sizes: Sizes,
 }
 
 /// The specialization constant that tells the shaders how to filter both
@@ -54,7 +58,7 @@ fn table_image(ctx: &Arc<Context>, name: &str, size: (u32, u32)) -> Result<Image
         ImageDesc {
             width: size.0,
             height: size.1,
-            format: FORMAT,
+            format: TABLE_FORMAT,
             usage: ImageUsageFlags::STORAGE | ImageUsageFlags::SAMPLED,
             mip_levels: 1,
             aspect: ImageAspectFlags::COLOR,
@@ -69,27 +73,49 @@ struct Bake {
 }
 
 impl SunTables {
+    /// The sizes `sky` asks for, or `None` without multiple scattering: a
+    /// change needs new tables and shader variants.
+    pub fn sizes_for(sky: &Sky) -> Option<Sizes> {
+        sky.multiple_scattering
+            .then_some((sky.ms_table_size, sky.irradiance_table_size))
+    }
+
+    /// The sizes these tables were baked at.
+    pub fn sizes(&self) -> Sizes {
+        self.sizes
+    }
+
     /// Makes both tables for `sky` and points bindings 4 and 5 of
     /// `sky_set` (whose layout is `sky_layout`) at them, then bakes them.
-    /// `constants` are the atmosphere shaders' specialization constants
-    /// (the table's mapping and filter, the sky's static fields, the
-    /// tables' filter).
+    /// They are read through the sampler's bilinear filter where
+    /// `linear_filter` (the device filters their format), by texel
+    /// fetches otherwise. `constants` are the atmosphere shaders'
+    /// specialization constants (the table's mapping and filter, the
+    /// sky's static fields, the tables' filter).
     pub fn bake(
         ctx: &Arc<Context>,
         sky: &Sky,
         sky_layout: &DescriptorSetLayout,
         sky_set: &DescriptorSet,
-        sampler: &crate::vk::Sampler,
+        linear_filter: bool,
         constants: &[(u32, u32)],
     ) -> Result<SunTables, RenderError> {
         let start = Instant::now();
+        let sampler = Sampler::clamped(
+            ctx,
+            if linear_filter {
+                SamplerFilter::Bilinear
+            } else {
+                SamplerFilter::Nearest
+            },
+        )?;
         let multiple_scattering = table_image(ctx, "multiple-scattering table", sky.ms_table_size)?;
         let irradiance = table_image(ctx, "sky-irradiance table", sky.irradiance_table_size)?;
         // The frame reads both through set 0. Neither bake statically uses
         // the binding of the table it writes, so pointing them there now
         // (before the bakes are recorded) is valid.
-        sky_set.write_sampled_image(4, &multiple_scattering, sampler);
-        sky_set.write_sampled_image(5, &irradiance, sampler);
+        sky_set.write_sampled_image(4, &multiple_scattering, &sampler);
+        sky_set.write_sampled_image(5, &irradiance, &sampler);
 
         let output_layout = DescriptorSetLayout::new(
             ctx,
@@ -139,6 +165,8 @@ impl SunTables {
         Ok(SunTables {
             _multiple_scattering: multiple_scattering,
             _irradiance: irradiance,
+            _sampler: sampler,
+            sizes: (sky.ms_table_size, sky.irradiance_table_size),
         })
     }
 }

@@ -58,9 +58,8 @@ pub const KNOBS: &[Knob] = &[
         best: Best::Unchanged,
         values: "WIDTHxHEIGHT, e.g. 1280x720",
         apply: |s, v| {
-            let (w, h) = v.split_once('x').ok_or("expected WIDTHxHEIGHT")?;
-            let parse = |t: &str| t.trim().parse::<u32>().map_err(|e| format!("'{t}': {e}"));
-            s.set_output_size(Some(parse(w)?), Some(parse(h)?))
+            let (w, h) = width_x_height(v, "expected WIDTHxHEIGHT")?;
+            s.set_output_size(Some(w), Some(h))
                 .map_err(|e| e.to_string())
         },
         read: |s| format!("{}x{}", s.output.width, s.output.height),
@@ -169,14 +168,10 @@ pub const KNOBS: &[Knob] = &[
         best: Best::Unchanged,
         values: "on | off (off: every light read from its uniform block, to measure the difference)",
         apply: |s, v| {
-            s.output.static_lights = match v {
-                "on" => true,
-                "off" => false,
-                _ => return Err("expected on or off".into()),
-            };
+            s.output.static_lights = parse_on_off(v)?;
             Ok(())
         },
-        read: |s| if s.output.static_lights { "on" } else { "off" }.into(),
+        read: |s| on_off(s.output.static_lights).into(),
     },
     Knob {
         name: "texture_filter",
@@ -236,9 +231,7 @@ pub const KNOBS: &[Knob] = &[
         best: Best::LastListed,
         values: "WIDTHxHEIGHT: optical-depth table texels, direction x altitude (3..=4096 each)",
         apply: |s, v| {
-            let (w, h) = v.split_once('x').ok_or("expected WIDTHxHEIGHT")?;
-            let parse = |t: &str| t.trim().parse::<u32>().map_err(|e| format!("'{t}': {e}"));
-            let (w, h) = (parse(w)?, parse(h)?);
+            let (w, h) = width_x_height(v, "expected WIDTHxHEIGHT")?;
             crate::atmosphere::model::check_table_size(w, h)?;
             sky_mut(s)?.table_size = (w, h);
             Ok(())
@@ -277,9 +270,7 @@ pub const KNOBS: &[Knob] = &[
             let size = if v == "off" {
                 None
             } else {
-                let (w, h) = v.split_once('x').ok_or("expected off or WIDTHxHEIGHT")?;
-                let parse = |t: &str| t.trim().parse::<u32>().map_err(|e| format!("'{t}': {e}"));
-                let (w, h) = (parse(w)?, parse(h)?);
+                let (w, h) = width_x_height(v, "expected off or WIDTHxHEIGHT")?;
                 crate::atmosphere::model::check_sky_view(w, h)?;
                 Some((w, h))
             };
@@ -299,11 +290,7 @@ pub const KNOBS: &[Knob] = &[
         best: Best::Fixed("on"),
         values: "on | off: every order of scattering and the sky's light on the ground, or single scattering alone",
         apply: |s, v| {
-            sky_mut(s)?.multiple_scattering = match v {
-                "on" => true,
-                "off" => false,
-                _ => return Err(format!("expected on or off, got '{v}'")),
-            };
+            sky_mut(s)?.multiple_scattering = parse_on_off(v)?;
             Ok(())
         },
         read: |s| match &s.sky {
@@ -379,11 +366,26 @@ fn on_off(on: bool) -> &'static str {
     }
 }
 
+/// `true` for "on", `false` for "off".
+fn parse_on_off(v: &str) -> Result<bool, String> {
+    match v {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err("expected on or off".into()),
+    }
+}
+
+/// A `WIDTHxHEIGHT` value; `expected` says what the knob takes when `v` has
+/// no `x`.
+fn width_x_height(v: &str, expected: &str) -> Result<(u32, u32), String> {
+    let (w, h) = v.split_once('x').ok_or(expected)?;
+    let parse = |t: &str| t.trim().parse::<u32>().map_err(|e| format!("'{t}': {e}"));
+    Ok((parse(w)?, parse(h)?))
+}
+
 /// A multiple-scattering or sky-irradiance table size, `WIDTHxHEIGHT`.
 fn sun_table_size(v: &str) -> Result<(u32, u32), String> {
-    let (w, h) = v.split_once('x').ok_or("expected WIDTHxHEIGHT")?;
-    let parse = |t: &str| t.trim().parse::<u32>().map_err(|e| format!("'{t}': {e}"));
-    let (w, h) = (parse(w)?, parse(h)?);
+    let (w, h) = width_x_height(v, "expected WIDTHxHEIGHT")?;
     crate::atmosphere::model::check_sun_table_size(w, h)?;
     Ok((w, h))
 }

@@ -87,11 +87,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     } else {
         &[(&[], None)]
     };
-    let multiple: &[&str] = if resources.multiple_scattering() {
-        &["MULTIPLE_SCATTERING"]
-    } else {
-        &[]
-    };
+    let multiple = resources.shader_features();
     let pipelines = draws
         .iter()
         .map(|(features, test)| {

@@ -37,12 +37,10 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         }
     };
     let layout = PipelineLayout::new(setup.ctx, &[&resources.layout])?;
-    let features: &[&str] = if resources.multiple_scattering() {
-        &["MULTIPLE_SCATTERING"]
-    } else {
-        &[]
-    };
-    let shader = ShaderModule::new(setup.ctx, shaders::SKY_VIEW_COMP.spirv(features))?;
+    let shader = ShaderModule::new(
+        setup.ctx,
+        shaders::SKY_VIEW_COMP.spirv(resources.shader_features()),
+    )?;
     let constants = [&table_constants(sky)[..], &resources.static_constants()].concat();
     let pipeline = ComputePipeline::new(setup.ctx, &layout, &shader, &constants)?;
     Ok(Box::new(SkyViewPass {
