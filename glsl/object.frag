@@ -23,6 +23,7 @@
 #include "lighting.glsl"
 #include "object_lighting.glsl"
 #include "octahedral.glsl"
+#include "srgb.glsl"
 
 // Each input exists only in the variants that read it, so the vertex
 // stage never writes an output nobody consumes.
@@ -70,7 +71,20 @@ const uint DEBUG_ALBEDO = 5u;
 layout(constant_id = SPEC_DEBUG_ATTRIBUTE) const uint DEBUG_ATTRIBUTE = DEBUG_NORMALS;
 #endif
 
+// Drawn straight into the 8-bit output (`FrameGraph::new`'s direct path),
+// the colour is sRGB-encoded here, as the tone map would encode it.
+layout(constant_id = SPEC_ENCODE_SRGB) const bool ENCODE_SRGB = false;
+
+void shade();
+
 void main() {
+    shade();
+    if (ENCODE_SRGB) {
+        out_color.rgb = srgb_encode(out_color.rgb);
+    }
+}
+
+void shade() {
     vec4 base = vec4(1.0);
 #ifdef BASE_COLOR_TEXTURE
     // Surface v grows upwards; image rows grow downwards.

@@ -21,6 +21,9 @@
 // Object pipelines: both sides drawn, back faces shaded with the normal
 // reversed.
 #define SPEC_TWO_SIDED 6
+// Object pipelines drawing straight into the 8-bit output: the shader
+// encodes sRGB.
+#define SPEC_ENCODE_SRGB 15
 // Static lights: whether a pipeline's lights are specialization constants
 // (static_lights.glsl), and the first of their ids, 12 per light.
 #define SPEC_STATIC_LIGHTS 5

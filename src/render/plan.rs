@@ -518,8 +518,10 @@ pub fn uses_deferred_lighting(scene: &Scene) -> bool {
         })
 }
 
-/// The 8-bit output: sRGB, so shaders write linear values.
-pub const OUTPUT_FORMAT: Format = Format::R8G8B8A8_SRGB;
+/// The 8-bit output: UNORM holding sRGB-encoded values, which the shaders
+/// writing it encode themselves (`glsl/include/srgb.glsl`), so its bytes do
+/// not depend on the driver's own encode.
+pub const OUTPUT_FORMAT: Format = Format::R8G8B8A8_UNORM;
 pub const DEPTH_FORMAT: Format = Format::D32_SFLOAT;
 /// kd can exceed 1 (it is only required to be >= 0), so not UNORM: the
 /// G-buffer's albedo (kd × texture) and material (ks, shininess) are 16-bit

@@ -21,6 +21,9 @@ pub const SPEC_SHININESS_EXPONENT: u32 = 4;
 /// Whether an object pipeline draws both sides (back faces shaded with
 /// the normal reversed).
 pub const SPEC_TWO_SIDED: u32 = 6;
+/// Whether an object pipeline draws straight into the 8-bit output, whose
+/// values the shader then sRGB-encodes (the output is UNORM).
+pub const SPEC_ENCODE_SRGB: u32 = 15;
 /// Whether a pipeline's lights are specialization constants
 /// (`render::static_lights`), and the first of their ids, 12 per light.
 pub const SPEC_STATIC_LIGHTS: u32 = 5;
@@ -74,6 +77,7 @@ mod tests {
             ("SPEC_DEBUG_ATTRIBUTE", SPEC_DEBUG_ATTRIBUTE),
             ("SPEC_SHININESS_EXPONENT", SPEC_SHININESS_EXPONENT),
             ("SPEC_TWO_SIDED", SPEC_TWO_SIDED),
+            ("SPEC_ENCODE_SRGB", SPEC_ENCODE_SRGB),
             ("SPEC_STATIC_LIGHTS", SPEC_STATIC_LIGHTS),
             ("SPEC_STATIC_LIGHT_DATA", SPEC_STATIC_LIGHT_DATA),
             ("MAX_STATIC_LIGHTS", MAX_STATIC_LIGHTS),

@@ -10,7 +10,7 @@
 
 use super::{PassResources, PassSetup, RecordPass};
 use crate::mesh::Vertex;
-use crate::render::plan::{Draw, FramePlan, PipelineKey, ShadingKey};
+use crate::render::plan::{attachment, Draw, FramePlan, PassIo, PipelineKey, ShadingKey};
 use crate::render::shader_ids::*;
 use crate::render::static_lights;
 use crate::render::RenderError;
@@ -94,6 +94,12 @@ impl SurfacePass {
             draw_keys = surface_keys(&draws, false);
         }
         let keys = distinct(&draw_keys);
+        // Drawn straight into the 8-bit output (UNORM), the shader encodes
+        // sRGB itself, as the tone map does.
+        let encode_srgb = matches!(
+            &setup.decl.io,
+            PassIo::Subpass { colour, .. } if colour.first() == Some(&attachment::OUTPUT)
+        );
         if !draws.is_empty() {
             let resources = setup.scene_resources()?;
             let render_pass = setup.render_pass()?;
@@ -139,6 +145,9 @@ impl SurfacePass {
                 // ones keep its default (false) and their cull mode.
                 if key.two_sided {
                     specialization.push((SPEC_TWO_SIDED, 1));
+                }
+                if encode_srgb {
+                    specialization.push((SPEC_ENCODE_SRGB, 1));
                 }
                 specialization.extend(static_lights::constants(
                     setup.scene,
