@@ -37,6 +37,7 @@ mod hostile_io;
 mod interrupt;
 mod limits;
 mod local_defects;
+mod memory_peaks;
 mod mesh_command;
 mod mikktspace;
 mod missing_assets;
