@@ -299,9 +299,11 @@ pub fn image_memory(w: u32, h: u32, budget: &MemoryBudget) -> Result<(), RenderE
 }
 
 /// Estimated peak memory of running the empty pass alone at `w` x `h`:
-/// its attachment and read-back buffer, and the image read back.
+/// its attachment and read-back buffer and the image read back, 12 bytes
+/// per pixel, and a third more (measured: 11.6 bytes per pixel above the
+/// driver's own memory at 4096x4096).
 pub fn empty_pass_memory(w: u32, h: u32, budget: &MemoryBudget) -> Result<(), RenderError> {
-    let need = u64::from(w) * u64::from(h) * (EMPTY_PASS_BYTES_PER_PIXEL + 4);
+    let need = u64::from(w) * u64::from(h) * 16;
     budget.check(format!("output size {w}x{h}"), need)?;
     Ok(())
 }
