@@ -7,10 +7,14 @@
 //! - `gbuffer`: opaque surfaces for deferred lighting, writing the ambient
 //!   term to the colour target and the G-buffer targets (shader feature
 //!   `GBUFFER`).
+//!
+//! In a scene with an atmosphere every form also lights its surfaces by
+//! the sun and sky at each shaded point (`AirLight`, shader features
+//! `SUN_LIGHT` and `SKY_LIGHT`), reading the atmosphere's set.
 
 use super::{PassResources, PassSetup, RecordPass};
 use crate::mesh::Vertex;
-use crate::render::plan::{Draw, FramePlan, PipelineKey, ShadingKey};
+use crate::render::plan::{AirLight, Draw, FramePlan, PipelineKey, ShadingKey};
 use crate::render::shader_ids::*;
 use crate::render::static_lights;
 use crate::render::RenderError;
@@ -46,11 +50,11 @@ pub struct SurfacePass {
     static_lights: bool,
 }
 
-/// Which pipeline `d` uses: with `static_lights`, a draw without the sun
-/// whose lights fit is specialized by them.
+/// Which pipeline `d` uses: with `static_lights`, a draw whose lights fit
+/// is specialized by them (the atmosphere's sun is not among them: it
+/// follows the frame's sun from the atmosphere's uniforms).
 fn surface_key(d: &Draw, static_lights: bool) -> SurfaceKey {
-    let lights = (static_lights && d.sun.is_none() && static_lights::fits(&d.lights))
-        .then(|| d.lights.clone());
+    let lights = (static_lights && static_lights::fits(&d.lights)).then(|| d.lights.clone());
     (d.pipeline, lights)
 }
 
@@ -96,6 +100,11 @@ impl SurfacePass {
         let keys = distinct(&draw_keys);
         if !draws.is_empty() {
             let resources = setup.scene_resources()?;
+            // The atmosphere's constants, for pipelines it lights.
+            let air_constants = match (&setup.scene.sky, setup.frame.sky) {
+                (Some(sky), Some(sky_resources)) => sky_resources.object_constants(sky),
+                _ => Vec::new(),
+            };
             let render_pass = setup.render_pass()?;
             let blend = match form {
                 Form::Opaque => vec![Blend::Replace],
@@ -121,6 +130,7 @@ impl SurfacePass {
                 } else if key.shading == ShadingKey::Gouraud {
                     features.push("GOURAUD");
                 }
+                features.extend(key.air.shader_features());
                 if !modules.contains_key(&features) {
                     let vert = ShaderModule::new(setup.ctx, shaders::OBJECT_VERT.spirv(&features))?;
                     let frag = ShaderModule::new(setup.ctx, shaders::OBJECT_FRAG.spirv(&features))?;
@@ -145,6 +155,14 @@ impl SurfacePass {
                     resources.light_anchor,
                     lights.as_deref(),
                 ));
+                if key.air != AirLight::None {
+                    if air_constants.is_empty() {
+                        return Err(RenderError::Frame(
+                            "objects lit by the atmosphere, but the frame has no atmosphere".into(),
+                        ));
+                    }
+                    specialization.extend(&air_constants);
+                }
                 let pipeline = GraphicsPipeline::new(
                     setup.ctx,
                     &resources.layout,
@@ -194,6 +212,10 @@ impl RecordPass for SurfacePass {
                 cmd.bind_pipeline(&self.pipelines[key]);
                 if bound.is_none() {
                     cmd.bind_descriptor_set(layout, FRAME_SET, &resources.frame_set, &[]);
+                    // Every draw of a scene shares one AirLight.
+                    if key.0.air != AirLight::None {
+                        cmd.bind_descriptor_set(layout, SKY_SET, &frame.sky()?.set, &[]);
+                    }
                 }
                 bound = Some(key);
             }
