@@ -84,19 +84,34 @@ Light air_sun_light(vec3 transmittance) {
 #ifdef SKY_LIGHT
 // The irradiance from the sky (every order, the direct sun excluded) on a
 // surface of normal n at the point, from the horizontal irradiance E_h of
-// the sky-irradiance table: E_h (1 + n.up) / 2 from the sky, as if its
-// radiance were uniform over the upper hemisphere, plus the light the
-// ground reflects, albedo (E_sun,h + E_h) (1 - n.up) / 2, the ground
-// taken as a uniform Lambertian plane under the point lit like the point
-// itself (E_sun,h the sun's irradiance on a horizontal surface there).
-// docs/atmosphere.md gives its error against full light transport.
+// the sky-irradiance table, after Reindl et al. (1990) without their
+// circumsolar term: E_h (1 + n.up) / 2 (1 + f sin^3(beta / 2)) from the
+// sky, as if its radiance were uniform over the upper hemisphere but for
+// a brighter band along the horizon (beta the surface's tilt, f =
+// sqrt(E_sun,h / (E_sun,h + E_h)): the clearer the air, the brighter the
+// band), plus the light the ground reflects, albedo (E_sun,h + E_h)
+// (1 - n.up) / 2, the ground taken as a uniform Lambertian plane under
+// the point lit like the point itself (E_sun,h the sun's irradiance on a
+// horizontal surface there). docs/atmosphere.md gives its error against
+// full light transport.
+//
+// Only inside the atmosphere, where the table is: above it the sky light
+// is zero (the light the planet and its air reflect into space is left
+// out, as on the Moon of a view from the Moon).
 vec3 air_sky_irradiance(AirPoint a, vec3 n, vec3 sun_transmittance) {
+    if (a.h > STATIC_RADII.y - STATIC_RADII.x) {
+        return vec3(0.0);
+    }
     float mu_s = dot(a.p, SUN_DIRECTION) / a.r;
     vec3 irradiance = sky.sun_irradiance.xyz;
     vec3 horizontal = irradiance * sky_irradiance(a.h, mu_s);
     vec3 sun_horizontal = irradiance * sun_transmittance * max(mu_s, 0.0);
+    vec3 global = sun_horizontal + horizontal;
+    vec3 f = sqrt(sun_horizontal / max(global, vec3(1e-30)));
     float c = dot(n, a.up);
-    return horizontal * (0.5 + 0.5 * c)
-        + STATIC_GROUND_ALBEDO.xyz * (sun_horizontal + horizontal) * (0.5 - 0.5 * c);
+    // sin(beta / 2) = sqrt((1 - cos beta) / 2).
+    float half_tilt = sqrt(max(0.5 - 0.5 * c, 0.0));
+    return horizontal * (0.5 + 0.5 * c) * (1.0 + f * (half_tilt * half_tilt * half_tilt))
+        + STATIC_GROUND_ALBEDO.xyz * global * (0.5 - 0.5 * c);
 }
 #endif
