@@ -315,7 +315,7 @@ fn sky_lights_the_shadowed_side_bluish() {
         let got = surface_radiance(&probe_scene, common::hdr_pixel(&cpu, x, y), x, y);
         let e = relative_error(got, want);
         println!("shadowed side {elevation}°, CPU reference: {got}: {e:.2e}");
-        assert!(e <= 0.01, "CPU reference, {elevation}°: {e:e}");
+        assert!(e <= 0.02, "CPU reference, {elevation}°: {e:e}");
         // Single scattering: no sky light, black in the sun's shadow.
         let single = sphere_scene(sun_degrees, normal, "phong", "forward", false);
         let hdr = common::render(&single, true).hdr.unwrap();
