@@ -115,22 +115,7 @@ impl SurfacePass {
             // count, shading model) share their shader modules.
             let mut modules: BTreeMap<Vec<&str>, (ShaderModule, ShaderModule)> = BTreeMap::new();
             for (key, lights) in keys {
-                let mut features = Vec::new();
-                if key.textured {
-                    features.push("BASE_COLOR_TEXTURE");
-                }
-                if key.normal_mapped {
-                    features.push("NORMAL_MAP");
-                }
-                if form == Form::GBuffer {
-                    features.push("GBUFFER");
-                }
-                if key.debug != 0 {
-                    features.push("DEBUG_VIEW");
-                } else if key.shading == ShadingKey::Gouraud {
-                    features.push("GOURAUD");
-                }
-                features.extend(key.air.shader_features());
+                let features = shader_features(&key, form);
                 if !modules.contains_key(&features) {
                     let vert = ShaderModule::new(setup.ctx, shaders::OBJECT_VERT.spirv(&features))?;
                     let frag = ShaderModule::new(setup.ctx, shaders::OBJECT_FRAG.spirv(&features))?;
@@ -262,6 +247,27 @@ impl RecordPass for SurfacePass {
     }
 }
 
+/// The object shaders' features for a pipeline of `key` in `form`.
+fn shader_features(key: &PipelineKey, form: Form) -> Vec<&'static str> {
+    let mut features = Vec::new();
+    if key.textured {
+        features.push("BASE_COLOR_TEXTURE");
+    }
+    if key.normal_mapped {
+        features.push("NORMAL_MAP");
+    }
+    if form == Form::GBuffer {
+        features.push("GBUFFER");
+    }
+    if key.debug != 0 {
+        features.push("DEBUG_VIEW");
+    } else if key.shading == ShadingKey::Gouraud {
+        features.push("GOURAUD");
+    }
+    features.extend(key.air.shader_features());
+    features
+}
+
 /// The vertex attributes a pipeline consumes: position and normal always,
 /// UVs for textured or normal-mapped materials, tangents only for
 /// normal-mapped ones (shaders that do not read them are not fed them);
@@ -295,4 +301,55 @@ fn vertex_attributes(textured: bool, normal_mapped: bool, debug: bool) -> Vec<Ve
         });
     }
     attributes
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every variant the pass can ask for is compiled: build.rs leaves out
+    /// the combinations the object shaders' rules exclude (the
+    /// atmosphere's light in a debug view, the sky without the sun), and
+    /// none of them is one a pipeline key leads to. A debug view never
+    /// carries the atmosphere's light (`AirLight::of`).
+    #[test]
+    fn every_variant_a_pipeline_can_ask_for_is_compiled() {
+        let mut asked = 0;
+        for form in [Form::Opaque, Form::Transparent, Form::GBuffer] {
+            for shading in [ShadingKey::Phong, ShadingKey::Gouraud, ShadingKey::Toon] {
+                for air in [AirLight::None, AirLight::Sun, AirLight::SunAndSky] {
+                    for debug in [0, 1] {
+                        if debug != 0 && air != AirLight::None {
+                            continue;
+                        }
+                        for bits in 0..4u32 {
+                            let key = PipelineKey {
+                                shading,
+                                textured: bits & 1 != 0,
+                                normal_mapped: bits & 2 != 0,
+                                blended: false,
+                                lights: 0,
+                                debug,
+                                shininess_exponent: 0,
+                                two_sided: false,
+                                air,
+                            };
+                            let features = shader_features(&key, form);
+                            assert!(!shaders::OBJECT_VERT.spirv(&features).is_empty());
+                            assert!(!shaders::OBJECT_FRAG.spirv(&features).is_empty());
+                            asked += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(asked, 3 * 3 * 4 * 4);
+        // And a left-out combination has no SPIR-V.
+        let left_out = shaders::OBJECT_FRAG
+            .features
+            .iter()
+            .position(|f| *f == "SKY_LIGHT")
+            .map(|i| shaders::OBJECT_FRAG.spirv[1 << i]);
+        assert_eq!(left_out, Some(&[][..]));
+    }
 }
