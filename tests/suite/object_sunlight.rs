@@ -3,12 +3,12 @@
 //! Phong, Gouraud and toon materials, against the f64 reference.
 //!
 //! The sun: under a sun 4° up, the transmittance from the sphere's lower
-//! and upper sun-facing flanks (89 m and 513 m up) differs by tens of per
-//! cent in blue, so one colour per object fails; each probe pixel's sun
+//! and upper sun-facing flanks (89 m and 513 m up) differs by 17 % (blue),
+//! so one colour per object fails; each probe pixel's sun
 //! term, recovered from the image by removing the aerial perspective of the
 //! 12 m of air in front of it (from the reference), must match
 //! kd·cos·E·T(point) within 1e-3. The sky: the sphere's shadowed side under
-//! a sun 30° up is lit, bluish, and matches the tilted-surface model
+//! a sun 30° up is lit, bluish where it faces up, and matches the tilted-surface model
 //! (`glsl/include/object_air.glsl`) with the horizontal irradiance of full
 //! light transport; the model's own error against full transport over the
 //! tilted hemisphere is measured by an ignored test
