@@ -21,6 +21,17 @@
 // that code is compiled, and the single-scattering image is unchanged.
 #include "constants.glsl"
 
+// The set of the block and tables below, and an offset added to this
+// file's specialization-constant ids: 0 and 0 in the atmosphere's own
+// shaders; the object shaders, whose set 0 and low ids are their own,
+// define both first (object_air.glsl).
+#ifndef SKY_BLOCK_SET
+#define SKY_BLOCK_SET 0
+#endif
+#ifndef SKY_SPEC_OFFSET
+#define SKY_SPEC_OFFSET 0
+#endif
+
 #if defined(MULTIPLE_SCATTERING) && !defined(BAKING_SKY_IRRADIANCE)
 #define GROUND_SKY_LIGHT
 #endif
@@ -32,7 +43,7 @@
 #define SUN_DIRECTION sky.sun_direction.xyz
 #endif
 
-layout(std140, set = 0, binding = 0) uniform Sky {
+layout(std140, set = SKY_BLOCK_SET, binding = 0) uniform Sky {
     vec4 forward;          // xyz: camera forward (unit)
     vec4 right;            // xyz: camera right * aspect / f
     vec4 up;               // xyz: camera up / f
@@ -59,15 +70,15 @@ layout(std140, set = 0, binding = 0) uniform Sky {
 // static_constants`): lavapipe reads a uniform block once per pixel and
 // per march sample, where constants cost nothing (static_lights.glsl).
 // The camera, the sun and the table frame stay in the block.
-SPEC_VEC4_CONSTANTS(SKY_RADII, SPEC_SKY_STATIC + 0)
-SPEC_VEC4_CONSTANTS(SKY_RAYLEIGH, SPEC_SKY_STATIC + 4)
-SPEC_VEC4_CONSTANTS(SKY_MIE_SCATTERING, SPEC_SKY_STATIC + 8)
-SPEC_VEC4_CONSTANTS(SKY_MIE_EXTINCTION, SPEC_SKY_STATIC + 12)
-SPEC_VEC4_CONSTANTS(SKY_OZONE_ABSORPTION, SPEC_SKY_STATIC + 16)
-SPEC_VEC4_CONSTANTS(SKY_OZONE_LAYER, SPEC_SKY_STATIC + 20)
-SPEC_VEC4_CONSTANTS(SKY_GROUND_ALBEDO, SPEC_SKY_STATIC + 24)
-SPEC_VEC4_CONSTANTS(SKY_VIEWPORT, SPEC_SKY_STATIC + 28)
-SPEC_VEC4_CONSTANTS(SKY_SKY_VIEW, SPEC_SKY_STATIC + 32)
+SPEC_VEC4_CONSTANTS(SKY_RADII, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 0)
+SPEC_VEC4_CONSTANTS(SKY_RAYLEIGH, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 4)
+SPEC_VEC4_CONSTANTS(SKY_MIE_SCATTERING, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 8)
+SPEC_VEC4_CONSTANTS(SKY_MIE_EXTINCTION, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 12)
+SPEC_VEC4_CONSTANTS(SKY_OZONE_ABSORPTION, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 16)
+SPEC_VEC4_CONSTANTS(SKY_OZONE_LAYER, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 20)
+SPEC_VEC4_CONSTANTS(SKY_GROUND_ALBEDO, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 24)
+SPEC_VEC4_CONSTANTS(SKY_VIEWPORT, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 28)
+SPEC_VEC4_CONSTANTS(SKY_SKY_VIEW, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 32)
 #define STATIC_RADII SPEC_VEC4(SKY_RADII)
 #define STATIC_RAYLEIGH SPEC_VEC4(SKY_RAYLEIGH)
 #define STATIC_MIE_SCATTERING SPEC_VEC4(SKY_MIE_SCATTERING)
@@ -80,32 +91,32 @@ SPEC_VEC4_CONSTANTS(SKY_SKY_VIEW, SPEC_SKY_STATIC + 32)
 
 // The optical-depth table, one RGBA32F texel per (direction, altitude),
 // read with texelFetch, or filtered by the sampler (TABLE_FILTER 2).
-layout(set = 0, binding = 1) uniform sampler2D od_table;
+layout(set = SKY_BLOCK_SET, binding = 1) uniform sampler2D od_table;
 
 #ifdef MULTIPLE_SCATTERING
 // Hillaire's Psi_ms per unit solar irradiance, by (cosine of the sun's
 // zenith angle, altitude): the isotropic radiance of every order above
 // the first that a unit of scattering coefficient sends on.
-layout(set = 0, binding = 4) uniform sampler2D ms_table;
+layout(set = SKY_BLOCK_SET, binding = 4) uniform sampler2D ms_table;
 #endif
 #ifdef GROUND_SKY_LIGHT
 // The sky's irradiance on a horizontal surface per unit solar irradiance,
 // by (cosine of the sun's zenith angle, altitude): every order of the
 // sky's light, the direct sun excluded.
-layout(set = 0, binding = 5) uniform sampler2D irradiance_table;
+layout(set = SKY_BLOCK_SET, binding = 5) uniform sampler2D irradiance_table;
 #endif
 // Whether the two tables above are read through the sampler's bilinear
 // filter (the device filters RGBA32F) or by four fetches and a blend.
-layout(constant_id = SPEC_SUN_TABLES_LINEAR_FILTER) const bool SUN_TABLES_LINEAR_FILTER = false;
+layout(constant_id = SKY_SPEC_OFFSET + SPEC_SUN_TABLES_LINEAR_FILTER) const bool SUN_TABLES_LINEAR_FILTER = false;
 
 // The table's mapping (0: horizon, Bruneton-style, split at the
 // horizontal; 1: the seed's linear altitude × linear cosine) and filter
 // (0: manual bilinear; 1: nearest; 2: the sampler's bilinear filter).
-layout(constant_id = SPEC_TABLE_MAPPING) const int TABLE_MAPPING = 0;
-layout(constant_id = SPEC_TABLE_FILTER) const int TABLE_FILTER = 0;
+layout(constant_id = SKY_SPEC_OFFSET + SPEC_TABLE_MAPPING) const int TABLE_MAPPING = 0;
+layout(constant_id = SKY_SPEC_OFFSET + SPEC_TABLE_FILTER) const int TABLE_FILTER = 0;
 // The ozone's integral towards the sun: in closed form (true) or from the
 // table's third channel (false).
-layout(constant_id = SPEC_OZONE_EXACT) const bool OZONE_EXACT = true;
+layout(constant_id = SKY_SPEC_OFFSET + SPEC_OZONE_EXACT) const bool OZONE_EXACT = true;
 
 const float PI = 3.14159265358979;
 const float INF = 1.0 / 0.0;

@@ -11,6 +11,13 @@
 #define MATERIAL_SET 2
 #define BASE_COLOR_BINDING 0
 #define NORMAL_MAP_BINDING 1
+// Object pipelines lit by an atmosphere's sun and sky (object_air.glsl):
+// the atmosphere's own set (its block and tables, atmosphere.glsl), with
+// the atmosphere shaders' specialization constants moved up by
+// SPEC_OBJECT_SKY_OFFSET, past the object pipelines' own ids (the static
+// lights end at SPEC_STATIC_LIGHT_DATA + 12 * MAX_STATIC_LIGHTS = 112).
+#define SKY_SET 3
+#define SPEC_OBJECT_SKY_OFFSET 128
 
 // Object and lighting pipelines' specialization constants.
 #define SPEC_SHADING_MODEL 0

@@ -11,6 +11,13 @@ pub const OBJECT_SET: u32 = 1;
 pub const MATERIAL_SET: u32 = 2;
 pub const BASE_COLOR_BINDING: u32 = 0;
 pub const NORMAL_MAP_BINDING: u32 = 1;
+/// Object pipelines lit by an atmosphere's sun and sky: the atmosphere's
+/// own set (`SkyResources::set`), after the material set.
+pub const SKY_SET: u32 = 3;
+/// Added to the atmosphere shaders' specialization-constant ids in object
+/// pipelines, past the object pipelines' own ids (the static lights end at
+/// `SPEC_STATIC_LIGHT_DATA + 12 * MAX_STATIC_LIGHTS`).
+pub const SPEC_OBJECT_SKY_OFFSET: u32 = 128;
 
 /// Object and lighting pipelines' specialization constants.
 pub const SPEC_SHADING_MODEL: u32 = 0;
@@ -57,6 +64,11 @@ pub fn float_constants(
     (first..).zip(values.into_iter().map(f32::to_bits))
 }
 
+const _: () = assert!(
+    SPEC_STATIC_LIGHT_DATA + 12 * MAX_STATIC_LIGHTS <= SPEC_OBJECT_SKY_OFFSET,
+    "the atmosphere's constants in object pipelines overlap the static lights"
+);
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -71,6 +83,8 @@ mod tests {
             ("MATERIAL_SET", MATERIAL_SET),
             ("BASE_COLOR_BINDING", BASE_COLOR_BINDING),
             ("NORMAL_MAP_BINDING", NORMAL_MAP_BINDING),
+            ("SKY_SET", SKY_SET),
+            ("SPEC_OBJECT_SKY_OFFSET", SPEC_OBJECT_SKY_OFFSET),
             ("SPEC_SHADING_MODEL", SPEC_SHADING_MODEL),
             ("SPEC_LIGHT_COUNT", SPEC_LIGHT_COUNT),
             ("SPEC_LIGHT_ARRAY_LENGTH", SPEC_LIGHT_ARRAY_LENGTH),

@@ -14,7 +14,7 @@
 //! shaders camera-relative.
 
 use super::plan::FramePlan;
-use super::shader_ids::{float_constants, SPEC_SKY_STATIC};
+use super::shader_ids::{float_constants, SPEC_OBJECT_SKY_OFFSET, SPEC_SKY_STATIC};
 use super::sun_tables::{self, SunTables};
 use super::RenderError;
 use crate::atmosphere::OpticalDepthTable;
@@ -174,7 +174,8 @@ pub struct SkyResources {
     /// Binding 0: uniforms; 1: optical-depth table; 2: the sky-view table
     /// written (compute); 3: the sky-view table read (fragment); 4 and 5:
     /// the multiple-scattering and sky-irradiance tables, with multiple
-    /// scattering.
+    /// scattering. Object pipelines bind it too, as their `SKY_SET`, for
+    /// the sun and sky light at each shaded point.
     pub set: DescriptorSet,
     _pool: DescriptorPool,
     pub layout: DescriptorSetLayout,
@@ -239,6 +240,18 @@ impl SkyResources {
     /// multiple-scattering and sky-irradiance tables.
     pub fn static_constants(&self) -> Vec<(u32, u32)> {
         static_constants(self.static_fields, self.linear_filter)
+    }
+
+    /// The specialization constants of object pipelines that read these
+    /// resources (`glsl/include/object_air.glsl`): the march's table
+    /// constants and [`static_constants`](Self::static_constants), each
+    /// id moved up by `SPEC_OBJECT_SKY_OFFSET`.
+    pub fn object_constants(&self, sky: &Sky) -> Vec<(u32, u32)> {
+        crate::render::passes::atmosphere::table_constants(sky)
+            .into_iter()
+            .chain(self.static_constants())
+            .map(|(id, value)| (id + SPEC_OBJECT_SKY_OFFSET, value))
+            .collect()
     }
 
     /// The shader features of the atmosphere shaders that read these
@@ -367,7 +380,11 @@ impl SkyResources {
             Some(_) if linear_filter => Some(Sampler::clamped(ctx, SamplerFilter::Bilinear)?),
             _ => None,
         };
-        let both = ShaderStageFlags::FRAGMENT | ShaderStageFlags::COMPUTE;
+        // The block and the tables the object shaders read for the sun and
+        // sky light on objects are visible to vertex shaders too (Gouraud
+        // lights per vertex).
+        let both =
+            ShaderStageFlags::VERTEX | ShaderStageFlags::FRAGMENT | ShaderStageFlags::COMPUTE;
         let mut bindings = vec![
             DescriptorBinding {
                 binding: 0,

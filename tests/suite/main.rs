@@ -45,6 +45,7 @@ mod model_corpus;
 mod multiple_scattering;
 mod normal_maps;
 mod obj_models;
+mod object_sunlight;
 mod outputs;
 mod pixel_oracle;
 mod real_models;
