@@ -443,6 +443,36 @@ struct Path {
     float t_end;        // distance from the camera to the end
 };
 
+// Sample i of n along a march of length t_end: its distance and its
+// step (x, y). Inside the atmosphere samples crowd near the camera
+// (t = L u^2), where the density is highest; from space, rays that end on
+// the ground crowd them towards it (march_from says why).
+vec2 march_sample(int i, int n, float t_end, bool inside, bool crowd_ground) {
+    float u = (float(i) + 0.5) / float(n);
+    float t_space = crowd_ground ? t_end * (1.0 - (1.0 - u) * (1.0 - u)) : t_end * u;
+    float dt_space = crowd_ground ? t_end * 2.0 * (1.0 - u) / float(n) : t_end / float(n);
+    float t = inside ? t_end * u * u : t_space;
+    float dt = inside ? t_end * 2.0 * u / float(n) : dt_space;
+    return vec2(t, dt);
+}
+
+#ifdef MULTIPLE_SCATTERING
+// Samples between two reads of the multiple-scattering table in a march.
+// At 4 the default sky moves by at most a few 1e-4 of its radiance
+// (docs/atmosphere.md, "Cost").
+#ifndef MS_KNOT_STRIDE
+#define MS_KNOT_STRIDE 4
+#endif
+
+// Psi_ms at distance t along a march with b = dot(o, d), c_bottom =
+// |o|^2 - Rb^2, sun_b = dot(o, sun) and sun_d = dot(d, sun).
+vec3 multiple_scattering_at(float t, float c_bottom, float b, float sun_b, float sun_d) {
+    float r;
+    float h = altitude(c_bottom, b, t, r);
+    return multiple_scattering(h, (sun_b + t * sun_d) / r);
+}
+#endif
+
 // Marches the ray from the camera along d (unit) up to a surface at
 // t_surface (INF: none). ground: 0 decides by the sphere test; 1 ignores
 // the ground; 2 ends at the ground, or where the ray grazes it (the rows
@@ -514,14 +544,23 @@ Path march_from(vec3 o, float c_bottom, float c_top, vec3 d, float t_surface, in
     // towards that point cost the orbit's grazing row 1.3 % instead of
     // 0.6 %).
     bool crowd_ground = path.end == END_GROUND;
+#ifdef MULTIPLE_SCATTERING
+    // Psi_ms changes slowly along a ray (with the altitude and the sun's
+    // angle, not with the density): it is read at every MS_KNOT_STRIDE-th
+    // sample and at the last, and interpolated linearly between. A table
+    // read per sample was most of what multiple scattering added to the
+    // march.
+    float sun_b = dot(o, SUN_DIRECTION);
+    float sun_d = dot(d, SUN_DIRECTION);
+    int knot_a = 0;
+    int knot_b = min(MS_KNOT_STRIDE, n - 1);
+    vec3 psi_a = multiple_scattering_at(march_sample(0, n, t_end, inside, crowd_ground).x, c_bottom, b, sun_b, sun_d);
+    vec3 psi_b = multiple_scattering_at(march_sample(knot_b, n, t_end, inside, crowd_ground).x, c_bottom, b, sun_b, sun_d);
+#endif
     for (int i = 0; i < n; ++i) {
-        float u = (float(i) + 0.5) / float(n);
-        // Inside the atmosphere samples crowd near the camera (t = L u^2),
-        // where the density is highest.
-        float t_space = crowd_ground ? t_end * (1.0 - (1.0 - u) * (1.0 - u)) : t_end * u;
-        float dt_space = crowd_ground ? t_end * 2.0 * (1.0 - u) / float(n) : t_end / float(n);
-        float t = inside ? t_end * u * u : t_space;
-        float dt = inside ? t_end * 2.0 * u / float(n) : dt_space;
+        vec2 sample_t = march_sample(i, n, t_end, inside, crowd_ground);
+        float t = sample_t.x;
+        float dt = sample_t.y;
         float r;
         float h = altitude(c_bottom, b, t, r);
         vec3 rho = densities(h);
@@ -536,9 +575,17 @@ Path march_from(vec3 o, float c_bottom, float c_top, vec3 d, float t_surface, in
         // test, and the view's transmittance alone.
         vec3 view = exp(-tau) * dt;
         vec3 weight = view * exp(-sun_tau) * (lit ? 1.0 : 0.0);
-        float mu_s = dot(o + t * d, SUN_DIRECTION) / r;
+        // The loop's bounds are constants, so every lane moves to the next
+        // knot together.
+        if (i == knot_b && i < n - 1) {
+            knot_a = knot_b;
+            psi_a = psi_b;
+            knot_b = min(knot_b + MS_KNOT_STRIDE, n - 1);
+            psi_b = multiple_scattering_at(march_sample(knot_b, n, t_end, inside, crowd_ground).x, c_bottom, b, sun_b, sun_d);
+        }
+        vec3 psi = mix(psi_a, psi_b, float(i - knot_a) / float(max(knot_b - knot_a, 1)));
         vec3 scattering = STATIC_RAYLEIGH.xyz * rho.x + STATIC_MIE_SCATTERING.xyz * rho.y;
-        path.multiple += scattering * multiple_scattering(h, mu_s) * view;
+        path.multiple += scattering * psi * view;
 #else
         // One exponential for both paths; no branch (lanes stay together).
         vec3 weight = exp(-(tau + sun_tau)) * (lit ? dt : 0.0);
