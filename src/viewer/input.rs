@@ -277,8 +277,14 @@ mod tests {
         );
         assert_eq!(Key::Char('5').action(), Some(Action::CycleKnob(5)));
         assert_eq!(Key::Char('0').action(), Some(Action::CycleKnob(10)));
-        assert_eq!(Key::Named(NamedKey::F2).action(), Some(Action::CycleKnob(11)));
-        assert_eq!(Key::Named(NamedKey::F11).action(), Some(Action::CycleKnob(20)));
+        assert_eq!(
+            Key::Named(NamedKey::F2).action(),
+            Some(Action::CycleKnob(11))
+        );
+        assert_eq!(
+            Key::Named(NamedKey::F11).action(),
+            Some(Action::CycleKnob(20))
+        );
         for n in 1..=KNOB_KEYS {
             let key = Key::parse(&knob_key(n).unwrap()).unwrap();
             assert_eq!(key.action(), Some(Action::CycleKnob(n)), "knob {n}");

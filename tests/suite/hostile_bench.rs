@@ -269,20 +269,14 @@ fn every_input_of_bench_and_sweep_is_bounded_and_never_blocks() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Class 3: an interrupt (SIGINT or SIGTERM) to `bench` stops every child
-/// it started, whatever it was doing: valgrind counting instructions, the
-/// other build of `--against` (with what it started), this build's own
-/// round. The run exits 130 and leaves no process and no temporary folder
-/// behind.
-#[test]
-fn interrupts_leave_no_child_and_no_temporary_folder() {
-    let dir = common::fresh_dir("hostile-bench", "interrupts");
-    let other = dir.join("other-build");
-    hanging_build(&other);
-    let tmp = dir.join("tmp");
-    std::fs::create_dir_all(&tmp).unwrap();
-    type Wanted = fn(&str) -> bool;
-    let cases: [(&str, Vec<String>, Wanted); 3] = [
+/// Which child process a case waits for, by its command name.
+type Wanted = fn(&str) -> bool;
+
+/// The interrupt tests' runs of `bench` that leave a child to stop:
+/// valgrind counting instructions, and a hanging other build of
+/// `--against` (`other`), each with the child it waits for.
+fn child_cases(other: &Path) -> Vec<(&'static str, Vec<String>, Wanted)> {
+    vec![
         (
             "valgrind",
             vec!["--metric".into(), "instructions".into()],
@@ -298,30 +292,53 @@ fn interrupts_leave_no_child_and_no_temporary_folder() {
             ],
             |comm| comm == "sleep",
         ),
-        (
-            "round-child",
-            vec![
-                "--against".into(),
-                env!("CARGO_BIN_EXE_aerial").into(),
-                "--rounds".into(),
-                "1000".into(),
-            ],
-            |comm| comm == "aerial",
-        ),
-    ];
+    ]
+}
+
+/// Starts a tiny `bench` with `args`, marked with `value` and with its
+/// temporary files in `tmp`, and waits until the child it starts is
+/// running.
+fn start_until_child(args: &[String], value: &str, tmp: &Path, wanted: Wanted) -> Child {
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let mut parent = tiny_bench(&args)
+        .env(MARKER, value)
+        .env("TMPDIR", tmp)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for_child(&mut parent, value, wanted);
+    parent
+}
+
+/// Class 3: an interrupt (SIGINT or SIGTERM) to `bench` stops every child
+/// it started, whatever it was doing: valgrind counting instructions, the
+/// other build of `--against` (with what it started), this build's own
+/// round. The run exits 130 and leaves no process and no temporary folder
+/// behind.
+#[test]
+fn interrupts_leave_no_child_and_no_temporary_folder() {
+    let dir = common::fresh_dir("hostile-bench", "interrupts");
+    let other = dir.join("other-build");
+    hanging_build(&other);
+    let tmp = dir.join("tmp");
+    std::fs::create_dir_all(&tmp).unwrap();
+    let mut cases = child_cases(&other);
+    cases.push((
+        "round-child",
+        vec![
+            "--against".into(),
+            env!("CARGO_BIN_EXE_aerial").into(),
+            "--rounds".into(),
+            "1000".into(),
+        ],
+        |comm| comm == "aerial",
+    ));
     for (name, args, wanted) in cases {
         for signal in [libc::SIGINT, libc::SIGTERM] {
             let value = format!("{name}-{signal}-{}", std::process::id());
-            let args: Vec<&str> = args.iter().map(String::as_str).collect();
-            let mut parent = tiny_bench(&args)
-                .env(MARKER, &value)
-                .env("TMPDIR", &tmp)
-                .stdin(Stdio::null())
-                .stdout(Stdio::null())
-                .stderr(Stdio::piped())
-                .spawn()
-                .unwrap();
-            wait_for_child(&mut parent, &value, wanted);
+            let mut parent = start_until_child(&args, &value, &tmp, wanted);
             // SAFETY: kill sends a signal to the process this test started.
             assert_eq!(unsafe { libc::kill(parent.id() as libc::pid_t, signal) }, 0);
             let start = Instant::now();
@@ -370,36 +387,10 @@ fn a_second_interrupt_during_cleanup_leaves_nothing_behind() {
     hanging_build(&other);
     let tmp = dir.join("tmp");
     std::fs::create_dir_all(&tmp).unwrap();
-    type Wanted = fn(&str) -> bool;
-    let cases: [(&str, Vec<String>, Wanted); 2] = [
-        (
-            "valgrind",
-            vec!["--metric".into(), "instructions".into()],
-            |comm| comm.contains("grind"),
-        ),
-        (
-            "other-build",
-            vec![
-                "--against".into(),
-                other.display().to_string(),
-                "--rounds".into(),
-                "1".into(),
-            ],
-            |comm| comm == "sleep",
-        ),
-    ];
+    let cases = child_cases(&other);
     for (name, args, wanted) in cases {
         let value = format!("twice-{name}-{}", std::process::id());
-        let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        let mut parent = tiny_bench(&args)
-            .env(MARKER, &value)
-            .env("TMPDIR", &tmp)
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        wait_for_child(&mut parent, &value, wanted);
+        let mut parent = start_until_child(&args, &value, &tmp, wanted);
         let pid = parent.id();
         // SAFETY: kill sends a signal to the process this test started.
         assert_eq!(unsafe { libc::kill(pid as libc::pid_t, libc::SIGINT) }, 0);

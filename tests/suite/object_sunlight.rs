@@ -184,6 +184,18 @@ fn sun_on_a_600_m_sphere_follows_each_point() {
     assert!(difference > 0.05, "{difference:e}");
 }
 
+/// The local zenith at `point` (world space) and the sun's irradiance
+/// through the air on a horizontal surface there, in f64.
+fn sun_on_horizontal(atmosphere: &Atmosphere, sun: &Sun, point: DVec3) -> (DVec3, DVec3) {
+    let rel = point - atmosphere.center;
+    let up = rel.normalize();
+    let transmittance = reference::sun_transmittance(atmosphere, rel, sun.direction);
+    (
+        up,
+        sun.irradiance * transmittance * up.dot(sun.direction).max(0.0),
+    )
+}
+
 /// The tilted-surface model of the sky light (`object_air.glsl`), in f64,
 /// with `horizontal` the sky's irradiance E_h on a horizontal surface at
 /// `point` (world space), β the surface's tilt from level:
@@ -196,11 +208,7 @@ fn sky_model(
     n: DVec3,
     horizontal: DVec3,
 ) -> DVec3 {
-    let rel = point - atmosphere.center;
-    let up = rel.normalize();
-    let mu_s = up.dot(sun.direction);
-    let transmittance = reference::sun_transmittance(atmosphere, rel, sun.direction);
-    let sun_horizontal = sun.irradiance * transmittance * mu_s.max(0.0);
+    let (up, sun_horizontal) = sun_on_horizontal(atmosphere, sun, point);
     let global = sun_horizontal + horizontal;
     let cos_tilt = n.dot(up);
     let tilt = cos_tilt.clamp(-1.0, 1.0).acos();
@@ -221,11 +229,7 @@ fn isotropic_model(
     n: DVec3,
     horizontal: DVec3,
 ) -> DVec3 {
-    let rel = point - atmosphere.center;
-    let up = rel.normalize();
-    let mu_s = up.dot(sun.direction);
-    let transmittance = reference::sun_transmittance(atmosphere, rel, sun.direction);
-    let sun_horizontal = sun.irradiance * transmittance * mu_s.max(0.0);
+    let (up, sun_horizontal) = sun_on_horizontal(atmosphere, sun, point);
     let c = n.dot(up);
     horizontal * (0.5 + 0.5 * c)
         + atmosphere.ground_albedo * (sun_horizontal + horizontal) * (0.5 - 0.5 * c)

@@ -14,9 +14,7 @@
 
 use super::{PassResources, PassSetup, RecordPass};
 use crate::mesh::Vertex;
-use crate::render::plan::{
-    attachment, AirLight, Draw, FramePlan, PassIo, PipelineKey, ShadingKey,
-};
+use crate::render::plan::{attachment, AirLight, Draw, FramePlan, PassIo, PipelineKey, ShadingKey};
 use crate::render::shader_ids::*;
 use crate::render::static_lights;
 use crate::render::RenderError;
