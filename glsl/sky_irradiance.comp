@@ -19,8 +19,11 @@ layout(set = 1, binding = 0, rgba32f) uniform writeonly image2D irradiance_out;
 
 // Directions over the upper hemisphere, cosine-weighted strata (sin^2 of
 // the zenith angle evenly spaced) × azimuth over [0, pi] (the sky is
-// mirror-symmetric about the plane of the zenith and the sun).
-const int ZENITH_STRATA = 8;
+// mirror-symmetric about the plane of the zenith and the sun). 32 zenith
+// strata, not 8: the sky brightens steeply towards the horizon, and one
+// stratum over its last 20 degrees left the irradiance about 1 % (blue)
+// low.
+const int ZENITH_STRATA = 32;
 const int AZIMUTH_STRATA = 16;
 
 void main() {
