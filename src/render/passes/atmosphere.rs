@@ -79,14 +79,23 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     ]
     .concat();
     // (shader features, depth test) per draw.
-    let draws: &[(&[&str], Option<CompareOp>)] = if resources.sky_view.is_some() {
-        &[
-            (&["SKY_VIEW"], Some(CompareOp::EQUAL)),
-            (&[], Some(CompareOp::LESS)),
-        ]
+    // With the aerial-perspective volume, pixels with a surface read it
+    // (the AERIAL_VOLUME variant, LESS) and the others take the sky view
+    // or march (EQUAL); without, the marching variant draws the surfaces.
+    let surfaces: &[&str] = if resources.aerial_volume.is_some() {
+        &["AERIAL_VOLUME"]
     } else {
-        &[(&[], None)]
+        &[]
     };
+    let draws: Vec<(&[&str], Option<CompareOp>)> =
+        match (resources.sky_view.is_some(), surfaces.is_empty()) {
+            (true, _) => vec![
+                (&["SKY_VIEW"], Some(CompareOp::EQUAL)),
+                (surfaces, Some(CompareOp::LESS)),
+            ],
+            (false, false) => vec![(&[], Some(CompareOp::EQUAL)), (surfaces, Some(CompareOp::LESS))],
+            (false, true) => vec![(&[], None)],
+        };
     let multiple = resources.shader_features();
     let pipelines = draws
         .iter()
