@@ -673,6 +673,13 @@ mod tests {
             true,
         ));
         plans.push(FramePlan::for_hdr_image(8, 8, true));
+        let (mut scene, _) = load("earth_objects.toml");
+        scene.sky.as_mut().unwrap().aerial_perspective = AerialPerspective::Volume;
+        plans.push(FramePlan::new(
+            &scene,
+            &SceneGeometry::new(&scene).unwrap(),
+            false,
+        ));
         let mut seen = std::collections::HashSet::new();
         for decl in plans.iter().flat_map(|p| &p.passes) {
             assert_eq!(decl.kind.is_subpass(), decl.is_subpass(), "{decl:?}");
@@ -879,5 +886,84 @@ mod tests {
         let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);
         assert!(plan.pass_names().contains(&"atmosphere"));
         assert!(plan.has_attachment(attachment::HDR));
+    }
+
+    /// The aerial-perspective volume's pass (and with it its image,
+    /// bindings and shader variant, which the renderer builds for the pass)
+    /// is in a frame only with aerial_perspective = "volume" and objects
+    /// under the atmosphere; it reaches the far side of the farthest object
+    /// in view.
+    #[test]
+    fn only_volume_mode_with_objects_under_an_atmosphere_gets_the_aerial_volume() {
+        let plan_of =
+            |scene: &Scene| FramePlan::new(scene, &SceneGeometry::new(scene).unwrap(), false);
+        let (mut scene, plan) = load("earth_objects.toml");
+        assert!(!plan.has(PassKind::AerialVolume));
+        assert_eq!(plan.aerial_volume_reach, None);
+        scene.sky.as_mut().unwrap().aerial_perspective = AerialPerspective::Volume;
+        let plan = plan_of(&scene);
+        assert_eq!(
+            plan.pass_names(),
+            vec![
+                "sky view",
+                "aerial volume",
+                "opaque",
+                "atmosphere",
+                "tonemap",
+                "readback"
+            ]
+        );
+        // The farthest sphere: radius 600 m, its centre 13 013.7 m away.
+        let reach = plan.aerial_volume_reach.unwrap();
+        assert!((13_613.0..13_700.0).contains(&reach), "{reach}");
+        // Deferred lighting and no sky view: still there.
+        scene.output.lighting = Lighting::Deferred;
+        scene.sky.as_mut().unwrap().sky_view = None;
+        let plan = plan_of(&scene);
+        assert_eq!(
+            plan.pass_names(),
+            vec![
+                "aerial volume",
+                "gbuffer",
+                "lighting",
+                "atmosphere",
+                "tonemap",
+                "readback"
+            ]
+        );
+        // A debug view draws no atmosphere, so no volume.
+        let mut debug = scene.clone();
+        debug.output.debug_view = Some(crate::scene::DebugView::Normals);
+        assert!(!plan_of(&debug).has(PassKind::AerialVolume));
+        // No objects: nothing reads the volume.
+        let (mut sky_only, _) = load("earth_noon.toml");
+        sky_only.sky.as_mut().unwrap().aerial_perspective = AerialPerspective::Volume;
+        let plan = plan_of(&sky_only);
+        assert!(!plan.has(PassKind::AerialVolume), "{:?}", plan.pass_names());
+        assert_eq!(plan.aerial_volume_reach, None);
+    }
+
+    /// The reach counts only objects that may be in view, and stops at the
+    /// far plane.
+    #[test]
+    fn the_aerial_volume_reaches_the_farthest_object_in_view() {
+        let (mut scene, _) = load("earth_objects.toml");
+        let eye = scene.camera.eye;
+        let forward = (scene.camera.look_at - eye).normalize();
+        let ahead = (eye + 100.0 * forward, 1.0_f32);
+        let behind = (eye - 1e5 * forward, 10.0_f32);
+        let reach = aerial_volume_reach(&scene, &[ahead, behind]);
+        assert!((reach - 101.0).abs() < 1e-9, "{reach}");
+        // Just outside the view cone to the side, however far: left out.
+        let side = glam::DVec3::Y.cross(forward).normalize();
+        let aside = (eye + 1e4 * (forward + 2.0 * side), 1.0_f32);
+        assert!((aerial_volume_reach(&scene, &[ahead, aside]) - 101.0).abs() < 1e-9);
+        // An object around the camera counts.
+        let around = (eye, 5.0_f32);
+        assert!((aerial_volume_reach(&scene, &[around]) - 5.0).abs() < 1e-9);
+        // The far plane cuts it, at the frustum's corner.
+        scene.camera.far = Some(50.0);
+        let reach = aerial_volume_reach(&scene, &[ahead]);
+        assert!(reach > 50.0 && reach < 70.0, "{reach}");
     }
 }

@@ -264,7 +264,11 @@ pub struct AerialVolume {
 }
 
 impl AerialVolume {
-    fn new(ctx: &Arc<Context>, sky: &Sky, linear_filter: bool) -> Result<AerialVolume, RenderError> {
+    fn new(
+        ctx: &Arc<Context>,
+        sky: &Sky,
+        linear_filter: bool,
+    ) -> Result<AerialVolume, RenderError> {
         let (w, h, d) = sky.aerial_volume;
         let image = Image::new_volume(
             ctx,

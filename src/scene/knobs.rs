@@ -8,8 +8,8 @@
 //! in `viewer::knobs`.
 
 use super::{
-    AerialPerspective, HdrFormat, Lighting, OzoneDepth, Scene, ShadingModel, TableFilter, TableMapping, TextureFilter,
-    ToneMapOperator,
+    AerialPerspective, HdrFormat, Lighting, OzoneDepth, Scene, ShadingModel, TableFilter,
+    TableMapping, TextureFilter, ToneMapOperator,
 };
 
 /// One named setting.

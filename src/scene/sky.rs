@@ -461,7 +461,9 @@ impl Check<'_> {
         )?;
         let aerial_volume = match &atmosphere.aerial_volume {
             None => DEFAULT_AERIAL_VOLUME,
-            Some(v) => parse_aerial_volume(v).map_err(|e| self.invalid("atmosphere.aerial_volume", e))?,
+            Some(v) => {
+                parse_aerial_volume(v).map_err(|e| self.invalid("atmosphere.aerial_volume", e))?
+            }
         };
         Ok(Some(Sky {
             sky_view,
@@ -541,7 +543,10 @@ mod tests {
         assert_eq!(sky.sun.angular_radius, 0.004675);
         assert!(sky.sun.disc);
         assert_eq!(sky.samples, super::DEFAULT_ATMOSPHERE_SAMPLES);
-        assert_eq!(sky.aerial_perspective, crate::scene::AerialPerspective::March);
+        assert_eq!(
+            sky.aerial_perspective,
+            crate::scene::AerialPerspective::March
+        );
         assert_eq!(sky.aerial_volume, (32, 32, 32));
         // The centre defaults to [0, -bottom_radius, 0] for any radius.
         let scene = parse("[sun]\ndirection = [0.0, 1.0, 0.0]\n[atmosphere]\nbottom_radius = 1000.0\ntop_radius = 1100.0\n").unwrap();

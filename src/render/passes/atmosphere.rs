@@ -93,7 +93,10 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
                 (&["SKY_VIEW"], Some(CompareOp::EQUAL)),
                 (surfaces, Some(CompareOp::LESS)),
             ],
-            (false, false) => vec![(&[], Some(CompareOp::EQUAL)), (surfaces, Some(CompareOp::LESS))],
+            (false, false) => vec![
+                (&[], Some(CompareOp::EQUAL)),
+                (surfaces, Some(CompareOp::LESS)),
+            ],
             (false, true) => vec![(&[], None)],
         };
     let multiple = resources.shader_features();
