@@ -9,8 +9,11 @@
 //! surface), so each shader variant holds only its own path and
 //! lavapipe skips the pixels a draw does not cover before shading them
 //! (with the march's code merely present in the sky-view shader, the
-//! frame measured about 20 % more CPU time). The uniforms and tables are
-//! the frame's [`SkyResources`].
+//! frame measured about 20 % more CPU time). With the aerial-perspective
+//! volume (see [`super::aerial_volume`]) the surface pixels read it instead
+//! of marching (the AERIAL_VOLUME variant, LESS), and the others take the
+//! sky view or march (EQUAL). The uniforms and tables are the frame's
+//! [`SkyResources`].
 
 use super::{fullscreen_pipeline, InputAttachments, PassResources, PassSetup, RecordPass};
 use crate::atmosphere::TableMapping;
