@@ -11,7 +11,15 @@
 //!
 //! and every combination is compiled with those preprocessor defines, so the
 //! plan can ask for any of them (`OBJECT_FRAG.spirv(&["GBUFFER"])`) without
-//! one line per combination. Each stage becomes a `ShaderVariants` constant
+//! one line per combination. Combinations no pipeline uses can be left out,
+//! one rule a line:
+//!
+//! ```glsl
+//! // requires: SKY_LIGHT SUN_LIGHT
+//! // excludes: SUN_LIGHT DEBUG_VIEW
+//! ```
+//!
+//! (the first flag only together with the second; never both). Each stage becomes a `ShaderVariants` constant
 //! named after its file (`object.frag` → `OBJECT_FRAG`). A GLSL error fails
 //! the build with shaderc's `file:line: message`.
 //!
@@ -52,14 +60,50 @@ fn main() {
             .filter_map(|line| line.trim().strip_prefix("// feature:"))
             .flat_map(|rest| rest.split_whitespace().map(str::to_string))
             .collect();
+        let bit = |flag: &str| {
+            let i = features
+                .iter()
+                .position(|f| f == flag)
+                .unwrap_or_else(|| panic!("{name}: rule names an undeclared feature {flag}"));
+            1u32 << i
+        };
+        // (flag, other flag, whether the rule is `requires`).
+        let rules: Vec<(u32, u32, bool)> = source
+            .lines()
+            .filter_map(|line| {
+                let line = line.trim();
+                let (rest, requires) = match line.strip_prefix("// requires:") {
+                    Some(rest) => (rest, true),
+                    None => (line.strip_prefix("// excludes:")?, false),
+                };
+                let flags: Vec<&str> = rest.split_whitespace().collect();
+                assert!(
+                    flags.len() == 2,
+                    "{name}: a rule names two features: {line}"
+                );
+                Some((bit(flags[0]), bit(flags[1]), requires))
+            })
+            .collect();
+        let compiled = |combination: u32| {
+            rules
+                .iter()
+                .all(|&(a, b, requires)| combination & a == 0 || (combination & b != 0) == requires)
+        };
+        let count = (0..1u32 << features.len()).filter(|&c| compiled(c)).count();
         assert!(
-            features.len() <= 6,
-            "{name}: at most 6 feature flags (64 variants)"
+            features.len() <= 8 && count <= 64,
+            "{name}: at most 64 variants ({count} from {} feature flags)",
+            features.len()
         );
         let constant = constant_name(&name);
         let mut spirv_files = Vec::new();
         // Bit i of the combination enables features[i].
         for combination in 0..1u32 << features.len() {
+            if !compiled(combination) {
+                // Left out by a rule: no SPIR-V.
+                spirv_files.push(None);
+                continue;
+            }
             let defines: Vec<&String> = features
                 .iter()
                 .enumerate()
@@ -102,7 +146,7 @@ fn main() {
                     }
                     let file = format!("{constant}_{combination}.spv");
                     std::fs::write(out.join(&file), artifact.as_binary_u8()).expect("write SPIR-V");
-                    spirv_files.push(file);
+                    spirv_files.push(Some(file));
                 }
                 Err(e) => {
                     eprintln!("GLSL error in {display} (features {defines:?}):\n{e}");
@@ -113,7 +157,10 @@ fn main() {
         let quoted: Vec<String> = features.iter().map(|f| format!("{f:?}")).collect();
         let includes: Vec<String> = spirv_files
             .iter()
-            .map(|f| format!("include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{f}\"))"))
+            .map(|f| match f {
+                Some(f) => format!("include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{f}\"))"),
+                None => "&[]".to_string(),
+            })
             .collect();
         writeln!(
             generated,

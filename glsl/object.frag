@@ -1,8 +1,7 @@
 #version 450
 // Shades object fragments. Forward: the lit colour into the colour target.
 // With GBUFFER (deferred lighting), Phong surfaces write their ambient term
-// (plus the lights of their own block: only the sun of a scene with an
-// atmosphere, whose colour is per object) to the colour target and their
+// (plus the atmosphere's sun and sky, below) to the colour target and their
 // material and normal to the G-buffer, and the lighting pass adds the
 // scene's lights; the other shading models are still
 // shaded here and write a zero material, so the lighting pass adds nothing
@@ -10,6 +9,12 @@
 // With NORMAL_MAP, the shading normal comes from a tangent-space normal
 // map: T along increasing u, B = sign * cross(N, T) along increasing v,
 // a texel holding 0.5 + 0.5 * (x, y, z).
+// With SUN_LIGHT (a scene with an atmosphere), every model is also lit by
+// the sun through the air at this pixel's own point, and with SKY_LIGHT
+// (multiple scattering) by the sky (object_air.glsl); in the G-buffer
+// form too, with the ambient term: per pixel, the sun's colour has no
+// place in the G-buffer, and the lighting pass's tiles would only repeat
+// it for every pixel.
 // With DEBUG_VIEW, the fragment writes one attribute instead of a colour
 // (DEBUG_ATTRIBUTE: world-space normal after normal mapping, tangent,
 // bitangent, UV, or albedo), for finding seams and broken frames.
@@ -18,11 +23,19 @@
 // feature: NORMAL_MAP
 // feature: DEBUG_VIEW
 // feature: GOURAUD
+// feature: SUN_LIGHT
+// feature: SKY_LIGHT
+// requires: SKY_LIGHT SUN_LIGHT
+// excludes: SUN_LIGHT DEBUG_VIEW
 #include "variant_rules.glsl"
 #include "scene_data.glsl"
 #include "lighting.glsl"
+#ifdef SUN_LIGHT
+#include "object_air.glsl"
+#endif
 #include "object_lighting.glsl"
 #include "octahedral.glsl"
+#include "srgb.glsl"
 
 // Each input exists only in the variants that read it, so the vertex
 // stage never writes an output nobody consumes.
@@ -70,7 +83,20 @@ const uint DEBUG_ALBEDO = 5u;
 layout(constant_id = SPEC_DEBUG_ATTRIBUTE) const uint DEBUG_ATTRIBUTE = DEBUG_NORMALS;
 #endif
 
+// Drawn straight into the 8-bit output (`FrameGraph::new`'s direct path),
+// the colour is sRGB-encoded here, as the tone map would encode it.
+layout(constant_id = SPEC_ENCODE_SRGB) const bool ENCODE_SRGB = false;
+
+void shade();
+
 void main() {
+    shade();
+    if (ENCODE_SRGB) {
+        out_color.rgb = srgb_encode(out_color.rgb);
+    }
+}
+
+void shade() {
     vec4 base = vec4(1.0);
 #ifdef BASE_COLOR_TEXTURE
     // Surface v grows upwards; image rows grow downwards.
@@ -128,9 +154,9 @@ void main() {
     vec3 v = normalize(frame.camera_position.xyz - in_world_position);
 #ifdef GBUFFER
     if (SHADING_MODEL == SHADING_PHONG) {
-        // Ambient plus the lights in the object's own block: only the sun
-        // (a colour per object, from the atmosphere), if the scene has one;
-        // the lighting pass adds the scene's lights.
+        // Ambient (and the atmosphere's sun and sky, if the scene has
+        // one; the object's block holds no lights here); the lighting
+        // pass adds the scene's lights.
         out_color = vec4(blinn_phong(in_world_position, n, v, kd, ka), alpha);
         out_albedo = vec4(kd, 1.0);
         out_normal = octahedral_encode(n);

@@ -5,9 +5,16 @@
 // feature: NORMAL_MAP
 // feature: DEBUG_VIEW
 // feature: GOURAUD
+// feature: SUN_LIGHT
+// feature: SKY_LIGHT
+// requires: SKY_LIGHT SUN_LIGHT
+// excludes: SUN_LIGHT DEBUG_VIEW
 #include "variant_rules.glsl"
 #include "scene_data.glsl"
 #include "lighting.glsl"
+#ifdef SUN_LIGHT
+#include "object_air.glsl"
+#endif
 #include "object_lighting.glsl"
 
 layout(location = 0) in vec3 in_position;

@@ -1,8 +1,10 @@
 #version 450
 #include "constants.glsl"
 // Tone-map subpass: reads the HDR colour of this pixel as an input
-// attachment and writes display colour; the sRGB attachment encodes it.
+// attachment and writes display colour, sRGB-encoded here into the UNORM
+// output (srgb.glsl says why not by the attachment).
 #include "tonemap.glsl"
+#include "srgb.glsl"
 
 layout(input_attachment_index = 0, set = 0, binding = 0) uniform subpassInput hdr;
 layout(location = 0) out vec4 out_color;
@@ -11,13 +13,9 @@ const int TONEMAP_REINHARD = 0;
 const int TONEMAP_ACES = 1;
 // No curve: the exposed value clamped to [0, 1] (LDR output with --hdr).
 const int TONEMAP_NONE = 2;
-// Debug views: a signed attribute v shown as 0.5 + 0.5 v in the PNG. The
-// target encodes sRGB, so the linear value that encodes to it is written.
+// Debug views: a signed attribute v shown as 0.5 + 0.5 v in the PNG,
+// written as it is (no sRGB encode).
 const int TONEMAP_DEBUG = 3;
-
-vec3 srgb_to_linear(vec3 c) {
-    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
-}
 layout(constant_id = SPEC_TONEMAP_OPERATOR) const int OPERATOR = TONEMAP_REINHARD;
 layout(constant_id = SPEC_TONEMAP_EXPOSURE) const float EXPOSURE = 1.0;
 
@@ -26,7 +24,7 @@ void main() {
         vec3 v = subpassLoad(hdr).rgb;
         bvec3 nan = isnan(v);
         v = vec3(nan.x ? 0.0 : v.x, nan.y ? 0.0 : v.y, nan.z ? 0.0 : v.z);
-        out_color = vec4(srgb_to_linear(clamp(0.5 + 0.5 * v, 0.0, 1.0)), 1.0);
+        out_color = vec4(clamp(0.5 + 0.5 * v, 0.0, 1.0), 1.0);
         return;
     }
     // Exposure first, then sanitize: the product of a large exposure and a
@@ -35,10 +33,11 @@ void main() {
     // the curve monotonic for every finite exposure.
     vec3 c = sanitize_hdr(subpassLoad(hdr).rgb * EXPOSURE);
     if (OPERATOR == TONEMAP_ACES) {
-        out_color = vec4(aces_fit(c), 1.0);
+        c = aces_fit(c);
     } else if (OPERATOR == TONEMAP_NONE) {
-        out_color = vec4(clamp(c, 0.0, 1.0), 1.0);
+        c = clamp(c, 0.0, 1.0);
     } else {
-        out_color = vec4(reinhard(c), 1.0);
+        c = reinhard(c);
     }
+    out_color = vec4(srgb_encode(c), 1.0);
 }

@@ -243,11 +243,21 @@ pub fn run(
     // Refuse what does not fit before the device allocates anything.
     let budget = MemoryBudget::from_env().map_err(RenderError::from)?;
     match source {
-        RunSource::Scene(scene) => preflight::scene_memory(scene, settings.keep_hdr, &budget)?,
+        RunSource::Scene(scene) => {
+            // The empty pass timed between frames shares the device.
+            let empty_pass = if settings.empty_pass_between_frames {
+                preflight::EMPTY_PASS_BYTES_PER_PIXEL
+            } else {
+                0
+            };
+            preflight::scene_bytes(scene, settings.keep_hdr, empty_pass, &budget)?;
+        }
         RunSource::HdrImage(image, _) => {
             preflight::image_memory(image.width, image.height, &budget)?
         }
-        RunSource::EmptyPass { width, height } => preflight::image_memory(width, height, &budget)?,
+        RunSource::EmptyPass { width, height } => {
+            preflight::empty_pass_memory(width, height, &budget)?
+        }
         #[cfg(feature = "validation-checks")]
         RunSource::ValidationCheck(_) => {}
     }

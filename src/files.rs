@@ -60,8 +60,9 @@ fn pending() -> std::sync::MutexGuard<'static, Option<HashSet<PathBuf>>> {
     PENDING.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-/// Removes every temporary file still being written. For a process that
-/// ends without unwinding (it exits right after); holding the lock also waits for a rename in
+/// Removes every temporary file still being written, and every
+/// [`TempFolder`] still in use. For a process that ends without unwinding
+/// (it exits right after); holding the lock also waits for a rename in
 /// progress, so a file is either complete under its final name or gone.
 pub fn remove_pending() {
     let mut guard = pending();
@@ -73,6 +74,68 @@ pub fn remove_pending() {
     // Leave the lock held until the process exits: no commit may start
     // after the cleanup. (The guard is forgotten, never unlocked.)
     std::mem::forget(guard);
+    let folders = pending_folders();
+    for path in folders.iter() {
+        remove_folder(path);
+    }
+    // Likewise: no folder is made, or half removed by its drop, after this.
+    std::mem::forget(folders);
+}
+
+/// Temporary folders in use, for [`remove_pending`].
+static PENDING_FOLDERS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn pending_folders() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    PENDING_FOLDERS.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// Removes `path` and everything in it. A process that wrote into it may
+/// have been killed a moment ago and its last files may still appear, so
+/// the removal is repeated (a few times, briefly) until the folder is gone.
+fn remove_folder(path: &Path) {
+    for _ in 0..50 {
+        match std::fs::remove_dir_all(path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound && path.exists() => {
+                std::thread::sleep(std::time::Duration::from_millis(10));
+            }
+            _ => return,
+        }
+    }
+}
+
+/// A temporary folder (in `TMPDIR`) for files a command makes and reads
+/// itself, such as a child process's report. It is removed with its
+/// contents when dropped, and by [`remove_pending`] when the process ends
+/// without unwinding (a second interrupt), so neither way of stopping
+/// leaves it behind.
+#[derive(Debug)]
+pub struct TempFolder {
+    path: PathBuf,
+}
+
+impl TempFolder {
+    /// Makes the folder. Registered under the same lock the cleanup takes,
+    /// so none is made once the cleanup has run.
+    pub fn new() -> std::io::Result<TempFolder> {
+        let mut folders = pending_folders();
+        let path = tempfile::tempdir()?.keep();
+        folders.push(path.clone());
+        Ok(TempFolder { path })
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for TempFolder {
+    fn drop(&mut self) {
+        // Removed under the lock: the cleanup of a process ending at once
+        // finds the folder either still whole and registered, or gone.
+        let mut folders = pending_folders();
+        remove_folder(&self.path);
+        folders.retain(|p| *p != self.path);
+    }
 }
 
 /// What makes two paths the same file: the device and inode on Unix, so a

@@ -17,9 +17,10 @@
 //! `compare`, encoding after the device is gone), and when the work
 //! reaches no safe point within [`GRACE`] of the signal (a single very
 //! long driver call) or at a second signal, the process ends at once: the
-//! temporary output files are removed ([`crate::files::remove_pending`])
-//! and it exits with `_exit`, which runs no destructors, so it cannot
-//! crash either.
+//! child process groups it started are killed and waited for
+//! ([`spawn_tracked_group`]), the temporary output files and folders are
+//! removed ([`crate::files::remove_pending`]), and it exits with `_exit`,
+//! which runs no destructors, so it cannot crash either.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
@@ -58,6 +59,80 @@ impl Busy {
 impl Drop for Busy {
     fn drop(&mut self) {
         BUSY.fetch_sub(1, Ordering::SeqCst);
+    }
+}
+
+/// Process groups of the children running now (see
+/// [`spawn_tracked_group`]), stopped before the process ends at once.
+static CHILD_GROUPS: std::sync::Mutex<Vec<u32>> = std::sync::Mutex::new(Vec::new());
+
+fn child_groups() -> std::sync::MutexGuard<'static, Vec<u32>> {
+    CHILD_GROUPS.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// Spawns `command`, which must lead a process group of its own, and
+/// records the group: if the process then ends at once (a second
+/// interrupt, or no safe point within [`GRACE`]), the group is killed and
+/// its leader waited for before the temporary files and folders are
+/// removed, so nothing writes into a folder being removed and nothing is
+/// left running. Spawned under the lock the cleanup takes: no child
+/// starts after it. Call [`untrack_group`] once the child has ended,
+/// before reaping it.
+pub fn spawn_tracked_group(
+    command: &mut std::process::Command,
+) -> std::io::Result<std::process::Child> {
+    let mut groups = child_groups();
+    let child = command.spawn()?;
+    groups.push(child.id());
+    Ok(child)
+}
+
+/// Forgets the group of `pid` (the child has ended and is about to be
+/// reaped, after which its id may be reused).
+pub fn untrack_group(pid: u32) {
+    child_groups().retain(|&g| g != pid);
+}
+
+/// Kills every recorded child group and waits, at most [`STOP_WAIT`], for
+/// each leader to end; keeps the lock, so no child starts after this.
+#[cfg(target_os = "linux")]
+fn stop_child_groups() {
+    let groups = child_groups();
+    for &pid in groups.iter() {
+        // SAFETY: kill has no memory effects; the group's leader is this
+        // process's child and not reaped yet (it is untracked first), so
+        // the id is still its group's.
+        unsafe { libc::kill(-(pid as libc::pid_t), libc::SIGKILL) };
+    }
+    let deadline = std::time::Instant::now() + STOP_WAIT;
+    for &pid in groups.iter() {
+        while std::time::Instant::now() < deadline && !ended(pid) {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+    std::mem::forget(groups);
+}
+
+/// How long the process waits for its killed children to end before it
+/// removes their temporary folders and exits.
+#[cfg(target_os = "linux")]
+const STOP_WAIT: Duration = Duration::from_secs(5);
+
+/// Whether the child `pid` has ended (or was reaped by another thread),
+/// without reaping it.
+#[cfg(target_os = "linux")]
+fn ended(pid: u32) -> bool {
+    // SAFETY: waitid fills the zeroed siginfo_t it is given; WNOWAIT
+    // leaves the child waitable, WNOHANG returns at once.
+    unsafe {
+        let mut info: libc::siginfo_t = std::mem::zeroed();
+        let r = libc::waitid(
+            libc::P_PID,
+            pid as libc::id_t,
+            &mut info,
+            libc::WEXITED | libc::WNOHANG | libc::WNOWAIT,
+        );
+        r != 0 || info.si_pid() != 0
     }
 }
 
@@ -196,8 +271,10 @@ fn watch(read_fd: libc::c_int) {
             }
         }
     }
-    // Under the lock of the pending files: a commit in progress finishes
-    // first, so its files are whole or gone.
+    // Children first: once they are gone, nothing writes into the
+    // temporary folders. Then, under the lock of the pending files, a
+    // commit in progress finishes first, so its files are whole or gone.
+    stop_child_groups();
     crate::files::remove_pending();
     if forced {
         eprintln!("{FORCED_MESSAGE}; no output written");

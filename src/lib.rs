@@ -32,6 +32,8 @@ pub mod shaders {
         /// The flags the file declares (`// feature: NAME`), in order.
         pub features: &'static [&'static str],
         /// SPIR-V per combination; bit i of the index enables `features[i]`.
+        /// Empty for a combination the file's rules leave out
+        /// (`// requires:`, `// excludes:`, see `build.rs`).
         pub spirv: &'static [&'static [u8]],
     }
 
@@ -46,7 +48,15 @@ pub mod shaders {
                 .enumerate()
                 .filter(|(_, f)| enabled.contains(f))
                 .fold(0, |acc, (i, _)| acc | (1 << i));
-            self.spirv[index]
+            let spirv = self.spirv[index];
+            // A pass asking for a combination the rules leave out is a bug
+            // in the pass, not in any input.
+            assert!(
+                !spirv.is_empty(),
+                "{}: the combination {enabled:?} is not compiled",
+                self.file
+            );
+            spirv
         }
 
         /// The variant with no feature enabled.

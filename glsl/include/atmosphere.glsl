@@ -21,6 +21,17 @@
 // that code is compiled, and the single-scattering image is unchanged.
 #include "constants.glsl"
 
+// The set of the block and tables below, and an offset added to this
+// file's specialization-constant ids: 0 and 0 in the atmosphere's own
+// shaders; the object shaders, whose set 0 and low ids are their own,
+// define both first (object_air.glsl).
+#ifndef SKY_BLOCK_SET
+#define SKY_BLOCK_SET 0
+#endif
+#ifndef SKY_SPEC_OFFSET
+#define SKY_SPEC_OFFSET 0
+#endif
+
 #if defined(MULTIPLE_SCATTERING) && !defined(BAKING_SKY_IRRADIANCE)
 #define GROUND_SKY_LIGHT
 #endif
@@ -32,7 +43,7 @@
 #define SUN_DIRECTION sky.sun_direction.xyz
 #endif
 
-layout(std140, set = 0, binding = 0) uniform Sky {
+layout(std140, set = SKY_BLOCK_SET, binding = 0) uniform Sky {
     vec4 forward;          // xyz: camera forward (unit)
     vec4 right;            // xyz: camera right * aspect / f
     vec4 up;               // xyz: camera up / f
@@ -59,15 +70,15 @@ layout(std140, set = 0, binding = 0) uniform Sky {
 // static_constants`): lavapipe reads a uniform block once per pixel and
 // per march sample, where constants cost nothing (static_lights.glsl).
 // The camera, the sun and the table frame stay in the block.
-SPEC_VEC4_CONSTANTS(SKY_RADII, SPEC_SKY_STATIC + 0)
-SPEC_VEC4_CONSTANTS(SKY_RAYLEIGH, SPEC_SKY_STATIC + 4)
-SPEC_VEC4_CONSTANTS(SKY_MIE_SCATTERING, SPEC_SKY_STATIC + 8)
-SPEC_VEC4_CONSTANTS(SKY_MIE_EXTINCTION, SPEC_SKY_STATIC + 12)
-SPEC_VEC4_CONSTANTS(SKY_OZONE_ABSORPTION, SPEC_SKY_STATIC + 16)
-SPEC_VEC4_CONSTANTS(SKY_OZONE_LAYER, SPEC_SKY_STATIC + 20)
-SPEC_VEC4_CONSTANTS(SKY_GROUND_ALBEDO, SPEC_SKY_STATIC + 24)
-SPEC_VEC4_CONSTANTS(SKY_VIEWPORT, SPEC_SKY_STATIC + 28)
-SPEC_VEC4_CONSTANTS(SKY_SKY_VIEW, SPEC_SKY_STATIC + 32)
+SPEC_VEC4_CONSTANTS(SKY_RADII, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 0)
+SPEC_VEC4_CONSTANTS(SKY_RAYLEIGH, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 4)
+SPEC_VEC4_CONSTANTS(SKY_MIE_SCATTERING, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 8)
+SPEC_VEC4_CONSTANTS(SKY_MIE_EXTINCTION, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 12)
+SPEC_VEC4_CONSTANTS(SKY_OZONE_ABSORPTION, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 16)
+SPEC_VEC4_CONSTANTS(SKY_OZONE_LAYER, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 20)
+SPEC_VEC4_CONSTANTS(SKY_GROUND_ALBEDO, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 24)
+SPEC_VEC4_CONSTANTS(SKY_VIEWPORT, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 28)
+SPEC_VEC4_CONSTANTS(SKY_SKY_VIEW, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 32)
 #define STATIC_RADII SPEC_VEC4(SKY_RADII)
 #define STATIC_RAYLEIGH SPEC_VEC4(SKY_RAYLEIGH)
 #define STATIC_MIE_SCATTERING SPEC_VEC4(SKY_MIE_SCATTERING)
@@ -80,32 +91,32 @@ SPEC_VEC4_CONSTANTS(SKY_SKY_VIEW, SPEC_SKY_STATIC + 32)
 
 // The optical-depth table, one RGBA32F texel per (direction, altitude),
 // read with texelFetch, or filtered by the sampler (TABLE_FILTER 2).
-layout(set = 0, binding = 1) uniform sampler2D od_table;
+layout(set = SKY_BLOCK_SET, binding = 1) uniform sampler2D od_table;
 
 #ifdef MULTIPLE_SCATTERING
 // Hillaire's Psi_ms per unit solar irradiance, by (cosine of the sun's
 // zenith angle, altitude): the isotropic radiance of every order above
 // the first that a unit of scattering coefficient sends on.
-layout(set = 0, binding = 4) uniform sampler2D ms_table;
+layout(set = SKY_BLOCK_SET, binding = 4) uniform sampler2D ms_table;
 #endif
 #ifdef GROUND_SKY_LIGHT
 // The sky's irradiance on a horizontal surface per unit solar irradiance,
 // by (cosine of the sun's zenith angle, altitude): every order of the
 // sky's light, the direct sun excluded.
-layout(set = 0, binding = 5) uniform sampler2D irradiance_table;
+layout(set = SKY_BLOCK_SET, binding = 5) uniform sampler2D irradiance_table;
 #endif
 // Whether the two tables above are read through the sampler's bilinear
 // filter (the device filters RGBA32F) or by four fetches and a blend.
-layout(constant_id = SPEC_SUN_TABLES_LINEAR_FILTER) const bool SUN_TABLES_LINEAR_FILTER = false;
+layout(constant_id = SKY_SPEC_OFFSET + SPEC_SUN_TABLES_LINEAR_FILTER) const bool SUN_TABLES_LINEAR_FILTER = false;
 
 // The table's mapping (0: horizon, Bruneton-style, split at the
 // horizontal; 1: the seed's linear altitude × linear cosine) and filter
 // (0: manual bilinear; 1: nearest; 2: the sampler's bilinear filter).
-layout(constant_id = SPEC_TABLE_MAPPING) const int TABLE_MAPPING = 0;
-layout(constant_id = SPEC_TABLE_FILTER) const int TABLE_FILTER = 0;
+layout(constant_id = SKY_SPEC_OFFSET + SPEC_TABLE_MAPPING) const int TABLE_MAPPING = 0;
+layout(constant_id = SKY_SPEC_OFFSET + SPEC_TABLE_FILTER) const int TABLE_FILTER = 0;
 // The ozone's integral towards the sun: in closed form (true) or from the
 // table's third channel (false).
-layout(constant_id = SPEC_OZONE_EXACT) const bool OZONE_EXACT = true;
+layout(constant_id = SKY_SPEC_OFFSET + SPEC_OZONE_EXACT) const bool OZONE_EXACT = true;
 
 const float PI = 3.14159265358979;
 const float INF = 1.0 / 0.0;
@@ -443,6 +454,77 @@ struct Path {
     float t_end;        // distance from the camera to the end
 };
 
+// Sample i of n along a march of length t_end (i may fall between
+// samples): its distance and its step (x, y). Inside the atmosphere samples crowd near the camera
+// (t = L u^2), where the density is highest; from space, rays that end on
+// the ground crowd them towards it (march_from says why).
+vec2 march_sample(float i, int n, float t_end, bool inside, bool crowd_ground) {
+    float u = (i + 0.5) / float(n);
+    float t_space = crowd_ground ? t_end * (1.0 - (1.0 - u) * (1.0 - u)) : t_end * u;
+    float dt_space = crowd_ground ? t_end * 2.0 * (1.0 - u) / float(n) : t_end / float(n);
+    float t = inside ? t_end * u * u : t_space;
+    float dt = inside ? t_end * 2.0 * u / float(n) : dt_space;
+    return vec2(t, dt);
+}
+
+#ifdef MULTIPLE_SCATTERING
+// Consecutive march samples that share one read of the
+// multiple-scattering table (march_from writes the four out).
+const int MS_GROUP = 4;
+
+// Psi_ms at distance t along a march with b = dot(o, d), c_bottom =
+// |o|^2 - Rb^2, sun_b = dot(o, sun) and sun_d = dot(d, sun).
+vec3 multiple_scattering_at(float t, float c_bottom, float b, float sun_b, float sun_d) {
+    float r;
+    float h = altitude(c_bottom, b, t, r);
+    return multiple_scattering(h, (sun_b + t * sun_d) / r);
+}
+#endif
+
+// The view path's running optical depth (trapezoid between samples) and
+// where its last sample was.
+struct MarchSums {
+    vec3 tau;
+    float previous_t;
+    vec3 previous_extinction;
+};
+
+// One sample of the march at (t, dt) = sample_t along o + t d: the view's
+// optical depth so far, and the sample's scattering added to the path
+// (with MULTIPLE_SCATTERING, the higher orders' too, psi being Psi_ms
+// there).
+#ifdef MULTIPLE_SCATTERING
+void march_step(inout Path path, inout MarchSums sums, vec3 o, vec3 d, float c_bottom, float b, vec2 sample_t, vec3 psi) {
+#else
+void march_step(inout Path path, inout MarchSums sums, vec3 o, vec3 d, float c_bottom, float b, vec2 sample_t) {
+#endif
+    float t = sample_t.x;
+    float dt = sample_t.y;
+    float r;
+    float h = altitude(c_bottom, b, t, r);
+    vec3 rho = densities(h);
+    vec3 e = extinction(rho);
+    sums.tau += 0.5 * (sums.previous_extinction + e) * (t - sums.previous_t);
+    sums.previous_t = t;
+    sums.previous_extinction = e;
+    vec3 tau = sums.tau;
+    bool lit;
+    vec3 sun_tau = sun_optical_depth(h, r, o + t * d, lit);
+#ifdef MULTIPLE_SCATTERING
+    // The higher orders reach into the planet's shadow too: no lit test,
+    // and the view's transmittance alone.
+    vec3 view = exp(-tau) * dt;
+    vec3 weight = view * exp(-sun_tau) * (lit ? 1.0 : 0.0);
+    vec3 scattering = STATIC_RAYLEIGH.xyz * rho.x + STATIC_MIE_SCATTERING.xyz * rho.y;
+    path.multiple += scattering * psi * view;
+#else
+    // One exponential for both paths; no branch (lanes stay together).
+    vec3 weight = exp(-(tau + sun_tau)) * (lit ? dt : 0.0);
+#endif
+    path.rayleigh += STATIC_RAYLEIGH.xyz * (rho.x * weight);
+    path.mie += STATIC_MIE_SCATTERING.xyz * (rho.y * weight);
+}
+
 // Marches the ray from the camera along d (unit) up to a surface at
 // t_surface (INF: none). ground: 0 decides by the sphere test; 1 ignores
 // the ground; 2 ends at the ground, or where the ray grazes it (the rows
@@ -501,8 +583,6 @@ Path march_from(vec3 o, float c_bottom, float c_top, vec3 d, float t_surface, in
     path.t_end = t_end + shift;
 
     int n = int(STATIC_RADII.w);
-    vec3 tau = vec3(0.0);
-    float previous_t = 0.0;
     float h_start = c_bottom / (sqrt(rb * rb + c_bottom) + rb);
     vec3 previous_extinction = extinction(densities(h_start));
     // From space, a ray that ends on the ground crowds its samples towards
@@ -514,38 +594,43 @@ Path march_from(vec3 o, float c_bottom, float c_top, vec3 d, float t_surface, in
     // towards that point cost the orbit's grazing row 1.3 % instead of
     // 0.6 %).
     bool crowd_ground = path.end == END_GROUND;
-    for (int i = 0; i < n; ++i) {
-        float u = (float(i) + 0.5) / float(n);
-        // Inside the atmosphere samples crowd near the camera (t = L u^2),
-        // where the density is highest.
-        float t_space = crowd_ground ? t_end * (1.0 - (1.0 - u) * (1.0 - u)) : t_end * u;
-        float dt_space = crowd_ground ? t_end * 2.0 * (1.0 - u) / float(n) : t_end / float(n);
-        float t = inside ? t_end * u * u : t_space;
-        float dt = inside ? t_end * 2.0 * u / float(n) : dt_space;
-        float r;
-        float h = altitude(c_bottom, b, t, r);
-        vec3 rho = densities(h);
-        vec3 e = extinction(rho);
-        tau += 0.5 * (previous_extinction + e) * (t - previous_t);
-        previous_t = t;
-        previous_extinction = e;
-        bool lit;
-        vec3 sun_tau = sun_optical_depth(h, r, o + t * d, lit);
+    MarchSums sums;
+    sums.tau = vec3(0.0);
+    sums.previous_t = 0.0;
+    sums.previous_extinction = previous_extinction;
 #ifdef MULTIPLE_SCATTERING
-        // The higher orders reach into the planet's shadow too: no lit
-        // test, and the view's transmittance alone.
-        vec3 view = exp(-tau) * dt;
-        vec3 weight = view * exp(-sun_tau) * (lit ? 1.0 : 0.0);
-        float mu_s = dot(o + t * d, SUN_DIRECTION) / r;
-        vec3 scattering = STATIC_RAYLEIGH.xyz * rho.x + STATIC_MIE_SCATTERING.xyz * rho.y;
-        path.multiple += scattering * multiple_scattering(h, mu_s) * view;
-#else
-        // One exponential for both paths; no branch (lanes stay together).
-        vec3 weight = exp(-(tau + sun_tau)) * (lit ? dt : 0.0);
-#endif
-        path.rayleigh += STATIC_RAYLEIGH.xyz * (rho.x * weight);
-        path.mie += STATIC_MIE_SCATTERING.xyz * (rho.y * weight);
+    // Psi_ms changes slowly along a ray (with the altitude and the sun's
+    // angle; the density, which changes fast, is applied per sample): one
+    // table read serves MS_GROUP consecutive samples, read at their middle
+    // (it moves the earth scenes by at most 0.4 % of a pixel's radiance
+    // against a read per sample). A read per sample was two thirds of what
+    // multiple scattering added to the march. The group is written out,
+    // not a loop or a branch: a CPU driver runs both sides of a branch
+    // with masks, so a read behind one is paid every sample anyway.
+    float sun_b = dot(o, SUN_DIRECTION);
+    float sun_d = dot(d, SUN_DIRECTION);
+    int groups = n / MS_GROUP;
+    for (int g = 0; g < groups; ++g) {
+        float k = float(g * MS_GROUP);
+        vec3 psi = multiple_scattering_at(march_sample(k + 0.5 * float(MS_GROUP - 1), n, t_end, inside, crowd_ground).x, c_bottom, b, sun_b, sun_d);
+        march_step(path, sums, o, d, c_bottom, b, march_sample(k, n, t_end, inside, crowd_ground), psi);
+        march_step(path, sums, o, d, c_bottom, b, march_sample(k + 1.0, n, t_end, inside, crowd_ground), psi);
+        march_step(path, sums, o, d, c_bottom, b, march_sample(k + 2.0, n, t_end, inside, crowd_ground), psi);
+        march_step(path, sums, o, d, c_bottom, b, march_sample(k + 3.0, n, t_end, inside, crowd_ground), psi);
     }
+    // The last n mod MS_GROUP samples read the table each.
+    for (int i = groups * MS_GROUP; i < n; ++i) {
+        vec2 at = march_sample(float(i), n, t_end, inside, crowd_ground);
+        march_step(path, sums, o, d, c_bottom, b, at, multiple_scattering_at(at.x, c_bottom, b, sun_b, sun_d));
+    }
+#else
+    for (int i = 0; i < n; ++i) {
+        march_step(path, sums, o, d, c_bottom, b, march_sample(float(i), n, t_end, inside, crowd_ground));
+    }
+#endif
+    vec3 tau = sums.tau;
+    float previous_t = sums.previous_t;
+    previous_extinction = sums.previous_extinction;
     {
         float r;
         float h = altitude(c_bottom, b, t_end, r);

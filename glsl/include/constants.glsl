@@ -11,6 +11,13 @@
 #define MATERIAL_SET 2
 #define BASE_COLOR_BINDING 0
 #define NORMAL_MAP_BINDING 1
+// Object pipelines lit by an atmosphere's sun and sky (object_air.glsl):
+// the atmosphere's own set (its block and tables, atmosphere.glsl), with
+// the atmosphere shaders' specialization constants moved up by
+// SPEC_OBJECT_SKY_OFFSET, past the object pipelines' own ids (the static
+// lights end at SPEC_STATIC_LIGHT_DATA + 12 * MAX_STATIC_LIGHTS = 112).
+#define SKY_SET 3
+#define SPEC_OBJECT_SKY_OFFSET 128
 
 // Object and lighting pipelines' specialization constants.
 #define SPEC_SHADING_MODEL 0
@@ -21,6 +28,9 @@
 // Object pipelines: both sides drawn, back faces shaded with the normal
 // reversed.
 #define SPEC_TWO_SIDED 6
+// Object pipelines drawing straight into the 8-bit output: the shader
+// encodes sRGB.
+#define SPEC_ENCODE_SRGB 15
 // Static lights: whether a pipeline's lights are specialization constants
 // (static_lights.glsl), and the first of their ids, 12 per light.
 #define SPEC_STATIC_LIGHTS 5

@@ -1,11 +1,23 @@
-// The forward shading models over the lights in the object's block.
-// Requires scene_data.glsl and lighting.glsl.
+// The forward shading models over the lights in the object's block, and,
+// with SUN_LIGHT, the atmosphere's sun and sky at the shaded point.
+// Requires scene_data.glsl and lighting.glsl (and object_air.glsl with
+// SUN_LIGHT).
 
-// Blinn-Phong: ka * La plus the sum over the object's lights.
+// Blinn-Phong: ka * La plus the sum over the object's lights, then the
+// sun (a directional light of the point's own colour) and the sky's
+// irradiance times kd (diffuse only: no specular from the sky).
 vec3 blinn_phong(vec3 p, vec3 n, vec3 v, vec3 kd, vec3 ka) {
     vec3 color = ka * frame.ambient.rgb;
 #define PHONG_TERM(light) color += blinn_phong_light(light, p, n, v, kd, object.ks)
     FOR_EACH_LIGHT(object, PHONG_TERM)
+#ifdef SUN_LIGHT
+    AirPoint air = air_point(p);
+    vec3 sun = air_sun_transmittance(air);
+    PHONG_TERM(air_sun_light(sun));
+#ifdef SKY_LIGHT
+    color += kd * air_sky_irradiance(air, n, sun);
+#endif
+#endif
 #undef PHONG_TERM
     return color;
 }
@@ -29,6 +41,16 @@ vec3 toon(vec3 p, vec3 n, vec3 v, vec3 kd, vec3 ka) {
     vec3 color = ka * frame.ambient.rgb;
 #define TOON_TERM(light) add_toon_light(color, light, p, n, v, kd)
     FOR_EACH_LIGHT(object, TOON_TERM)
+#ifdef SUN_LIGHT
+    // The sun in tones like any light; the sky's light, which comes from
+    // every direction, unbanded.
+    AirPoint air = air_point(p);
+    vec3 sun = air_sun_transmittance(air);
+    TOON_TERM(air_sun_light(sun));
+#ifdef SKY_LIGHT
+    color += kd * air_sky_irradiance(air, n, sun);
+#endif
+#endif
 #undef TOON_TERM
     return color;
 }

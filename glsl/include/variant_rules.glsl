@@ -8,3 +8,8 @@
 #if defined(GOURAUD) && !defined(DEBUG_VIEW)
 #undef NORMAL_MAP
 #endif
+
+// The atmosphere's light (SUN_LIGHT, and SKY_LIGHT with it) never reaches
+// a debug view, and the sky light comes only with the sun's: build.rs
+// compiles no other combination (the `requires:` and `excludes:` lines of
+// the object shaders).

@@ -205,11 +205,12 @@ pub fn column_above(h: f64, scale_height: f64, top: f64) -> f64 {
 /// the sun, zero in the planet's shadow ([`reference::sun_transmittance`],
 /// in f64).
 ///
-/// The renderer evaluates it once per object, at the centre of its
-/// bounding sphere, so one object is lit by one colour: exact for objects
-/// small against the scale heights; across a 20 m sphere under a sun 1°
-/// above the horizon the transmittance varies by a few per cent in blue
-/// (see `tests.rs`, `sun_light_varies_little_across_a_small_object`).
+/// The renderer's shaders compute the same at every shaded point, from
+/// the optical-depth table (`glsl/include/object_air.glsl`), and the CPU
+/// reference renderer calls [`reference::sun_transmittance`] per pixel:
+/// across a 20 m sphere under a sun 1° above the horizon the
+/// transmittance varies by a few per cent in blue, across a 600 m one by
+/// tens of per cent (`tests/suite/atmosphere_objects.rs`).
 pub fn sun_light_at(sky: &Sky, point: DVec3) -> DVec3 {
     sky.sun.irradiance
         * reference::sun_transmittance(

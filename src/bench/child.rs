@@ -64,10 +64,11 @@ pub fn run(
 ) -> Result<ExitStatus, ChildError> {
     let _busy = crate::interrupt::Busy::start();
     tie_to_this_process(command);
-    let mut child = command.spawn().map_err(|error| ChildError::Spawn {
-        what: what.to_string(),
-        error,
-    })?;
+    let mut child =
+        crate::interrupt::spawn_tracked_group(command).map_err(|error| ChildError::Spawn {
+            what: what.to_string(),
+            error,
+        })?;
     let started = Instant::now();
     loop {
         match exited(&child) {
@@ -100,6 +101,7 @@ pub fn run(
     // The leader has ended but is not reaped yet, so its group id cannot
     // have been reused: whatever it left running in the group goes too.
     signal_group(&child, Signal::Kill);
+    crate::interrupt::untrack_group(child.id());
     child.wait().map_err(|error| ChildError::Wait {
         what: what.to_string(),
         error,
@@ -187,6 +189,7 @@ fn stop(child: &mut Child) {
         std::thread::sleep(POLL);
     }
     signal_group(child, Signal::Kill);
+    crate::interrupt::untrack_group(child.id());
     let _ = child.wait();
 }
 

@@ -292,7 +292,7 @@ fn measure(args: &BenchArgs) -> anyhow::Result<BenchReport> {
         let _busy = aerial::interrupt::Busy::start();
         aerial::interrupt::check()?;
         eprintln!("counting instructions under valgrind (a few seconds per frame and pass)...");
-        let dir = tempfile::tempdir().context("a folder for valgrind's files")?;
+        let dir = aerial::files::TempFolder::new().context("a folder for valgrind's files")?;
         let json = dir.path().join("instructions.json");
         spawn_counting_run(&run_args(args, &[Metric::Instructions], &json), dir.path())?;
         let counted = BenchReport::load_named(&json, "the counting run's report")?;
@@ -356,7 +356,7 @@ fn against(args: &BenchArgs, other: &Path) -> anyhow::Result<ExitCode> {
     // Held throughout, so an interrupt between the runs also waits for the
     // temporary folder to be removed.
     let _busy = aerial::interrupt::Busy::start();
-    let dir = tempfile::tempdir().context("a folder for the rounds' reports")?;
+    let dir = aerial::files::TempFolder::new().context("a folder for the rounds' reports")?;
     let limit = Limit {
         after: Duration::from_secs_f64(timeout),
         hint: " (--round-timeout)".to_string(),

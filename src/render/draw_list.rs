@@ -36,6 +36,51 @@ pub struct PipelineKey {
     /// back faces (specialization constant 6, given only when true, so
     /// one-sided pipelines are created exactly as without it).
     pub two_sided: bool,
+    /// The atmosphere's light on the object, computed at each shaded point
+    /// (shader features `SUN_LIGHT` and `SKY_LIGHT`, and the atmosphere's
+    /// descriptor set).
+    pub air: AirLight,
+}
+
+/// How an atmosphere lights objects: per shaded point (per pixel; per
+/// vertex for Gouraud), from the tables the atmosphere pass reads
+/// (`glsl/include/object_air.glsl`). The sun's direction and irradiance
+/// come from the atmosphere's uniforms, so a frame that turns the sun
+/// keeps its pipelines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum AirLight {
+    /// No atmosphere (or a debug view): the object shaders compile none
+    /// of it.
+    None,
+    /// The sun through the air, with its transmittance to the point and
+    /// the planet's shadow (single scattering: no sky light, as on the
+    /// ground).
+    Sun,
+    /// The sun and the sky's irradiance (multiple scattering, whose
+    /// sky-irradiance table the sky light reads).
+    SunAndSky,
+}
+
+impl AirLight {
+    /// The light `scene`'s atmosphere gives its objects: none without one
+    /// or in a debug view (which draws attributes, not light).
+    pub fn of(scene: &Scene) -> AirLight {
+        match &scene.sky {
+            Some(_) if scene.output.debug_view.is_some() => AirLight::None,
+            Some(sky) if sky.multiple_scattering => AirLight::SunAndSky,
+            Some(_) => AirLight::Sun,
+            None => AirLight::None,
+        }
+    }
+
+    /// The object shaders' features for it.
+    pub fn shader_features(self) -> &'static [&'static str] {
+        match self {
+            AirLight::None => &[],
+            AirLight::Sun => &["SUN_LIGHT"],
+            AirLight::SunAndSky => &["SUN_LIGHT", "SKY_LIGHT"],
+        }
+    }
 }
 
 /// The largest shininess the shaders raise to by squaring (nine squarings).
@@ -78,15 +123,10 @@ pub struct Draw {
     /// Index into `FramePlan::normal_maps`.
     pub normal_map: Option<usize>,
     /// Indices into `Scene::lights` evaluated while drawing the object
-    /// (empty for surfaces lit later by the deferred lighting pass).
+    /// (empty for surfaces lit later by the deferred lighting pass). The
+    /// atmosphere's sun and sky are not among them: see
+    /// [`PipelineKey::air`].
     pub lights: Vec<usize>,
-    /// With `[sun]` and `[atmosphere]`: the sun's colour on this object
-    /// (irradiance times the transmittance to the top of the atmosphere at
-    /// its bounding sphere's centre, [`crate::atmosphere::sun_light_at`]),
-    /// evaluated after `lights` while drawing it, also for surfaces lit
-    /// later: one directional light per object, it gains nothing from tile
-    /// culling, and the G-buffer has no room for a per-object colour.
-    pub sun: Option<[f32; 3]>,
 }
 
 /// Where a normal map comes from: a normal-map file, or a height map
@@ -125,6 +165,7 @@ impl DrawList {
         // A debug view draws attributes, not light: every surface opaque,
         // no lights.
         let debug = scene.output.debug_view.map_or(0, |v| v as u32);
+        let air = AirLight::of(scene);
         for (i, object) in scene.objects.iter().enumerate() {
             let material = &scene.materials[object.material];
             let texture = material.texture.as_ref().map(|source| {
@@ -160,17 +201,6 @@ impl DrawList {
                 let (centre, radius) = geometry.bounds[i];
                 scene.lights_reaching_sphere(centre, radius)
             };
-            let sun = match &scene.sky {
-                Some(sky) if debug == 0 => {
-                    let centre = geometry.bounds[i].0;
-                    Some(
-                        crate::atmosphere::sun_light_at(sky, centre)
-                            .as_vec3()
-                            .to_array(),
-                    )
-                }
-                _ => None,
-            };
             let draw = Draw {
                 object: i,
                 pipeline: PipelineKey {
@@ -178,7 +208,7 @@ impl DrawList {
                     textured: texture.is_some(),
                     normal_mapped: normal_map.is_some(),
                     blended,
-                    lights: (lights.len() + usize::from(sun.is_some())) as u32,
+                    lights: lights.len() as u32,
                     debug,
                     // The G-buffer form leaves lighting to the lighting
                     // pass; only the forward shaders use it.
@@ -188,11 +218,14 @@ impl DrawList {
                         shininess_exponent(material.shininess)
                     },
                     two_sided: object.is_two_sided(material),
+                    // The sun and sky light every surface of the scene, lit
+                    // later or not: per point, they gain nothing from the
+                    // lighting pass's tiles.
+                    air,
                 },
                 texture,
                 normal_map,
                 lights,
-                sun,
             };
             if blended {
                 transparent.push(draw);

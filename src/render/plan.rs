@@ -10,7 +10,7 @@
 //! tone-map subpass when the scene asks for LDR output.
 
 pub use super::draw_list::{
-    shininess_exponent, Draw, DrawList, NormalMapSource, PipelineKey, ShadingKey,
+    shininess_exponent, AirLight, Draw, DrawList, NormalMapSource, PipelineKey, ShadingKey,
     MAX_SHININESS_EXPONENT,
 };
 use super::geometry::SceneGeometry;
@@ -584,8 +584,10 @@ pub fn uses_deferred_lighting(scene: &Scene) -> bool {
         })
 }
 
-/// The 8-bit output: sRGB, so shaders write linear values.
-pub const OUTPUT_FORMAT: Format = Format::R8G8B8A8_SRGB;
+/// The 8-bit output: UNORM holding sRGB-encoded values, which the shaders
+/// writing it encode themselves (`glsl/include/srgb.glsl`), so its bytes do
+/// not depend on the driver's own encode.
+pub const OUTPUT_FORMAT: Format = Format::R8G8B8A8_UNORM;
 pub const DEPTH_FORMAT: Format = Format::D32_SFLOAT;
 /// kd can exceed 1 (it is only required to be >= 0), so not UNORM: the
 /// G-buffer's albedo (kd × texture) and material (ks, shininess) are 16-bit
@@ -786,27 +788,33 @@ mod tests {
     }
 
     #[test]
-    fn with_a_sun_every_draw_carries_its_own_sun_light_forward_and_deferred() {
+    fn with_an_atmosphere_every_draw_is_lit_by_its_sun_and_sky_forward_and_deferred() {
         let (mut scene, plan) = load("earth_objects.toml");
-        let sky = scene.sky.clone().unwrap();
         for d in plan.draws() {
-            let (centre, _) = scene.object_bounds(d.object).unwrap();
-            let want = crate::atmosphere::sun_light_at(&sky, centre).as_vec3();
-            assert_eq!(d.sun, Some(want.to_array()));
-            assert_eq!(d.pipeline.lights as usize, d.lights.len() + 1);
+            // Per point in the shaders, not a light of the object's block.
+            assert_eq!(d.pipeline.air, AirLight::SunAndSky);
+            assert_eq!(d.pipeline.lights as usize, d.lights.len());
         }
+        // Single scattering: the sun alone, as on the ground.
+        scene.sky.as_mut().unwrap().multiple_scattering = false;
+        let geometry = SceneGeometry::new(&scene).unwrap();
+        let plan = FramePlan::new(&scene, &geometry, false);
+        assert!(plan.draws().all(|d| d.pipeline.air == AirLight::Sun));
         // Deferred: the scene's lights move to the lighting pass, the sun
-        // stays with the object.
+        // stays with the surface pass.
         scene.output.lighting = Lighting::Deferred;
-        let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);
+        let plan = FramePlan::new(&scene, &geometry, false);
         assert_eq!(plan.lighting, Lighting::Deferred);
-        assert!(plan
-            .opaque
-            .iter()
-            .all(|d| d.lights.is_empty() && d.sun.is_some() && d.pipeline.lights == 1));
-        // No sun, no extra light.
+        assert!(plan.opaque.iter().all(|d| d.lights.is_empty()
+            && d.pipeline.air == AirLight::Sun
+            && d.pipeline.lights == 0));
+        // A debug view draws attributes: no light at all.
+        scene.output.debug_view = Some(crate::scene::DebugView::Normals);
+        let plan = FramePlan::new(&scene, &geometry, false);
+        assert!(plan.draws().all(|d| d.pipeline.air == AirLight::None));
+        // No atmosphere, no air light.
         let (_, plan) = load("default.toml");
-        assert!(plan.draws().all(|d| d.sun.is_none()));
+        assert!(plan.draws().all(|d| d.pipeline.air == AirLight::None));
     }
 
     #[test]

@@ -148,19 +148,27 @@ impl Renderer {
         crate::interrupt::check()?;
         let render_pass = build_render_pass(ctx, &plan)?;
         crate::interrupt::check()?;
-        let scene_resources = if plan.draws().next().is_some() {
-            let geometry = geometry.as_deref().ok_or_else(|| {
-                RenderError::Frame("the plan draws objects but there is no geometry".into())
-            })?;
-            Some(SceneResources::new(ctx, scene, geometry, &plan)?)
-        } else {
-            None
-        };
+        // The sky's resources first: objects lit by the atmosphere bind
+        // its set.
         let sky_resources = match &scene.sky {
             Some(sky) if plan.has(PassKind::Atmosphere) => {
                 Some(SkyResources::new(ctx, sky, &scene.camera, &plan)?)
             }
             _ => None,
+        };
+        let scene_resources = if plan.draws().next().is_some() {
+            let geometry = geometry.as_deref().ok_or_else(|| {
+                RenderError::Frame("the plan draws objects but there is no geometry".into())
+            })?;
+            Some(SceneResources::new(
+                ctx,
+                scene,
+                geometry,
+                &plan,
+                sky_resources.as_ref(),
+            )?)
+        } else {
+            None
         };
         crate::interrupt::check()?;
         let frame_resources = frame_resources(
@@ -475,24 +483,13 @@ fn frame_resources<'a>(
     }
 }
 
-/// What of a draw the recorded commands depend on: everything but the
-/// sun's colour on the object, which follows the sun and lives in the
-/// object's uniform block (only whether the object has it counts).
-fn as_recorded(draws: &[super::plan::Draw]) -> Vec<super::plan::Draw> {
-    let mut d = draws.to_vec();
-    for draw in &mut d {
-        draw.sun = draw.sun.map(|_| [0.0; 3]);
-    }
-    d
-}
-
 /// Whether a new view's plan `b` can reuse everything created for `a`:
 /// the same attachments and passes at the same size, the same draws (in
 /// any order: the order of opaque and transparent draws follows the
 /// camera) and the same deferred light tiles. The uniforms may differ.
 fn same_resources(a: &FramePlan, b: &FramePlan) -> bool {
     let by_object = |draws: &[super::plan::Draw]| {
-        let mut d = as_recorded(draws);
+        let mut d = draws.to_vec();
         d.sort_by_key(|d| d.object);
         d
     };
@@ -508,9 +505,7 @@ fn same_resources(a: &FramePlan, b: &FramePlan) -> bool {
 /// Whether two plans record the same commands: the same resources, and the
 /// draws in the same order. The uniforms may still differ.
 fn same_frame(a: &FramePlan, b: &FramePlan) -> bool {
-    same_resources(a, b)
-        && as_recorded(&a.opaque) == as_recorded(&b.opaque)
-        && as_recorded(&a.transparent) == as_recorded(&b.transparent)
+    same_resources(a, b) && a.opaque == b.opaque && a.transparent == b.transparent
 }
 
 /// The render pass the plan's subpasses form, with its attachments: what

@@ -2,12 +2,14 @@
 //! geometry buffer, the per-frame uniforms, the per-object blocks (a
 //! dynamic uniform buffer, std140) and the base-colour textures, with
 //! one material descriptor set per (base colour, normal map) pair, and the
-//! one pipeline layout object pipelines use.
+//! one pipeline layout object pipelines use (with the atmosphere's set
+//! when its sun and sky light the objects).
 
 use super::geometry::SceneGeometry;
 use super::gpu_types::{GpuLight, ObjectHeader, ViewUniforms};
-use super::plan::{Draw, FramePlan};
-use super::shader_ids::{BASE_COLOR_BINDING, NORMAL_MAP_BINDING};
+use super::plan::{AirLight, Draw, FramePlan};
+use super::shader_ids::{BASE_COLOR_BINDING, MATERIAL_SET, NORMAL_MAP_BINDING, SKY_SET};
+use super::sky_resources::SkyResources;
 use super::RenderError;
 use crate::mesh::height::{encode_normal_map, GreenAxis, HeightEdge, HeightFilter, HeightMap};
 use crate::scene::{placeholder_texels, Light, Scene, Texture, TextureFilter, PLACEHOLDER_TEXTURE};
@@ -47,12 +49,17 @@ pub struct SceneResources {
     material_sets: Vec<(ImagePair, DescriptorSet)>,
     _pool: DescriptorPool,
     /// The one layout of object pipelines: frame, object and (when some
-    /// draw samples an image) material sets, at the numbers in
-    /// `shader_ids`.
+    /// draw samples an image) material sets, and, when the atmosphere
+    /// lights the objects, its set (`SkyResources::set`), at the numbers
+    /// in `shader_ids`.
     pub layout: PipelineLayout,
     pub frame_layout: DescriptorSetLayout,
     pub object_layout: DescriptorSetLayout,
     _material_layout: Option<DescriptorSetLayout>,
+    /// An empty layout in the material set's place, when the atmosphere's
+    /// set follows it and no draw samples an image (a pipeline layout
+    /// numbers its sets without gaps).
+    _empty_layout: Option<DescriptorSetLayout>,
     /// Textures, normal maps and the 1x1 defaults the sets point at.
     _images: Vec<Image>,
     _sampler: Option<Sampler>,
@@ -68,11 +75,15 @@ pub struct SceneResources {
 }
 
 impl SceneResources {
+    /// The resources of `plan`'s draws; `sky` must be present when a draw
+    /// is lit by the atmosphere ([`AirLight`]), whose set its layout then
+    /// includes.
     pub fn new(
         ctx: &Arc<Context>,
         scene: &Scene,
         geometry: &SceneGeometry,
         plan: &FramePlan,
+        sky: Option<&SkyResources>,
     ) -> Result<SceneResources, RenderError> {
         let (geometry_buffer, ranges) = upload_geometry(ctx, geometry)?;
         let light_anchor = scene.camera.eye;
@@ -241,6 +252,27 @@ impl SceneResources {
         }
         let mut set_layouts = vec![&frame_layout, &object_layout];
         set_layouts.extend(&material_layout);
+        let air_lit = plan.draws().any(|d| d.pipeline.air != AirLight::None);
+        let sky_layout = match sky {
+            Some(sky) if air_lit => Some(&sky.layout),
+            None if air_lit => {
+                return Err(RenderError::Frame(
+                    "objects lit by the atmosphere, but the frame has no atmosphere resources"
+                        .into(),
+                ))
+            }
+            _ => None,
+        };
+        let empty_layout = match (&sky_layout, &material_layout) {
+            (Some(_), None) => Some(DescriptorSetLayout::new(ctx, &[])?),
+            _ => None,
+        };
+        if let Some(sky_layout) = sky_layout {
+            set_layouts.extend(&empty_layout);
+            debug_assert_eq!(set_layouts.len() as u32, MATERIAL_SET + 1);
+            debug_assert_eq!(SKY_SET, MATERIAL_SET + 1);
+            set_layouts.push(sky_layout);
+        }
         let layout = PipelineLayout::new(ctx, &set_layouts)?;
         let mut images = textures;
         images.extend(normal_maps);
@@ -255,6 +287,7 @@ impl SceneResources {
             frame_layout,
             object_layout,
             _material_layout: material_layout,
+            _empty_layout: empty_layout,
             _images: images,
             _sampler: sampler,
             geometry: geometry_buffer,
@@ -267,10 +300,11 @@ impl SceneResources {
     }
 
     /// Rewrites what follows the view, between frames: the per-frame
-    /// uniforms (camera) and the object blocks (the sun's colour on each
-    /// object), for `scene` planned as `plan`, whose draws carry the same
-    /// lights as those this was created with (so every block keeps its
-    /// size and offset).
+    /// uniforms (camera) and the object blocks (their camera-relative
+    /// transforms and lights), for `scene` planned as `plan`, whose draws
+    /// carry the same lights as those this was created with (so every
+    /// block keeps its size and offset). The sun's direction and
+    /// irradiance live in the atmosphere's uniforms.
     pub fn set_view(&mut self, scene: &Scene, plan: &FramePlan) {
         let frame = ViewUniforms::new(scene, plan.width, plan.height, self.light_anchor);
         self.frame_buffer.write(0, bytemuck::bytes_of(&frame));
@@ -380,15 +414,9 @@ fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
     let normal = glam::Mat4::from_mat3(object.transform.normal_matrix());
     let lights: Vec<GpuLight> = draw
         .map(|d| {
-            let sun = scene.sky.as_ref().zip(d.sun).map(|(sky, color)| GpuLight {
-                position: sky.sun.direction.as_vec3().extend(0.0).to_array(),
-                color: [color[0], color[1], color[2], 0.0],
-                attenuation: [1.0, 0.0, 0.0, 0.0],
-            });
             d.lights
                 .iter()
                 .map(|&l| gpu_light(&scene.lights[l], scene.camera.eye, scene.light_cutoff))
-                .chain(sun)
                 .collect()
         })
         .unwrap_or_default();

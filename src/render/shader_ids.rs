@@ -11,6 +11,13 @@ pub const OBJECT_SET: u32 = 1;
 pub const MATERIAL_SET: u32 = 2;
 pub const BASE_COLOR_BINDING: u32 = 0;
 pub const NORMAL_MAP_BINDING: u32 = 1;
+/// Object pipelines lit by an atmosphere's sun and sky: the atmosphere's
+/// own set (`SkyResources::set`), after the material set.
+pub const SKY_SET: u32 = 3;
+/// Added to the atmosphere shaders' specialization-constant ids in object
+/// pipelines, past the object pipelines' own ids (the static lights end at
+/// `SPEC_STATIC_LIGHT_DATA + 12 * MAX_STATIC_LIGHTS`).
+pub const SPEC_OBJECT_SKY_OFFSET: u32 = 128;
 
 /// Object and lighting pipelines' specialization constants.
 pub const SPEC_SHADING_MODEL: u32 = 0;
@@ -21,6 +28,9 @@ pub const SPEC_SHININESS_EXPONENT: u32 = 4;
 /// Whether an object pipeline draws both sides (back faces shaded with
 /// the normal reversed).
 pub const SPEC_TWO_SIDED: u32 = 6;
+/// Whether an object pipeline draws straight into the 8-bit output, whose
+/// values the shader then sRGB-encodes (the output is UNORM).
+pub const SPEC_ENCODE_SRGB: u32 = 15;
 /// Whether a pipeline's lights are specialization constants
 /// (`render::static_lights`), and the first of their ids, 12 per light.
 pub const SPEC_STATIC_LIGHTS: u32 = 5;
@@ -60,6 +70,11 @@ pub fn float_constants(
     (first..).zip(values.into_iter().map(f32::to_bits))
 }
 
+const _: () = assert!(
+    SPEC_STATIC_LIGHT_DATA + 12 * MAX_STATIC_LIGHTS <= SPEC_OBJECT_SKY_OFFSET,
+    "the atmosphere's constants in object pipelines overlap the static lights"
+);
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -74,12 +89,15 @@ mod tests {
             ("MATERIAL_SET", MATERIAL_SET),
             ("BASE_COLOR_BINDING", BASE_COLOR_BINDING),
             ("NORMAL_MAP_BINDING", NORMAL_MAP_BINDING),
+            ("SKY_SET", SKY_SET),
+            ("SPEC_OBJECT_SKY_OFFSET", SPEC_OBJECT_SKY_OFFSET),
             ("SPEC_SHADING_MODEL", SPEC_SHADING_MODEL),
             ("SPEC_LIGHT_COUNT", SPEC_LIGHT_COUNT),
             ("SPEC_LIGHT_ARRAY_LENGTH", SPEC_LIGHT_ARRAY_LENGTH),
             ("SPEC_DEBUG_ATTRIBUTE", SPEC_DEBUG_ATTRIBUTE),
             ("SPEC_SHININESS_EXPONENT", SPEC_SHININESS_EXPONENT),
             ("SPEC_TWO_SIDED", SPEC_TWO_SIDED),
+            ("SPEC_ENCODE_SRGB", SPEC_ENCODE_SRGB),
             ("SPEC_STATIC_LIGHTS", SPEC_STATIC_LIGHTS),
             ("SPEC_STATIC_LIGHT_DATA", SPEC_STATIC_LIGHT_DATA),
             ("MAX_STATIC_LIGHTS", MAX_STATIC_LIGHTS),

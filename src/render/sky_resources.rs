@@ -15,7 +15,8 @@
 
 use super::plan::{FramePlan, PassKind};
 use super::shader_ids::{
-    float_constants, AERIAL_VOLUME_BINDING, AERIAL_VOLUME_WRITE_BINDING, SPEC_SKY_STATIC,
+    float_constants, AERIAL_VOLUME_BINDING, AERIAL_VOLUME_WRITE_BINDING, SPEC_OBJECT_SKY_OFFSET,
+    SPEC_SKY_STATIC,
 };
 use super::sun_tables::{self, SunTables};
 use super::RenderError;
@@ -193,7 +194,9 @@ pub struct SkyResources {
     /// written (compute); 3: the sky-view table read (fragment); 4 and 5:
     /// the multiple-scattering and sky-irradiance tables, with multiple
     /// scattering; 8 and 9: the aerial-perspective volume written
-    /// (compute) and read (fragment), in frames with it.
+    /// (compute) and read (fragment), in frames with it. Object pipelines
+    /// bind it too, as their `SKY_SET`, for the sun and sky light at each
+    /// shaded point.
     pub set: DescriptorSet,
     _pool: DescriptorPool,
     pub layout: DescriptorSetLayout,
@@ -310,6 +313,18 @@ impl SkyResources {
     /// multiple-scattering and sky-irradiance tables.
     pub fn static_constants(&self) -> Vec<(u32, u32)> {
         static_constants(self.static_fields, self.linear_filter)
+    }
+
+    /// The specialization constants of object pipelines that read these
+    /// resources (`glsl/include/object_air.glsl`): the march's table
+    /// constants and [`static_constants`](Self::static_constants), each
+    /// id moved up by `SPEC_OBJECT_SKY_OFFSET`.
+    pub fn object_constants(&self, sky: &Sky) -> Vec<(u32, u32)> {
+        crate::render::passes::atmosphere::table_constants(sky)
+            .into_iter()
+            .chain(self.static_constants())
+            .map(|(id, value)| (id + SPEC_OBJECT_SKY_OFFSET, value))
+            .collect()
     }
 
     /// The shader features of the atmosphere shaders that read these
@@ -432,7 +447,11 @@ impl SkyResources {
             Some(_) if linear_filter => Some(Sampler::clamped(ctx, SamplerFilter::Bilinear)?),
             _ => None,
         };
-        let both = ShaderStageFlags::FRAGMENT | ShaderStageFlags::COMPUTE;
+        // The block and the tables the object shaders read for the sun and
+        // sky light on objects are visible to vertex shaders too (Gouraud
+        // lights per vertex).
+        let both =
+            ShaderStageFlags::VERTEX | ShaderStageFlags::FRAGMENT | ShaderStageFlags::COMPUTE;
         let mut bindings = vec![
             DescriptorBinding {
                 binding: 0,

@@ -13,9 +13,10 @@
 //! exactly the uniform block's.
 //!
 //! Each distinct light list needs its own pipeline, so a pass that would
-//! need more than [`MAX_STATIC_PIPELINES`] of them, a draw with more than
-//! `MAX_STATIC_LIGHTS` lights, or one lit by the sun (whose colour the
-//! frame rewrites) reads its lights from the uniform block as before.
+//! need more than [`MAX_STATIC_PIPELINES`] of them, or a draw with more
+//! than `MAX_STATIC_LIGHTS` lights, reads its lights from the uniform
+//! block as before. An atmosphere's sun is not among a draw's lights: the
+//! object shaders compute it per point from the atmosphere's uniforms.
 
 use super::gpu_types::GpuLight;
 use super::scene_resources::gpu_light;

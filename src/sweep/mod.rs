@@ -129,6 +129,10 @@ pub enum SweepError {
     },
     #[error("rendering {what} failed: {reason}")]
     Render { what: String, reason: String },
+    /// The sweep, or one of its renders, does not fit the memory budget
+    /// (or a texture cannot be sized).
+    #[error(transparent)]
+    Memory(crate::render::RenderError),
     #[error("{what}: the device recorded no pass timings (no timestamp queries), so there is no GPU time to plot")]
     NoTimings { what: String },
     #[error("{what}: frame timings are not finite numbers")]

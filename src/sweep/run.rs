@@ -246,6 +246,63 @@ impl Sweep {
         Ok(scene)
     }
 
+    /// Refuses, before anything is rendered, a sweep whose estimated peak
+    /// memory is over the budget (`AERIAL_MEMORY_BUDGET`). The peak is the
+    /// images kept as references for later rows, plus the larger of the
+    /// largest render (its image run reads the HDR image back, its timed
+    /// run times the empty pass on the same device) and the largest
+    /// comparison (the test's images and the comparison's working memory).
+    /// Each render alone is also checked as `render` checks it. Without
+    /// the references and the comparison, the estimate of a 1024x1024
+    /// sweep fell 44 % short of its measured peak.
+    fn check_memory(&self, chosen: &[(usize, &Combination)]) -> Result<(), SweepError> {
+        use crate::render::preflight;
+        let budget =
+            crate::budget::MemoryBudget::from_env().map_err(|e| SweepError::Memory(e.into()))?;
+        let pixels = |s: &Scene| u64::from(s.output.width) * u64::from(s.output.height);
+        let (mut render, mut largest) = (0u64, (0u64, String::new()));
+        let mut references: Vec<&[String]> = Vec::new();
+        let mut cpu_references: Vec<ReferenceScene> = Vec::new();
+        let mut kept = 0u64;
+        for (_, c) in chosen {
+            let scene = self.scene_for(&c.values)?;
+            let bytes = preflight::scene_bytes(
+                &scene,
+                true,
+                preflight::EMPTY_PASS_BYTES_PER_PIXEL,
+                &budget,
+            )
+            .map_err(SweepError::Memory)?;
+            render = render.max(bytes);
+            if pixels(&scene) > largest.0 {
+                largest = (pixels(&scene), self.describe(&c.values));
+            }
+            if self.options.reference == ReferenceKind::Cpu {
+                let key = self.cpu_reference_scene(&c.values)?;
+                if !cpu_references.contains(&key) {
+                    cpu_references.push(key);
+                    kept += IMAGES_BYTES_PER_PIXEL * pixels(&scene);
+                }
+            } else if !references.contains(&c.reference.as_slice()) {
+                references.push(&c.reference);
+                kept += IMAGES_BYTES_PER_PIXEL * pixels(&self.scene_for(&c.reference)?);
+            }
+        }
+        let compare = largest.0 * (IMAGES_BYTES_PER_PIXEL + 2 * COMPARE_BYTES_PER_PIXEL);
+        let need = kept.saturating_add(render.max(compare));
+        budget
+            .check(
+                format!(
+                    "the sweep ({} combinations, the largest image at {}; {} reference images kept)",
+                    chosen.len(),
+                    largest.1,
+                    references.len() + cpu_references.len()
+                ),
+                need,
+            )
+            .map_err(|e| SweepError::Memory(e.into()))
+    }
+
     /// `name=value` pairs for `values`, for labels and errors.
     fn describe(&self, values: &[String]) -> String {
         self.axes
@@ -304,6 +361,7 @@ impl Sweep {
             .enumerate()
             .filter(|(k, _)| shard.is_none_or(|s| s.holds(*k)))
             .collect();
+        self.check_memory(&chosen)?;
         let cpu = self.options.reference == ReferenceKind::Cpu;
         // GPU images kept because they serve as references (none with a
         // CPU reference: then every GPU image is compared once).
@@ -482,6 +540,14 @@ pub(super) fn add_new_names<'a>(
         }
     }
 }
+
+/// Bytes per pixel of one render's [`Images`]: the 8-bit output and the
+/// f32 HDR image.
+const IMAGES_BYTES_PER_PIXEL: u64 = 4 + 16;
+
+/// Working memory of comparing images already in memory, per pixel of each
+/// image: the bound `compare` uses for images it decodes itself.
+const COMPARE_BYTES_PER_PIXEL: u64 = crate::report::image_diff::BYTES_PER_PIXEL;
 
 /// The images of one render, kept while they may serve as a reference.
 struct Images {

@@ -27,6 +27,16 @@ pub enum NamedKey {
     Enter,
     Tab,
     F1,
+    F2,
+    F3,
+    F4,
+    F5,
+    F6,
+    F7,
+    F8,
+    F9,
+    F10,
+    F11,
     F12,
 }
 
@@ -46,6 +56,16 @@ const NAMED: &[(&str, NamedKey)] = &[
     ("Enter", NamedKey::Enter),
     ("Tab", NamedKey::Tab),
     ("F1", NamedKey::F1),
+    ("F2", NamedKey::F2),
+    ("F3", NamedKey::F3),
+    ("F4", NamedKey::F4),
+    ("F5", NamedKey::F5),
+    ("F6", NamedKey::F6),
+    ("F7", NamedKey::F7),
+    ("F8", NamedKey::F8),
+    ("F9", NamedKey::F9),
+    ("F10", NamedKey::F10),
+    ("F11", NamedKey::F11),
     ("F12", NamedKey::F12),
 ];
 
@@ -103,6 +123,16 @@ impl Key {
                     N::Enter => NamedKey::Enter,
                     N::Tab => NamedKey::Tab,
                     N::F1 => NamedKey::F1,
+                    N::F2 => NamedKey::F2,
+                    N::F3 => NamedKey::F3,
+                    N::F4 => NamedKey::F4,
+                    N::F5 => NamedKey::F5,
+                    N::F6 => NamedKey::F6,
+                    N::F7 => NamedKey::F7,
+                    N::F8 => NamedKey::F8,
+                    N::F9 => NamedKey::F9,
+                    N::F10 => NamedKey::F10,
+                    N::F11 => NamedKey::F11,
                     N::F12 => NamedKey::F12,
                     _ => return None,
                 };
@@ -131,7 +161,7 @@ pub enum Action {
     /// Pressed: back to the scene's sun.
     ResetSun,
     /// Pressed: the next value of knob N (1-based, as listed by `F1`; key
-    /// 0 is knob 10).
+    /// 0 is knob 10, F2 to F11 knobs 11 to 20).
     CycleKnob(usize),
     /// Pressed: print the per-pass times.
     PrintTimings,
@@ -164,6 +194,9 @@ impl Key {
             Key::Named(N::End) => Some(Action::ResetSun),
             Key::Char(c @ '1'..='9') => Some(Action::CycleKnob(c as usize - '0' as usize)),
             Key::Char('0') => Some(Action::CycleKnob(10)),
+            Key::Named(n) if FUNCTION_KNOB_KEYS.contains(&n) => Some(Action::CycleKnob(
+                11 + FUNCTION_KNOB_KEYS.iter().position(|k| *k == n).unwrap_or(0),
+            )),
             Key::Char('T') => Some(Action::PrintTimings),
             Key::Named(N::F12) => Some(Action::Screenshot),
             Key::Named(N::F1) | Key::Char('H') => Some(Action::Help),
@@ -173,12 +206,39 @@ impl Key {
     }
 }
 
+/// The function keys that cycle knobs 11 to 20, in order (F1 is help,
+/// F12 the screenshot).
+const FUNCTION_KNOB_KEYS: [NamedKey; 10] = [
+    NamedKey::F2,
+    NamedKey::F3,
+    NamedKey::F4,
+    NamedKey::F5,
+    NamedKey::F6,
+    NamedKey::F7,
+    NamedKey::F8,
+    NamedKey::F9,
+    NamedKey::F10,
+    NamedKey::F11,
+];
+
+/// How many knobs have a key: the digits, then F2 to F11.
+pub const KNOB_KEYS: usize = 10 + FUNCTION_KNOB_KEYS.len();
+
+/// The key that cycles knob `n` (1-based), as the help prints it.
+pub fn knob_key(n: usize) -> Option<String> {
+    match n {
+        1..=10 => Some((n % 10).to_string()),
+        11..=KNOB_KEYS => Some(format!("F{}", n - 9)),
+        _ => None,
+    }
+}
+
 /// The key bindings, for `F1` and docs/viewer.md.
 pub const HELP: &str = "\
 keys: W/S or Up/Down forward/back, A/D or Left/Right sideways, E/Q up/down, Shift x10 speed;
       drag with the left mouse button to look around; wheel or +/- field of view;
       L/K (PageUp/PageDown) sun later/earlier, End the scene's sun; Home the scene's camera;
-      1-9, 0 cycle the knob listed with that number; T print per-pass GPU times;
+      1-9, 0, F2-F11 cycle the knob listed with that key; T print per-pass GPU times;
       F12 screenshot (PNG + EXR) and the [camera] that reproduces it; F1/H this help; Esc quit";
 
 #[cfg(test)]
@@ -217,5 +277,18 @@ mod tests {
         );
         assert_eq!(Key::Char('5').action(), Some(Action::CycleKnob(5)));
         assert_eq!(Key::Char('0').action(), Some(Action::CycleKnob(10)));
+        assert_eq!(
+            Key::Named(NamedKey::F2).action(),
+            Some(Action::CycleKnob(11))
+        );
+        assert_eq!(
+            Key::Named(NamedKey::F11).action(),
+            Some(Action::CycleKnob(20))
+        );
+        for n in 1..=KNOB_KEYS {
+            let key = Key::parse(&knob_key(n).unwrap()).unwrap();
+            assert_eq!(key.action(), Some(Action::CycleKnob(n)), "knob {n}");
+        }
+        assert_eq!(knob_key(KNOB_KEYS + 1), None);
     }
 }

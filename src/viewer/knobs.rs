@@ -75,6 +75,21 @@ const CYCLES: &[Cycle] = &[
         applies: has_sky_and_objects,
     },
     Cycle {
+        name: "multiple_scattering",
+        values: &["on", "off"],
+        applies: has_sky,
+    },
+    Cycle {
+        name: "ms_table_size",
+        values: &["8x8", "32x32", "64x64"],
+        applies: has_sky,
+    },
+    Cycle {
+        name: "irradiance_table_size",
+        values: &["16x4", "64x16", "128x32"],
+        applies: has_sky,
+    },
+    Cycle {
         name: "od_filter",
         values: &["manual", "nearest", "hardware"],
         applies: has_sky,
@@ -102,7 +117,7 @@ const CYCLES: &[Cycle] = &[
 ];
 
 /// The knobs that apply to `scene`; key N cycles entry N-1 (key 0 the
-/// tenth).
+/// tenth, F2 to F11 the eleventh to the twentieth).
 pub fn applicable(scene: &Scene) -> Vec<&'static Cycle> {
     CYCLES.iter().filter(|c| (c.applies)(scene)).collect()
 }
@@ -134,12 +149,7 @@ pub fn listing(scene: &Scene) -> String {
         .enumerate()
         .map(|(i, c)| {
             let value = c.current(scene).unwrap_or_else(|e| e.to_string());
-            // Keys 1..9 and 0; an eleventh knob has no key.
-            let key = if i < 10 {
-                ((i + 1) % 10).to_string()
-            } else {
-                "-".into()
-            };
+            let key = crate::viewer::input::knob_key(i + 1).unwrap_or_else(|| "-".into());
             format!("  {key} {}={value} ({})", c.name, c.values.join("|"))
         })
         .collect::<Vec<_>>()
@@ -182,7 +192,10 @@ mod tests {
         let after = samples.advance(&mut earth).unwrap();
         assert_ne!(before, after);
         assert_eq!(samples.current(&earth).unwrap(), after);
-        assert!(applicable(&earth).len() <= 10, "one digit key each");
+        assert!(
+            applicable(&earth).len() <= crate::viewer::input::KNOB_KEYS,
+            "one key each"
+        );
         // Aerial perspective needs objects under the sky.
         assert!(!names.contains(&"aerial_perspective"));
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -190,5 +203,6 @@ mod tests {
         let objects = Scene::load(&path).unwrap();
         let names: Vec<_> = applicable(&objects).iter().map(|c| c.name).collect();
         assert!(names.contains(&"aerial_perspective") && names.contains(&"aerial_volume"));
+        assert!(applicable(&objects).len() <= crate::viewer::input::KNOB_KEYS);
     }
 }

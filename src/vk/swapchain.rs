@@ -132,8 +132,9 @@ pub struct Swapchain {
     cmd: vk::CommandBuffer,
 }
 
-/// The output's format (`render::plan::OUTPUT_FORMAT`): 8-bit sRGB RGBA.
-const SOURCE_FORMAT: vk::Format = vk::Format::R8G8B8A8_SRGB;
+/// The output's format (`render::plan::OUTPUT_FORMAT`): 8-bit RGBA
+/// holding sRGB-encoded values.
+const SOURCE_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 
 impl Swapchain {
     /// A swapchain for `surface` of about `width`×`height` (the surface's
@@ -162,9 +163,12 @@ impl Swapchain {
                 modes
             )));
         }
-        // The output is 8-bit sRGB: an sRGB swapchain format shows the same
-        // bytes. RGBA order takes a plain copy; BGRA a blit, which swaps the
-        // channels (decoding and re-encoding sRGB, exact at 8 bits).
+        // The output holds sRGB-encoded bytes in a UNORM image: the window
+        // must show those bytes as they are. RGBA order takes a plain copy,
+        // which moves bytes unchanged into a UNORM or an sRGB image (both
+        // show encoded bytes in the sRGB colour space); BGRA a blit, which
+        // swaps the channels exactly only into a UNORM image (into an sRGB
+        // one it would encode the encoded values again).
         let srgb = vk::ColorSpaceKHR::SRGB_NONLINEAR;
         let pick = |f: vk::Format| {
             formats
@@ -172,15 +176,15 @@ impl Swapchain {
                 .find(|s| s.format == f && s.color_space == srgb)
                 .copied()
         };
-        let (chosen, blit) = match (
-            pick(vk::Format::R8G8B8A8_SRGB),
-            pick(vk::Format::B8G8R8A8_SRGB),
-        ) {
+        let copied = pick(vk::Format::R8G8B8A8_UNORM).or_else(|| pick(vk::Format::R8G8B8A8_SRGB));
+        let (chosen, blit) = match (copied, pick(vk::Format::B8G8R8A8_UNORM)) {
             (Some(f), _) => (f, false),
             (None, Some(f)) => (f, true),
             (None, None) => {
                 return Err(VkError::Surface(format!(
-                    "the window offers no 8-bit sRGB format (R8G8B8A8_SRGB or B8G8R8A8_SRGB); it offers {:?}",
+                    "the window offers no 8-bit format that shows sRGB-encoded bytes as they are \
+                     (R8G8B8A8_UNORM, R8G8B8A8_SRGB or B8G8R8A8_UNORM in the sRGB colour space); \
+                     it offers {:?}",
                     formats.iter().map(|f| f.format).collect::<Vec<_>>()
                 )))
             }

@@ -5,7 +5,8 @@
 //! reference alone (`sun_transmittance` at the pixel's own surface point,
 //! not the object's centre, and `aerial_perspective` along the pixel's
 //! ray, which comes from the inverted view-projection in f64). Also: how
-//! much one sun colour per object costs across a sphere, the shipped
+//! much the sun's colour varies across a sphere (what one colour per
+//! object would miss), the shipped
 //! `earth_objects` scene against the CPU reference renderer, and the CPU
 //! reference's image precision against the oracle's. Every render runs
 //! under validation.
@@ -108,9 +109,9 @@ fn check_panel(label: &str, sun: [f64; 3], lighting: &str) -> DVec3 {
                 let scale = want[c].max(want.max_element() * 1e-3).max(1e-9);
                 let e = (got[c] - want[c]).abs() / scale;
                 worst = worst.max(e);
-                // f32 shading of an f64 colour; the object's one transmittance
-                // (at its centre) against the exact one at each pixel's point
-                // on the 1 m panel: measured at most 3.3e-4 (blue, sunset).
+                // f32 shading, the transmittance from the table at each
+                // pixel's point: measured at most 8.2e-5 (sunset; 3.3e-4
+                // when one transmittance, at the centre, lit the panel).
                 assert!(
                 e <= 2e-3,
                 "{label} ({lighting}, {renderer}), pixel ({x}, {y}) channel {c}: {got} against {want}"
@@ -158,10 +159,11 @@ fn a_panel_is_lit_by_the_transmitted_sun_in_forward_and_deferred_lighting() {
     }
 }
 
-/// The approximation: one sun colour per object, from its bounding
-/// sphere's centre. Measured across spheres of the sizes the example
-/// scenes use, the exact transmittance at the top and bottom of the sphere
-/// against the one at its centre.
+/// What one sun colour per object, from its bounding sphere's centre (the
+/// renderer's approximation before the sun was computed per point), would
+/// miss: across spheres of the sizes the example scenes use, the exact
+/// transmittance at the top and bottom of the sphere against the one at
+/// its centre.
 #[test]
 fn sun_light_varies_little_across_a_small_object() {
     let (scene, _) = panel_scene(SUNSET, "forward");

@@ -341,6 +341,100 @@ fn interrupts_leave_no_child_and_no_temporary_folder() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Whether signal `signal` is still pending for process `pid` (sent but not
+/// yet taken by one of its threads): `ShdPnd` in its status. False once the
+/// process is gone.
+fn signal_pending(pid: u32, signal: libc::c_int) -> bool {
+    let Ok(status) = std::fs::read_to_string(format!("/proc/{pid}/status")) else {
+        return false;
+    };
+    status
+        .lines()
+        .filter_map(|l| l.strip_prefix("ShdPnd:"))
+        .filter_map(|mask| u64::from_str_radix(mask.trim(), 16).ok())
+        .any(|mask| mask & (1 << (signal - 1)) != 0)
+}
+
+/// A second interrupt while `bench` is stopping its children after the
+/// first ends the process at once, and still leaves nothing behind: the
+/// child's process group is killed and waited for, and the temporary
+/// folder removed, before it exits. Before, the folder (valgrind's, or the
+/// rounds' reports) stayed in `TMPDIR`. The second signal is sent as soon
+/// as the first has been taken (no longer pending), so the two never merge
+/// into one; that is a condition, not a delay, and the deadlines only turn
+/// a hang into a failure.
+#[test]
+fn a_second_interrupt_during_cleanup_leaves_nothing_behind() {
+    let dir = common::fresh_dir("hostile-bench", "second-interrupt");
+    let other = dir.join("other-build");
+    hanging_build(&other);
+    let tmp = dir.join("tmp");
+    std::fs::create_dir_all(&tmp).unwrap();
+    type Wanted = fn(&str) -> bool;
+    let cases: [(&str, Vec<String>, Wanted); 2] = [
+        (
+            "valgrind",
+            vec!["--metric".into(), "instructions".into()],
+            |comm| comm.contains("grind"),
+        ),
+        (
+            "other-build",
+            vec![
+                "--against".into(),
+                other.display().to_string(),
+                "--rounds".into(),
+                "1".into(),
+            ],
+            |comm| comm == "sleep",
+        ),
+    ];
+    for (name, args, wanted) in cases {
+        let value = format!("twice-{name}-{}", std::process::id());
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let mut parent = tiny_bench(&args)
+            .env(MARKER, &value)
+            .env("TMPDIR", &tmp)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        wait_for_child(&mut parent, &value, wanted);
+        let pid = parent.id();
+        // SAFETY: kill sends a signal to the process this test started.
+        assert_eq!(unsafe { libc::kill(pid as libc::pid_t, libc::SIGINT) }, 0);
+        let start = Instant::now();
+        while signal_pending(pid, libc::SIGINT) {
+            assert!(
+                start.elapsed() < Duration::from_secs(60),
+                "{value}: the first SIGINT still pending after 60 s"
+            );
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        // SAFETY: as above; the process may have ended already, but it is
+        // not reaped, so the id is still its own.
+        unsafe { libc::kill(pid as libc::pid_t, libc::SIGINT) };
+        while parent.try_wait().unwrap().is_none() {
+            assert!(
+                start.elapsed() < Duration::from_secs(60),
+                "{value}: bench still running 60 s after the signals"
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let out = parent.wait_with_output().unwrap();
+        assert_eq!(out.status.code(), Some(130), "{value}: {}", text(&out));
+        assert!(text(&out).contains("no output written"), "{}", text(&out));
+        assert_eq!(wait_until_none_marked(&value), Vec::new(), "{value}");
+        assert_eq!(
+            entries(&tmp),
+            Vec::<String>::new(),
+            "{value}: {}",
+            text(&out)
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Class 3, hangs: another build that never answers `--version`, or never
 /// finishes its round, is stopped after `--round-timeout` with everything
 /// it started, and the run fails saying so, instead of waiting forever.

@@ -466,40 +466,6 @@ fn a_nearly_full_file_system_is_found_before_the_work() {
     }
 }
 
-/// Runs `aerial args` and returns its output and its own peak resident
-/// memory (`VmHWM`, read while it runs: a high-water mark, so a late read
-/// still holds the peak; not the child's rusage, which would start from
-/// this large process's peak).
-fn peak_memory(args: &[&OsStr]) -> (Output, u64) {
-    let child = common::aerial()
-        .args(args)
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let status = format!("/proc/{}/status", child.id());
-    let done = std::sync::atomic::AtomicBool::new(false);
-    let mut peak = 0u64;
-    let out = std::thread::scope(|scope| {
-        let waiter = scope.spawn(|| {
-            let out = child.wait_with_output().unwrap();
-            done.store(true, std::sync::atomic::Ordering::SeqCst);
-            out
-        });
-        while !done.load(std::sync::atomic::Ordering::SeqCst) {
-            let hwm = std::fs::read_to_string(&status).ok().and_then(|s| {
-                let line = s.lines().find(|l| l.starts_with("VmHWM:"))?.to_owned();
-                line.split_whitespace().nth(1)?.parse::<u64>().ok()
-            });
-            peak = peak.max(hwm.unwrap_or(0) * 1024);
-            std::thread::sleep(std::time::Duration::from_millis(2));
-        }
-        waiter.join().unwrap()
-    });
-    assert!(peak > 0, "no reading of the child's memory");
-    (out, peak)
-}
-
 /// An OpenEXR of `width` x `height` pixels of noise at `path`.
 fn noise_exr(path: &Path, width: u32, height: u32) {
     let data = (0..u64::from(width) * u64::from(height) * 4)
@@ -531,7 +497,7 @@ fn tonemap_memory_estimate_bounds_the_measured_peak() {
         let exr = dir.path().join(format!("{width}x{height}.exr"));
         noise_exr(&exr, width, height);
         let (result, peak) =
-            peak_memory(&[os("tonemap"), exr.as_os_str(), os("--out"), out.as_os_str()]);
+            common::peak_memory(&[os("tonemap"), exr.as_os_str(), os("--out"), out.as_os_str()]);
         assert_eq!(result.status.code(), Some(0), "{}", stderr(&result));
         std::fs::remove_file(&exr).unwrap();
         peak
@@ -586,7 +552,7 @@ fn compare_with_a_diff_image_stays_within_its_estimate() {
     let diff = dir.path().join("d.png");
     let files = std::fs::metadata(&a).unwrap().len() + std::fs::metadata(&b).unwrap().len();
     let estimate = 2 * u64::from(side * side) * aerial::report::image_diff::BYTES_PER_PIXEL + files;
-    let (out, peak) = peak_memory(&[
+    let (out, peak) = common::peak_memory(&[
         os("compare"),
         a.as_os_str(),
         b.as_os_str(),
@@ -810,7 +776,7 @@ fn render_memory_estimate_bounds_the_measured_peak() {
             args.extend(scene);
             args.extend([os("--width"), os(side), os("--height"), os(side)]);
             args.extend([os("--out"), out.as_os_str()]);
-            let (result, peak) = peak_memory(&args);
+            let (result, peak) = common::peak_memory(&args);
             assert_eq!(result.status.code(), Some(0), "{}", stderr(&result));
             (args, peak)
         };

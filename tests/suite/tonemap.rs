@@ -3,9 +3,11 @@
 //! renderer can produce by accident (Inf, NaN, negatives). Every run is
 //! under validation with zero messages.
 //!
-//! The subpass writes an sRGB attachment, so the CPU side applies the sRGB
-//! transfer function and the tolerance is one 8-bit step (the hardware's
-//! rounding of the encode may differ from ours by one).
+//! The subpass encodes sRGB itself into a UNORM output, so the CPU side
+//! applies the sRGB transfer function too. For the curves the tolerance is
+//! one 8-bit step (the shader evaluates them in f32, which can round a
+//! value at a step's midpoint either way); the encode alone is held to
+//! half a step.
 
 use crate::common;
 
@@ -250,4 +252,80 @@ fn the_tonemap_command_honours_operator_and_exposure() {
         );
     }
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The 8-bit output's sRGB encode is the exact piecewise curve, computed in
+/// the tone-map shader (the output is UNORM, so no driver encode with its
+/// own approximation is involved): every byte of a fine gradient through
+/// the clamping tone map is within half a step of the f64 encode of its
+/// input, and the bytes never step down. The gradient holds every
+/// 16-bit step of [0, 1], the knee at 0.0031308 and, for every byte, the
+/// inputs just below and above the one whose exact encode falls halfway
+/// between two bytes (where a loose encode rounds the wrong way). The
+/// margin beyond half a step is f32 arithmetic's, not an approximation's.
+#[test]
+fn the_srgb_encode_is_within_half_a_step_of_the_exact_curve() {
+    let decode = |e: f64| {
+        if e <= 0.04045 {
+            e / 12.92
+        } else {
+            ((e + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let mut values: Vec<f32> = (0..=65535).map(|i| i as f32 / 65535.0).collect();
+    values.extend([0.0031308, 0.0031307, 0.0031309]);
+    for k in 0..255 {
+        // The linear value whose exact encode is (k + 0.5) / 255, and its
+        // neighbours a relative 1e-4 either side.
+        let half = decode((k as f64 + 0.5) / 255.0);
+        values.extend([half * (1.0 - 1e-4), half * (1.0 + 1e-4)].map(|v| v as f32));
+    }
+    values.sort_by(f32::total_cmp);
+    let width = 512u32;
+    let height = values.len().div_ceil(width as usize) as u32;
+    let mut data: Vec<f32> = values.iter().flat_map(|&v| [v, v, v, 1.0]).collect();
+    data.resize((width * height * 4) as usize, 1.0);
+    let image = Pixels {
+        width,
+        height,
+        data,
+    };
+    let tone_map = ToneMap {
+        operator: ToneMapOperator::None,
+        exposure: 1.0,
+    };
+    let run = app::run(
+        RunSource::HdrImage(&image, tone_map),
+        &common::validated_settings(),
+        &mut || {},
+    )
+    .expect("tone map runs");
+    common::assert_no_validation_messages(&run);
+    let mut worst = (0.0f64, 0.0f32);
+    let (mut off, mut down) = (0, 0);
+    for (i, &v) in values.iter().enumerate() {
+        let exact = 255.0 * srgb_encode(f64::from(v));
+        for c in 0..3 {
+            let error = (f64::from(run.output.data[i * 4 + c]) - exact).abs();
+            if error > worst.0 {
+                worst = (error, v);
+            }
+            off += usize::from(error > 0.5 + 1e-3);
+        }
+        assert_eq!(run.output.data[i * 4 + 3], 255);
+        down += usize::from(i > 0 && run.output.data[i * 4] < run.output.data[(i - 1) * 4]);
+    }
+    eprintln!(
+        "{} inputs: {off} bytes more than half a step off, {down} steps down; \
+         largest distance {:.5} steps, at {:e}",
+        values.len(),
+        worst.0,
+        worst.1
+    );
+    assert_eq!(
+        off, 0,
+        "largest distance {} steps, at {:e}",
+        worst.0, worst.1
+    );
+    assert_eq!(down, 0, "the encode is not monotonic");
 }

@@ -7,10 +7,14 @@
 //! - `gbuffer`: opaque surfaces for deferred lighting, writing the ambient
 //!   term to the colour target and the G-buffer targets (shader feature
 //!   `GBUFFER`).
+//!
+//! In a scene with an atmosphere every form also lights its surfaces by
+//! the sun and sky at each shaded point (`AirLight`, shader features
+//! `SUN_LIGHT` and `SKY_LIGHT`), reading the atmosphere's set.
 
 use super::{PassResources, PassSetup, RecordPass};
 use crate::mesh::Vertex;
-use crate::render::plan::{Draw, FramePlan, PipelineKey, ShadingKey};
+use crate::render::plan::{attachment, AirLight, Draw, FramePlan, PassIo, PipelineKey, ShadingKey};
 use crate::render::shader_ids::*;
 use crate::render::static_lights;
 use crate::render::RenderError;
@@ -46,11 +50,11 @@ pub struct SurfacePass {
     static_lights: bool,
 }
 
-/// Which pipeline `d` uses: with `static_lights`, a draw without the sun
-/// whose lights fit is specialized by them.
+/// Which pipeline `d` uses: with `static_lights`, a draw whose lights fit
+/// is specialized by them (the atmosphere's sun is not among them: it
+/// follows the frame's sun from the atmosphere's uniforms).
 fn surface_key(d: &Draw, static_lights: bool) -> SurfaceKey {
-    let lights = (static_lights && d.sun.is_none() && static_lights::fits(&d.lights))
-        .then(|| d.lights.clone());
+    let lights = (static_lights && static_lights::fits(&d.lights)).then(|| d.lights.clone());
     (d.pipeline, lights)
 }
 
@@ -94,8 +98,19 @@ impl SurfacePass {
             draw_keys = surface_keys(&draws, false);
         }
         let keys = distinct(&draw_keys);
+        // Drawn straight into the 8-bit output (UNORM), the shader encodes
+        // sRGB itself, as the tone map does.
+        let encode_srgb = matches!(
+            &setup.decl.io,
+            PassIo::Subpass { colour, .. } if colour.first() == Some(&attachment::OUTPUT)
+        );
         if !draws.is_empty() {
             let resources = setup.scene_resources()?;
+            // The atmosphere's constants, for pipelines it lights.
+            let air_constants = match (&setup.scene.sky, setup.frame.sky) {
+                (Some(sky), Some(sky_resources)) => sky_resources.object_constants(sky),
+                _ => Vec::new(),
+            };
             let render_pass = setup.render_pass()?;
             let blend = match form {
                 Form::Opaque => vec![Blend::Replace],
@@ -106,21 +121,7 @@ impl SurfacePass {
             // count, shading model) share their shader modules.
             let mut modules: BTreeMap<Vec<&str>, (ShaderModule, ShaderModule)> = BTreeMap::new();
             for (key, lights) in keys {
-                let mut features = Vec::new();
-                if key.textured {
-                    features.push("BASE_COLOR_TEXTURE");
-                }
-                if key.normal_mapped {
-                    features.push("NORMAL_MAP");
-                }
-                if form == Form::GBuffer {
-                    features.push("GBUFFER");
-                }
-                if key.debug != 0 {
-                    features.push("DEBUG_VIEW");
-                } else if key.shading == ShadingKey::Gouraud {
-                    features.push("GOURAUD");
-                }
+                let features = shader_features(&key, form);
                 if !modules.contains_key(&features) {
                     let vert = ShaderModule::new(setup.ctx, shaders::OBJECT_VERT.spirv(&features))?;
                     let frag = ShaderModule::new(setup.ctx, shaders::OBJECT_FRAG.spirv(&features))?;
@@ -140,11 +141,22 @@ impl SurfacePass {
                 if key.two_sided {
                     specialization.push((SPEC_TWO_SIDED, 1));
                 }
+                if encode_srgb {
+                    specialization.push((SPEC_ENCODE_SRGB, 1));
+                }
                 specialization.extend(static_lights::constants(
                     setup.scene,
                     resources.light_anchor,
                     lights.as_deref(),
                 ));
+                if key.air != AirLight::None {
+                    if air_constants.is_empty() {
+                        return Err(RenderError::Frame(
+                            "objects lit by the atmosphere, but the frame has no atmosphere".into(),
+                        ));
+                    }
+                    specialization.extend(&air_constants);
+                }
                 let pipeline = GraphicsPipeline::new(
                     setup.ctx,
                     &resources.layout,
@@ -194,6 +206,10 @@ impl RecordPass for SurfacePass {
                 cmd.bind_pipeline(&self.pipelines[key]);
                 if bound.is_none() {
                     cmd.bind_descriptor_set(layout, FRAME_SET, &resources.frame_set, &[]);
+                    // Every draw of a scene shares one AirLight.
+                    if key.0.air != AirLight::None {
+                        cmd.bind_descriptor_set(layout, SKY_SET, &frame.sky()?.set, &[]);
+                    }
                 }
                 bound = Some(key);
             }
@@ -240,6 +256,27 @@ impl RecordPass for SurfacePass {
     }
 }
 
+/// The object shaders' features for a pipeline of `key` in `form`.
+fn shader_features(key: &PipelineKey, form: Form) -> Vec<&'static str> {
+    let mut features = Vec::new();
+    if key.textured {
+        features.push("BASE_COLOR_TEXTURE");
+    }
+    if key.normal_mapped {
+        features.push("NORMAL_MAP");
+    }
+    if form == Form::GBuffer {
+        features.push("GBUFFER");
+    }
+    if key.debug != 0 {
+        features.push("DEBUG_VIEW");
+    } else if key.shading == ShadingKey::Gouraud {
+        features.push("GOURAUD");
+    }
+    features.extend(key.air.shader_features());
+    features
+}
+
 /// The vertex attributes a pipeline consumes: position and normal always,
 /// UVs for textured or normal-mapped materials, tangents only for
 /// normal-mapped ones (shaders that do not read them are not fed them);
@@ -273,4 +310,55 @@ fn vertex_attributes(textured: bool, normal_mapped: bool, debug: bool) -> Vec<Ve
         });
     }
     attributes
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every variant the pass can ask for is compiled: build.rs leaves out
+    /// the combinations the object shaders' rules exclude (the
+    /// atmosphere's light in a debug view, the sky without the sun), and
+    /// none of them is one a pipeline key leads to. A debug view never
+    /// carries the atmosphere's light (`AirLight::of`).
+    #[test]
+    fn every_variant_a_pipeline_can_ask_for_is_compiled() {
+        let mut asked = 0;
+        for form in [Form::Opaque, Form::Transparent, Form::GBuffer] {
+            for shading in [ShadingKey::Phong, ShadingKey::Gouraud, ShadingKey::Toon] {
+                for air in [AirLight::None, AirLight::Sun, AirLight::SunAndSky] {
+                    for debug in [0, 1] {
+                        if debug != 0 && air != AirLight::None {
+                            continue;
+                        }
+                        for bits in 0..4u32 {
+                            let key = PipelineKey {
+                                shading,
+                                textured: bits & 1 != 0,
+                                normal_mapped: bits & 2 != 0,
+                                blended: false,
+                                lights: 0,
+                                debug,
+                                shininess_exponent: 0,
+                                two_sided: false,
+                                air,
+                            };
+                            let features = shader_features(&key, form);
+                            assert!(!shaders::OBJECT_VERT.spirv(&features).is_empty());
+                            assert!(!shaders::OBJECT_FRAG.spirv(&features).is_empty());
+                            asked += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(asked, 3 * 3 * 4 * 4);
+        // And a left-out combination has no SPIR-V.
+        let left_out = shaders::OBJECT_FRAG
+            .features
+            .iter()
+            .position(|f| *f == "SKY_LIGHT")
+            .map(|i| shaders::OBJECT_FRAG.spirv[1 << i]);
+        assert_eq!(left_out, Some(&[][..]));
+    }
 }

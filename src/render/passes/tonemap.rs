@@ -1,7 +1,8 @@
 //! The tone-map subpass: reads the HDR colour of each pixel as an input
-//! attachment and writes the display colour into the sRGB output (Reinhard
-//! or ACES after exposure, or a clamp for LDR scenes read back with
-//! `--hdr`). Operator and exposure are specialization constants.
+//! attachment and writes the display colour, sRGB-encoded by the shader,
+//! into the 8-bit output (Reinhard or ACES after exposure, or a clamp for
+//! LDR scenes read back with `--hdr`). Operator and exposure are
+//! specialization constants.
 
 use super::{fullscreen_pipeline, InputAttachments, PassResources, PassSetup, RecordPass};
 use crate::render::shader_ids::{SPEC_TONEMAP_EXPOSURE, SPEC_TONEMAP_OPERATOR};

@@ -290,3 +290,37 @@ pub fn tone_map_on_gpu(
         .map(|c| [c[0], c[1], c[2], c[3]])
         .collect()
 }
+
+/// Runs `aerial args` and returns its output and its own peak resident
+/// memory (`VmHWM`, read while it runs: a high-water mark, so a late read
+/// still holds the peak; not the child's rusage, which would start from
+/// this large process's peak).
+pub fn peak_memory(args: &[&std::ffi::OsStr]) -> (std::process::Output, u64) {
+    let child = aerial()
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let status = format!("/proc/{}/status", child.id());
+    let done = std::sync::atomic::AtomicBool::new(false);
+    let mut peak = 0u64;
+    let out = std::thread::scope(|scope| {
+        let waiter = scope.spawn(|| {
+            let out = child.wait_with_output().unwrap();
+            done.store(true, std::sync::atomic::Ordering::SeqCst);
+            out
+        });
+        while !done.load(std::sync::atomic::Ordering::SeqCst) {
+            let hwm = std::fs::read_to_string(&status).ok().and_then(|s| {
+                let line = s.lines().find(|l| l.starts_with("VmHWM:"))?.to_owned();
+                line.split_whitespace().nth(1)?.parse::<u64>().ok()
+            });
+            peak = peak.max(hwm.unwrap_or(0) * 1024);
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+        waiter.join().unwrap()
+    });
+    assert!(peak > 0, "no reading of the child's memory");
+    (out, peak)
+}
