@@ -1,6 +1,7 @@
 #version 450
 // feature: SKY_VIEW
 // feature: MULTIPLE_SCATTERING
+// feature: AERIAL_VOLUME
 // The atmosphere subpass: for each pixel, single scattering along the view
 // ray through the atmosphere (Rayleigh + Mie, ozone absorption) in front
 // of whatever the surface pass drew there, or the analytic ground sphere,
@@ -17,6 +18,13 @@
 // The MULTIPLE_SCATTERING variant adds every order of scattering above the
 // first (isotropic, so no phase applies) and lights the ground by the sky
 // too (include/atmosphere.glsl).
+//
+// The AERIAL_VOLUME variant (aerial_perspective = "volume") is drawn only
+// on pixels with a surface (depth test LESS) and reads the air in front of
+// it from the aerial-perspective volume (glsl/aerial_volume.comp) at the
+// pixel and the surface's distance instead of marching; the pixels whose
+// surface lies behind the planet's ground, which the volume does not
+// hold, march as before.
 
 #include "atmosphere.glsl"
 
@@ -31,6 +39,13 @@ layout(constant_id = SPEC_SKY_VIEW_HARDWARE_FILTER) const bool SKY_VIEW_HARDWARE
 // surface colour is the clear colour, black, and is not read: on lavapipe
 // an input-attachment read is about two empty passes' worth per full screen.
 layout(constant_id = SPEC_TRANSPARENT_OVER_SKY) const bool TRANSPARENT_OVER_SKY = true;
+#endif
+
+#ifdef AERIAL_VOLUME
+// Trilinear through the sampler where the device filters RGBA32F (the
+// same check as the multiple-scattering tables'), by eight fetches a
+// panel otherwise.
+layout(set = 0, binding = AERIAL_VOLUME_BINDING) uniform sampler3D aerial_volume;
 #endif
 
 layout(input_attachment_index = 0, set = 1, binding = 0) uniform subpassInput surface;
@@ -92,6 +107,66 @@ Path sky_view_path(vec3 d) {
 }
 #endif
 
+#ifdef AERIAL_VOLUME
+// Manual trilinear of the panel starting at column `panel` around texel
+// position f (texel units, centres on integers, within the panel).
+vec3 aerial_volume_trilinear(vec3 f, int panel) {
+    ivec3 p = ivec3(floor(f));
+    ivec3 size = textureSize(aerial_volume, 0);
+    p = min(p, ivec3(size.x / 2, size.y, size.z) - 2);
+    vec3 a = f - vec3(p);
+    p.x += panel;
+    vec3 c000 = texelFetch(aerial_volume, p, 0).xyz;
+    vec3 c100 = texelFetch(aerial_volume, p + ivec3(1, 0, 0), 0).xyz;
+    vec3 c010 = texelFetch(aerial_volume, p + ivec3(0, 1, 0), 0).xyz;
+    vec3 c110 = texelFetch(aerial_volume, p + ivec3(1, 1, 0), 0).xyz;
+    vec3 c001 = texelFetch(aerial_volume, p + ivec3(0, 0, 1), 0).xyz;
+    vec3 c101 = texelFetch(aerial_volume, p + ivec3(1, 0, 1), 0).xyz;
+    vec3 c011 = texelFetch(aerial_volume, p + ivec3(0, 1, 1), 0).xyz;
+    vec3 c111 = texelFetch(aerial_volume, p + ivec3(1, 1, 1), 0).xyz;
+    vec3 near = mix(mix(c000, c100, a.x), mix(c010, c110, a.x), a.y);
+    vec3 far = mix(mix(c001, c101, a.x), mix(c011, c111, a.x), a.y);
+    return mix(near, far, a.z);
+}
+
+// The light scattered towards the camera in front of a surface at
+// distance t along the pixel's ray, and the transmittance to it, from the
+// volume: bilinear across the columns around the pixel, and linear in the
+// distance between the two slices around t (the slices are not evenly
+// spaced, so the slice coordinate is placed by distance, not by its
+// square root); in front of the first slice, linear from the camera,
+// where nothing is scattered yet and the transmittance is 1.
+void aerial_volume_read(float t, out vec3 inscatter, out vec3 transmittance) {
+    ivec3 size = textureSize(aerial_volume, 0);
+    int w = size.x / 2;
+    float slices = float(size.z);
+    // Column coordinates of the pixel, clamped to the panel's texel
+    // centres so no filter reaches into the other panel.
+    vec2 column = clamp(gl_FragCoord.xy * STATIC_VIEWPORT.zw * vec2(w, size.y) - 0.5,
+        vec2(0.0), vec2(w - 1, size.y - 1));
+    float u = aerial_slice(t, slices);
+    float k = clamp(floor(u), 0.0, slices - 2.0);
+    float t0 = aerial_slice_distance(k, slices);
+    float t1 = aerial_slice_distance(k + 1.0, slices);
+    float slice = u < 0.0 ? 0.0 : k + clamp((t - t0) / (t1 - t0), 0.0, 1.0);
+    // The share of the first slice's values in front of it.
+    float share = u < 0.0 ? clamp(t / t0, 0.0, 1.0) : 1.0;
+    vec3 f = vec3(column, slice);
+    vec3 scattered;
+    vec3 through;
+    if (SUN_TABLES_LINEAR_FILTER) {
+        vec3 texel = 1.0 / vec3(size);
+        scattered = textureLod(aerial_volume, (f + 0.5) * texel, 0.0).xyz;
+        through = textureLod(aerial_volume, (f + vec3(w, 0.0, 0.0) + 0.5) * texel, 0.0).xyz;
+    } else {
+        scattered = aerial_volume_trilinear(f, 0);
+        through = aerial_volume_trilinear(f, w);
+    }
+    inscatter = scattered * share;
+    transmittance = 1.0 - (1.0 - through) * share;
+}
+#endif
+
 void main() {
 #ifdef SKY_VIEW
     vec3 colour = TRANSPARENT_OVER_SKY ? subpassLoad(surface).rgb : vec3(0.0);
@@ -126,6 +201,22 @@ void main() {
         return;
     }
 
+#ifdef AERIAL_VOLUME
+    // Drawn only where a surface is (depth test LESS). The volume holds the
+    // air in front of it unless the planet's ground comes first (then the
+    // pixel shows the ground, marched below) or it lies beyond the
+    // volume's reach (which holds every object in view).
+    float g0, g1;
+    bool behind_ground = sphere(o, d, sky.terms.x, STATIC_RADII.x, g0, g1)
+        && g0 >= 0.0 && g1 > 0.0 && g0 < t_surface;
+    if (!behind_ground && t_surface <= sky.forward.w) {
+        vec3 inscatter;
+        vec3 transmittance;
+        aerial_volume_read(t_surface, inscatter, transmittance);
+        out_color = vec4(max(colour * transmittance + inscatter, vec3(0.0)), 1.0);
+        return;
+    }
+#endif
 #ifdef SKY_VIEW
     // Drawn only where nothing is in front (depth test EQUAL far plane).
     Path path = sky_view_path(d);

@@ -761,3 +761,31 @@ vec2 sky_view_coords(vec3 d, out bool below) {
     }
     return vec2(azimuth / PI * float(w - 1), s * float(half_h - 1));
 }
+
+// The aerial-perspective volume (aerial_volume.comp writes it; the
+// AERIAL_VOLUME variant of atmosphere.frag reads it): for a grid of view
+// directions through the screen (columns, centred on the pixels of a
+// WIDTH x HEIGHT image) and DEPTH distances along each, the light the air
+// scatters towards the camera in front of that distance (every order,
+// phases applied for the column's direction, times the sun's irradiance)
+// and the transmittance from the camera. A 3D RGBA32F image two panels
+// wide: in-scattering in columns 0..W-1, transmittance in W..2W-1.
+//
+// Slice k (0..DEPTH-1) lies at distance reach * ((k + 1) / DEPTH)^2 along
+// its column, reach being the far side of the farthest object in view
+// (sky.forward.w; src/render/plan.rs, aerial_volume_reach): slices crowd
+// near the camera, where the air in front of a surface changes fastest
+// relative to itself, and the camera itself is slice -1 (nothing
+// scattered, transmittance 1). docs/atmosphere.md has the measurements
+// behind the choice.
+
+// The distance of slice coordinate k (texel centres on integers).
+float aerial_slice_distance(float k, float slices) {
+    float s = (k + 1.0) / slices;
+    return sky.forward.w * s * s;
+}
+
+// The slice coordinate of distance t: the inverse of aerial_slice_distance.
+float aerial_slice(float t, float slices) {
+    return slices * sqrt(max(t, 0.0) / sky.forward.w) - 1.0;
+}

@@ -51,6 +51,11 @@
 // The first of the sky block's unchanging fields, 4 ids per field.
 #define SPEC_SKY_STATIC 8
 
+// The atmosphere's set 0: the aerial-perspective volume, written by
+// aerial_volume.comp and read by atmosphere.frag's AERIAL_VOLUME variant.
+#define AERIAL_VOLUME_WRITE_BINDING 8
+#define AERIAL_VOLUME_BINDING 9
+
 // Four float specialization constants NAME_0 .. NAME_3 with ids ID ..
 // ID + 3, read back as one vector by SPEC_VEC4(NAME): the static lights
 // and the sky's unchanging fields are declared with these.

@@ -77,6 +77,42 @@ pub fn check_sky_view(w: u32, h: u32) -> Result<(), String> {
     Ok(())
 }
 
+/// Default size of the aerial-perspective volume (columns across ×
+/// columns down × slices in distance): Hillaire's 32³.
+pub const DEFAULT_AERIAL_VOLUME: (u32, u32, u32) = (32, 32, 32);
+/// Smallest accepted side of the volume: two texels to interpolate between.
+pub const MIN_AERIAL_VOLUME_SIDE: u32 = 2;
+/// Largest accepted side of the volume.
+pub const MAX_AERIAL_VOLUME_SIDE: u32 = 256;
+
+/// Checks an aerial-perspective volume size (the scene field and the knob).
+pub fn check_aerial_volume(size: (u32, u32, u32)) -> Result<(), String> {
+    let (w, h, d) = size;
+    if [w, h, d]
+        .iter()
+        .all(|n| (MIN_AERIAL_VOLUME_SIDE..=MAX_AERIAL_VOLUME_SIDE).contains(n))
+    {
+        Ok(())
+    } else {
+        Err(format!(
+            "each side must be between {MIN_AERIAL_VOLUME_SIDE} and {MAX_AERIAL_VOLUME_SIDE}, \
+             got {w}x{h}x{d}"
+        ))
+    }
+}
+
+/// How the atmosphere in front of a surface is found
+/// (`atmosphere.aerial_perspective`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AerialPerspective {
+    /// Every pixel with a surface marches its own ray to it.
+    March,
+    /// Pixels read a camera-frustum volume marched once per frame
+    /// (Hillaire 2020's aerial-perspective volume).
+    Volume,
+}
+
 /// The sun and the atmosphere around a planet.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sky {
@@ -101,6 +137,11 @@ pub struct Sky {
     pub ms_table_size: (u32, u32),
     /// The sky-irradiance table's texels, sun angle × altitude.
     pub irradiance_table_size: (u32, u32),
+    /// How pixels with a surface get the air in front of it.
+    pub aerial_perspective: AerialPerspective,
+    /// The aerial-perspective volume's size with `AerialPerspective::Volume`:
+    /// columns across and down the screen, and slices in distance.
+    pub aerial_volume: (u32, u32, u32),
 }
 
 impl Sky {

@@ -15,7 +15,9 @@ pub use super::draw_list::{
 };
 use super::geometry::SceneGeometry;
 use super::tiles::{self, TileGroup};
-use crate::scene::{HdrFormat, Lighting, Scene, ShadingModel, Texture, ToneMapOperator};
+use crate::scene::{
+    AerialPerspective, HdrFormat, Lighting, Scene, ShadingModel, Texture, ToneMapOperator,
+};
 use crate::vk::{DepthUse, Format};
 
 /// The attachment names passes refer to.
@@ -79,6 +81,9 @@ pub enum PassIo {
 pub enum PassKind {
     /// The atmosphere marched for a grid of view directions (compute).
     SkyView,
+    /// The air in front of surfaces, marched once per froxel column of the
+    /// camera's frustum (compute; `aerial_perspective = "volume"`).
+    AerialVolume,
     /// Deferred: surfaces into the G-buffer.
     GBuffer,
     /// Deferred: the G-buffer lit per screen tile.
@@ -99,9 +104,10 @@ pub enum PassKind {
 
 impl PassKind {
     /// Every kind, in the order a frame runs them.
-    pub const ALL: [PassKind; 9] = [
+    pub const ALL: [PassKind; 10] = [
         PassKind::HdrUpload,
         PassKind::SkyView,
+        PassKind::AerialVolume,
         PassKind::GBuffer,
         PassKind::Lighting,
         PassKind::Opaque,
@@ -116,7 +122,7 @@ impl PassKind {
     pub fn is_subpass(self) -> bool {
         !matches!(
             self,
-            PassKind::SkyView | PassKind::HdrUpload | PassKind::Readback
+            PassKind::SkyView | PassKind::AerialVolume | PassKind::HdrUpload | PassKind::Readback
         )
     }
 
@@ -124,6 +130,7 @@ impl PassKind {
     pub fn name(self) -> &'static str {
         match self {
             PassKind::SkyView => "sky view",
+            PassKind::AerialVolume => "aerial volume",
             PassKind::GBuffer => "gbuffer",
             PassKind::Lighting => "lighting",
             PassKind::Opaque => "opaque",
@@ -229,6 +236,9 @@ pub struct FramePlan {
     /// Passes in the order they run; one timestamp interval each. The
     /// subpasses among them form one render pass, in this order.
     pub passes: Vec<PassDecl>,
+    /// The distance from the camera the aerial-perspective volume reaches,
+    /// when the frame has one (see [`aerial_volume_reach`]).
+    pub aerial_volume_reach: Option<f64>,
 }
 
 impl FramePlan {
@@ -253,6 +263,11 @@ impl FramePlan {
             textures: draws.textures,
             normal_maps: draws.normal_maps,
             tile_groups,
+            aerial_volume_reach: graph
+                .passes
+                .iter()
+                .any(|p| p.kind == PassKind::AerialVolume)
+                .then(|| aerial_volume_reach(scene, &geometry.bounds)),
             attachments: graph.attachments,
             passes: graph.passes,
         }
@@ -275,6 +290,7 @@ impl FramePlan {
             tile_groups: Vec::new(),
             attachments: graph.attachments,
             passes: graph.passes,
+            aerial_volume_reach: None,
         }
     }
 
@@ -401,6 +417,20 @@ impl FrameGraph {
                 io: PassIo::Compute,
             });
         }
+        // The aerial-perspective volume only serves pixels with a surface:
+        // a frame without objects has none to read it.
+        if sky
+            && !scene.objects.is_empty()
+            && scene
+                .sky
+                .as_ref()
+                .is_some_and(|s| s.aerial_perspective == AerialPerspective::Volume)
+        {
+            passes.push(PassDecl {
+                kind: PassKind::AerialVolume,
+                io: PassIo::Compute,
+            });
+        }
         if deferred {
             let wide = gbuffer_format(scene);
             for (name, format) in [(ALBEDO, wide), (NORMAL, NORMAL_FORMAT), (MATERIAL, wide)] {
@@ -503,6 +533,42 @@ impl FrameGraph {
             ],
         }
     }
+}
+
+/// How far from the camera the aerial-perspective volume reaches: the far
+/// side of the farthest object whose bounding sphere (`bounds`, one per
+/// object) may be in view, no farther than the far plane reaches, and at
+/// least a millimetre. Slices spread over this distance alone, so a scene
+/// of metre-sized objects gets centimetre slices and one with objects
+/// across a continent gets kilometre ones; a surface beyond it (none, by
+/// construction) would march its own ray.
+pub fn aerial_volume_reach(scene: &Scene, bounds: &[(glam::DVec3, f32)]) -> f64 {
+    let camera = &scene.camera;
+    let aspect = f64::from(scene.output.width) / f64::from(scene.output.height);
+    let (forward, right, up) = super::sky_resources::ray_basis(camera, aspect);
+    // The view cone around `forward` through the frustum's corners.
+    let corner = forward + right + up;
+    let cos_corner = corner.normalize().dot(forward);
+    let half_angle = cos_corner.clamp(-1.0, 1.0).acos();
+    let in_view = |centre: glam::DVec3, radius: f64| {
+        let to = centre - camera.eye;
+        let distance = to.length();
+        if distance <= radius {
+            return true;
+        }
+        let angle = (to.dot(forward) / distance).clamp(-1.0, 1.0).acos();
+        angle - (radius / distance).asin() <= half_angle
+    };
+    let farthest = bounds
+        .iter()
+        .filter(|(c, r)| in_view(*c, f64::from(*r)))
+        .map(|(c, r)| c.distance(camera.eye) + f64::from(*r))
+        .fold(0.0_f64, f64::max);
+    // The far plane cuts view depth; along the corner ray it is farthest.
+    let far_plane = camera
+        .far
+        .map_or(f64::INFINITY, |far| f64::from(far) * corner.length());
+    farthest.min(far_plane).max(1e-3)
 }
 
 /// Whether `scene` is lit in a deferred lighting pass: asked for, outside
@@ -609,6 +675,13 @@ mod tests {
             true,
         ));
         plans.push(FramePlan::for_hdr_image(8, 8, true));
+        let (mut scene, _) = load("earth_objects.toml");
+        scene.sky.as_mut().unwrap().aerial_perspective = AerialPerspective::Volume;
+        plans.push(FramePlan::new(
+            &scene,
+            &SceneGeometry::new(&scene).unwrap(),
+            false,
+        ));
         let mut seen = std::collections::HashSet::new();
         for decl in plans.iter().flat_map(|p| &p.passes) {
             assert_eq!(decl.kind.is_subpass(), decl.is_subpass(), "{decl:?}");
@@ -821,5 +894,84 @@ mod tests {
         let plan = FramePlan::new(&scene, &SceneGeometry::new(&scene).unwrap(), false);
         assert!(plan.pass_names().contains(&"atmosphere"));
         assert!(plan.has_attachment(attachment::HDR));
+    }
+
+    /// The aerial-perspective volume's pass (and with it its image,
+    /// bindings and shader variant, which the renderer builds for the pass)
+    /// is in a frame only with aerial_perspective = "volume" and objects
+    /// under the atmosphere; it reaches the far side of the farthest object
+    /// in view.
+    #[test]
+    fn only_volume_mode_with_objects_under_an_atmosphere_gets_the_aerial_volume() {
+        let plan_of =
+            |scene: &Scene| FramePlan::new(scene, &SceneGeometry::new(scene).unwrap(), false);
+        let (mut scene, plan) = load("earth_objects.toml");
+        assert!(!plan.has(PassKind::AerialVolume));
+        assert_eq!(plan.aerial_volume_reach, None);
+        scene.sky.as_mut().unwrap().aerial_perspective = AerialPerspective::Volume;
+        let plan = plan_of(&scene);
+        assert_eq!(
+            plan.pass_names(),
+            vec![
+                "sky view",
+                "aerial volume",
+                "opaque",
+                "atmosphere",
+                "tonemap",
+                "readback"
+            ]
+        );
+        // The farthest sphere: radius 600 m, its centre 13 013.7 m away.
+        let reach = plan.aerial_volume_reach.unwrap();
+        assert!((13_613.0..13_700.0).contains(&reach), "{reach}");
+        // Deferred lighting and no sky view: still there.
+        scene.output.lighting = Lighting::Deferred;
+        scene.sky.as_mut().unwrap().sky_view = None;
+        let plan = plan_of(&scene);
+        assert_eq!(
+            plan.pass_names(),
+            vec![
+                "aerial volume",
+                "gbuffer",
+                "lighting",
+                "atmosphere",
+                "tonemap",
+                "readback"
+            ]
+        );
+        // A debug view draws no atmosphere, so no volume.
+        let mut debug = scene.clone();
+        debug.output.debug_view = Some(crate::scene::DebugView::Normals);
+        assert!(!plan_of(&debug).has(PassKind::AerialVolume));
+        // No objects: nothing reads the volume.
+        let (mut sky_only, _) = load("earth_noon.toml");
+        sky_only.sky.as_mut().unwrap().aerial_perspective = AerialPerspective::Volume;
+        let plan = plan_of(&sky_only);
+        assert!(!plan.has(PassKind::AerialVolume), "{:?}", plan.pass_names());
+        assert_eq!(plan.aerial_volume_reach, None);
+    }
+
+    /// The reach counts only objects that may be in view, and stops at the
+    /// far plane.
+    #[test]
+    fn the_aerial_volume_reaches_the_farthest_object_in_view() {
+        let (mut scene, _) = load("earth_objects.toml");
+        let eye = scene.camera.eye;
+        let forward = (scene.camera.look_at - eye).normalize();
+        let ahead = (eye + 100.0 * forward, 1.0_f32);
+        let behind = (eye - 1e5 * forward, 10.0_f32);
+        let reach = aerial_volume_reach(&scene, &[ahead, behind]);
+        assert!((reach - 101.0).abs() < 1e-9, "{reach}");
+        // Just outside the view cone to the side, however far: left out.
+        let side = glam::DVec3::Y.cross(forward).normalize();
+        let aside = (eye + 1e4 * (forward + 2.0 * side), 1.0_f32);
+        assert!((aerial_volume_reach(&scene, &[ahead, aside]) - 101.0).abs() < 1e-9);
+        // An object around the camera counts.
+        let around = (eye, 5.0_f32);
+        assert!((aerial_volume_reach(&scene, &[around]) - 5.0).abs() < 1e-9);
+        // The far plane cuts it, at the frustum's corner.
+        scene.camera.far = Some(50.0);
+        let reach = aerial_volume_reach(&scene, &[ahead]);
+        assert!(reach > 50.0 && reach < 70.0, "{reach}");
     }
 }

@@ -11,7 +11,7 @@
 //!   once (`SceneGeometry::new`), and the lights each object's uniform
 //!   block must hold where the blocks are laid out (`scene_resources`).
 
-use super::plan::{attachment, FrameGraph, PassIo};
+use super::plan::{attachment, FrameGraph, PassIo, PassKind};
 use super::RenderError;
 use crate::budget::{Bytes, MemoryBudget};
 use crate::image_io::FileFormat;
@@ -158,8 +158,9 @@ pub fn scene_bytes(
     let (w, h) = (scene.output.width as u64, scene.output.height as u64);
     // Every attachment the renderer will create (the G-buffer and the
     // atmosphere's surface copy included), from the same graph.
-    let attachments = attachment_bytes(w, h, &FrameGraph::new(scene, keep_hdr))
-        .saturating_add((w * h).saturating_mul(extra_per_pixel));
+    let graph = FrameGraph::new(scene, keep_hdr);
+    let attachments =
+        attachment_bytes(w, h, &graph).saturating_add((w * h).saturating_mul(extra_per_pixel));
     let size_what = format!("output size {w}x{h}");
     budget.check(&size_what, attachments)?;
     total = total.saturating_add(attachments);
@@ -225,6 +226,18 @@ pub fn scene_bytes(
         if let Some((w, h)) = sky.sky_view {
             let need = u64::from(w) * u64::from(h) * 16 * u64::from(sky.sky_view_panels());
             budget.check(format!("sky-view table {w}x{h}"), need)?;
+            total = total.saturating_add(need);
+        }
+        // The aerial-perspective volume: two RGBA32F panels, in frames
+        // that have it.
+        if graph
+            .passes
+            .iter()
+            .any(|p| p.kind == PassKind::AerialVolume)
+        {
+            let (w, h, d) = sky.aerial_volume;
+            let need = crate::render::sky_resources::AerialVolume::bytes(sky.aerial_volume);
+            budget.check(format!("aerial-perspective volume {w}x{h}x{d}"), need)?;
             total = total.saturating_add(need);
         }
         // The multiple-scattering and sky-irradiance tables, RGBA32F

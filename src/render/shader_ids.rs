@@ -55,6 +55,12 @@ pub const SPEC_SUN_TABLES_LINEAR_FILTER: u32 = 5;
 /// (`sky_resources::static_constants`).
 pub const SPEC_SKY_STATIC: u32 = 8;
 
+/// The atmosphere's set 0: the aerial-perspective volume written by its
+/// compute pass (storage image) and read by the atmosphere subpass
+/// (sampled), present only in frames with the volume.
+pub const AERIAL_VOLUME_WRITE_BINDING: u32 = 8;
+pub const AERIAL_VOLUME_BINDING: u32 = 9;
+
 /// The specialization entries of consecutive float constants from id
 /// `first` on (the shaders' `SPEC_VEC4_CONSTANTS`).
 pub fn float_constants(
@@ -110,6 +116,8 @@ mod tests {
                 SPEC_SUN_TABLES_LINEAR_FILTER,
             ),
             ("SPEC_SKY_STATIC", SPEC_SKY_STATIC),
+            ("AERIAL_VOLUME_WRITE_BINDING", AERIAL_VOLUME_WRITE_BINDING),
+            ("AERIAL_VOLUME_BINDING", AERIAL_VOLUME_BINDING),
         ];
         let glsl = include_str!("../../glsl/include/constants.glsl");
         let defined: Vec<(&str, u32)> = glsl

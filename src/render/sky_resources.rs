@@ -13,8 +13,11 @@
 //! Everything planet-scale is computed here in f64 and given to the
 //! shaders camera-relative.
 
-use super::plan::FramePlan;
-use super::shader_ids::{float_constants, SPEC_OBJECT_SKY_OFFSET, SPEC_SKY_STATIC};
+use super::plan::{FramePlan, PassKind};
+use super::shader_ids::{
+    float_constants, AERIAL_VOLUME_BINDING, AERIAL_VOLUME_WRITE_BINDING, SPEC_OBJECT_SKY_OFFSET,
+    SPEC_SKY_STATIC,
+};
 use super::sun_tables::{self, SunTables};
 use super::RenderError;
 use crate::atmosphere::OpticalDepthTable;
@@ -31,6 +34,7 @@ use std::sync::Arc;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct SkyUniforms {
+    /// xyz: camera forward; w: the aerial-perspective volume's reach.
     pub forward: [f32; 4],
     pub right: [f32; 4],
     pub up: [f32; 4],
@@ -165,6 +169,21 @@ pub fn uniforms(
     }
 }
 
+/// The uniform block for `sky` seen by `camera` in the frame `plan`: the
+/// block of [`uniforms`], and the aerial-perspective volume's reach (the
+/// forward vector's spare w, 0 without a volume), which changes with the
+/// view and so is not a constant.
+fn plan_uniforms(
+    sky: &Sky,
+    camera: &Camera,
+    plan: &FramePlan,
+    table_size: (u32, u32),
+) -> SkyUniforms {
+    let mut block = uniforms(sky, camera, plan.width, plan.height, table_size);
+    block.forward[3] = plan.aerial_volume_reach.unwrap_or(0.0) as f32;
+    block
+}
+
 /// Every table holds four 32-bit floats a texel.
 pub(super) const TABLE_FORMAT: Format = Format::R32G32B32A32_SFLOAT;
 
@@ -174,8 +193,10 @@ pub struct SkyResources {
     /// Binding 0: uniforms; 1: optical-depth table; 2: the sky-view table
     /// written (compute); 3: the sky-view table read (fragment); 4 and 5:
     /// the multiple-scattering and sky-irradiance tables, with multiple
-    /// scattering. Object pipelines bind it too, as their `SKY_SET`, for
-    /// the sun and sky light at each shaded point.
+    /// scattering; 8 and 9: the aerial-perspective volume written
+    /// (compute) and read (fragment), in frames with it. Object pipelines
+    /// bind it too, as their `SKY_SET`, for the sun and sky light at each
+    /// shaded point.
     pub set: DescriptorSet,
     _pool: DescriptorPool,
     pub layout: DescriptorSetLayout,
@@ -194,6 +215,9 @@ pub struct SkyResources {
     sky_view_sampler: Option<Sampler>,
     /// The sky-view table's size (directions), when there is one.
     pub sky_view: Option<(u32, u32)>,
+    /// The aerial-perspective volume, when the frame has one: in-scattering
+    /// and transmittance panels side by side, `2 W × H × D` texels.
+    pub aerial_volume: Option<AerialVolume>,
     /// The optical-depth table's size in bytes and its bake time (wall
     /// clock), for the reports.
     pub table_bytes: usize,
@@ -231,6 +255,55 @@ impl SkyUniforms {
             self.viewport,
             self.sky_view,
         ]
+    }
+}
+
+/// The aerial-perspective volume's image, its sampler and its size.
+pub struct AerialVolume {
+    pub image: Image,
+    _sampler: Sampler,
+    /// Columns across and down the screen, slices in distance.
+    pub size: (u32, u32, u32),
+}
+
+impl AerialVolume {
+    fn new(
+        ctx: &Arc<Context>,
+        sky: &Sky,
+        linear_filter: bool,
+    ) -> Result<AerialVolume, RenderError> {
+        let (w, h, d) = sky.aerial_volume;
+        let image = Image::new_volume(
+            ctx,
+            "aerial-perspective volume",
+            ImageDesc {
+                width: 2 * w,
+                height: h,
+                format: TABLE_FORMAT,
+                usage: ImageUsageFlags::STORAGE | ImageUsageFlags::SAMPLED,
+                mip_levels: 1,
+                aspect: ImageAspectFlags::COLOR,
+            },
+            d,
+        )?;
+        // Read through the sampler's filter where the device filters the
+        // format (the multiple-scattering tables' check), by texel fetches
+        // otherwise.
+        let filter = if linear_filter {
+            SamplerFilter::Bilinear
+        } else {
+            SamplerFilter::Nearest
+        };
+        Ok(AerialVolume {
+            image,
+            _sampler: Sampler::clamped(ctx, filter)?,
+            size: (w, h, d),
+        })
+    }
+
+    /// The volume's size in bytes.
+    pub fn bytes(size: (u32, u32, u32)) -> u64 {
+        2 * u64::from(size.0) * u64::from(size.1) * u64::from(size.2) * 16
     }
 }
 
@@ -283,7 +356,7 @@ impl SkyResources {
     /// frames; the tables do not depend on either (the sky-view table is
     /// computed from the uniforms in every frame).
     pub fn set_view(&mut self, sky: &Sky, camera: &Camera, plan: &FramePlan) {
-        let block = uniforms(sky, camera, plan.width, plan.height, self.table_size);
+        let block = plan_uniforms(sky, camera, plan, self.table_size);
         self.uniforms.write(0, bytemuck::bytes_of(&block));
     }
 
@@ -305,13 +378,7 @@ impl SkyResources {
             table.height,
             table.bake_seconds
         );
-        let block = uniforms(
-            sky,
-            camera,
-            plan.width,
-            plan.height,
-            (table.width, table.height),
-        );
+        let block = plan_uniforms(sky, camera, plan, (table.width, table.height));
         let uniforms = Buffer::with_data(
             ctx,
             "atmosphere",
@@ -418,6 +485,21 @@ impl SkyResources {
                 });
             }
         }
+        let aerial_volume = if plan.has(PassKind::AerialVolume) {
+            bindings.push(DescriptorBinding {
+                binding: AERIAL_VOLUME_WRITE_BINDING,
+                kind: DescriptorType::STORAGE_IMAGE,
+                stages: ShaderStageFlags::COMPUTE,
+            });
+            bindings.push(DescriptorBinding {
+                binding: AERIAL_VOLUME_BINDING,
+                kind: DescriptorType::COMBINED_IMAGE_SAMPLER,
+                stages: ShaderStageFlags::FRAGMENT,
+            });
+            Some(AerialVolume::new(ctx, sky, linear_filter)?)
+        } else {
+            None
+        };
         let layout = DescriptorSetLayout::new(ctx, &bindings)?;
         let pool = DescriptorPool::for_layouts(ctx, &[&layout])?;
         let set = pool.allocate(&layout)?;
@@ -431,6 +513,10 @@ impl SkyResources {
         if let Some(image) = &sky_view_image {
             set.write_storage_image(2, image);
             set.write_sampled_image(3, image, sky_view_sampler.as_ref().unwrap_or(&sampler));
+        }
+        if let Some(volume) = &aerial_volume {
+            set.write_storage_image(AERIAL_VOLUME_WRITE_BINDING, &volume.image);
+            set.write_sampled_image(AERIAL_VOLUME_BINDING, &volume.image, &volume._sampler);
         }
         // The multiple-scattering and sky-irradiance tables are read
         // through the sampler's filter where the device can filter their
@@ -467,6 +553,7 @@ impl SkyResources {
             _sampler: sampler,
             sky_view_sampler,
             sky_view: sky.sky_view,
+            aerial_volume,
             table_bytes: table.bytes(),
             table_bake_seconds: table.bake_seconds,
             static_fields,

@@ -8,8 +8,8 @@
 //! in `viewer::knobs`.
 
 use super::{
-    HdrFormat, Lighting, OzoneDepth, Scene, ShadingModel, TableFilter, TableMapping, TextureFilter,
-    ToneMapOperator,
+    AerialPerspective, HdrFormat, Lighting, OzoneDepth, Scene, ShadingModel, TableFilter,
+    TableMapping, TextureFilter, ToneMapOperator,
 };
 
 /// One named setting.
@@ -330,6 +330,35 @@ pub const KNOBS: &[Knob] = &[
         },
     },
     Knob {
+        name: "aerial_perspective",
+        best: Best::Fixed("march"),
+        values: "march | volume: surfaces march their own ray through the air, or read the aerial-perspective volume",
+        apply: |s, v| {
+            sky_mut(s)?.aerial_perspective = AerialPerspective::parse(v)?;
+            Ok(())
+        },
+        read: |s| match &s.sky {
+            Some(sky) => sky.aerial_perspective.name().into(),
+            None => "-".into(),
+        },
+    },
+    Knob {
+        name: "aerial_volume",
+        best: Best::LastListed,
+        values: "WIDTHxHEIGHTxDEPTH: the aerial-perspective volume's columns across and down the screen and slices in distance (2..=256 each; with aerial_perspective=volume)",
+        apply: |s, v| {
+            sky_mut(s)?.aerial_volume = super::sky::parse_aerial_volume(v)?;
+            Ok(())
+        },
+        read: |s| match &s.sky {
+            Some(sky) => {
+                let (w, h, d) = sky.aerial_volume;
+                format!("{w}x{h}x{d}")
+            }
+            None => "-".into(),
+        },
+    },
+    Knob {
         name: "od_filter",
         best: Best::Fixed("manual"),
         values: "manual | nearest | hardware: how the atmosphere pass reads the optical-depth table",
@@ -440,6 +469,7 @@ named! {
     TableMapping { "horizon" => Horizon, "linear" => Linear }
     TableFilter { "manual" => Manual, "nearest" => Nearest, "hardware" => Hardware }
     OzoneDepth { "exact" => Exact, "table" => Table }
+    AerialPerspective { "march" => March, "volume" => Volume }
 }
 
 /// The scene's sky, for the atmosphere knobs.
@@ -510,6 +540,7 @@ mod tests {
         names_match_the_scene_file::<TableMapping>();
         names_match_the_scene_file::<TableFilter>();
         names_match_the_scene_file::<OzoneDepth>();
+        names_match_the_scene_file::<AerialPerspective>();
         assert_eq!(
             TableFilter::parse("linear"),
             Err("expected manual, nearest or hardware".to_string())
@@ -571,6 +602,10 @@ mod tests {
             ("od_ozone", "exact"),
             ("od_table_size", "3x3"),
             ("atmosphere_samples", "8"),
+            ("aerial_perspective", "volume"),
+            ("aerial_perspective", "march"),
+            ("aerial_volume", "16x8x64"),
+            ("aerial_volume", "2x256x2"),
         ] {
             let knob = Knob::find(name).unwrap();
             knob.set(&mut scene, value).unwrap();
@@ -582,6 +617,11 @@ mod tests {
             ("od_filter", "cubic"),
             ("od_ozone", "analytic"),
             ("od_table_size", "256x2"),
+            ("aerial_perspective", "froxel"),
+            ("aerial_volume", "32x32"),
+            ("aerial_volume", "1x32x32"),
+            ("aerial_volume", "32x32x257"),
+            ("aerial_volume", "32xx32"),
         ] {
             let e = Knob::find(name)
                 .unwrap()

@@ -22,8 +22,9 @@ use glam::{DVec3, Vec3};
 use serde::Deserialize;
 
 pub use crate::atmosphere::model::{
-    Atmosphere, OzoneDepth, Sky, Sun, TableFilter, TableMapping, DEFAULT_ATMOSPHERE_SAMPLES,
-    DEFAULT_TABLE_SIZE, MAX_ATMOSPHERE_SAMPLES, MAX_TABLE_SIDE, MIN_TABLE_SIDE,
+    AerialPerspective, Atmosphere, OzoneDepth, Sky, Sun, TableFilter, TableMapping,
+    DEFAULT_ATMOSPHERE_SAMPLES, DEFAULT_TABLE_SIZE, MAX_ATMOSPHERE_SAMPLES, MAX_TABLE_SIDE,
+    MIN_TABLE_SIDE,
 };
 pub use crate::mesh::obj::AssetWarning;
 pub use camera::Camera;

@@ -79,6 +79,8 @@ pub(super) struct AtmosphereFile {
     multiple_scattering: Option<bool>,
     ms_table_size: Option<[u32; 2]>,
     irradiance_table_size: Option<[u32; 2]>,
+    aerial_perspective: Option<AerialPerspective>,
+    aerial_volume: Option<String>,
 }
 
 /// `atmosphere.sky_view`: `[width, height]` or `"off"`.
@@ -107,6 +109,25 @@ pub(super) struct MieFromFile {
     turbidity: f64,
     k: Option<[f64; 3]>,
     albedo: Option<f64>,
+}
+
+/// An aerial-perspective volume size, `WIDTHxHEIGHTxDEPTH` (the scene
+/// field and the knob), each side within the bounds.
+pub(super) fn parse_aerial_volume(v: &str) -> std::result::Result<(u32, u32, u32), String> {
+    let sides: Vec<&str> = v.split('x').collect();
+    let [w, h, d] = sides[..] else {
+        return Err(format!(
+            "expected WIDTHxHEIGHTxDEPTH (e.g. \"32x32x32\"), got \"{v}\""
+        ));
+    };
+    let parse = |t: &str| {
+        t.trim()
+            .parse::<u32>()
+            .map_err(|e| format!("'{t}' in \"{v}\": {e}"))
+    };
+    let size = (parse(w)?, parse(h)?, parse(d)?);
+    check_aerial_volume(size)?;
+    Ok(size)
 }
 
 fn ones() -> [f64; 3] {
@@ -438,8 +459,18 @@ impl Check<'_> {
             atmosphere.irradiance_table_size,
             DEFAULT_IRRADIANCE_TABLE_SIZE,
         )?;
+        let aerial_volume = match &atmosphere.aerial_volume {
+            None => DEFAULT_AERIAL_VOLUME,
+            Some(v) => {
+                parse_aerial_volume(v).map_err(|e| self.invalid("atmosphere.aerial_volume", e))?
+            }
+        };
         Ok(Some(Sky {
             sky_view,
+            aerial_perspective: atmosphere
+                .aerial_perspective
+                .unwrap_or(AerialPerspective::March),
+            aerial_volume,
             multiple_scattering: atmosphere.multiple_scattering.unwrap_or(true),
             ms_table_size,
             irradiance_table_size,
@@ -512,6 +543,11 @@ mod tests {
         assert_eq!(sky.sun.angular_radius, 0.004675);
         assert!(sky.sun.disc);
         assert_eq!(sky.samples, super::DEFAULT_ATMOSPHERE_SAMPLES);
+        assert_eq!(
+            sky.aerial_perspective,
+            crate::scene::AerialPerspective::March
+        );
+        assert_eq!(sky.aerial_volume, (32, 32, 32));
         // The centre defaults to [0, -bottom_radius, 0] for any radius.
         let scene = parse("[sun]\ndirection = [0.0, 1.0, 0.0]\n[atmosphere]\nbottom_radius = 1000.0\ntop_radius = 1100.0\n").unwrap();
         assert_eq!(
@@ -606,6 +642,18 @@ mod tests {
             ("[atmosphere]\nsky_view = [1, 256]\n", "atmosphere.sky_view"),
             ("[atmosphere]\nsky_view = [128, 2]\n", "atmosphere.sky_view"),
             ("[atmosphere]\nsky_view = \"on\"\n", "atmosphere.sky_view"),
+            (
+                "[atmosphere]\naerial_volume = \"32x32\"\n",
+                "atmosphere.aerial_volume",
+            ),
+            (
+                "[atmosphere]\naerial_volume = \"32x1x32\"\n",
+                "atmosphere.aerial_volume",
+            ),
+            (
+                "[atmosphere]\naerial_volume = \"32x32x300\"\n",
+                "atmosphere.aerial_volume",
+            ),
         ] {
             let text = if extra.starts_with("[atmosphere]") {
                 format!("{sun}{extra}")
@@ -619,6 +667,7 @@ mod tests {
             "od_table_mapping = \"log\"",
             "od_filter = \"cubic\"",
             "od_ozone = \"analytic\"",
+            "aerial_perspective = \"froxels\"",
         ] {
             let text = format!("[sun]\ndirection = [0.0, 1.0, 0.0]\n[atmosphere]\n{bad}\n");
             let e = parse(&text).unwrap_err().to_string();

@@ -27,6 +27,11 @@ fn has_sky(s: &Scene) -> bool {
     s.sky.is_some()
 }
 
+/// Aerial perspective is the air in front of objects.
+fn has_sky_and_objects(s: &Scene) -> bool {
+    has_sky(s) && has_objects(s)
+}
+
 /// Every knob the viewer can cycle, in key order before filtering.
 const CYCLES: &[Cycle] = &[
     Cycle {
@@ -58,6 +63,16 @@ const CYCLES: &[Cycle] = &[
         name: "atmosphere_samples",
         values: &["4", "8", "16", "32", "64"],
         applies: has_sky,
+    },
+    Cycle {
+        name: "aerial_perspective",
+        values: &["march", "volume"],
+        applies: has_sky_and_objects,
+    },
+    Cycle {
+        name: "aerial_volume",
+        values: &["16x16x16", "32x32x32", "64x64x64"],
+        applies: has_sky_and_objects,
     },
     Cycle {
         name: "multiple_scattering",
@@ -181,5 +196,13 @@ mod tests {
             applicable(&earth).len() <= crate::viewer::input::KNOB_KEYS,
             "one key each"
         );
+        // Aerial perspective needs objects under the sky.
+        assert!(!names.contains(&"aerial_perspective"));
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("assets/scenes/earth_objects.toml");
+        let objects = Scene::load(&path).unwrap();
+        let names: Vec<_> = applicable(&objects).iter().map(|c| c.name).collect();
+        assert!(names.contains(&"aerial_perspective") && names.contains(&"aerial_volume"));
+        assert!(applicable(&objects).len() <= crate::viewer::input::KNOB_KEYS);
     }
 }

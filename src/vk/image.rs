@@ -38,7 +38,7 @@ impl ImageState {
     };
 }
 
-/// A device-local 2D image with its view, which knows its current layout
+/// A device-local 2D (or 3D, [`Image::new_volume`]) image with its view, which knows its current layout
 /// while commands are recorded.
 pub struct Image {
     ctx: Arc<Context>,
@@ -54,15 +54,57 @@ pub struct Image {
 
 impl Image {
     pub fn new(ctx: &Arc<Context>, name: &str, desc: ImageDesc) -> Result<Image, VkError> {
+        Image::create(ctx, name, desc, None)
+    }
+
+    /// A 3D image of `desc.width` × `desc.height` × `depth` texels, one mip
+    /// level, for tables a shader writes and samples in three dimensions.
+    pub fn new_volume(
+        ctx: &Arc<Context>,
+        name: &str,
+        desc: ImageDesc,
+        depth: u32,
+    ) -> Result<Image, VkError> {
+        let max = ctx.limits.max_image_dimension3_d;
+        if [desc.width, desc.height, depth]
+            .iter()
+            .any(|&n| n == 0 || n > max)
+            || desc.mip_levels != 1
+        {
+            return Err(VkError::ImageSize {
+                name: format!("{name} (depth {depth})"),
+                width: desc.width,
+                height: desc.height,
+                max_width: max,
+                max_height: max,
+                limit: "maxImageDimension3D",
+            });
+        }
+        Image::create(ctx, name, desc, Some(depth))
+    }
+
+    /// A 2D image, or a 3D one of `volume` slices.
+    fn create(
+        ctx: &Arc<Context>,
+        name: &str,
+        desc: ImageDesc,
+        volume: Option<u32>,
+    ) -> Result<Image, VkError> {
         check_format(ctx, desc.format, desc.usage)?;
-        check_size(ctx, name, &desc)?;
+        if volume.is_none() {
+            check_size(ctx, name, &desc)?;
+        }
+        let (image_type, view_type) = match volume {
+            Some(_) => (vk::ImageType::TYPE_3D, vk::ImageViewType::TYPE_3D),
+            None => (vk::ImageType::TYPE_2D, vk::ImageViewType::TYPE_2D),
+        };
         let info = vk::ImageCreateInfo::default()
-            .image_type(vk::ImageType::TYPE_2D)
+            .image_type(image_type)
             .format(desc.format)
             .extent(vk::Extent3D {
                 width: desc.width,
                 height: desc.height,
-                depth: 1,
+                depth: volume.unwrap_or(1),
             })
             .mip_levels(desc.mip_levels)
             .array_layers(1)
@@ -100,7 +142,7 @@ impl Image {
         bound?;
         let view_info = vk::ImageViewCreateInfo::default()
             .image(handle)
-            .view_type(vk::ImageViewType::TYPE_2D)
+            .view_type(view_type)
             .format(desc.format)
             .subresource_range(image.full_range());
         // SAFETY: the image is bound to memory and the range is within it.

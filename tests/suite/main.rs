@@ -15,6 +15,7 @@
 
 mod common;
 
+mod aerial_volume;
 mod atmosphere;
 mod atmosphere_objects;
 mod bench;

@@ -9,8 +9,11 @@
 //! surface), so each shader variant holds only its own path and
 //! lavapipe skips the pixels a draw does not cover before shading them
 //! (with the march's code merely present in the sky-view shader, the
-//! frame measured about 20 % more CPU time). The uniforms and tables are
-//! the frame's [`SkyResources`].
+//! frame measured about 20 % more CPU time). With the aerial-perspective
+//! volume (see [`super::aerial_volume`]) the surface pixels read it instead
+//! of marching (the AERIAL_VOLUME variant, LESS), and the others take the
+//! sky view or march (EQUAL). The uniforms and tables are the frame's
+//! [`SkyResources`].
 
 use super::{fullscreen_pipeline, InputAttachments, PassResources, PassSetup, RecordPass};
 use crate::atmosphere::TableMapping;
@@ -79,14 +82,26 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     ]
     .concat();
     // (shader features, depth test) per draw.
-    let draws: &[(&[&str], Option<CompareOp>)] = if resources.sky_view.is_some() {
-        &[
-            (&["SKY_VIEW"], Some(CompareOp::EQUAL)),
-            (&[], Some(CompareOp::LESS)),
-        ]
+    // With the aerial-perspective volume, pixels with a surface read it
+    // (the AERIAL_VOLUME variant, LESS) and the others take the sky view
+    // or march (EQUAL); without, the marching variant draws the surfaces.
+    let surfaces: &[&str] = if resources.aerial_volume.is_some() {
+        &["AERIAL_VOLUME"]
     } else {
-        &[(&[], None)]
+        &[]
     };
+    let draws: Vec<(&[&str], Option<CompareOp>)> =
+        match (resources.sky_view.is_some(), surfaces.is_empty()) {
+            (true, _) => vec![
+                (&["SKY_VIEW"], Some(CompareOp::EQUAL)),
+                (surfaces, Some(CompareOp::LESS)),
+            ],
+            (false, false) => vec![
+                (&[], Some(CompareOp::EQUAL)),
+                (surfaces, Some(CompareOp::LESS)),
+            ],
+            (false, true) => vec![(&[], None)],
+        };
     let multiple = resources.shader_features();
     let pipelines = draws
         .iter()

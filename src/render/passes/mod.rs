@@ -11,6 +11,7 @@
 //! index or its neighbours. Adding a pass is a new file here, a
 //! [`PassKind`] and one entry in `FramePlan::new`.
 
+pub mod aerial_volume;
 pub mod atmosphere;
 pub mod deferred_lighting;
 pub mod sky_view;
@@ -35,6 +36,7 @@ use std::sync::Arc;
 pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     match setup.decl.kind {
         PassKind::SkyView => sky_view::create(setup),
+        PassKind::AerialVolume => aerial_volume::create(setup),
         PassKind::GBuffer => surface::create_gbuffer(setup),
         PassKind::Lighting => deferred_lighting::create(setup),
         PassKind::Opaque => surface::create_opaque(setup),

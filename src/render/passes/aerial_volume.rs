@@ -1,0 +1,76 @@
+//! The aerial-perspective volume: before the render pass, a compute
+//! dispatch marches one ray per column of a grid through the screen
+//! (`glsl/aerial_volume.comp`), storing at each of its slices the light the
+//! air scatters towards the camera in front of it and the transmittance to
+//! it, so that the atmosphere subpass reads them at each surface instead
+//! of marching every pixel (`aerial_perspective = "volume"`).
+//!
+//! The idea is Hillaire's (2020) camera-frustum volume. Here one
+//! invocation marches its column once through every slice, the slices
+//! reach the farthest object in view (`plan::aerial_volume_reach`), and the
+//! pass exists only in frames with surfaces under an atmosphere.
+
+use super::atmosphere::table_constants;
+use super::{PassResources, PassSetup, RecordPass};
+use crate::render::RenderError;
+use crate::shaders;
+use crate::vk::{CommandBuffer, ComputePipeline, ImageUse, PipelineLayout, ShaderModule};
+
+/// Invocations per workgroup side (`local_size` in the shader).
+const GROUP: u32 = 8;
+
+/// Fields drop in order: the pipeline before its layout.
+pub struct AerialVolumePass {
+    pipeline: ComputePipeline,
+    layout: PipelineLayout,
+    /// Columns across and down.
+    columns: (u32, u32),
+}
+
+pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+    let resources = setup.sky_resources()?;
+    let (sky, volume) = match (&setup.scene.sky, &resources.aerial_volume) {
+        (Some(sky), Some(volume)) => (sky, volume),
+        _ => {
+            return Err(RenderError::Frame(
+                "the aerial-volume pass needs a scene with [atmosphere] and an \
+                 aerial-perspective volume"
+                    .into(),
+            ))
+        }
+    };
+    let layout = PipelineLayout::new(setup.ctx, &[&resources.layout])?;
+    let shader = ShaderModule::new(
+        setup.ctx,
+        shaders::AERIAL_VOLUME_COMP.spirv(resources.shader_features()),
+    )?;
+    let constants = [&table_constants(sky)[..], &resources.static_constants()].concat();
+    let pipeline = ComputePipeline::new(setup.ctx, &layout, &shader, &constants)?;
+    Ok(Box::new(AerialVolumePass {
+        pipeline,
+        layout,
+        columns: (volume.size.0, volume.size.1),
+    }))
+}
+
+impl RecordPass for AerialVolumePass {
+    fn record(&self, cmd: &CommandBuffer, frame: &PassResources<'_>) -> Result<(), RenderError> {
+        let sky = frame.sky()?;
+        let volume = sky.aerial_volume.as_ref().ok_or_else(|| {
+            RenderError::Frame("the aerial-volume pass has no aerial-perspective volume".into())
+        })?;
+        // Every texel is rewritten: the previous submission's reads must
+        // finish, its contents are not needed.
+        cmd.transition_discarding(&volume.image, ImageUse::ComputeWrite);
+        cmd.bind_compute_pipeline(&self.pipeline);
+        cmd.bind_compute_descriptor_set(&self.layout, 0, &sky.set);
+        cmd.dispatch([
+            self.columns.0.div_ceil(GROUP),
+            self.columns.1.div_ceil(GROUP),
+            1,
+        ]);
+        // The atmosphere subpass samples what this wrote.
+        cmd.transition(&volume.image, ImageUse::FragmentSampled);
+        Ok(())
+    }
+}
