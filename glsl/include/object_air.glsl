@@ -115,3 +115,25 @@ vec3 air_sky_irradiance(AirPoint a, vec3 n, vec3 sun_transmittance) {
         + STATIC_GROUND_ALBEDO.xyz * global * (0.5 - 0.5 * c);
 }
 #endif
+
+// What the atmosphere brings to a point q (relative to the camera) with
+// normal n: the sun as a directional light of the point's own colour, and
+// the sky's irradiance (zero without SKY_LIGHT), which every shading
+// model adds times kd.
+struct AirLights {
+    Light sun;
+    vec3 sky;
+};
+
+AirLights air_lights(vec3 q, vec3 n) {
+    AirPoint air = air_point(q);
+    vec3 transmittance = air_sun_transmittance(air);
+    AirLights lights;
+    lights.sun = air_sun_light(transmittance);
+#ifdef SKY_LIGHT
+    lights.sky = air_sky_irradiance(air, n, transmittance);
+#else
+    lights.sky = vec3(0.0);
+#endif
+    return lights;
+}

@@ -11,12 +11,9 @@ vec3 blinn_phong(vec3 p, vec3 n, vec3 v, vec3 kd, vec3 ka) {
 #define PHONG_TERM(light) color += blinn_phong_light(light, p, n, v, kd, object.ks)
     FOR_EACH_LIGHT(object, PHONG_TERM)
 #ifdef SUN_LIGHT
-    AirPoint air = air_point(p);
-    vec3 sun = air_sun_transmittance(air);
-    PHONG_TERM(air_sun_light(sun));
-#ifdef SKY_LIGHT
-    color += kd * air_sky_irradiance(air, n, sun);
-#endif
+    AirLights air = air_lights(p, n);
+    PHONG_TERM(air.sun);
+    color += kd * air.sky;
 #endif
 #undef PHONG_TERM
     return color;
@@ -44,12 +41,9 @@ vec3 toon(vec3 p, vec3 n, vec3 v, vec3 kd, vec3 ka) {
 #ifdef SUN_LIGHT
     // The sun in tones like any light; the sky's light, which comes from
     // every direction, unbanded.
-    AirPoint air = air_point(p);
-    vec3 sun = air_sun_transmittance(air);
-    TOON_TERM(air_sun_light(sun));
-#ifdef SKY_LIGHT
-    color += kd * air_sky_irradiance(air, n, sun);
-#endif
+    AirLights air = air_lights(p, n);
+    TOON_TERM(air.sun);
+    color += kd * air.sky;
 #endif
 #undef TOON_TERM
     return color;
