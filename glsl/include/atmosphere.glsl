@@ -66,28 +66,11 @@ layout(std140, set = SKY_BLOCK_SET, binding = 0) uniform Sky {
 
 // The block's fields the frame never changes (the atmosphere, the tables'
 // sizes, the viewport) are read from specialization constants instead, 4
-// per field from SPEC_SKY_STATIC on, in this order (`sky_resources::
-// static_constants`): lavapipe reads a uniform block once per pixel and
+// per field from SPEC_SKY_STATIC on, in the order glsl/interface.toml
+// gives (read as STATIC_RADII and so on): lavapipe reads a uniform block once per pixel and
 // per march sample, where constants cost nothing (static_lights.glsl).
 // The camera, the sun and the table frame stay in the block.
-SPEC_VEC4_CONSTANTS(SKY_RADII, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 0)
-SPEC_VEC4_CONSTANTS(SKY_RAYLEIGH, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 4)
-SPEC_VEC4_CONSTANTS(SKY_MIE_SCATTERING, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 8)
-SPEC_VEC4_CONSTANTS(SKY_MIE_EXTINCTION, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 12)
-SPEC_VEC4_CONSTANTS(SKY_OZONE_ABSORPTION, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 16)
-SPEC_VEC4_CONSTANTS(SKY_OZONE_LAYER, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 20)
-SPEC_VEC4_CONSTANTS(SKY_GROUND_ALBEDO, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 24)
-SPEC_VEC4_CONSTANTS(SKY_VIEWPORT, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 28)
-SPEC_VEC4_CONSTANTS(SKY_SKY_VIEW, SKY_SPEC_OFFSET + SPEC_SKY_STATIC + 32)
-#define STATIC_RADII SPEC_VEC4(SKY_RADII)
-#define STATIC_RAYLEIGH SPEC_VEC4(SKY_RAYLEIGH)
-#define STATIC_MIE_SCATTERING SPEC_VEC4(SKY_MIE_SCATTERING)
-#define STATIC_MIE_EXTINCTION SPEC_VEC4(SKY_MIE_EXTINCTION)
-#define STATIC_OZONE_ABSORPTION SPEC_VEC4(SKY_OZONE_ABSORPTION)
-#define STATIC_OZONE_LAYER SPEC_VEC4(SKY_OZONE_LAYER)
-#define STATIC_GROUND_ALBEDO SPEC_VEC4(SKY_GROUND_ALBEDO)
-#define STATIC_VIEWPORT SPEC_VEC4(SKY_VIEWPORT)
-#define STATIC_SKY_VIEW SPEC_VEC4(SKY_SKY_VIEW)
+DECLARE_SKY_STATIC(SKY_SPEC_OFFSET)
 
 // The optical-depth table, one RGBA32F texel per (direction, altitude),
 // read with texelFetch, or filtered by the sampler (TABLE_FILTER 2).

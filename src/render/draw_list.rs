@@ -73,13 +73,14 @@ impl AirLight {
         }
     }
 
-    /// The object shaders' features for it.
-    pub fn shader_features(self) -> &'static [&'static str] {
-        match self {
-            AirLight::None => &[],
-            AirLight::Sun => &["SUN_LIGHT"],
-            AirLight::SunAndSky => &["SUN_LIGHT", "SKY_LIGHT"],
-        }
+    /// Whether objects take the atmosphere's sun light.
+    pub fn sun(self) -> bool {
+        self != AirLight::None
+    }
+
+    /// Whether objects take the atmosphere's sky light.
+    pub fn sky(self) -> bool {
+        self == AirLight::SunAndSky
     }
 }
 

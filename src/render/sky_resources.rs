@@ -242,19 +242,9 @@ fn static_constants(static_fields: [[f32; 4]; 9], linear_filter: bool) -> Vec<(u
 
 impl SkyUniforms {
     /// The fields the frame never changes, in the order the shaders
-    /// declare their constants (glsl/include/atmosphere.glsl).
+    /// declare their constants (both generated from glsl/interface.toml).
     fn static_fields(&self) -> [[f32; 4]; 9] {
-        [
-            self.radii,
-            self.rayleigh,
-            self.mie_scattering,
-            self.mie_extinction,
-            self.ozone_absorption,
-            self.ozone_layer,
-            self.ground_albedo,
-            self.viewport,
-            self.sky_view,
-        ]
+        crate::render::shader_ids::sky_static_fields(self)
     }
 }
 
@@ -327,14 +317,11 @@ impl SkyResources {
             .collect()
     }
 
-    /// The shader features of the atmosphere shaders that read these
-    /// resources: MULTIPLE_SCATTERING where they hold its tables.
-    pub fn shader_features(&self) -> &'static [&'static str] {
-        if self.sun_tables.is_some() {
-            &["MULTIPLE_SCATTERING"]
-        } else {
-            &[]
-        }
+    /// Whether these resources hold the multiple-scattering tables, so
+    /// the atmosphere shaders that read them take their
+    /// `MULTIPLE_SCATTERING` variant.
+    pub fn multiple_scattering(&self) -> bool {
+        self.sun_tables.is_some()
     }
 
     /// Whether `sky` seen by `camera` in `plan` keeps the fields these

@@ -13,7 +13,7 @@
 use super::atmosphere::table_constants;
 use super::{PassResources, PassSetup, RecordPass};
 use crate::render::RenderError;
-use crate::shaders;
+use crate::shaders::{self, AerialVolumeCompFeatures};
 use crate::vk::{CommandBuffer, ComputePipeline, ImageUse, PipelineLayout, ShaderModule};
 
 /// Invocations per workgroup side (`local_size` in the shader).
@@ -42,7 +42,10 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     let layout = PipelineLayout::new(setup.ctx, &[&resources.layout])?;
     let shader = ShaderModule::new(
         setup.ctx,
-        shaders::AERIAL_VOLUME_COMP.spirv(resources.shader_features()),
+        shaders::AERIAL_VOLUME_COMP.spirv(AerialVolumeCompFeatures::NONE.with(
+            AerialVolumeCompFeatures::MULTIPLE_SCATTERING,
+            resources.multiple_scattering(),
+        )),
     )?;
     let constants = [&table_constants(sky)[..], &resources.static_constants()].concat();
     let pipeline = ComputePipeline::new(setup.ctx, &layout, &shader, &constants)?;

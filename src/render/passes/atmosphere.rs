@@ -24,7 +24,7 @@ use crate::render::shader_ids::{
 use crate::render::sky_resources::SkyResources;
 use crate::render::RenderError;
 use crate::scene::{OzoneDepth, TableFilter};
-use crate::shaders;
+use crate::shaders::{self, AtmosphereFragFeatures};
 use crate::vk::CompareOp;
 use crate::vk::{CommandBuffer, GraphicsPipeline, PipelineLayout};
 
@@ -85,36 +85,35 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     // With the aerial-perspective volume, pixels with a surface read it
     // (the AERIAL_VOLUME variant, LESS) and the others take the sky view
     // or march (EQUAL); without, the marching variant draws the surfaces.
-    let surfaces: &[&str] = if resources.aerial_volume.is_some() {
-        &["AERIAL_VOLUME"]
-    } else {
-        &[]
+    type Features = AtmosphereFragFeatures;
+    let base = Features::NONE.with(
+        Features::MULTIPLE_SCATTERING,
+        resources.multiple_scattering(),
+    );
+    let volume = resources.aerial_volume.is_some();
+    let surfaces = base.with(Features::AERIAL_VOLUME, volume);
+    let draws: Vec<(Features, Option<CompareOp>)> = match (resources.sky_view.is_some(), volume) {
+        (true, _) => vec![
+            (base | Features::SKY_VIEW, Some(CompareOp::EQUAL)),
+            (surfaces, Some(CompareOp::LESS)),
+        ],
+        (false, true) => vec![
+            (base, Some(CompareOp::EQUAL)),
+            (surfaces, Some(CompareOp::LESS)),
+        ],
+        (false, false) => vec![(base, None)],
     };
-    let draws: Vec<(&[&str], Option<CompareOp>)> =
-        match (resources.sky_view.is_some(), surfaces.is_empty()) {
-            (true, _) => vec![
-                (&["SKY_VIEW"], Some(CompareOp::EQUAL)),
-                (surfaces, Some(CompareOp::LESS)),
-            ],
-            (false, false) => vec![
-                (&[], Some(CompareOp::EQUAL)),
-                (surfaces, Some(CompareOp::LESS)),
-            ],
-            (false, true) => vec![(&[], None)],
-        };
-    let multiple = resources.shader_features();
     let pipelines = draws
         .iter()
-        .map(|(features, test)| {
-            let features = [features, multiple].concat();
+        .map(|&(features, test)| {
             fullscreen_pipeline(
                 setup.ctx,
                 &layout,
                 &setup.render_pass()?.render_pass,
                 setup.subpass,
-                shaders::ATMOSPHERE_FRAG.spirv(&features),
+                shaders::ATMOSPHERE_FRAG.spirv(features),
                 &constants,
-                *test,
+                test,
             )
         })
         .collect::<Result<_, _>>()?;

@@ -19,12 +19,13 @@ use crate::render::shader_ids::*;
 use crate::render::static_lights;
 use crate::render::RenderError;
 use crate::scene::Scene;
-use crate::shaders;
+use crate::shaders::{self, ObjectFragFeatures, ObjectVertFeatures};
 use crate::vk::CompareOp;
 use crate::vk::{
     Blend, CommandBuffer, CullModeFlags, Format, GraphicsPipeline, GraphicsPipelineDesc,
     ShaderModule, VertexAttribute,
 };
+use std::collections::btree_map::Entry;
 use std::collections::BTreeMap;
 
 /// Which form of the pass.
@@ -119,15 +120,19 @@ impl SurfacePass {
             };
             // Keys that differ only in specialization constants (light
             // count, shading model) share their shader modules.
-            let mut modules: BTreeMap<Vec<&str>, (ShaderModule, ShaderModule)> = BTreeMap::new();
+            let mut modules: BTreeMap<_, (ShaderModule, ShaderModule)> = BTreeMap::new();
             for (key, lights) in keys {
-                let features = shader_features(&key, form);
-                if !modules.contains_key(&features) {
-                    let vert = ShaderModule::new(setup.ctx, shaders::OBJECT_VERT.spirv(&features))?;
-                    let frag = ShaderModule::new(setup.ctx, shaders::OBJECT_FRAG.spirv(&features))?;
-                    modules.insert(features.clone(), (vert, frag));
-                }
-                let (vert, frag) = &modules[&features];
+                let (vert, frag) = match modules.entry(shader_features(&key, form)) {
+                    Entry::Occupied(modules) => modules.into_mut(),
+                    Entry::Vacant(slot) => {
+                        let (vert, frag) = *slot.key();
+                        slot.insert((
+                            ShaderModule::new(setup.ctx, shaders::OBJECT_VERT.spirv(vert))?,
+                            ShaderModule::new(setup.ctx, shaders::OBJECT_FRAG.spirv(frag))?,
+                        ))
+                    }
+                };
+                let (vert, frag) = (&*vert, &*frag);
                 let attributes = vertex_attributes(key.textured, key.normal_mapped, key.debug != 0);
                 let mut specialization = vec![
                     (SPEC_SHADING_MODEL, key.shading as u32),
@@ -256,25 +261,27 @@ impl RecordPass for SurfacePass {
     }
 }
 
-/// The object shaders' features for a pipeline of `key` in `form`.
-fn shader_features(key: &PipelineKey, form: Form) -> Vec<&'static str> {
-    let mut features = Vec::new();
-    if key.textured {
-        features.push("BASE_COLOR_TEXTURE");
-    }
-    if key.normal_mapped {
-        features.push("NORMAL_MAP");
-    }
-    if form == Form::GBuffer {
-        features.push("GBUFFER");
-    }
-    if key.debug != 0 {
-        features.push("DEBUG_VIEW");
-    } else if key.shading == ShadingKey::Gouraud {
-        features.push("GOURAUD");
-    }
-    features.extend(key.air.shader_features());
-    features
+/// The object shaders' features for a pipeline of `key` in `form`: the
+/// vertex stage's and the fragment stage's (which alone has `GBUFFER`).
+fn shader_features(key: &PipelineKey, form: Form) -> (ObjectVertFeatures, ObjectFragFeatures) {
+    let debug = key.debug != 0;
+    let gouraud = !debug && key.shading == ShadingKey::Gouraud;
+    let vert = ObjectVertFeatures::NONE
+        .with(ObjectVertFeatures::BASE_COLOR_TEXTURE, key.textured)
+        .with(ObjectVertFeatures::NORMAL_MAP, key.normal_mapped)
+        .with(ObjectVertFeatures::DEBUG_VIEW, debug)
+        .with(ObjectVertFeatures::GOURAUD, gouraud)
+        .with(ObjectVertFeatures::SUN_LIGHT, key.air.sun())
+        .with(ObjectVertFeatures::SKY_LIGHT, key.air.sky());
+    let frag = ObjectFragFeatures::NONE
+        .with(ObjectFragFeatures::BASE_COLOR_TEXTURE, key.textured)
+        .with(ObjectFragFeatures::NORMAL_MAP, key.normal_mapped)
+        .with(ObjectFragFeatures::GBUFFER, form == Form::GBuffer)
+        .with(ObjectFragFeatures::DEBUG_VIEW, debug)
+        .with(ObjectFragFeatures::GOURAUD, gouraud)
+        .with(ObjectFragFeatures::SUN_LIGHT, key.air.sun())
+        .with(ObjectFragFeatures::SKY_LIGHT, key.air.sky());
+    (vert, frag)
 }
 
 /// The vertex attributes a pipeline consumes: position and normal always,
@@ -343,9 +350,9 @@ mod tests {
                                 two_sided: false,
                                 air,
                             };
-                            let features = shader_features(&key, form);
-                            assert!(!shaders::OBJECT_VERT.spirv(&features).is_empty());
-                            assert!(!shaders::OBJECT_FRAG.spirv(&features).is_empty());
+                            let (vert, frag) = shader_features(&key, form);
+                            assert!(shaders::OBJECT_VERT.is_compiled(vert), "{key:?}");
+                            assert!(shaders::OBJECT_FRAG.is_compiled(frag), "{key:?}");
                             asked += 1;
                         }
                     }
@@ -354,11 +361,6 @@ mod tests {
         }
         assert_eq!(asked, 3 * 3 * 4 * 4);
         // And a left-out combination has no SPIR-V.
-        let left_out = shaders::OBJECT_FRAG
-            .features
-            .iter()
-            .position(|f| *f == "SKY_LIGHT")
-            .map(|i| shaders::OBJECT_FRAG.spirv[1 << i]);
-        assert_eq!(left_out, Some(&[][..]));
+        assert!(!shaders::OBJECT_FRAG.is_compiled(ObjectFragFeatures::SKY_LIGHT));
     }
 }
