@@ -270,22 +270,15 @@ fn read_file(path: &Path, identity: &CacheIdentity) -> Option<Vec<u8>> {
         }
     };
     let mut bytes = Vec::new();
-    if let Err(e) = file
-        .take(MAX_FILE_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| e.to_string())
-        .and_then(|_| {
-            if bytes.len() as u64 > MAX_FILE_BYTES {
-                Err(format!(
-                    "longer than {}",
-                    crate::budget::Bytes(MAX_FILE_BYTES)
-                ))
-            } else {
-                Ok(())
-            }
-        })
-    {
-        warn(e);
+    if let Err(e) = file.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes) {
+        warn(e.to_string());
+        return None;
+    }
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        warn(format!(
+            "longer than {}",
+            crate::budget::Bytes(MAX_FILE_BYTES)
+        ));
         return None;
     }
     match parse_file(&bytes, identity) {
