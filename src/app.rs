@@ -20,6 +20,9 @@ pub struct RenderSettings {
     /// Which validation-layer checks to run under (`Off` for none).
     pub validate: Validation,
     pub device: Option<String>,
+    /// Where the device's pipeline cache is kept between runs (in memory
+    /// only by default).
+    pub pipeline_cache: crate::vk::PipelineCacheStore,
     /// Frames submitted and discarded before the measured ones (warm-up:
     /// first-use costs such as shader compilation in the driver).
     pub warmup: u32,
@@ -498,6 +501,7 @@ fn context(settings: &RenderSettings) -> Result<std::sync::Arc<Context>, RenderE
         device: settings.device.clone(),
         display: None,
         pipeline_statistics: settings.count_work,
+        pipeline_cache: settings.pipeline_cache.clone(),
     })?;
     if settings.count_instructions && !ctx.device_info().cpu {
         return Err(crate::instructions::CountError::NotCpuDevice {

@@ -688,10 +688,15 @@ impl PendingFile {
     /// Flushes the data to disk and renames the file into place. The
     /// destination is checked again, since it may have changed meanwhile.
     pub fn commit(self) -> Result<PathBuf, FileError> {
+        self.commit_as(Listed::Yes)
+    }
+
+    /// [`PendingFile::commit`], listing the file among [`written`] or not.
+    fn commit_as(self, listed: Listed) -> Result<PathBuf, FileError> {
         // A safe point: after an interrupt nothing more is committed.
         crate::interrupt::check().map_err(|_| interrupted(&self.path))?;
         let ready = self.prepare()?;
-        ready.persist(&mut pending())
+        ready.persist(&mut pending(), listed)
     }
 
     /// Everything before the rename: data flushed to disk (so a crash
@@ -727,7 +732,11 @@ struct Ready {
 impl Ready {
     /// Renames the file into place; `pending` is the locked set of
     /// temporary files, so an interrupt cannot run in the middle.
-    fn persist(mut self, pending: &mut Option<HashSet<PathBuf>>) -> Result<PathBuf, FileError> {
+    fn persist(
+        mut self,
+        pending: &mut Option<HashSet<PathBuf>>,
+        listed: Listed,
+    ) -> Result<PathBuf, FileError> {
         let tmp = self.tmp.take().expect("present until persisted");
         let tmp_path = tmp.path().to_path_buf();
         let result = tmp.persist(&self.dest);
@@ -739,12 +748,22 @@ impl Ready {
             path: self.path.clone(),
             error: without_temporary_name(e.error),
         })?;
-        WRITTEN
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .push(self.path.clone());
+        if listed == Listed::Yes {
+            WRITTEN
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .push(self.path.clone());
+        }
         Ok(self.path.clone())
     }
+}
+
+/// Whether a committed file is one of the command's outputs, listed by
+/// [`written`], or state the program keeps for itself (a cache).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Listed {
+    Yes,
+    No,
 }
 
 /// Every output renamed into place by this process, in order.
@@ -804,7 +823,7 @@ pub fn commit_all(files: Vec<PendingFile>) -> Result<Vec<PathBuf>, FileError> {
     let mut ready = ready.into_iter();
     let mut guard = pending();
     for file in ready.by_ref() {
-        match file.persist(&mut guard) {
+        match file.persist(&mut guard, Listed::Yes) {
             Ok(path) => done.push(path),
             Err(e) => {
                 for path in &done {
@@ -822,6 +841,18 @@ pub fn commit_all(files: Vec<PendingFile>) -> Result<Vec<PathBuf>, FileError> {
 
 /// Writes `bytes` to `path` through a [`PendingFile`].
 pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<PathBuf, FileError> {
+    write_bytes_as(path, bytes, Listed::Yes)
+}
+
+/// Writes `bytes` to `path` like [`write_bytes`], for a file the program
+/// keeps for itself (a cache) rather than an output of the command: it is
+/// not listed by [`written`], so an interrupted run does not name it among
+/// what it wrote.
+pub fn write_cache_bytes(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
+    write_bytes_as(path, bytes, Listed::No).map(|_| ())
+}
+
+fn write_bytes_as(path: &Path, bytes: &[u8], listed: Listed) -> Result<PathBuf, FileError> {
     use std::io::Write as _;
     let file = PendingFile::create(path)?;
     let mut w = std::io::BufWriter::new(file.file());
@@ -829,7 +860,7 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<PathBuf, FileError> {
         .and_then(|()| w.flush())
         .map_err(|e| file.io_error(e))?;
     drop(w);
-    file.commit()
+    file.commit_as(listed)
 }
 
 /// What a path that exists but is not a regular file is, for messages:

@@ -72,6 +72,8 @@ pub struct BenchSettings {
     pub frames: u32,
     pub validate: crate::vk::validation::Validation,
     pub device: Option<String>,
+    /// Where the device's pipeline cache is kept between runs.
+    pub pipeline_cache: crate::vk::PipelineCacheStore,
     /// What to measure; time always is (see [`Metric`]).
     pub metrics: Vec<Metric>,
     /// Count instructions in this process, which must have been started
@@ -212,6 +214,7 @@ pub fn run(
     let render_settings = RenderSettings {
         validate: settings.validate,
         device: settings.device.clone(),
+        pipeline_cache: settings.pipeline_cache.clone(),
         warmup: settings.warmup,
         frames: settings.frames,
         keep_hdr: false,

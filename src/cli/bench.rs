@@ -217,6 +217,9 @@ fn run_args(args: &BenchArgs, metrics: &[Metric], json: &std::path::Path) -> Vec
     if let Some(d) = &args.gpu.device {
         out.push(format!("--device={d}").into());
     }
+    if args.gpu.no_pipeline_cache {
+        out.push("--no-pipeline-cache".into());
+    }
     if args.strict.strict {
         out.push("--strict".into());
     }
@@ -276,6 +279,7 @@ fn measure(args: &BenchArgs) -> anyhow::Result<BenchReport> {
         frames: args.frames,
         validate: args.gpu.validate.unwrap_or_default(),
         device: args.gpu.device.clone(),
+        pipeline_cache: args.gpu.pipeline_cache(),
         metrics: args.metrics.clone(),
         counting,
     };

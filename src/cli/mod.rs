@@ -13,9 +13,11 @@ pub mod view;
 use aerial::mesh::smoothing::Smoothing;
 use aerial::scene::{is_model_file, ModelSceneOptions, Scene};
 use aerial::vk::validation::Validation;
+use aerial::vk::PipelineCacheStore;
 use std::path::Path;
 
-/// The options of every command that renders: validation and device.
+/// The options of every command that renders: validation, device and
+/// pipeline cache.
 #[derive(clap::Args)]
 pub struct GpuArgs {
     /// Enable the Khronos validation layer: --validate=core, sync,
@@ -33,6 +35,18 @@ pub struct GpuArgs {
     /// Physical device by index or name substring.
     #[arg(long)]
     pub device: Option<String>,
+    /// Neither read nor write the pipeline cache on disk (kept in
+    /// $XDG_CACHE_HOME/aerial or ~/.cache/aerial, or where
+    /// AERIAL_PIPELINE_CACHE says; AERIAL_PIPELINE_CACHE=off does the same).
+    #[arg(long)]
+    pub no_pipeline_cache: bool,
+}
+
+impl GpuArgs {
+    /// Where the device's pipeline cache is kept between runs.
+    pub fn pipeline_cache(&self) -> PipelineCacheStore {
+        PipelineCacheStore::for_command_line(self.no_pipeline_cache)
+    }
 }
 
 /// `--strict`: every asset warning is an error.

@@ -90,6 +90,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         &RenderSettings {
             validate: args.gpu.validate.unwrap_or_default(),
             device: args.gpu.device.clone(),
+            pipeline_cache: args.gpu.pipeline_cache(),
             warmup: 0,
             frames: args.frames,
             keep_hdr: args.hdr.is_some(),

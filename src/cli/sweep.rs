@@ -232,6 +232,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     let settings = |warmup, frames, keep_hdr, empty_pass| RenderSettings {
         validate: args.gpu.validate.unwrap_or_default(),
         device: args.gpu.device.clone(),
+        pipeline_cache: args.gpu.pipeline_cache(),
         warmup,
         frames,
         keep_hdr,

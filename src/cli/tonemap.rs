@@ -62,6 +62,7 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
         RunSource::HdrImage(&image, tone_map),
         &RenderSettings {
             validate: args.gpu.validate.unwrap_or_default(),
+            pipeline_cache: args.gpu.pipeline_cache(),
             device: args.gpu.device,
             warmup: 0,
             frames: 1,

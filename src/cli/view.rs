@@ -67,6 +67,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         scene_name: scene_name.clone(),
         validate: args.gpu.validate.unwrap_or_default(),
         device: args.gpu.device.clone(),
+        pipeline_cache: args.gpu.pipeline_cache(),
         present_mode: args.present_mode,
         script,
     });

@@ -39,6 +39,9 @@ pub struct ViewOptions {
     pub scene_name: String,
     pub validate: Validation,
     pub device: Option<String>,
+    /// Where the device's pipeline cache is kept between runs; every
+    /// rebuild of the renderer (a knob cycled) goes through it too.
+    pub pipeline_cache: crate::vk::PipelineCacheStore,
     pub present_mode: PresentMode,
     /// Input to replay instead of (as well as) a person's.
     pub script: Option<Script>,

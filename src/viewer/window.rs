@@ -291,6 +291,7 @@ impl App {
         let ctx = Context::new(&ContextOptions {
             validate: self.options.validate,
             device: self.options.device.clone(),
+            pipeline_cache: self.options.pipeline_cache.clone(),
             display: Some(display),
             ..Default::default()
         })?;

@@ -5,6 +5,7 @@
 //! itself tears down in the only valid order: wait idle, allocator, device,
 //! messenger, instance, then the validation log the layer wrote into.
 
+use super::pipeline_cache::{CacheIdentity, PipelineCache, PipelineCacheStore};
 use super::validation::{self, Validation, ValidationLog};
 use super::VkError;
 use ash::vk;
@@ -32,6 +33,9 @@ pub struct ContextOptions {
     /// Enable pipeline-statistics queries ([`super::PipelineStatsQueries`]);
     /// a device without them is refused.
     pub pipeline_statistics: bool,
+    /// Where the device's pipeline cache is kept between runs; in memory
+    /// only by default.
+    pub pipeline_cache: PipelineCacheStore,
 }
 
 /// What identifies the device an output came from; recorded with every
@@ -62,6 +66,9 @@ pub struct Context {
     pub(crate) queue: vk::Queue,
     pub(crate) queue_family: u32,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
+    /// Given to every pipeline creation; saved and destroyed in Drop
+    /// before the device.
+    pipeline_cache: ManuallyDrop<PipelineCache>,
     pub(crate) limits: vk::PhysicalDeviceLimits,
     info: DeviceInfo,
     /// Created with [`ContextOptions::pipeline_statistics`].
@@ -206,6 +213,11 @@ impl Context {
         self.allocator.lock().unwrap_or_else(|p| p.into_inner())
     }
 
+    /// The pipeline cache every pipeline of this device is created with.
+    pub(crate) fn pipeline_cache(&self) -> vk::PipelineCache {
+        self.pipeline_cache.handle
+    }
+
     /// The alignment of dynamic uniform-buffer offsets.
     pub fn uniform_offset_alignment(&self) -> u64 {
         self.limits.min_uniform_buffer_offset_alignment
@@ -300,6 +312,16 @@ impl PartialInstance {
         // SAFETY: family and index 0 were requested above.
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
 
+        let pipeline_cache =
+            match PipelineCache::new(&device, CacheIdentity::of(&props), &options.pipeline_cache) {
+                Ok(cache) => cache,
+                Err(e) => {
+                    // SAFETY: the device has no children yet.
+                    unsafe { device.destroy_device(None) };
+                    return Err(e);
+                }
+            };
+
         let allocator = match Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),
             device: device.clone(),
@@ -310,7 +332,10 @@ impl PartialInstance {
         }) {
             Ok(a) => a,
             Err(e) => {
-                // SAFETY: the device has no children yet.
+                // Dropped first: it saves (nothing yet) and destroys the
+                // cache, the device's only child.
+                drop(pipeline_cache);
+                // SAFETY: the device has no children left.
                 unsafe { device.destroy_device(None) };
                 return Err(e.into());
             }
@@ -355,6 +380,7 @@ impl PartialInstance {
             queue,
             queue_family,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            pipeline_cache: ManuallyDrop::new(pipeline_cache),
             limits: props.limits,
             info,
             pipeline_statistics: options.pipeline_statistics,
@@ -447,9 +473,12 @@ impl Drop for Context {
     fn drop(&mut self) {
         // SAFETY: every wrapper holding an Arc<Context> is gone (we are in
         // Drop of the last Arc), so no child objects remain except the
-        // allocator's memory blocks, which it frees before the device goes.
+        // allocator's memory blocks, which it frees before the device goes,
+        // and the pipeline cache, saved and destroyed while the device is
+        // idle and alive.
         unsafe {
             let _ = self.device.device_wait_idle();
+            ManuallyDrop::drop(&mut self.pipeline_cache);
             ManuallyDrop::drop(&mut self.allocator);
             self.device.destroy_device(None);
             if let Some((loader, messenger)) = self.debug.take() {

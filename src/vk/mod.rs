@@ -13,6 +13,7 @@ mod context;
 mod descriptors;
 mod image;
 mod pipeline;
+mod pipeline_cache;
 mod query;
 mod render_graph;
 mod swapchain;
@@ -31,6 +32,7 @@ pub use pipeline::{
     Blend, ComputePipeline, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, ShaderModule,
     VertexAttribute,
 };
+pub use pipeline_cache::{PipelineCacheStore, PIPELINE_CACHE_ENV};
 pub use query::{PipelineStats, PipelineStatsQueries, TimestampQueries};
 pub use render_graph::{
     AttachmentSpec, AttachmentStart, DepthUse, Framebuffer, RenderPass, RenderTargets, SubpassSpec,

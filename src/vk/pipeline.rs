@@ -210,10 +210,11 @@ impl GraphicsPipeline {
             .render_pass(pass.handle)
             .subpass(desc.subpass);
         // SAFETY: all state structs are locals alive for the call; the
-        // shaders, layout and pass are valid objects of this device.
+        // shaders, layout, pass and pipeline cache are valid objects of
+        // this device (the cache is internally synchronised by the driver).
         let handle = unsafe {
             ctx.device
-                .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+                .create_graphics_pipelines(ctx.pipeline_cache(), &[info], None)
         }
         .map_err(|(_, e)| VkError::Api(e))?[0];
         Ok(GraphicsPipeline {
@@ -276,10 +277,12 @@ impl ComputePipeline {
             .stage(stage)
             .layout(layout.handle);
         // SAFETY: the stage and specialization structs are locals alive
-        // for the call; shader and layout are valid objects of this device.
+        // for the call; shader, layout and pipeline cache are valid objects
+        // of this device (the cache is internally synchronised by the
+        // driver).
         let handle = unsafe {
             ctx.device
-                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+                .create_compute_pipelines(ctx.pipeline_cache(), &[info], None)
         }
         .map_err(|(_, e)| VkError::Api(e))?[0];
         Ok(ComputePipeline {

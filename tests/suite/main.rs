@@ -48,6 +48,7 @@ mod normal_maps;
 mod obj_models;
 mod object_sunlight;
 mod outputs;
+mod pipeline_cache;
 mod pixel_oracle;
 mod real_models;
 mod regression;
