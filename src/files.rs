@@ -7,7 +7,8 @@
 //! - A failed or interrupted write leaves no temporary file behind: the
 //!   temporary file is removed on drop (an interrupted run unwinds and
 //!   drops it, see [`crate::interrupt`]), and [`remove_pending`] removes
-//!   the ones still open when the process must end without unwinding.
+//!   the ones still open when the process must end without unwinding
+//!   (`main` registers it with [`crate::interrupt::on_forced_exit`]).
 //! - Only regular files are replaced. A destination that is a device, FIFO,
 //!   socket or folder is refused; a symbolic link is written through (its
 //!   target is replaced, the link stays).

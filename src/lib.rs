@@ -9,6 +9,7 @@ pub mod app;
 pub mod atmosphere;
 pub mod bench;
 pub mod budget;
+pub mod child_process;
 pub mod files;
 pub mod image_io;
 pub mod instructions;

@@ -8,7 +8,6 @@
 //! `aerial bench` subcommand only parses arguments and prints.
 
 pub mod baseline;
-pub mod child;
 pub mod report;
 
 pub use baseline::{compare, BaselineComparison, RatioRow, RowKey, Verdict};

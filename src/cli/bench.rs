@@ -3,11 +3,11 @@
 //! optionally gate against a baseline or another build on the interval of
 //! each median ratio.
 
-use aerial::bench::child::{self, Limit};
 use aerial::bench::{
     self, compare, BaselineComparison, BenchReport, BenchScene, BenchSettings, Metric, PassReport,
     Progress, Verdict,
 };
+use aerial::child_process::{self as child, Limit};
 use aerial::instructions::{spawn_counting_run, Callgrind};
 use aerial::scene::Knob;
 use anyhow::{bail, Context as _};

@@ -41,7 +41,7 @@ pub fn run(args: NormalMapArgs) -> anyhow::Result<()> {
     files::check_output(&args.out, files::Format::Png).context("--out")?;
     // The size from the header first: refuse what does not fit the memory
     // budget, or the output's file system, before decoding.
-    let info = preflight::inspect_texture(&args.input)?;
+    let info = image_io::inspect_texture(&args.input)?;
     files::check_room(&[(&args.out, files::png_size_bound(info.width, info.height))])
         .context("--out")?;
     MemoryBudget::from_env()?.check(

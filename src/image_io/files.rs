@@ -7,8 +7,8 @@
 //! prepare a file without committing it, for runs that write several files
 //! and commit them together.
 
+use super::{ImageError, Pixels};
 use crate::files::{self, PendingFile};
-use crate::render::{Pixels, RenderError};
 use std::io::Write as _;
 use std::path::Path;
 
@@ -19,8 +19,8 @@ pub fn png_file(
     path: &Path,
     pixels: &Pixels<u8>,
     metadata: &[(&str, String)],
-) -> Result<PendingFile, RenderError> {
-    let err = |reason: String| RenderError::Output {
+) -> Result<PendingFile, ImageError> {
+    let err = |reason: String| ImageError::Output {
         path: path.to_path_buf(),
         reason,
     };
@@ -56,7 +56,7 @@ pub fn write_png(
     path: &Path,
     pixels: &Pixels<u8>,
     metadata: &[(&str, String)],
-) -> Result<(), RenderError> {
+) -> Result<(), ImageError> {
     png_file(path, pixels, metadata)?.commit()?;
     Ok(())
 }
@@ -66,8 +66,8 @@ pub fn write_png(
 /// after the image data count too, so the whole file is read; compressed
 /// text is inflated with the `png` crate's default size limit, so a
 /// malicious chunk cannot exhaust memory.
-pub fn read_png_text(path: &Path) -> Result<Vec<(String, String)>, RenderError> {
-    let err = |reason: String| RenderError::Input {
+pub fn read_png_text(path: &Path) -> Result<Vec<(String, String)>, ImageError> {
+    let err = |reason: String| ImageError::Input {
         path: path.to_path_buf(),
         reason,
     };
@@ -109,7 +109,7 @@ pub fn read_png_text(path: &Path) -> Result<Vec<(String, String)>, RenderError> 
 
 /// Encodes linear float RGBA pixels as OpenEXR (32-bit float channels)
 /// into a temporary file for `path`.
-pub fn exr_file(path: &Path, pixels: &Pixels<f32>) -> Result<PendingFile, RenderError> {
+pub fn exr_file(path: &Path, pixels: &Pixels<f32>) -> Result<PendingFile, ImageError> {
     use exr::prelude::*;
     files::check_output(path, files::Format::Exr)?;
     let file = PendingFile::create(path)?;
@@ -131,7 +131,7 @@ pub fn exr_file(path: &Path, pixels: &Pixels<f32>) -> Result<PendingFile, Render
     Image::from_encoded_channels((w, pixels.height as usize), encoding, channels)
         .write()
         .to_buffered(&mut out)
-        .map_err(|e| RenderError::Output {
+        .map_err(|e| ImageError::Output {
             path: path.to_path_buf(),
             reason: e.to_string(),
         })?;
@@ -141,7 +141,7 @@ pub fn exr_file(path: &Path, pixels: &Pixels<f32>) -> Result<PendingFile, Render
 }
 
 /// [`exr_file`], committed.
-pub fn write_exr(path: &Path, pixels: &Pixels<f32>) -> Result<(), RenderError> {
+pub fn write_exr(path: &Path, pixels: &Pixels<f32>) -> Result<(), ImageError> {
     files::commit_all(vec![exr_file(path, pixels)?])?;
     Ok(())
 }
@@ -150,15 +150,15 @@ pub fn write_exr(path: &Path, pixels: &Pixels<f32>) -> Result<(), RenderError> {
 /// header alone, checked against the largest image the renderer takes:
 /// a small file that claims a huge image is refused before anything is
 /// allocated for it.
-pub fn exr_size(path: &Path) -> Result<(u32, u32), RenderError> {
-    let err = |reason: String| RenderError::Input {
+pub fn exr_size(path: &Path) -> Result<(u32, u32), ImageError> {
+    let err = |reason: String| ImageError::Input {
         path: path.to_path_buf(),
         reason,
     };
     crate::files::note_inputs([path]);
     let meta = exr::meta::MetaData::read_from_file(path, false)
         .map_err(|e| err(format!("not a readable OpenEXR file: {e}")))?;
-    let max = crate::scene::MAX_OUTPUT_SIZE as usize;
+    let max = super::MAX_IMAGE_SIDE as usize;
     let mut size = None;
     for header in &meta.headers {
         let s = header.layer_size;
@@ -196,7 +196,7 @@ pub const READ_EXR_BYTES_PER_PIXEL: u64 = 32;
 /// The header is read first and the size checked against the largest
 /// image the renderer takes and the memory budget, so a small file that
 /// claims a huge image is refused before anything is allocated for it.
-pub fn read_exr(path: &Path) -> Result<Pixels<f32>, RenderError> {
+pub fn read_exr(path: &Path) -> Result<Pixels<f32>, ImageError> {
     use exr::prelude::*;
     let (w, h) = exr_size(path)?;
     crate::budget::MemoryBudget::from_env()?.check(
@@ -215,7 +215,7 @@ pub fn read_exr(path: &Path) -> Result<Pixels<f32>, RenderError> {
             pixels.data[i..i + 4].copy_from_slice(&[r, g, b, a]);
         },
     )
-    .map_err(|e| RenderError::Input {
+    .map_err(|e| ImageError::Input {
         path: path.to_path_buf(),
         reason: e.to_string(),
     })?;

@@ -25,12 +25,15 @@ mod static_lights;
 mod sun_tables;
 pub mod tiles;
 
+/// The images a renderer reads back are `image_io`'s, so they are written
+/// as they are.
+pub use crate::image_io::Pixels;
 pub use empty_pass::EmptyPass;
 pub use frame::PrefixFrames;
 pub use geometry::SceneGeometry;
 pub use plan::{subpass_timing_note, FramePlan, PassKind};
 pub use reference::{render_reference, render_reference_with, ReferenceError, Transport};
-pub use renderer::{FrameTiming, Pixels, Renderer, ViewChange};
+pub use renderer::{FrameTiming, Renderer, ViewChange};
 
 use std::path::PathBuf;
 
@@ -56,13 +59,11 @@ pub enum RenderError {
     #[error(transparent)]
     File(#[from] crate::files::FileError),
     #[error(transparent)]
+    Image(#[from] crate::image_io::ImageError),
+    #[error(transparent)]
     Budget(#[from] crate::budget::BudgetError),
     #[error("{object}: {reason}")]
     Object { object: String, reason: String },
-    #[error("cannot write {path}: {reason}")]
-    Output { path: PathBuf, reason: String },
-    #[error("cannot read {path}: {reason}")]
-    Input { path: PathBuf, reason: String },
     #[error("size {width}x{height}: each side must be in 1..={max}", max = crate::scene::MAX_OUTPUT_SIZE)]
     Size { width: u32, height: u32 },
     #[error(transparent)]

@@ -34,7 +34,7 @@ use crate::mesh::smoothing::Smoothing;
 use crate::mesh::MAX_SEGMENTS;
 
 /// Largest accepted output width or height.
-pub const MAX_OUTPUT_SIZE: u32 = 16384;
+pub const MAX_OUTPUT_SIZE: u32 = crate::image_io::MAX_IMAGE_SIDE;
 /// Fewest segments accepted in either tessellation direction: fewer cannot
 /// enclose any volume (a closed surface needs 3 around).
 pub const MIN_SEGMENTS: u32 = 3;

@@ -268,7 +268,7 @@ impl Check<'_> {
             let problem = if let Some(problem) = crate::files::input_file_problem(path) {
                 problem
             } else {
-                match crate::render::preflight::inspect_texture(path) {
+                match crate::image_io::inspect_texture(path) {
                     Ok(_) => return Some(Ok(path.clone())),
                     Err(e) => format!("is not usable: {e}"),
                 }

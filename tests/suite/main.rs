@@ -43,6 +43,7 @@ mod mesh_command;
 mod mikktspace;
 mod missing_assets;
 mod model_corpus;
+mod module_layers;
 mod multiple_scattering;
 mod normal_maps;
 mod obj_models;
