@@ -1,14 +1,14 @@
 //! The rendered images: the tone-mapped PNG (with its metadata text) and
 //! the linear HDR OpenEXR, written and read back.
 //!
-//! Every file goes through [`crate::files`]: written under a unique
+//! Every file goes through [`crate::safe_files`]: written under a unique
 //! temporary name in the destination folder and renamed into place, so a
 //! failed run never leaves a half-written image. The `*_file` functions
 //! prepare a file without committing it, for runs that write several files
 //! and commit them together.
 
 use super::{ImageError, Pixels};
-use crate::files::{self, PendingFile};
+use crate::safe_files::{self, PendingFile};
 use std::io::Write as _;
 use std::path::Path;
 
@@ -24,7 +24,7 @@ pub fn png_file(
         path: path.to_path_buf(),
         reason,
     };
-    files::check_output(path, files::Format::Png)?;
+    safe_files::check_output(path, safe_files::Format::Png)?;
     let file = PendingFile::create(path)?;
     let mut out = std::io::BufWriter::new(file.file());
     let mut encoder = png::Encoder::new(&mut out, pixels.width, pixels.height);
@@ -72,7 +72,7 @@ pub fn read_png_text(path: &Path) -> Result<Vec<(String, String)>, ImageError> {
         reason,
     };
     let file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
-    crate::files::note_inputs([path]);
+    crate::safe_files::note_inputs([path]);
     let decoder = png::Decoder::new(std::io::BufReader::new(file));
     let mut reader = decoder
         .read_info()
@@ -111,7 +111,7 @@ pub fn read_png_text(path: &Path) -> Result<Vec<(String, String)>, ImageError> {
 /// into a temporary file for `path`.
 pub fn exr_file(path: &Path, pixels: &Pixels<f32>) -> Result<PendingFile, ImageError> {
     use exr::prelude::*;
-    files::check_output(path, files::Format::Exr)?;
+    safe_files::check_output(path, safe_files::Format::Exr)?;
     let file = PendingFile::create(path)?;
     let w = pixels.width as usize;
     let channels = SpecificChannels::rgba(|position: Vec2<usize>| {
@@ -142,7 +142,7 @@ pub fn exr_file(path: &Path, pixels: &Pixels<f32>) -> Result<PendingFile, ImageE
 
 /// [`exr_file`], committed.
 pub fn write_exr(path: &Path, pixels: &Pixels<f32>) -> Result<(), ImageError> {
-    files::commit_all(vec![exr_file(path, pixels)?])?;
+    safe_files::commit_all(vec![exr_file(path, pixels)?])?;
     Ok(())
 }
 
@@ -155,7 +155,7 @@ pub fn exr_size(path: &Path) -> Result<(u32, u32), ImageError> {
         path: path.to_path_buf(),
         reason,
     };
-    crate::files::note_inputs([path]);
+    crate::safe_files::note_inputs([path]);
     let meta = exr::meta::MetaData::read_from_file(path, false)
         .map_err(|e| err(format!("not a readable OpenEXR file: {e}")))?;
     let max = super::MAX_IMAGE_SIDE as usize;

@@ -2,7 +2,7 @@
 //! (never from its name, so a PNG named `.jpg` or a file without an
 //! extension reads as what it is), inspecting and decoding textures, and
 //! reading and writing the rendered PNG and OpenEXR images (written through
-//! [`crate::files`]: a temporary name, then a rename). No other module
+//! [`crate::safe_files`]: a temporary name, then a rename). No other module
 //! reads or writes OpenEXR: `compare` takes its linear images from
 //! [`read_exr_rgb`].
 
@@ -39,7 +39,7 @@ pub struct Pixels<T> {
 #[derive(Debug, thiserror::Error)]
 pub enum ImageError {
     #[error(transparent)]
-    File(#[from] crate::files::FileError),
+    File(#[from] crate::safe_files::FileError),
     #[error(transparent)]
     Budget(#[from] crate::budget::BudgetError),
     #[error("cannot write {path}: {reason}")]
@@ -52,9 +52,9 @@ pub enum ImageError {
 
 /// Opens `path` with its format guessed from its first bytes. The error is
 /// the reason alone; callers name the file in their own error type. The
-/// file is an input from then on (see [`crate::files::note_inputs`]).
+/// file is an input from then on (see [`crate::safe_files::note_inputs`]).
 pub fn open(path: &Path) -> Result<ImageReader<BufReader<std::fs::File>>, String> {
-    crate::files::note_inputs([path]);
+    crate::safe_files::note_inputs([path]);
     ImageReader::open(path)
         .map_err(|e| e.to_string())?
         .with_guessed_format()
@@ -79,7 +79,7 @@ pub enum FileFormat {
 /// then on, as for [`open`]).
 pub fn sniff_file(path: &Path) -> std::io::Result<FileFormat> {
     use std::io::Read as _;
-    crate::files::note_inputs([path]);
+    crate::safe_files::note_inputs([path]);
     let mut head = [0u8; 8];
     let n = std::fs::File::open(path)?.read(&mut head)?;
     Ok(sniff(&head[..n]))

@@ -6,12 +6,12 @@
 //! one command buffer recorded once → submitted per frame → images read
 //! back.
 
-use super::frame::TimedCommands;
 use super::geometry::SceneGeometry;
 use super::passes::{Attachments, PassResources, PassSetup, RecordPass};
 use super::plan::{attachment, FramePlan, PassIo, PassKind};
 use super::scene_resources::SceneResources;
 use super::sky_resources::SkyResources;
+use super::timed_submit::TimedCommands;
 use super::RenderError;
 use crate::image_io::Pixels;
 use crate::scene::{HdrFormat, Scene, ToneMap};

@@ -23,7 +23,7 @@ use std::path::PathBuf;
 use glam::Vec3;
 use serde::Deserialize;
 
-use super::checks::{Check, Result, MAX_COLOUR, MAX_LENGTH, MIN_LENGTH};
+use super::value_checks::{Check, Result, MAX_COLOUR, MAX_LENGTH, MIN_LENGTH};
 use super::{
     Camera, DebugView, HdrFormat, Light, Lighting, Material, Object, Output, Scene, SceneError,
     ShadingModel, Shape, Texture, TextureFilter, ToneMap, ToneMapOperator, Transform,
@@ -661,7 +661,7 @@ impl Check<'_> {
         let file_at = |name: &str, given: Option<PathBuf>| -> Result<Option<PathBuf>> {
             let Some(given) = given else { return Ok(None) };
             let resolved = self.base_dir.join(&given);
-            match crate::files::input_file_problem(&resolved) {
+            match crate::safe_files::input_file_problem(&resolved) {
                 Some(problem) => Err(self.invalid(field(name), problem)),
                 None => Ok(Some(resolved)),
             }

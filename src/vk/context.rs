@@ -220,7 +220,7 @@ impl Context {
     /// filtering, whose device feature was not enabled) so a caller can
     /// check that the validation messenger is live and counting. The
     /// sampler is destroyed again at once. Only with the
-    /// `validation-checks` feature (see `vk/checks.rs`).
+    /// `validation-checks` feature (see `vk/deliberate_misuse.rs`).
     #[cfg(feature = "validation-checks")]
     pub fn misuse_api_for_validation_check(&self) -> Result<(), VkError> {
         let info = vk::SamplerCreateInfo::default()

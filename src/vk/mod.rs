@@ -6,10 +6,10 @@
 
 mod buffer;
 // Test-only deliberate mistakes; see the `validation-checks` feature.
-#[cfg(feature = "validation-checks")]
-mod checks;
 mod commands;
 mod context;
+#[cfg(feature = "validation-checks")]
+mod deliberate_misuse;
 mod descriptors;
 mod image;
 mod pipeline;

@@ -7,7 +7,7 @@
 
 use crate::common;
 
-use aerial::atmosphere::reference;
+use aerial::atmosphere::quadrature;
 use aerial::render::Pixels;
 use aerial::scene::Scene;
 use glam::DVec3;
@@ -21,7 +21,7 @@ fn example(name: &str) -> Scene {
 }
 
 /// A sky-only scene: camera at `eye` looking at `look_at`, sun towards
-/// `sun`, Earth's atmosphere, single scattering (what `reference::radiance`
+/// `sun`, Earth's atmosphere, single scattering (what `quadrature::radiance`
 /// integrates; tests/suite/multiple_scattering.rs checks every order).
 fn sky_scene(eye: [f64; 3], look_at: [f64; 3], fov: f64, sun: [f64; 3]) -> Scene {
     common::scene(&format!(
@@ -58,11 +58,11 @@ fn sky_errors(label: &str, scene: &Scene, hdr: &Pixels<f32>) -> (f64, f64) {
             if d.dot(sky.sun.direction) > 5f64.to_radians().cos() {
                 continue;
             }
-            match reference::atmosphere_segment(&sky.atmosphere, origin, d) {
+            match quadrature::atmosphere_segment(&sky.atmosphere, origin, d) {
                 Some((_, _, false)) => {}
                 _ => continue,
             }
-            let exact = reference::radiance(&sky.atmosphere, &sky.sun, origin, d);
+            let exact = quadrature::radiance(&sky.atmosphere, &sky.sun, origin, d);
             let got = common::hdr_pixel(hdr, x, y);
             for c in 0..3 {
                 // Relative to the pixel's brightest channel, so a channel
@@ -250,7 +250,7 @@ fn the_hdr_image_stays_finite_from_the_ground_to_space_and_at_night() {
     let hdr = run.hdr.unwrap();
     let centre = common::hdr_pixel(&hdr, 48, 32);
     let sky = scene.sky.as_ref().unwrap();
-    let exact = reference::radiance(
+    let exact = quadrature::radiance(
         &sky.atmosphere,
         &sky.sun,
         scene.camera.eye - sky.atmosphere.center,
@@ -331,9 +331,9 @@ fn the_limb_glows_from_orbit() {
     let mut limb = 0;
     for y in 0..64 {
         let d = common::pixel_ray(&scene, x, y);
-        if let Some((_, _, false)) = reference::atmosphere_segment(&sky.atmosphere, origin, d) {
+        if let Some((_, _, false)) = quadrature::atmosphere_segment(&sky.atmosphere, origin, d) {
             let got = common::hdr_pixel(&hdr, x, y);
-            let exact = reference::radiance(&sky.atmosphere, &sky.sun, origin, d);
+            let exact = quadrature::radiance(&sky.atmosphere, &sky.sun, origin, d);
             println!("limb row {y}: {got} against {exact}");
             assert!(
                 (got - exact).abs().max_element() <= 1e-2 * exact.max_element() + 1e-6,

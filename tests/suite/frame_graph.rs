@@ -5,9 +5,9 @@
 
 use crate::common;
 
-use aerial::app::RenderRun;
 use aerial::render::tiles::{self, TILE_SIZE};
 use aerial::render::{FramePlan, Pixels, SceneGeometry};
+use aerial::render_run::RenderRun;
 use aerial::scene::{HdrFormat, Lighting, Scene, ToneMapOperator};
 use std::path::Path;
 

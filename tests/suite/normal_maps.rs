@@ -222,7 +222,7 @@ fn non_png_normal_map_is_a_clear_error() {
         "{ type = \"plane\", width = 2, depth = 2 }",
         0.0,
     );
-    let error = match aerial::app::render(&s, &common::validated_settings()) {
+    let error = match aerial::render_run::render(&s, &common::validated_settings()) {
         Ok(_) => panic!("a JPEG normal map rendered"),
         Err(e) => e.to_string(),
     };

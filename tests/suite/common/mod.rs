@@ -3,8 +3,8 @@
 
 #![allow(dead_code)]
 
-use aerial::app::{self, RenderRun, RenderSettings};
 use aerial::render::Pixels;
+use aerial::render_run::{self, RenderRun, RenderSettings};
 use aerial::scene::Scene;
 use glam::{DMat4, DVec3, DVec4};
 use std::path::Path;
@@ -21,7 +21,7 @@ pub fn scene(toml: &str) -> Scene {
 
 /// Renders with validation on and asserts the layer said nothing.
 pub fn render(scene: &Scene, keep_hdr: bool) -> RenderRun {
-    let run = app::render(
+    let run = render_run::render(
         scene,
         &RenderSettings {
             keep_hdr,
@@ -277,8 +277,11 @@ pub fn tone_map_on_gpu(
         height: 1,
         data: values.iter().flatten().copied().collect(),
     };
-    let run = app::run(
-        aerial::app::RunSource::HdrImage(&image, aerial::scene::ToneMap { operator, exposure }),
+    let run = render_run::run(
+        aerial::render_run::RunSource::HdrImage(
+            &image,
+            aerial::scene::ToneMap { operator, exposure },
+        ),
         &validated_settings(),
         &mut || {},
     )

@@ -6,7 +6,7 @@
 //! pass that benchmarks measure the driver's floor with.
 
 use crate::budget::MemoryBudget;
-use crate::instructions::Callgrind;
+use crate::callgrind::Callgrind;
 use crate::render::{
     empty_pass, preflight, EmptyPass, FrameTiming, Pixels, PrefixFrames, RenderError, Renderer,
 };
@@ -37,7 +37,7 @@ pub struct RenderSettings {
     pub count_work: bool,
     /// Count each pass's CPU instructions ([`RenderRun::instruction_frames`]);
     /// only in a process started by
-    /// [`crate::instructions::spawn_counting_run`].
+    /// [`crate::callgrind::spawn_counting_run`].
     pub count_instructions: bool,
 }
 
@@ -58,7 +58,7 @@ pub struct RenderRun {
     pub empty_pass_frames: Vec<FrameTiming>,
     /// With [`RenderSettings::count_instructions`], per measured frame the
     /// instructions of each prefix of the frame (the first k passes, k =
-    /// 0..=passes); see [`crate::instructions`]. Empty otherwise.
+    /// 0..=passes); see [`crate::callgrind`]. Empty otherwise.
     pub instruction_frames: Vec<Vec<u64>>,
     /// Validation messages that were not on the allow-list (empty without
     /// validation).
@@ -455,8 +455,7 @@ fn count_prefixes(
     settings: &RenderSettings,
     on_frame: &mut dyn FnMut(),
 ) -> Result<(Vec<FrameTiming>, Vec<Vec<u64>>), RenderError> {
-    let callgrind =
-        Callgrind::from_env()?.ok_or(crate::instructions::CountError::NotUnderValgrind)?;
+    let callgrind = Callgrind::from_env()?.ok_or(crate::callgrind::CountError::NotUnderValgrind)?;
     let passes = frames.pass_count();
     // Warm-up runs every prefix too: the driver compiles some shader
     // variants on first use, which must not land in a counted frame.
@@ -500,7 +499,7 @@ fn context(settings: &RenderSettings) -> Result<std::sync::Arc<Context>, RenderE
         pipeline_statistics: settings.count_work,
     })?;
     if settings.count_instructions && !ctx.device_info().cpu {
-        return Err(crate::instructions::CountError::NotCpuDevice {
+        return Err(crate::callgrind::CountError::NotCpuDevice {
             device: ctx.device_info().name.clone(),
         }
         .into());

@@ -158,10 +158,11 @@ impl Callgrind {
 
 /// The instruction total (`Ir`) of one callgrind dump file.
 fn read_dump_total(path: &Path) -> Result<u64, CountError> {
-    let text = crate::files::read_text(path, MAX_DUMP_BYTES).map_err(|e| CountError::Dump {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
+    let text =
+        crate::safe_files::read_text(path, MAX_DUMP_BYTES).map_err(|e| CountError::Dump {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
     parse_dump_total(&text).ok_or_else(|| CountError::Dump {
         path: path.to_path_buf(),
         reason: "no 'summary:' or 'totals:' line with an Ir count".to_string(),

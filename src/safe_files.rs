@@ -1,6 +1,8 @@
-//! The one way this crate writes an output file: into a uniquely named
-//! temporary file in the destination's folder, renamed over the destination
-//! only once it is complete.
+//! Files handled safely: the one way this crate writes an output file
+//! (into a uniquely named temporary file in the destination's folder,
+//! renamed over the destination only once it is complete), and the one way
+//! it reads an input (bounded in size, and recorded so that no output ever
+//! replaces it).
 //!
 //! - Concurrent writers to the same path each get their own temporary file,
 //!   so the destination is always one whole file, never a mix.
