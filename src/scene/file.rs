@@ -86,16 +86,18 @@ struct OutputFile {
     static_lights: bool,
 }
 
+/// The defaults are [`Output`]'s, so they are written once.
 impl Default for OutputFile {
     fn default() -> Self {
+        let output = Output::default();
         OutputFile {
-            width: 640,
-            height: 360,
-            hdr_format: HdrFormat::Rgba16F,
-            texture_filter: TextureFilter::Trilinear,
-            lighting: Lighting::Forward,
-            debug_view: None,
-            static_lights: true,
+            width: output.width,
+            height: output.height,
+            hdr_format: output.hdr_format,
+            texture_filter: output.texture_filter,
+            lighting: output.lighting,
+            debug_view: output.debug_view,
+            static_lights: output.static_lights,
         }
     }
 }

@@ -172,6 +172,21 @@ pub enum TextureFilter {
     Trilinear,
 }
 
+/// The `[output]` section's defaults, for every field the file leaves out.
+impl Default for Output {
+    fn default() -> Self {
+        Output {
+            width: 640,
+            height: 360,
+            hdr_format: HdrFormat::Rgba16F,
+            texture_filter: TextureFilter::Trilinear,
+            lighting: Lighting::Forward,
+            debug_view: None,
+            static_lights: true,
+        }
+    }
+}
+
 impl Output {
     /// `width / height`, the aspect ratio for [`Camera::projection`].
     pub fn aspect(&self) -> f32 {
@@ -339,10 +354,7 @@ impl Scene {
                 width,
                 height,
                 hdr_format: HdrFormat::Rgba32F,
-                texture_filter: TextureFilter::Trilinear,
-                lighting: Lighting::Forward,
-                debug_view: None,
-                static_lights: true,
+                ..Output::default()
             },
             camera: Camera {
                 eye: DVec3::Z,
