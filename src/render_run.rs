@@ -206,15 +206,15 @@ pub enum RunSource<'a> {
     EmptyPass { width: u32, height: u32 },
     /// Draws nothing: makes a deliberate mistake on the run's device, so a
     /// test can check that the run reports the layer's message (see
-    /// [`Misuse`]). `output` is empty. Only with the `validation-checks`
+    /// [`Misuse`]). `output` is empty. Only with the `deliberate-misuse`
     /// feature, which the test suite turns on: it is no part of the
     /// shipped API.
-    #[cfg(feature = "validation-checks")]
+    #[cfg(feature = "deliberate-misuse")]
     ValidationCheck(Misuse),
 }
 
 /// The deliberate mistakes of [`RunSource::ValidationCheck`].
-#[cfg(feature = "validation-checks")]
+#[cfg(feature = "deliberate-misuse")]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Misuse {
     /// Two writes to one image with no barrier between them.
@@ -258,7 +258,7 @@ pub fn run(
         RunSource::EmptyPass { width, height } => {
             preflight::empty_pass_memory(width, height, &budget)?
         }
-        #[cfg(feature = "validation-checks")]
+        #[cfg(feature = "deliberate-misuse")]
         RunSource::ValidationCheck(_) => {}
     }
     // Safe points (see `crate::interrupt`): before the device is created,
@@ -340,14 +340,14 @@ fn produce(
                 instruction_frames,
             }
         }
-        #[cfg(feature = "validation-checks")]
+        #[cfg(feature = "deliberate-misuse")]
         RunSource::ValidationCheck(misuse) => make_mistake(ctx, misuse)?,
     })
 }
 
 /// Makes the deliberate mistake `misuse` on `ctx` (see
 /// [`RunSource::ValidationCheck`]); produces nothing.
-#[cfg(feature = "validation-checks")]
+#[cfg(feature = "deliberate-misuse")]
 fn make_mistake(ctx: &Context, misuse: Misuse) -> Result<Produced, RenderError> {
     match misuse {
         Misuse::SyncHazard => ctx.record_sync_hazard_for_validation_check()?,

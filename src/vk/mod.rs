@@ -5,10 +5,10 @@
 //! block states the invariant it relies on.
 
 mod buffer;
-// Test-only deliberate mistakes; see the `validation-checks` feature.
+// Test-only deliberate mistakes; see the `deliberate-misuse` feature.
 mod commands;
 mod context;
-#[cfg(feature = "validation-checks")]
+#[cfg(feature = "deliberate-misuse")]
 mod deliberate_misuse;
 mod descriptors;
 mod image;
