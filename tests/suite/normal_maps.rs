@@ -38,13 +38,7 @@ fn write_quad(path: &Path, mirrored: bool) {
 
 use common::tilt_scene as scene;
 
-fn assert_close(a: [f32; 3], b: [f32; 3], what: &str) {
-    for c in 0..3 {
-        // 8-bit map texels quantize the direction to ~0.2 degrees; allow
-        // 2/255 in the output.
-        assert!((a[c] - b[c]).abs() <= 2.0, "{what}: {a:?} vs {b:?}");
-    }
-}
+use common::assert_close;
 
 #[test]
 fn mapped_tilt_matches_rotated_geometry() {
