@@ -39,7 +39,7 @@
 //! image. Rows are shared between the machine's cores.
 //!
 //! It lives in `render/` because it is a second renderer (scene in, linear
-//! RGBA out, like [`crate::render_run::RenderRun::hdr`]); `report/` only compares
+//! RGBA out, like the GPU renderer's HDR image); `report/` only compares
 //! images and stays free of any way of making them.
 //!
 //! # What "exact" means here, and what it does not cover
