@@ -24,7 +24,7 @@ mod bounds;
 mod claims_validation;
 mod cli;
 mod cli_compare;
-mod cpu_reference;
+mod cpu_renderer;
 mod debug_view;
 mod docs_links;
 mod examples;
