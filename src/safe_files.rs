@@ -430,25 +430,6 @@ pub fn check_room(outputs: &[(&Path, u64)]) -> Result<(), FileError> {
     Ok(())
 }
 
-/// An upper bound of the size of a PNG of `width` x `height` RGBA8 pixels
-/// as [`crate::image_io::png_file`] writes it: the filtered rows stored
-/// uncompressed (what the compressor falls back to for noise), the
-/// compressor's and the chunks' framing, and room for the header and the
-/// metadata text.
-pub fn png_size_bound(width: u32, height: u32) -> u64 {
-    let raw = u64::from(height) * (1 + 4 * u64::from(width));
-    raw + raw / 64 + (16 << 10)
-}
-
-/// An upper bound of the size of an OpenEXR of `width` x `height` RGBA
-/// 32-bit float pixels as [`crate::image_io::exr_file`] writes it: the
-/// pixels uncompressed (the lossless compression falls back to that), the
-/// chunk offset table and headers.
-pub fn exr_size_bound(width: u32, height: u32) -> u64 {
-    let raw = u64::from(width) * u64::from(height) * 16;
-    raw + raw / 64 + u64::from(height) * 16 + (16 << 10)
-}
-
 /// The file formats this crate writes images in. The name of an output
 /// must say its format: a PNG is named `*.png`, an OpenEXR `*.exr` (any
 /// case), so no file holds data its name misrepresents.

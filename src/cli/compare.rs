@@ -116,7 +116,7 @@ pub fn run(args: CompareArgs) -> anyhow::Result<ExitCode> {
         // The diff has the reference's size: room for it, before the work
         // (an unreadable reference is reported by the comparison).
         if let Ok((width, height)) = image_io::image_size(&args.reference) {
-            safe_files::check_room(&[(diff, safe_files::png_size_bound(width, height))])
+            safe_files::check_room(&[(diff, image_io::png_size_bound(width, height))])
                 .context("--diff")?;
         }
     }

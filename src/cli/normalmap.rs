@@ -42,11 +42,8 @@ pub fn run(args: NormalMapArgs) -> anyhow::Result<()> {
     // The size from the header first: refuse what does not fit the memory
     // budget, or the output's file system, before decoding.
     let info = image_io::inspect_texture(&args.input)?;
-    safe_files::check_room(&[(
-        &args.out,
-        safe_files::png_size_bound(info.width, info.height),
-    )])
-    .context("--out")?;
+    safe_files::check_room(&[(&args.out, image_io::png_size_bound(info.width, info.height))])
+        .context("--out")?;
     MemoryBudget::from_env()?.check(
         format!(
             "height map {} ({}x{})",

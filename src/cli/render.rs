@@ -70,12 +70,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     }
     // Room for both on their file systems, before the work.
     let (width, height) = (scene.output.width, scene.output.height);
-    let mut sizes = vec![(
-        args.out.as_path(),
-        safe_files::png_size_bound(width, height),
-    )];
+    let mut sizes = vec![(args.out.as_path(), image_io::png_size_bound(width, height))];
     if let Some(hdr) = &args.hdr {
-        sizes.push((hdr.as_path(), safe_files::exr_size_bound(width, height)));
+        sizes.push((hdr.as_path(), image_io::exr_size_bound(width, height)));
     }
     safe_files::check_room(&sizes).map_err(|e| {
         let flag = match &e {

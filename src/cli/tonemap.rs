@@ -45,7 +45,7 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
     // whole run's memory (reading, the GPU's copies, the PNG) against the
     // budget, before anything is decoded.
     let (width, height) = image_io::exr_size(&args.input)?;
-    safe_files::check_room(&[(&args.out, safe_files::png_size_bound(width, height))])
+    safe_files::check_room(&[(&args.out, image_io::png_size_bound(width, height))])
         .context("--out")?;
     MemoryBudget::from_env()?.check(
         format!("tone-mapping {} ({width}x{height})", args.input.display()),

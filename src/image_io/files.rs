@@ -185,6 +185,25 @@ pub fn image_size(path: &Path) -> Result<(u32, u32), String> {
     }
 }
 
+/// An upper bound of the size of a PNG of `width` x `height` RGBA8 pixels
+/// as [`png_file`] writes it: the filtered rows stored
+/// uncompressed (what the compressor falls back to for noise), the
+/// compressor's and the chunks' framing, and room for the header and the
+/// metadata text.
+pub fn png_size_bound(width: u32, height: u32) -> u64 {
+    let raw = u64::from(height) * (1 + 4 * u64::from(width));
+    raw + raw / 64 + (16 << 10)
+}
+
+/// An upper bound of the size of an OpenEXR of `width` x `height` RGBA
+/// 32-bit float pixels as [`exr_file`] writes it: the
+/// pixels uncompressed (the lossless compression falls back to that), the
+/// chunk offset table and headers.
+pub fn exr_size_bound(width: u32, height: u32) -> u64 {
+    let raw = u64::from(width) * u64::from(height) * 16;
+    raw + raw / 64 + u64::from(height) * 16 + (16 << 10)
+}
+
 /// Peak memory of [`read_exr`] per pixel, an upper bound: the RGBA f32
 /// pixels (16 bytes), and the decoder's compressed and decompressed
 /// blocks in flight. Measured: 16.5 bytes per pixel at 4096x4096.

@@ -12,8 +12,9 @@ mod texture;
 
 pub use exr_rgb::{exr_layer_sizes, exr_layer_sizes_in, read_exr_rgb, ExrError, ExrRgb};
 pub use files::{
-    exr_file, exr_size, image_size, png_file, read_exr, read_png_text, tonemap_memory, write_exr,
-    write_png, READ_EXR_BYTES_PER_PIXEL, TONEMAP_BUFFER_BYTES_PER_PIXEL,
+    exr_file, exr_size, exr_size_bound, image_size, png_file, png_size_bound, read_exr,
+    read_png_text, tonemap_memory, write_exr, write_png, READ_EXR_BYTES_PER_PIXEL,
+    TONEMAP_BUFFER_BYTES_PER_PIXEL,
 };
 pub use texture::{inspect_texture, TextureInfo};
 
