@@ -302,8 +302,9 @@ fn watch(read_fd: libc::c_int) {
         }
     }
     // Children first: once they are gone, nothing writes into the
-    // temporary folders. Then, under the lock of the pending files, a
-    // commit in progress finishes first, so its files are whole or gone.
+    // temporary folders. Then the registered cleanups (the removal of the
+    // pending files takes their lock, so a commit in progress finishes
+    // first and its files are whole or gone).
     stop_child_groups();
     run_forced_exit_cleanups();
     if forced {
