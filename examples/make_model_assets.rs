@@ -11,6 +11,12 @@
 //!
 //! Run with `cargo run --example make_model_assets`; the outputs are
 //! deterministic, so re-running reproduces the committed files.
+//!
+//! With `--cut-torus DIR [N,N,...]` it writes instead the benchmark models
+//! of `docs/mesh-performance.md` into `DIR`, as `torus<N>.obj` for N
+//! triangles (default 10000,100000,1000000): the same torus on a 4v x v
+//! grid, v = sqrt(N / 8), cut into 8 objects along u, with UVs and no
+//! normals. They are too large to commit.
 
 use std::f64::consts::{PI, TAU};
 use std::fmt::Write as _;
@@ -107,7 +113,36 @@ fn bumps(size: u32) -> image::RgbaImage {
     })
 }
 
+/// The benchmark tori (`--cut-torus DIR [SIZES]`).
+fn write_cut_tori(dir: &Path, sizes: &str) -> std::io::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    for n in sizes.split(',') {
+        let n: u32 = n
+            .trim()
+            .parse()
+            .map_err(|e| std::io::Error::other(format!("triangle count {n:?}: {e}")))?;
+        let v = (f64::from(n / 8)).sqrt().round() as u32;
+        let text = grid_obj(
+            "# made by examples/make_model_assets.rs --cut-torus\n",
+            torus,
+            (4 * v, v),
+            (8, 1),
+            (1.0, 1.0),
+        );
+        std::fs::write(dir.join(format!("torus{n}.obj")), text)?;
+    }
+    Ok(())
+}
+
 fn main() -> std::io::Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("--cut-torus") {
+        let Some(dir) = args.get(1) else {
+            return Err(std::io::Error::other("usage: --cut-torus DIR [N,N,...]"));
+        };
+        let sizes = args.get(2).map_or("10000,100000,1000000", String::as_str);
+        return write_cut_tori(Path::new(dir), sizes);
+    }
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models");
     std::fs::create_dir_all(&dir)?;
     let header = "# made by examples/make_model_assets.rs\n";

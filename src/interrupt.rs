@@ -18,9 +18,12 @@
 //! reaches no safe point within [`GRACE`] of the signal (a single very
 //! long driver call) or at a second signal, the process ends at once: the
 //! child process groups it started are killed and waited for
-//! ([`spawn_tracked_group`]), the temporary output files and folders are
-//! removed ([`crate::files::remove_pending`]), and it exits with `_exit`,
-//! which runs no destructors, so it cannot crash either.
+//! ([`spawn_tracked_group`]), the cleanups registered with
+//! [`on_forced_exit`] run (the program registers the removal of its
+//! temporary output files and folders), and it exits with `_exit`, which
+//! runs no destructors, so it cannot crash either. The cleanups are
+//! registered rather than called by name so that this module, which the
+//! file writers themselves poll, depends on none of them.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
@@ -37,6 +40,33 @@ pub const GRACE: Duration = Duration::from_secs(10);
 pub const FORCED_MESSAGE: &str = "interrupted; stopped without waiting for the current step";
 
 static REQUESTED: AtomicBool = AtomicBool::new(false);
+
+/// What [`on_forced_exit`] registered, in order.
+static FORCED_EXIT_CLEANUPS: std::sync::Mutex<Vec<fn()>> = std::sync::Mutex::new(Vec::new());
+
+/// Registers `cleanup` to run when an interrupt ends the process without
+/// unwinding: after the child process groups are stopped, before `_exit`.
+/// It runs on the watcher thread while the main thread may be anywhere,
+/// so it must take its own locks. Register once, early in `main`.
+pub fn on_forced_exit(cleanup: fn()) {
+    FORCED_EXIT_CLEANUPS
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .push(cleanup);
+}
+
+/// Runs the cleanups [`on_forced_exit`] registered.
+#[cfg(target_os = "linux")]
+fn run_forced_exit_cleanups() {
+    // A copy, so a cleanup that registers another cannot deadlock.
+    let cleanups = FORCED_EXIT_CLEANUPS
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .clone();
+    for cleanup in cleanups {
+        cleanup();
+    }
+}
 
 /// How many [`Busy`] guards are alive.
 static BUSY: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
@@ -272,10 +302,11 @@ fn watch(read_fd: libc::c_int) {
         }
     }
     // Children first: once they are gone, nothing writes into the
-    // temporary folders. Then, under the lock of the pending files, a
-    // commit in progress finishes first, so its files are whole or gone.
+    // temporary folders. Then the registered cleanups (the removal of the
+    // pending files takes their lock, so a commit in progress finishes
+    // first and its files are whole or gone).
     stop_child_groups();
-    crate::files::remove_pending();
+    run_forced_exit_cleanups();
     if forced {
         eprintln!("{FORCED_MESSAGE}; no output written");
     } else {

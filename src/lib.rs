@@ -5,17 +5,18 @@
 //! the thin RAII layer in [`vk`], recorded once into a command buffer,
 //! submitted per frame, and read back as images and per-pass timings.
 
-pub mod app;
 pub mod atmosphere;
 pub mod bench;
 pub mod budget;
-pub mod files;
+pub mod callgrind;
+pub mod child_process;
 pub mod image_io;
-pub mod instructions;
 pub mod interrupt;
 pub mod mesh;
 pub mod render;
+pub mod render_run;
 pub mod report;
+pub mod safe_files;
 pub mod scene;
 pub mod sweep;
 pub mod viewer;

@@ -54,7 +54,10 @@ fn main() -> std::process::ExitCode {
     // SIGINT, SIGTERM and the other stop signals only ask the work to stop
     // at its next safe point; it then unwinds like an error, removing its
     // temporary files (see `aerial::interrupt`). If the handler cannot be
-    // installed, the default (exit without cleanup) remains.
+    // installed, the default (exit without cleanup) remains. When it must
+    // end the process without unwinding, the temporary output files and
+    // folders still open are removed first.
+    aerial::interrupt::on_forced_exit(aerial::safe_files::remove_pending);
     #[cfg(target_os = "linux")]
     if let Err(e) = aerial::interrupt::install() {
         eprintln!(
@@ -68,7 +71,7 @@ fn main() -> std::process::ExitCode {
     if aerial::interrupt::requested() {
         // Outputs completed before the interrupt stay (each is whole); say
         // which, so a script's earlier screenshots are not taken for lost.
-        let written: Vec<String> = aerial::files::written()
+        let written: Vec<String> = aerial::safe_files::written()
             .iter()
             .map(|p| p.display().to_string())
             .collect();

@@ -8,7 +8,7 @@
 //! only when seen directly.
 //!
 //! [`model`] holds the types (planet and air, sun, table settings) that
-//! scenes are read into; [`reference`](mod@reference) integrates the model
+//! scenes are read into; [`quadrature`](mod@quadrature) integrates the model
 //! adaptively (the oracle of the tests);
 //! [`transport`] adds every order of scattering and ground reflection to
 //! it (an unbiased Monte Carlo estimate with its standard error);
@@ -25,7 +25,7 @@
 pub mod coefficients;
 pub mod model;
 pub mod ozone;
-pub mod reference;
+pub mod quadrature;
 pub mod table;
 pub mod transport;
 
@@ -202,18 +202,18 @@ pub fn column_above(h: f64, scale_height: f64, top: f64) -> f64 {
 /// The sun's light on an object at `point` (world space): a directional
 /// light along `sun.direction` whose colour is the irradiance at the top of
 /// the atmosphere times the transmittance from `point` to the top towards
-/// the sun, zero in the planet's shadow ([`reference::sun_transmittance`],
+/// the sun, zero in the planet's shadow ([`quadrature::sun_transmittance`],
 /// in f64).
 ///
 /// The renderer's shaders compute the same at every shaded point, from
 /// the optical-depth table (`glsl/include/object_air.glsl`), and the CPU
-/// reference renderer calls [`reference::sun_transmittance`] per pixel:
+/// CPU renderer calls [`quadrature::sun_transmittance`] per pixel:
 /// across a 20 m sphere under a sun 1° above the horizon the
 /// transmittance varies by a few per cent in blue, across a 600 m one by
 /// tens of per cent (`tests/suite/atmosphere_objects.rs`).
 pub fn sun_light_at(sky: &Sky, point: DVec3) -> DVec3 {
     sky.sun.irradiance
-        * reference::sun_transmittance(
+        * quadrature::sun_transmittance(
             &sky.atmosphere,
             point - sky.atmosphere.center,
             sky.sun.direction,

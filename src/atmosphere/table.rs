@@ -43,7 +43,7 @@
 //! arithmetic here ([`OpticalDepthTable::lookup`]) as in
 //! `glsl/include/atmosphere.glsl`.
 
-use super::reference::densities_to_top;
+use super::quadrature::densities_to_top;
 use super::{Atmosphere, Densities};
 use glam::DVec3;
 
@@ -231,7 +231,7 @@ impl OpticalDepthTable {
                     // way; the grazing integral is finite, so take it.
                     let d = densities_to_top(&effective, p, dir).unwrap_or_else(|| {
                         let d = frame.distance_to_top(r, mu);
-                        super::reference::densities_between(&effective, p, p + d * dir)
+                        super::quadrature::densities_between(&effective, p, p + d * dir)
                     });
                     encode(atmosphere, alt, d)
                 })

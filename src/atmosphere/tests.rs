@@ -1,7 +1,7 @@
 //! The model and reference against closed forms, and the optical-depth
 //! table against the reference.
 
-use super::reference::{densities_between, densities_to_top, radiance};
+use super::quadrature::{densities_between, densities_to_top, radiance};
 use super::*;
 
 fn earth() -> Atmosphere {
@@ -313,10 +313,10 @@ fn ozone_in_closed_form_matches_the_reference() {
 }
 
 /// Tall atmospheres: the cut of [`Atmosphere::effective_top_radius`] and
-/// the reference's own cut ([`super::reference::pieces`]).
+/// the reference's own cut ([`super::quadrature::pieces`]).
 mod tall {
     use super::*;
-    use crate::atmosphere::reference::{pieces, REFERENCE_CUT};
+    use crate::atmosphere::quadrature::{pieces, REFERENCE_CUT};
 
     fn tall(top: f64) -> Atmosphere {
         Atmosphere {

@@ -1,6 +1,6 @@
 //! Full light transport in double precision: the radiance reaching a point
 //! with every order of scattering and of ground reflection, the reference
-//! that single scattering ([`reference`](mod@super::reference)) is a part
+//! that single scattering ([`quadrature`](mod@super::quadrature)) is a part
 //! of.
 //!
 //! # What it covers
@@ -14,7 +14,7 @@
 //! Light may scatter or reflect any number of times in any order: sky light
 //! on the ground, ground light in the sky, the ground seen through the air
 //! lit by either. The top of the air is the reference's own
-//! ([`reference::REFERENCE_CUT`]): `top_radius`, or lower where a tall
+//! ([`quadrature::REFERENCE_CUT`]): `top_radius`, or lower where a tall
 //! atmosphere holds a negligible column above.
 //!
 //! # What it leaves out
@@ -30,7 +30,7 @@
 //! # Estimator
 //! The radiance along a ray is split as L = L₁ + L≥₂. L₁ (light that
 //! scattered once in the air or reflected once on the ground) is
-//! [`reference::radiance`] itself, the adaptive quadrature to 1e-7, so the
+//! [`quadrature::radiance`] itself, the adaptive quadrature to 1e-7, so the
 //! single-scattering part of [`full_radiance`] *is* today's integral.
 //!
 //! L≥₂ is an unbiased Monte Carlo estimate, with its standard error, by
@@ -106,13 +106,13 @@
 //! The tests check: energy conservation over an albedo-1 ground, the
 //! single-scattering part against the quadrature, the Monte Carlo's own
 //! order 1 against the quadrature, the transmittance estimator against
-//! [`reference::densities_to_top`], orders 1 and 2 of a thin homogeneous
+//! [`quadrature::densities_to_top`], orders 1 and 2 of a thin homogeneous
 //! slab against an independent quadrature, the order count, and the
 //! multiple-to-single ratios of Earth's sky against an independent
 //! tracer's.
 
 use super::{
-    cornette_shanks_phase, hits_ground, ray_sphere, rayleigh_phase, reference, Atmosphere, Sun,
+    cornette_shanks_phase, hits_ground, quadrature, ray_sphere, rayleigh_phase, Atmosphere, Sun,
 };
 use glam::DVec3;
 use std::f64::consts::{PI, TAU};
@@ -150,12 +150,12 @@ impl Default for TransportSettings {
 }
 
 /// The radiance along one ray, per channel, in the units of
-/// [`reference::radiance`].
+/// [`quadrature::radiance`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct TransportEstimate {
     /// `single + multiple`: all orders up to `max_order`.
     pub radiance: DVec3,
-    /// Order 1: [`reference::radiance`] (single scattering and the sun-lit
+    /// Order 1: [`quadrature::radiance`] (single scattering and the sun-lit
     /// ground), exact to its quadrature's tolerance.
     pub single: DVec3,
     /// Orders 2 to `max_order`: the Monte Carlo estimate.
@@ -171,7 +171,7 @@ pub struct TransportEstimate {
 /// Radiance reaching `origin` (relative to the planet centre) from
 /// `direction` (pointing away from the viewer) with every order of
 /// scattering and ground reflection up to `settings.max_order`; the sun's
-/// disc (order zero) is not included, as in [`reference::radiance`].
+/// disc (order zero) is not included, as in [`quadrature::radiance`].
 pub fn full_radiance(
     atmosphere: &Atmosphere,
     sun: &Sun,
@@ -180,7 +180,7 @@ pub fn full_radiance(
     settings: TransportSettings,
 ) -> TransportEstimate {
     let single = if settings.max_order >= 1 {
-        reference::radiance(atmosphere, sun, origin, direction)
+        quadrature::radiance(atmosphere, sun, origin, direction)
     } else {
         DVec3::ZERO
     };
@@ -207,7 +207,7 @@ pub fn full_radiance(
 /// (so the sky and, for a tilted surface, the ground), without the sun's
 /// direct light. Returns the irradiance and its standard error, per
 /// channel, in the units of `sun.irradiance`. A point below the ground is
-/// taken on the ground above it (as in [`reference::sun_transmittance`]);
+/// taken on the ground above it (as in [`quadrature::sun_transmittance`]);
 /// directions below the horizon of a point on the ground see the ground at
 /// that very point.
 pub fn sky_irradiance(
@@ -311,7 +311,7 @@ impl Track {
 
 impl<'a> Medium<'a> {
     fn new(atmosphere: &'a Atmosphere, sun: &Sun) -> Medium<'a> {
-        let cut = atmosphere.negligible_altitude(reference::REFERENCE_CUT);
+        let cut = atmosphere.negligible_altitude(quadrature::REFERENCE_CUT);
         let top = atmosphere
             .top_radius
             .min(atmosphere.bottom_radius + cut)
@@ -1025,7 +1025,7 @@ mod tests {
         ] {
             let p = DVec3::new(0.0, a.bottom_radius + h, 0.0);
             let d = dir(elevation, 0.0);
-            let exact = a.transmittance(reference::densities_to_top(&a, p, d).unwrap());
+            let exact = a.transmittance(quadrature::densities_to_top(&a, p, d).unwrap());
             let n = scaled(4000);
             for c in 0..3 {
                 let ch = &medium.channels[c];
@@ -1061,7 +1061,7 @@ mod tests {
 
     #[test]
     fn the_single_scattering_part_is_the_reference_integral() {
-        // By construction: `single` is `reference::radiance`, bit for bit,
+        // By construction: `single` is `quadrature::radiance`, bit for bit,
         // and `by_order` starts with it.
         let a = probe_earth();
         let s = sun(dir(30.0, 0.0));
@@ -1073,7 +1073,7 @@ mod tests {
         for (h, d) in cases {
             let origin = DVec3::new(0.0, a.bottom_radius + h, 0.0);
             let e = full_radiance(&a, &s, origin, d, settings(64, 1, UNLIMITED));
-            let exact = reference::radiance(&a, &s, origin, d);
+            let exact = quadrature::radiance(&a, &s, origin, d);
             assert_eq!(e.single, exact);
             assert_eq!(e.by_order[0], exact);
             let sum = e.by_order.iter().copied().sum::<DVec3>();
@@ -1093,7 +1093,7 @@ mod tests {
         let s = sun(dir(20.0, 0.0));
         for (h, d) in [(0.0, dir(30.0, 150.0)), (5_000.0, dir(-20.0, 0.0))] {
             let origin = DVec3::new(0.0, a.bottom_radius + h, 0.0);
-            let exact = reference::radiance(&a, &s, origin, d);
+            let exact = quadrature::radiance(&a, &s, origin, d);
             let (got, error, _) = sampled(&a, &s, origin, d, scaled(3000), 1, 1);
             println!("h {h}: {got} ± {error} against {exact}");
             assert!(
@@ -1266,7 +1266,7 @@ mod tests {
             let single = DVec3::from_array(std::array::from_fn(|c| {
                 slab.single(c, z.min(Slab::DEPTH), v)
             }));
-            let exact = reference::radiance(a, s, origin, v);
+            let exact = quadrature::radiance(a, s, origin, v);
             assert!(
                 ((single - exact) / exact).abs().max_element() < 1e-5,
                 "{single} {exact}"
@@ -1330,7 +1330,7 @@ mod tests {
             let lo = bottom + k as f64 * width;
             for (b, w) in gauss_legendre(4, lo, lo + width) {
                 let half = ((top - b) * (top + b)).sqrt();
-                let depth = reference::densities_between(
+                let depth = quadrature::densities_between(
                     a,
                     DVec3::new(-half, b, 0.0),
                     DVec3::new(half, b, 0.0),
@@ -1564,7 +1564,7 @@ mod tests {
         for (name, h, s, v, expected) in cases {
             let origin = DVec3::new(0.0, a.bottom_radius + h, 0.0);
             let start = Instant::now();
-            let single = reference::radiance(&a, &sun(s), origin, v);
+            let single = quadrature::radiance(&a, &sun(s), origin, v);
             let single_time = start.elapsed();
             let start = Instant::now();
             let e = full_radiance(&a, &sun(s), origin, v, settings(paths, 1, UNLIMITED));

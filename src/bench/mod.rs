@@ -8,7 +8,6 @@
 //! `aerial bench` subcommand only parses arguments and prints.
 
 pub mod baseline;
-pub mod child;
 pub mod report;
 
 pub use baseline::{compare, BaselineComparison, RatioRow, RowKey, Verdict};
@@ -17,8 +16,8 @@ pub use report::{
     SceneReport, CPU_FRAME, FORMAT, GPU_TOTAL,
 };
 
-use crate::app::{self, RenderRun, RenderSettings, RunError, RunSource};
 use crate::render::empty_pass;
+use crate::render_run::{self, RenderRun, RenderSettings, RunError, RunSource};
 use crate::report::stats::{summarise_passes, PassTimesError, Summary};
 use crate::scene::{knob_settings, Scene, SceneError};
 use sha2::{Digest, Sha256};
@@ -77,7 +76,7 @@ pub struct BenchSettings {
     /// What to measure; time always is (see [`Metric`]).
     pub metrics: Vec<Metric>,
     /// Count instructions in this process, which must have been started
-    /// under callgrind by [`crate::instructions::spawn_counting_run`]:
+    /// under callgrind by [`crate::callgrind::spawn_counting_run`]:
     /// every run counts each frame prefix instead of timing frames, and the
     /// report's rows carry [`PassReport::instructions`].
     pub counting: bool,
@@ -125,13 +124,13 @@ impl BenchScene {
 /// can neither fill memory nor hang the run; a longer file is refused
 /// naming the bound.
 pub(crate) fn read_bounded_text(path: &Path, limit: u64, what: &str) -> Result<String, BenchError> {
-    use crate::files::TextReadError;
+    use crate::safe_files::TextReadError;
     let bound = crate::budget::Bytes(limit);
     let refuse = |reason: String| BenchError::Input {
         path: path.to_path_buf(),
         reason,
     };
-    if let Some(problem) = crate::files::input_file_problem(path) {
+    if let Some(problem) = crate::safe_files::input_file_problem(path) {
         // The problem ends with the path, which the error starts with.
         let shown = path.display().to_string();
         let problem = problem
@@ -144,7 +143,7 @@ pub(crate) fn read_bounded_text(path: &Path, limit: u64, what: &str) -> Result<S
             problem.to_string()
         }));
     }
-    crate::files::read_text(path, limit).map_err(|e| match e {
+    crate::safe_files::read_text(path, limit).map_err(|e| match e {
         TextReadError::Io(error) => BenchError::Io {
             path: path.to_path_buf(),
             error,
@@ -195,7 +194,7 @@ pub fn run(
         // are one scene: the report would list it twice under two names.
         if let Some(t) = scenes[..i]
             .iter()
-            .find(|t| crate::files::same_file(&t.path, &s.path))
+            .find(|t| crate::safe_files::same_file(&t.path, &s.path))
         {
             return Err(BenchError::DuplicateScene {
                 first: t.path.clone(),
@@ -230,7 +229,7 @@ pub fn run(
     for resolution in resolutions {
         let label = baseline::empty_pass_scene(resolution);
         progress.run(&label);
-        let run = app::run(
+        let run = render_run::run(
             RunSource::EmptyPass {
                 width: resolution.width,
                 height: resolution.height,
@@ -259,7 +258,7 @@ pub fn run(
     for s in scenes {
         let label = s.path.display().to_string();
         progress.run(&label);
-        let run = app::run(RunSource::Scene(&s.scene), &render_settings, &mut || {
+        let run = render_run::run(RunSource::Scene(&s.scene), &render_settings, &mut || {
             progress.frame()
         })
         .map_err(|error| BenchError::Render {
@@ -520,7 +519,7 @@ fn summarise(
         let per_pass: Vec<Vec<u64>> = run
             .instruction_frames
             .iter()
-            .map(|prefixes| crate::instructions::pass_counts(prefixes))
+            .map(|prefixes| crate::callgrind::pass_counts(prefixes))
             .collect();
         for (i, p) in passes.iter_mut().enumerate() {
             p.instructions =

@@ -404,12 +404,12 @@ impl BenchReport {
             reason: e.to_string(),
         })?;
         text.push('\n');
-        crate::files::write_bytes(path, text.as_bytes()).map_err(|e| match e {
-            crate::files::FileError::Io { error, .. } => BenchError::Io {
+        crate::safe_files::write_bytes(path, text.as_bytes()).map_err(|e| match e {
+            crate::safe_files::FileError::Io { error, .. } => BenchError::Io {
                 path: path.to_path_buf(),
                 error,
             },
-            crate::files::FileError::Refused { reason, .. } => BenchError::Json {
+            crate::safe_files::FileError::Refused { reason, .. } => BenchError::Json {
                 path: path.to_path_buf(),
                 reason: format!("cannot write: {reason}"),
             },

@@ -3,12 +3,12 @@
 //! optionally gate against a baseline or another build on the interval of
 //! each median ratio.
 
-use aerial::bench::child::{self, Limit};
 use aerial::bench::{
     self, compare, BaselineComparison, BenchReport, BenchScene, BenchSettings, Metric, PassReport,
     Progress, Verdict,
 };
-use aerial::instructions::{spawn_counting_run, Callgrind};
+use aerial::callgrind::{spawn_counting_run, Callgrind};
+use aerial::child_process::{self as child, Limit};
 use aerial::scene::Knob;
 use anyhow::{bail, Context as _};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -121,7 +121,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     };
     if let Some(json) = &args.json {
         if let Some(base) = &args.compare {
-            if aerial::files::same_file(json, base) {
+            if aerial::safe_files::same_file(json, base) {
                 bail!(
                     "--json and --compare name the same file ({}): this run would replace \
                      the baseline it is judged against; write it elsewhere and copy it over \
@@ -133,7 +133,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     }
     // No output may be a file the run reads (`measure` adds the files the
     // scenes name once they are parsed).
-    aerial::files::protect_inputs(
+    aerial::safe_files::protect_inputs(
         args.scenes
             .iter()
             .chain(&args.compare)
@@ -263,7 +263,7 @@ fn measure(args: &BenchArgs) -> anyhow::Result<BenchReport> {
         }
         scenes.push(s);
     }
-    aerial::files::protect_inputs(scenes.iter().flat_map(|s| &s.scene.files));
+    aerial::safe_files::protect_inputs(scenes.iter().flat_map(|s| &s.scene.files));
     if let Some(json) = &args.json {
         check_json_output(json)?;
     }
@@ -296,7 +296,7 @@ fn measure(args: &BenchArgs) -> anyhow::Result<BenchReport> {
         let _busy = aerial::interrupt::Busy::start();
         aerial::interrupt::check()?;
         eprintln!("counting instructions under valgrind (a few seconds per frame and pass)...");
-        let dir = aerial::files::TempFolder::new().context("a folder for valgrind's files")?;
+        let dir = aerial::safe_files::TempFolder::new().context("a folder for valgrind's files")?;
         let json = dir.path().join("instructions.json");
         spawn_counting_run(&run_args(args, &[Metric::Instructions], &json), dir.path())?;
         let counted = BenchReport::load_named(&json, "the counting run's report")?;
@@ -315,7 +315,7 @@ fn check_json_output(json: &Path) -> anyhow::Result<()> {
             json.display()
         );
     }
-    aerial::files::check_destination(json).context("--json")?;
+    aerial::safe_files::check_destination(json).context("--json")?;
     Ok(())
 }
 
@@ -360,7 +360,7 @@ fn against(args: &BenchArgs, other: &Path) -> anyhow::Result<ExitCode> {
     // Held throughout, so an interrupt between the runs also waits for the
     // temporary folder to be removed.
     let _busy = aerial::interrupt::Busy::start();
-    let dir = aerial::files::TempFolder::new().context("a folder for the rounds' reports")?;
+    let dir = aerial::safe_files::TempFolder::new().context("a folder for the rounds' reports")?;
     let limit = Limit {
         after: Duration::from_secs_f64(timeout),
         hint: " (--round-timeout)".to_string(),
@@ -443,7 +443,7 @@ fn resolve_build(given: &Path) -> anyhow::Result<PathBuf> {
             "--against {}: {} (give the path of another aerial binary, e.g. \
              ../before/target/release/aerial; it is not looked up in PATH)",
             given.display(),
-            match aerial::files::input_file_problem(given) {
+            match aerial::safe_files::input_file_problem(given) {
                 Some(problem) => problem,
                 None => e.to_string(),
             }

@@ -4,11 +4,11 @@
 //! threshold is exceeded (errors exit with 2, see `main.rs`), so a CI step
 //! can gate on it.
 
-use aerial::files;
 use aerial::image_io;
 use aerial::report::image_diff::{
     compare_files, write_diff_png, ImageDiff, Metric, Thresholds, WINDOW,
 };
+use aerial::safe_files;
 use anyhow::{bail, Context as _};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -109,14 +109,15 @@ pub fn run(args: CompareArgs) -> anyhow::Result<ExitCode> {
         args.window_threshold,
     )?;
     // The diff image may be neither of the images compared.
-    files::protect_inputs_as_read();
-    files::protect_inputs([&args.reference, &args.test]);
+    safe_files::protect_inputs_as_read();
+    safe_files::protect_inputs([&args.reference, &args.test]);
     if let Some(diff) = &args.diff {
-        files::check_output(diff, files::Format::Png).context("--diff")?;
+        safe_files::check_output(diff, safe_files::Format::Png).context("--diff")?;
         // The diff has the reference's size: room for it, before the work
         // (an unreadable reference is reported by the comparison).
         if let Ok((width, height)) = image_io::image_size(&args.reference) {
-            files::check_room(&[(diff, files::png_size_bound(width, height))]).context("--diff")?;
+            safe_files::check_room(&[(diff, image_io::png_size_bound(width, height))])
+                .context("--diff")?;
         }
     }
     // The library's errors name the file and the reason, and also carry

@@ -47,10 +47,10 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
         bail!("--weld: must be between 0 and 1e-3, got {}", args.weld);
     }
     // The model, its MTL libraries and the textures they name are inputs.
-    aerial::files::protect_inputs_as_read();
-    aerial::files::protect_inputs([&args.model]);
+    aerial::safe_files::protect_inputs_as_read();
+    aerial::safe_files::protect_inputs([&args.model]);
     if let Some(json) = &args.json {
-        aerial::files::check_destination(json).context("--json")?;
+        aerial::safe_files::check_destination(json).context("--json")?;
     }
     let report = inspect(
         &args.model,
@@ -68,9 +68,9 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
         eprintln!("warning: {w}");
     }
     // Its MTL libraries and textures are known once it is read.
-    aerial::files::protect_inputs(&report.files);
+    aerial::safe_files::protect_inputs(&report.files);
     if let Some(json) = &args.json {
-        aerial::files::check_destination(json).context("--json")?;
+        aerial::safe_files::check_destination(json).context("--json")?;
     }
     println!("model                      {}", report.file);
     println!("smoothing                  {}", report.smoothing);
@@ -113,7 +113,7 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
     );
     if let Some(json) = &args.json {
         let text = serde_json::to_string_pretty(&report).context("encoding the report")?;
-        aerial::files::write_bytes(json, text.as_bytes())?;
+        aerial::safe_files::write_bytes(json, text.as_bytes())?;
         eprintln!("wrote {}", json.display());
     }
     Ok(())

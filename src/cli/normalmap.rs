@@ -3,10 +3,10 @@
 //! reads (`src/mesh/height.rs`).
 
 use aerial::budget::MemoryBudget;
-use aerial::files;
 use aerial::image_io;
 use aerial::mesh::height::{encode_normal_map, GreenAxis, HeightEdge, HeightFilter, HeightMap};
 use aerial::render::{preflight, Pixels};
+use aerial::safe_files;
 use anyhow::{bail, Context as _};
 use std::path::PathBuf;
 
@@ -36,13 +36,13 @@ pub fn run(args: NormalMapArgs) -> anyhow::Result<()> {
     if !(args.scale.is_finite() && args.scale > 0.0) {
         bail!("--scale: must be finite and > 0, got {}", args.scale);
     }
-    files::protect_inputs_as_read();
-    files::protect_inputs([&args.input]);
-    files::check_output(&args.out, files::Format::Png).context("--out")?;
+    safe_files::protect_inputs_as_read();
+    safe_files::protect_inputs([&args.input]);
+    safe_files::check_output(&args.out, safe_files::Format::Png).context("--out")?;
     // The size from the header first: refuse what does not fit the memory
     // budget, or the output's file system, before decoding.
-    let info = preflight::inspect_texture(&args.input)?;
-    files::check_room(&[(&args.out, files::png_size_bound(info.width, info.height))])
+    let info = image_io::inspect_texture(&args.input)?;
+    safe_files::check_room(&[(&args.out, image_io::png_size_bound(info.width, info.height))])
         .context("--out")?;
     MemoryBudget::from_env()?.check(
         format!(

@@ -1,10 +1,10 @@
 //! `aerial render`: render one scene to PNG (and optionally EXR).
 
-use aerial::app::{self, RenderSettings};
 use aerial::bench::{CPU_FRAME, GPU_TOTAL};
-use aerial::files;
 use aerial::image_io;
+use aerial::render_run::{self, RenderSettings};
 use aerial::report::stats::{summarise_passes, Summary};
+use aerial::safe_files;
 use aerial::vk::validation;
 use anyhow::{bail, Context as _};
 use std::path::PathBuf;
@@ -44,7 +44,7 @@ pub struct RenderArgs {
 
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     // Every file the scene reads is an input, found while it loads.
-    files::protect_inputs_as_read();
+    safe_files::protect_inputs_as_read();
     let mut scene = super::load_scene(
         args.scene.as_deref(),
         &args.model,
@@ -60,23 +60,25 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     }
     // Outputs are checked before the render, so a bad path fails at once;
     // none may be a file the scene was read from.
-    files::protect_inputs(&scene.files);
-    files::check_output(&args.out, files::Format::Png).context("--out")?;
+    safe_files::protect_inputs(&scene.files);
+    safe_files::check_output(&args.out, safe_files::Format::Png).context("--out")?;
     if let Some(hdr) = &args.hdr {
-        if files::same_file(hdr, &args.out) {
+        if safe_files::same_file(hdr, &args.out) {
             bail!("--hdr and --out name the same file: {}", hdr.display());
         }
-        files::check_output(hdr, files::Format::Exr).context("--hdr")?;
+        safe_files::check_output(hdr, safe_files::Format::Exr).context("--hdr")?;
     }
     // Room for both on their file systems, before the work.
     let (width, height) = (scene.output.width, scene.output.height);
-    let mut sizes = vec![(args.out.as_path(), files::png_size_bound(width, height))];
+    let mut sizes = vec![(args.out.as_path(), image_io::png_size_bound(width, height))];
     if let Some(hdr) = &args.hdr {
-        sizes.push((hdr.as_path(), files::exr_size_bound(width, height)));
+        sizes.push((hdr.as_path(), image_io::exr_size_bound(width, height)));
     }
-    files::check_room(&sizes).map_err(|e| {
+    safe_files::check_room(&sizes).map_err(|e| {
         let flag = match &e {
-            files::FileError::Refused { path, .. } if Some(path) == args.hdr.as_ref() => "--hdr",
+            safe_files::FileError::Refused { path, .. } if Some(path) == args.hdr.as_ref() => {
+                "--hdr"
+            }
             _ => "--out",
         };
         anyhow::Error::new(e).context(flag)
@@ -85,7 +87,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         Some(path) => path.display().to_string(),
         None => "the default scene".to_string(),
     };
-    let run = app::render(
+    let run = render_run::render(
         &scene,
         &RenderSettings {
             validate: args.gpu.validate.unwrap_or_default(),
@@ -114,7 +116,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     if let (Some(path), Some(hdr)) = (&args.hdr, &run.hdr) {
         outputs.push(image_io::exr_file(path, hdr)?);
     }
-    for path in files::commit_all(outputs)? {
+    for path in safe_files::commit_all(outputs)? {
         eprintln!("wrote {}", path.display());
     }
     if args.frames > 1 {
@@ -124,7 +126,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
 }
 
 /// Per-pass GPU time and CPU frame time over the frames: median and spread.
-fn print_timings(run: &app::RenderRun) {
+fn print_timings(run: &render_run::RenderRun) {
     println!(
         "{:<12} {:>10} {:>10} {:>10} {:>10}",
         "pass", "median ms", "min ms", "p95 ms", "max ms"

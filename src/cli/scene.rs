@@ -1,7 +1,7 @@
 //! `aerial scene`: write the scene `render` and `view` build around a
 //! model file, as a scene file to start from and edit.
 
-use aerial::files;
+use aerial::safe_files;
 use aerial::scene::model_scene_toml;
 use anyhow::Context as _;
 use std::path::PathBuf;
@@ -28,9 +28,9 @@ pub struct SceneArgs {
 pub fn run(args: SceneArgs) -> anyhow::Result<()> {
     // The model, and every file read while loading it (its MTL libraries
     // and the textures they name), may not be the scene file written.
-    files::protect_inputs_as_read();
-    files::protect_inputs([&args.model]);
-    files::check_destination(&args.out).context("--out")?;
+    safe_files::protect_inputs_as_read();
+    safe_files::protect_inputs([&args.model]);
+    safe_files::check_destination(&args.out).context("--out")?;
     let options = args.model_args.options(args.width, args.height);
     let text = model_scene_toml(&args.model, &options)?;
     // Parsed before it is written: the file is a scene that loads, and its
@@ -44,9 +44,9 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
     )?;
     args.strict.apply(&scene)?;
     // Now every file the scene reads is known: none may be the output.
-    files::protect_inputs(&scene.files);
-    files::check_destination(&args.out).context("--out")?;
-    files::write_bytes(&args.out, text.as_bytes()).context("--out")?;
+    safe_files::protect_inputs(&scene.files);
+    safe_files::check_destination(&args.out).context("--out")?;
+    safe_files::write_bytes(&args.out, text.as_bytes()).context("--out")?;
     eprintln!("wrote {}", args.out.display());
     Ok(())
 }

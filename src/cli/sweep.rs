@@ -1,8 +1,8 @@
 //! `aerial sweep`: render every combination of some knob settings, and
 //! write error against GPU time as CSV, JSON and an SVG plot.
 
-use aerial::app::{self, RenderSettings, RunSource};
-use aerial::render::render_reference;
+use aerial::render::render_on_cpu;
+use aerial::render_run::{self, RenderSettings, RunSource};
 use aerial::scene::Scene;
 use aerial::sweep::{
     self, Axis, Job, ReferenceKind, Rendered, Shard, Sweep, SweepOptions, DEFAULT_MAX_COMBINATIONS,
@@ -136,11 +136,11 @@ fn check_out_dir(dir: &Path) -> anyhow::Result<()> {
             Err(e) => return Err(refuse(format!("{}: {e}", probe.display()))),
         }
     }
-    aerial::files::check_output_dir(dir)?;
+    aerial::safe_files::check_output_dir(dir)?;
     for name in ["sweep.csv", "sweep.json", "sweep.svg"] {
         let path = dir.join(name);
         if path.exists() {
-            aerial::files::check_destination(&path)?;
+            aerial::safe_files::check_destination(&path)?;
         }
     }
     Ok(())
@@ -160,7 +160,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         .map(|spec| Shard::parse(spec, |var| std::env::var(var).ok()))
         .transpose()?;
     // A FIFO or device would block or never end: refused before opening.
-    if let Some(problem) = aerial::files::input_file_problem(&scene_path) {
+    if let Some(problem) = aerial::safe_files::input_file_problem(&scene_path) {
         if std::fs::metadata(&scene_path).is_ok() {
             anyhow::bail!(
                 "{problem}; a scene is read from a regular file of at most {}",
@@ -171,16 +171,17 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     }
     let scene = Scene::load(&scene_path)?;
     args.strict.apply(&scene)?;
-    aerial::files::protect_inputs(&scene.files);
-    let scene_bytes = aerial::files::read_limited(&scene_path, aerial::scene::MAX_SCENE_FILE_BYTES)
-        .map_err(|e| match e {
-            Some(e) => anyhow::anyhow!("cannot read {}: {e}", scene_path.display()),
-            None => anyhow::anyhow!(
-                "{}: longer than {} (reading stopped there)",
-                scene_path.display(),
-                aerial::budget::Bytes(aerial::scene::MAX_SCENE_FILE_BYTES)
-            ),
-        })?;
+    aerial::safe_files::protect_inputs(&scene.files);
+    let scene_bytes =
+        aerial::safe_files::read_limited(&scene_path, aerial::scene::MAX_SCENE_FILE_BYTES)
+            .map_err(|e| match e {
+                Some(e) => anyhow::anyhow!("cannot read {}: {e}", scene_path.display()),
+                None => anyhow::anyhow!(
+                    "{}: longer than {} (reading stopped there)",
+                    scene_path.display(),
+                    aerial::budget::Bytes(aerial::scene::MAX_SCENE_FILE_BYTES)
+                ),
+            })?;
     // Before the work: a sweep takes minutes, a bad folder must not.
     check_out_dir(&args.out_dir)?;
     let axes = args
@@ -244,10 +245,10 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             Job::Timing { warmup, frames } => (warmup, frames, false),
             Job::Images => (0, 1, true),
             Job::Reference => {
-                let hdr = render_reference(scene)?;
+                let hdr = render_on_cpu(scene)?;
                 // The sRGB output through the renderer's own tone-map
                 // pass, as the GPU images get theirs.
-                let run = app::run(
+                let run = render_run::run(
                     RunSource::HdrImage(&hdr, scene.tone_map),
                     &settings(0, 1, false, false),
                     &mut || {},
@@ -267,7 +268,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         // The timed run also times the empty pass between its frames: the
         // floor its time is a multiple of.
         let timing = matches!(job, Job::Timing { .. });
-        let run = app::render(scene, &settings(warmup, frames, keep_hdr, timing))?;
+        let run = render_run::render(scene, &settings(warmup, frames, keep_hdr, timing))?;
         validation::check(&run.validation)?;
         Ok(Rendered {
             device: run.device.name.clone(),

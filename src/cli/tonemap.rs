@@ -2,10 +2,10 @@
 //! the renderer's own tone-map subpass, e.g. to try another operator or
 //! exposure on a `render --hdr` output without rendering again.
 
-use aerial::app::{self, RenderSettings, RunSource};
 use aerial::budget::MemoryBudget;
-use aerial::files;
 use aerial::image_io;
+use aerial::render_run::{self, RenderSettings, RunSource};
+use aerial::safe_files;
 use aerial::scene::{ToneMap, ToneMapOperator};
 use aerial::vk::validation;
 use anyhow::{bail, Context as _};
@@ -38,14 +38,15 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         bail!("--exposure: must be finite and > 0, got {}", args.exposure);
     }
-    files::protect_inputs_as_read();
-    files::protect_inputs([&args.input]);
-    files::check_output(&args.out, files::Format::Png).context("--out")?;
+    safe_files::protect_inputs_as_read();
+    safe_files::protect_inputs([&args.input]);
+    safe_files::check_output(&args.out, safe_files::Format::Png).context("--out")?;
     // From the header alone: the output's room on its file system, and the
     // whole run's memory (reading, the GPU's copies, the PNG) against the
     // budget, before anything is decoded.
     let (width, height) = image_io::exr_size(&args.input)?;
-    files::check_room(&[(&args.out, files::png_size_bound(width, height))]).context("--out")?;
+    safe_files::check_room(&[(&args.out, image_io::png_size_bound(width, height))])
+        .context("--out")?;
     MemoryBudget::from_env()?.check(
         format!("tone-mapping {} ({width}x{height})", args.input.display()),
         image_io::tonemap_memory(width, height),
@@ -58,7 +59,7 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
         },
         exposure: args.exposure,
     };
-    let run = app::run(
+    let run = render_run::run(
         RunSource::HdrImage(&image, tone_map),
         &RenderSettings {
             validate: args.gpu.validate.unwrap_or_default(),

@@ -35,7 +35,7 @@ pub struct ViewArgs {
 
 pub fn run(args: ViewArgs) -> anyhow::Result<()> {
     // Every file the scene and the script read is an input.
-    aerial::files::protect_inputs_as_read();
+    aerial::safe_files::protect_inputs_as_read();
     let scene = super::load_scene(
         args.scene.as_deref(),
         &args.model,
@@ -45,13 +45,13 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
     )?;
     let script = args.script.as_deref().map(Script::load).transpose()?;
     // No screenshot may be a file the run reads.
-    aerial::files::protect_inputs(scene.files.iter().chain(&args.script));
+    aerial::safe_files::protect_inputs(scene.files.iter().chain(&args.script));
     if let Some(script) = &script {
         for (frame, action) in &script.steps {
             if let ScriptAction::Screenshot(path) = action {
-                let check = || -> Result<(), aerial::files::FileError> {
-                    aerial::files::check_output(path, aerial::files::Format::Png)?;
-                    aerial::files::check_destination(&path.with_extension("exr"))?;
+                let check = || -> Result<(), aerial::safe_files::FileError> {
+                    aerial::safe_files::check_output(path, aerial::safe_files::Format::Png)?;
+                    aerial::safe_files::check_destination(&path.with_extension("exr"))?;
                     Ok(())
                 };
                 check().with_context(|| format!("the script's screenshot at frame {frame}"))?;

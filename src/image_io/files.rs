@@ -1,14 +1,14 @@
 //! The rendered images: the tone-mapped PNG (with its metadata text) and
 //! the linear HDR OpenEXR, written and read back.
 //!
-//! Every file goes through [`crate::files`]: written under a unique
+//! Every file goes through [`crate::safe_files`]: written under a unique
 //! temporary name in the destination folder and renamed into place, so a
 //! failed run never leaves a half-written image. The `*_file` functions
 //! prepare a file without committing it, for runs that write several files
 //! and commit them together.
 
-use crate::files::{self, PendingFile};
-use crate::render::{Pixels, RenderError};
+use super::{ImageError, Pixels};
+use crate::safe_files::{self, PendingFile};
 use std::io::Write as _;
 use std::path::Path;
 
@@ -19,12 +19,12 @@ pub fn png_file(
     path: &Path,
     pixels: &Pixels<u8>,
     metadata: &[(&str, String)],
-) -> Result<PendingFile, RenderError> {
-    let err = |reason: String| RenderError::Output {
+) -> Result<PendingFile, ImageError> {
+    let err = |reason: String| ImageError::Output {
         path: path.to_path_buf(),
         reason,
     };
-    files::check_output(path, files::Format::Png)?;
+    safe_files::check_output(path, safe_files::Format::Png)?;
     let file = PendingFile::create(path)?;
     let mut out = std::io::BufWriter::new(file.file());
     let mut encoder = png::Encoder::new(&mut out, pixels.width, pixels.height);
@@ -56,7 +56,7 @@ pub fn write_png(
     path: &Path,
     pixels: &Pixels<u8>,
     metadata: &[(&str, String)],
-) -> Result<(), RenderError> {
+) -> Result<(), ImageError> {
     png_file(path, pixels, metadata)?.commit()?;
     Ok(())
 }
@@ -66,13 +66,13 @@ pub fn write_png(
 /// after the image data count too, so the whole file is read; compressed
 /// text is inflated with the `png` crate's default size limit, so a
 /// malicious chunk cannot exhaust memory.
-pub fn read_png_text(path: &Path) -> Result<Vec<(String, String)>, RenderError> {
-    let err = |reason: String| RenderError::Input {
+pub fn read_png_text(path: &Path) -> Result<Vec<(String, String)>, ImageError> {
+    let err = |reason: String| ImageError::Input {
         path: path.to_path_buf(),
         reason,
     };
     let file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
-    crate::files::note_inputs([path]);
+    crate::safe_files::note_inputs([path]);
     let decoder = png::Decoder::new(std::io::BufReader::new(file));
     let mut reader = decoder
         .read_info()
@@ -109,9 +109,9 @@ pub fn read_png_text(path: &Path) -> Result<Vec<(String, String)>, RenderError> 
 
 /// Encodes linear float RGBA pixels as OpenEXR (32-bit float channels)
 /// into a temporary file for `path`.
-pub fn exr_file(path: &Path, pixels: &Pixels<f32>) -> Result<PendingFile, RenderError> {
+pub fn exr_file(path: &Path, pixels: &Pixels<f32>) -> Result<PendingFile, ImageError> {
     use exr::prelude::*;
-    files::check_output(path, files::Format::Exr)?;
+    safe_files::check_output(path, safe_files::Format::Exr)?;
     let file = PendingFile::create(path)?;
     let w = pixels.width as usize;
     let channels = SpecificChannels::rgba(|position: Vec2<usize>| {
@@ -131,7 +131,7 @@ pub fn exr_file(path: &Path, pixels: &Pixels<f32>) -> Result<PendingFile, Render
     Image::from_encoded_channels((w, pixels.height as usize), encoding, channels)
         .write()
         .to_buffered(&mut out)
-        .map_err(|e| RenderError::Output {
+        .map_err(|e| ImageError::Output {
             path: path.to_path_buf(),
             reason: e.to_string(),
         })?;
@@ -141,8 +141,8 @@ pub fn exr_file(path: &Path, pixels: &Pixels<f32>) -> Result<PendingFile, Render
 }
 
 /// [`exr_file`], committed.
-pub fn write_exr(path: &Path, pixels: &Pixels<f32>) -> Result<(), RenderError> {
-    files::commit_all(vec![exr_file(path, pixels)?])?;
+pub fn write_exr(path: &Path, pixels: &Pixels<f32>) -> Result<(), ImageError> {
+    safe_files::commit_all(vec![exr_file(path, pixels)?])?;
     Ok(())
 }
 
@@ -150,15 +150,15 @@ pub fn write_exr(path: &Path, pixels: &Pixels<f32>) -> Result<(), RenderError> {
 /// header alone, checked against the largest image the renderer takes:
 /// a small file that claims a huge image is refused before anything is
 /// allocated for it.
-pub fn exr_size(path: &Path) -> Result<(u32, u32), RenderError> {
-    let err = |reason: String| RenderError::Input {
+pub fn exr_size(path: &Path) -> Result<(u32, u32), ImageError> {
+    let err = |reason: String| ImageError::Input {
         path: path.to_path_buf(),
         reason,
     };
-    crate::files::note_inputs([path]);
+    crate::safe_files::note_inputs([path]);
     let meta = exr::meta::MetaData::read_from_file(path, false)
         .map_err(|e| err(format!("not a readable OpenEXR file: {e}")))?;
-    let max = crate::scene::MAX_OUTPUT_SIZE as usize;
+    let max = super::MAX_IMAGE_SIDE as usize;
     let mut size = None;
     for header in &meta.headers {
         let s = header.layer_size;
@@ -185,6 +185,25 @@ pub fn image_size(path: &Path) -> Result<(u32, u32), String> {
     }
 }
 
+/// An upper bound of the size of a PNG of `width` x `height` RGBA8 pixels
+/// as [`png_file`] writes it: the filtered rows stored
+/// uncompressed (what the compressor falls back to for noise), the
+/// compressor's and the chunks' framing, and room for the header and the
+/// metadata text.
+pub fn png_size_bound(width: u32, height: u32) -> u64 {
+    let raw = u64::from(height) * (1 + 4 * u64::from(width));
+    raw + raw / 64 + (16 << 10)
+}
+
+/// An upper bound of the size of an OpenEXR of `width` x `height` RGBA
+/// 32-bit float pixels as [`exr_file`] writes it: the
+/// pixels uncompressed (the lossless compression falls back to that), the
+/// chunk offset table and headers.
+pub fn exr_size_bound(width: u32, height: u32) -> u64 {
+    let raw = u64::from(width) * u64::from(height) * 16;
+    raw + raw / 64 + u64::from(height) * 16 + (16 << 10)
+}
+
 /// Peak memory of [`read_exr`] per pixel, an upper bound: the RGBA f32
 /// pixels (16 bytes), and the decoder's compressed and decompressed
 /// blocks in flight. Measured: 16.5 bytes per pixel at 4096x4096.
@@ -196,7 +215,7 @@ pub const READ_EXR_BYTES_PER_PIXEL: u64 = 32;
 /// The header is read first and the size checked against the largest
 /// image the renderer takes and the memory budget, so a small file that
 /// claims a huge image is refused before anything is allocated for it.
-pub fn read_exr(path: &Path) -> Result<Pixels<f32>, RenderError> {
+pub fn read_exr(path: &Path) -> Result<Pixels<f32>, ImageError> {
     use exr::prelude::*;
     let (w, h) = exr_size(path)?;
     crate::budget::MemoryBudget::from_env()?.check(
@@ -215,7 +234,7 @@ pub fn read_exr(path: &Path) -> Result<Pixels<f32>, RenderError> {
             pixels.data[i..i + 4].copy_from_slice(&[r, g, b, a]);
         },
     )
-    .map_err(|e| RenderError::Input {
+    .map_err(|e| ImageError::Input {
         path: path.to_path_buf(),
         reason: e.to_string(),
     })?;

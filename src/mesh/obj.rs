@@ -265,7 +265,7 @@ fn read_within_budget(
 ) -> Result<Vec<u8>, ObjError> {
     let budget = budget()?;
     let limit = budget.bytes / per_byte;
-    crate::files::read_limited(path, limit).map_err(|e| match e {
+    crate::safe_files::read_limited(path, limit).map_err(|e| match e {
         Some(reason) => ObjError::Io {
             file: file.to_owned(),
             reason,
@@ -316,8 +316,8 @@ pub fn load_obj(path: &Path) -> Result<ObjModel, ObjError> {
     let mut model = parse_scanned(&text, &file, base_dir, corners, origin)?;
     model.files.insert(0, path.to_path_buf());
     // Its MTL libraries and the textures they name are inputs too, read or
-    // not (see `crate::files::note_inputs`).
-    crate::files::note_inputs(&model.files);
+    // not (see `crate::safe_files::note_inputs`).
+    crate::safe_files::note_inputs(&model.files);
     Ok(model)
 }
 

@@ -11,7 +11,7 @@
 //! The attachment is copied to a host buffer after the timed interval so
 //! tests can check that the pass really wrote every pixel.
 
-use super::frame::TimedCommands;
+use super::timed_submit::TimedCommands;
 use super::{FrameTiming, Pixels, RenderError};
 use crate::shaders;
 use crate::vk::{

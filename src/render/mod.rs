@@ -4,19 +4,19 @@
 //! written by `crate::image_io`. `tiles` culls lights per screen tile for deferred
 //! lighting, and `static_lights` carries unchanging lights as
 //! specialization constants; `octahedral` is the G-buffer's normal encoding. `empty_pass`
-//! is the driver's floor that benchmarks divide by; `reference` is the
-//! exact CPU image that sweeps can measure against.
+//! is the driver's floor that benchmarks divide by; `cpu_renderer` draws the
+//! exact CPU image that sweeps can measure against; `timed_submit` submits
+//! the recorded frame and times it.
 
+pub mod cpu_renderer;
 pub mod draw_list;
 pub mod empty_pass;
-mod frame;
 pub mod geometry;
 mod gpu_types;
 pub mod octahedral;
 pub mod passes;
 pub mod plan;
 pub mod preflight;
-pub mod reference;
 mod renderer;
 mod scene_resources;
 pub mod shader_ids;
@@ -24,13 +24,17 @@ pub mod sky_resources;
 mod static_lights;
 mod sun_tables;
 pub mod tiles;
+mod timed_submit;
 
+/// The images a renderer reads back are `image_io`'s, so they are written
+/// as they are.
+pub use crate::image_io::Pixels;
+pub use cpu_renderer::{render_on_cpu, render_on_cpu_with, CpuRenderError, Transport};
 pub use empty_pass::EmptyPass;
-pub use frame::PrefixFrames;
 pub use geometry::SceneGeometry;
 pub use plan::{subpass_timing_note, FramePlan, PassKind};
-pub use reference::{render_reference, render_reference_with, ReferenceError, Transport};
-pub use renderer::{FrameTiming, Pixels, Renderer, ViewChange};
+pub use renderer::{FrameTiming, Renderer, ViewChange};
+pub use timed_submit::PrefixFrames;
 
 use std::path::PathBuf;
 
@@ -54,19 +58,17 @@ pub enum RenderError {
     #[error("invalid HDR input image: {0}")]
     InvalidImage(String),
     #[error(transparent)]
-    File(#[from] crate::files::FileError),
+    File(#[from] crate::safe_files::FileError),
+    #[error(transparent)]
+    Image(#[from] crate::image_io::ImageError),
     #[error(transparent)]
     Budget(#[from] crate::budget::BudgetError),
     #[error("{object}: {reason}")]
     Object { object: String, reason: String },
-    #[error("cannot write {path}: {reason}")]
-    Output { path: PathBuf, reason: String },
-    #[error("cannot read {path}: {reason}")]
-    Input { path: PathBuf, reason: String },
     #[error("size {width}x{height}: each side must be in 1..={max}", max = crate::scene::MAX_OUTPUT_SIZE)]
     Size { width: u32, height: u32 },
     #[error(transparent)]
-    Count(#[from] crate::instructions::CountError),
+    Count(#[from] crate::callgrind::CountError),
     /// Stopped at a safe point by an interrupt (see [`crate::interrupt`]).
     #[error(transparent)]
     Interrupted(#[from] crate::interrupt::Interrupted),

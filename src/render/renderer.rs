@@ -6,13 +6,14 @@
 //! one command buffer recorded once → submitted per frame → images read
 //! back.
 
-use super::frame::TimedCommands;
 use super::geometry::SceneGeometry;
 use super::passes::{Attachments, PassResources, PassSetup, RecordPass};
 use super::plan::{attachment, FramePlan, PassIo, PassKind};
 use super::scene_resources::SceneResources;
 use super::sky_resources::SkyResources;
+use super::timed_submit::TimedCommands;
 use super::RenderError;
+use crate::image_io::Pixels;
 use crate::scene::{HdrFormat, Scene, ToneMap};
 use crate::vk::{AttachmentSpec, AttachmentStart, Context, Image, RenderTargets, SubpassSpec};
 use std::sync::Arc;
@@ -28,14 +29,6 @@ pub struct FrameTiming {
     /// Pipeline statistics per pass (in `FramePlan::passes` order); empty
     /// unless the context counts them.
     pub work: Vec<crate::vk::PipelineStats>,
-}
-
-/// A read-back image, row-major, top row first, RGBA.
-#[derive(Clone, Debug)]
-pub struct Pixels<T> {
-    pub width: u32,
-    pub height: u32,
-    pub data: Vec<T>,
 }
 
 /// What [`Renderer::set_view`] had to do for the new view.

@@ -8,8 +8,8 @@
 //! - [`image_diff`] compares two images (PNG as sRGB 8-bit, OpenEXR as linear
 //!   float) with FLIP, PSNR or RMSE, gates the result against [`Thresholds`],
 //!   and writes a diff picture for humans to look at.
-//! - [`plot`] draws error against GPU time as SVG, for the sweep
-//!   ([`crate::sweep`]).
+//! - [`plot`] draws error against GPU time as SVG, for the sweep (which
+//!   calls it; nothing here knows the sweep).
 //!
 //! All are deliberately free of Vulkan so they can run on CI machines without
 //! a GPU, e.g. to re-check stored screenshots.

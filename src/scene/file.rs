@@ -23,7 +23,7 @@ use std::path::PathBuf;
 use glam::Vec3;
 use serde::Deserialize;
 
-use super::checks::{Check, Result, MAX_COLOUR, MAX_LENGTH, MIN_LENGTH};
+use super::value_checks::{Check, Result, MAX_COLOUR, MAX_LENGTH, MIN_LENGTH};
 use super::{
     Camera, DebugView, HdrFormat, Light, Lighting, Material, Object, Output, Scene, SceneError,
     ShadingModel, Shape, Texture, TextureFilter, ToneMap, ToneMapOperator, Transform,
@@ -34,7 +34,7 @@ use crate::mesh::smoothing::Smoothing;
 use crate::mesh::MAX_SEGMENTS;
 
 /// Largest accepted output width or height.
-pub const MAX_OUTPUT_SIZE: u32 = 16384;
+pub const MAX_OUTPUT_SIZE: u32 = crate::image_io::MAX_IMAGE_SIDE;
 /// Fewest segments accepted in either tessellation direction: fewer cannot
 /// enclose any volume (a closed surface needs 3 around).
 pub const MIN_SEGMENTS: u32 = 3;
@@ -86,16 +86,18 @@ struct OutputFile {
     static_lights: bool,
 }
 
+/// The defaults are [`Output`]'s, so they are written once.
 impl Default for OutputFile {
     fn default() -> Self {
+        let output = Output::default();
         OutputFile {
-            width: 640,
-            height: 360,
-            hdr_format: HdrFormat::Rgba16F,
-            texture_filter: TextureFilter::Trilinear,
-            lighting: Lighting::Forward,
-            debug_view: None,
-            static_lights: true,
+            width: output.width,
+            height: output.height,
+            hdr_format: output.hdr_format,
+            texture_filter: output.texture_filter,
+            lighting: output.lighting,
+            debug_view: output.debug_view,
+            static_lights: output.static_lights,
         }
     }
 }
@@ -661,7 +663,7 @@ impl Check<'_> {
         let file_at = |name: &str, given: Option<PathBuf>| -> Result<Option<PathBuf>> {
             let Some(given) = given else { return Ok(None) };
             let resolved = self.base_dir.join(&given);
-            match crate::files::input_file_problem(&resolved) {
+            match crate::safe_files::input_file_problem(&resolved) {
                 Some(problem) => Err(self.invalid(field(name), problem)),
                 None => Ok(Some(resolved)),
             }

@@ -5,7 +5,6 @@
 //! in `assets/scenes/`.
 
 mod camera;
-mod checks;
 mod error;
 mod file;
 mod knobs;
@@ -15,6 +14,7 @@ mod model_scene;
 mod models;
 mod object;
 mod sky;
+mod value_checks;
 
 use std::path::Path;
 
@@ -72,7 +72,7 @@ pub struct Scene {
     /// Every file the scene was read from: the scene file (when loaded
     /// with [`Scene::load`]), OBJ models, their MTL libraries, textures,
     /// normal and height maps. Empty for scenes built in code. A command
-    /// must never write over one of them (see [`crate::files::protect_inputs`]).
+    /// must never write over one of them (see [`crate::safe_files::protect_inputs`]).
     pub files: Vec<std::path::PathBuf>,
 }
 
@@ -172,6 +172,21 @@ pub enum TextureFilter {
     Trilinear,
 }
 
+/// The `[output]` section's defaults, for every field the file leaves out.
+impl Default for Output {
+    fn default() -> Self {
+        Output {
+            width: 640,
+            height: 360,
+            hdr_format: HdrFormat::Rgba16F,
+            texture_filter: TextureFilter::Trilinear,
+            lighting: Lighting::Forward,
+            debug_view: None,
+            static_lights: true,
+        }
+    }
+}
+
 impl Output {
     /// `width / height`, the aspect ratio for [`Camera::projection`].
     pub fn aspect(&self) -> f32 {
@@ -224,7 +239,7 @@ impl Scene {
     /// [`Scene::from_toml`].
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
         let file = path.display().to_string();
-        use crate::files::{read_text, TextReadError};
+        use crate::safe_files::{read_text, TextReadError};
         let text = read_text(path, MAX_SCENE_FILE_BYTES).map_err(|e| match e {
             TextReadError::Io(reason) => SceneError::Io {
                 file: file.clone(),
@@ -326,7 +341,7 @@ impl Scene {
     pub fn from_toml(text: &str, file: &str, base_dir: &Path) -> Result<Scene, SceneError> {
         // Parsing describes the scene (every field checked, no model file
         // opened); the OBJ models it names are read after.
-        let check = checks::Check { file, base_dir };
+        let check = value_checks::Check { file, base_dir };
         let description = check.parse(text)?;
         check.load_models(description)
     }
@@ -339,10 +354,7 @@ impl Scene {
                 width,
                 height,
                 hdr_format: HdrFormat::Rgba32F,
-                texture_filter: TextureFilter::Trilinear,
-                lighting: Lighting::Forward,
-                debug_view: None,
-                static_lights: true,
+                ..Output::default()
             },
             camera: Camera {
                 eye: DVec3::Z,

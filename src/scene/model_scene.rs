@@ -283,7 +283,7 @@ pub fn model_scene_toml(model: &Path, options: &ModelSceneOptions) -> Result<Str
     }
     if options.ground {
         // At most the largest length a scene file accepts.
-        let size = (radius * 16.0).min(super::checks::MAX_LENGTH);
+        let size = (radius * 16.0).min(super::value_checks::MAX_LENGTH);
         let _ = writeln!(
             s,
             "\n[[objects]]\nname = \"ground\"\nmaterial = \"ground\"\n\
@@ -309,7 +309,7 @@ fn frameable(
     eye: DVec3,
     near_factor: f64,
 ) -> Result<(), String> {
-    use super::checks::{MAX_COORDINATE, MAX_LENGTH, MIN_LENGTH};
+    use super::value_checks::{MAX_COORDINATE, MAX_LENGTH, MIN_LENGTH};
     let across = 2.0 * radius;
     if near < MIN_LENGTH {
         return Err(format!(

@@ -10,10 +10,10 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::checks::{Check, Result, MAX_COLOUR};
 use super::file::{
     Description, MaterialRef, ModelObject, ObjectDescription, PendingMaterial, DEFAULT_TESSELLATION,
 };
+use super::value_checks::{Check, Result, MAX_COLOUR};
 use super::{
     AssetWarning, Material, Object, Scene, SceneError, SceneWarning, ShadingModel, Shape, Texture,
 };
@@ -265,10 +265,10 @@ impl Check<'_> {
         let values = checked_mtl_values(mtl, warn);
         let mut usable = |path: &Option<std::path::PathBuf>, what: &str, fallback: &str| {
             let path = path.as_ref()?;
-            let problem = if let Some(problem) = crate::files::input_file_problem(path) {
+            let problem = if let Some(problem) = crate::safe_files::input_file_problem(path) {
                 problem
             } else {
-                match crate::render::preflight::inspect_texture(path) {
+                match crate::image_io::inspect_texture(path) {
                     Ok(_) => return Some(Ok(path.clone())),
                     Err(e) => format!("is not usable: {e}"),
                 }

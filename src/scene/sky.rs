@@ -13,7 +13,7 @@
 use glam::DVec3;
 use serde::Deserialize;
 
-use super::checks::{Check, Result};
+use super::value_checks::{Check, Result};
 use crate::atmosphere::coefficients;
 use crate::atmosphere::model::*;
 

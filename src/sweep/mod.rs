@@ -20,11 +20,11 @@
 //! reference is compared with its own image, so its error is exactly 0.
 //!
 //! With [`ReferenceKind::Cpu`] the reference is instead the exact image of
-//! the combination's *own* scene ([`crate::render::render_reference`]):
+//! the combination's *own* scene ([`crate::render::render_on_cpu`]):
 //! every knob is applied first, because some (`lights`, `light_cutoff`)
 //! change what the exact image is, and the rest (tessellation, HDR format)
 //! only change how far the GPU is from it. References are cached by
-//! [`ReferenceScene`](crate::render::reference::ReferenceScene), everything the CPU renderer reads, so a sweep over
+//! [`CpuScene`](crate::render::cpu_renderer::CpuScene), everything the CPU renderer reads, so a sweep over
 //! tessellation and format renders each size's reference once or, where
 //! the tessellation moves a bounding sphere across a light's cutoff, once
 //! per light set. No combination is its own reference then, and every
@@ -71,7 +71,7 @@
 //! Besides milliseconds, each combination's timed run also times the empty
 //! pass at the combination's output size after each frame, on the same
 //! device and over the same seconds (see
-//! [`RenderSettings::empty_pass_between_frames`](crate::app::RenderSettings::empty_pass_between_frames)).
+//! [`RenderSettings::empty_pass_between_frames`](crate::render_run::RenderSettings::empty_pass_between_frames)).
 //! `gpu_x_empty` is the GPU median divided by that floor's median: a
 //! ratio that stays comparable between machines, which is what a sweep
 //! merged from shards run on different hosts is plotted and ranked by.
@@ -90,7 +90,7 @@ pub use run::{
 };
 pub use shard::{merge, read_shard, scene_hash, Shard, ShardError, ShardSource};
 
-use crate::render::reference::ReferenceError;
+use crate::render::cpu_renderer::CpuRenderError;
 use crate::render::Pixels;
 use crate::report::image_diff::CompareError;
 use crate::report::plot::PlotError;
@@ -111,7 +111,7 @@ pub enum SweepError {
     NoCpuReference {
         what: String,
         #[source]
-        source: ReferenceError,
+        source: CpuRenderError,
     },
     #[error("knob {knob} is given twice; list all its values in one --knob")]
     DuplicateKnob { knob: &'static str },
@@ -151,7 +151,7 @@ pub enum SweepError {
         error: std::io::Error,
     },
     #[error(transparent)]
-    File(crate::files::FileError),
+    File(crate::safe_files::FileError),
     #[error(transparent)]
     Plot(#[from] PlotError),
     #[error("cannot serialise the sweep as JSON: {0}")]

@@ -308,12 +308,13 @@ pub fn write_outputs(result: &SweepResult, dir: &Path) -> Result<Vec<PathBuf>, S
             let mut pending = Vec::new();
             for (name, text) in files {
                 let path = dir.join(name);
-                let file = crate::files::PendingFile::create(&path).map_err(SweepError::File)?;
+                let file =
+                    crate::safe_files::PendingFile::create(&path).map_err(SweepError::File)?;
                 std::io::Write::write_all(&mut file.file(), text.as_bytes())
                     .map_err(|e| SweepError::File(file.io_error(e)))?;
                 pending.push(file);
             }
-            crate::files::commit_all(pending).map_err(SweepError::File)
+            crate::safe_files::commit_all(pending).map_err(SweepError::File)
         });
     if result.is_err() {
         // remove_dir only removes empty folders: nothing else is touched.

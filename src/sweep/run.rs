@@ -3,7 +3,7 @@
 //! it with its reference and mark the Pareto front.
 
 use super::{ReferenceKind, Row, Shard, SweepError, SweepResult, TimeAxis};
-use crate::render::reference::ReferenceScene;
+use crate::render::cpu_renderer::CpuScene;
 use crate::render::{FrameTiming, Pixels};
 use crate::report::image_diff::{compare_images, ImageRef, Metric};
 use crate::report::stats::{summarise_passes, Summary};
@@ -90,7 +90,7 @@ pub enum Job {
     /// One frame with the HDR image read back, for the error metrics.
     Images,
     /// The exact image of the scene, for [`ReferenceKind::Cpu`]: `hdr` from
-    /// [`crate::render::render_reference`] and `output` that image through
+    /// [`crate::render::render_on_cpu`] and `output` that image through
     /// the renderer's tone-map pass, so the FLIP columns compare like with
     /// like. `frames` and `passes` are not read.
     Reference,
@@ -219,8 +219,8 @@ impl Sweep {
     }
 
     /// What the CPU reference of combination `values` depends on.
-    fn cpu_reference_scene(&self, values: &[String]) -> Result<ReferenceScene, SweepError> {
-        ReferenceScene::new(&self.scene_for(values)?).map_err(|source| SweepError::NoCpuReference {
+    fn cpu_reference_scene(&self, values: &[String]) -> Result<CpuScene, SweepError> {
+        CpuScene::new(&self.scene_for(values)?).map_err(|source| SweepError::NoCpuReference {
             what: self.describe(values),
             source,
         })
@@ -262,7 +262,7 @@ impl Sweep {
         let pixels = |s: &Scene| u64::from(s.output.width) * u64::from(s.output.height);
         let (mut render, mut largest) = (0u64, (0u64, String::new()));
         let mut references: Vec<&[String]> = Vec::new();
-        let mut cpu_references: Vec<ReferenceScene> = Vec::new();
+        let mut cpu_references: Vec<CpuScene> = Vec::new();
         let mut kept = 0u64;
         for (_, c) in chosen {
             let scene = self.scene_for(&c.values)?;
@@ -372,8 +372,8 @@ impl Sweep {
             .collect();
         let mut cache: HashMap<Vec<String>, Rc<Images>> = HashMap::new();
         // CPU references by what they depend on; a short list, searched
-        // linearly (`ReferenceScene` holds floats, so it is not `Hash`).
-        let mut cpu_cache: Vec<(ReferenceScene, Rc<Images>)> = Vec::new();
+        // linearly (`CpuScene` holds floats, so it is not `Hash`).
+        let mut cpu_cache: Vec<(CpuScene, Rc<Images>)> = Vec::new();
         let mut device = String::new();
         let mut passes: Vec<String> = Vec::new();
         let mut setup_names: Vec<String> = Vec::new();

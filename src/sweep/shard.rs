@@ -236,14 +236,14 @@ pub const MAX_SWEEP_JSON_BYTES: u64 = 64 << 20;
 /// `/dev/zero`), FIFO or folder is refused before it is opened, and
 /// reading stops at the bound.
 pub fn read_shard(dir: &Path) -> Result<(PathBuf, SweepResult), ShardError> {
-    use crate::files::TextReadError;
+    use crate::safe_files::TextReadError;
     let path = dir.join("sweep.json");
     let bound = crate::budget::Bytes(MAX_SWEEP_JSON_BYTES);
     let input = |reason: String| ShardError::Input {
         path: path.clone(),
         reason,
     };
-    if let Some(problem) = crate::files::input_file_problem(&path) {
+    if let Some(problem) = crate::safe_files::input_file_problem(&path) {
         let shown = path.display().to_string();
         let problem = problem
             .strip_suffix(&shown)
@@ -257,7 +257,7 @@ pub fn read_shard(dir: &Path) -> Result<(PathBuf, SweepResult), ShardError> {
             problem
         }));
     }
-    let text = crate::files::read_text(&path, MAX_SWEEP_JSON_BYTES).map_err(|e| match e {
+    let text = crate::safe_files::read_text(&path, MAX_SWEEP_JSON_BYTES).map_err(|e| match e {
         TextReadError::Io(error) => ShardError::Read {
             path: path.clone(),
             error,

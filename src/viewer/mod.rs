@@ -55,6 +55,8 @@ pub enum ViewerError {
     #[error(transparent)]
     Render(#[from] RenderError),
     #[error(transparent)]
+    Image(#[from] crate::image_io::ImageError),
+    #[error(transparent)]
     Vulkan(#[from] VkError),
     #[error(transparent)]
     Knob(#[from] KnobError),

@@ -67,9 +67,11 @@ impl Script {
     /// Reads and parses the script at `path`; a relative screenshot path
     /// is relative to the current directory, as on the command line.
     pub fn load(path: &Path) -> Result<Script, ScriptError> {
-        let text = crate::files::read_text(path, MAX_SCRIPT_BYTES).map_err(|e| {
+        let text = crate::safe_files::read_text(path, MAX_SCRIPT_BYTES).map_err(|e| {
             let hint = match e {
-                crate::files::TextReadError::TooLong(_) => "; a script is a few lines per frame",
+                crate::safe_files::TextReadError::TooLong(_) => {
+                    "; a script is a few lines per frame"
+                }
                 _ => "",
             };
             ScriptError::Read {

@@ -12,9 +12,9 @@ use super::knobs;
 use super::script::{Script, ScriptAction};
 use super::timing::TimingWindow;
 use super::{ViewOptions, ViewOutcome, ViewerError, SCRIPT_STEP_SECONDS};
-use crate::files;
 use crate::image_io;
 use crate::render::{preflight, RenderError, Renderer, SceneGeometry, ViewChange};
+use crate::safe_files;
 use crate::scene::Scene;
 use crate::vk::validation::ValidationLog;
 use crate::vk::{Context, ContextOptions, Presented, Surface, Swapchain};
@@ -634,8 +634,9 @@ impl Live {
             crate::vk::validation::check(&log.messages())?;
         }
         let exr_path = path.with_extension("exr");
-        files::check_output(path, files::Format::Png).map_err(|e| shot_err(e.to_string()))?;
-        files::check_destination(&exr_path).map_err(|e| shot_err(e.to_string()))?;
+        safe_files::check_output(path, safe_files::Format::Png)
+            .map_err(|e| shot_err(e.to_string()))?;
+        safe_files::check_destination(&exr_path).map_err(|e| shot_err(e.to_string()))?;
         // The frame on screen (the renderer reads its output back every
         // frame) and, for the EXR, the same view drawn once more by a
         // renderer that keeps the HDR image.
@@ -649,7 +650,7 @@ impl Live {
                 .ok_or_else(|| shot_err("the HDR image was not read back".into()))?
         };
         let camera_toml = self.camera.toml();
-        let mut metadata = crate::app::png_metadata(self.ctx.device_info());
+        let mut metadata = crate::render_run::png_metadata(self.ctx.device_info());
         metadata.push(("aerial:scene", options.scene_name.clone()));
         metadata.push(("aerial:camera", camera_toml.clone()));
         let sun_line = self.scene.sky.as_ref().map(|s| {
@@ -669,7 +670,7 @@ impl Live {
             image_io::png_file(path, &pixels, &metadata)?,
             image_io::exr_file(&exr_path, &hdr)?,
         ];
-        files::commit_all(pending).map_err(|e| shot_err(e.to_string()))?;
+        safe_files::commit_all(pending).map_err(|e| shot_err(e.to_string()))?;
         println!(
             "wrote {} and {} (frame {}); this view with `aerial render`:\n{camera_toml}{}",
             path.display(),

@@ -228,24 +228,6 @@ impl Context {
         self.limits.max_uniform_buffer_range as u64
     }
 
-    /// Makes one deliberate API misuse (a sampler with anisotropic
-    /// filtering, whose device feature was not enabled) so a caller can
-    /// check that the validation messenger is live and counting. The
-    /// sampler is destroyed again at once. Only with the
-    /// `validation-checks` feature (see `vk/checks.rs`).
-    #[cfg(feature = "validation-checks")]
-    pub fn misuse_api_for_validation_check(&self) -> Result<(), VkError> {
-        let info = vk::SamplerCreateInfo::default()
-            .anisotropy_enable(true)
-            .max_anisotropy(4.0);
-        // SAFETY: the only invalid part is the disabled feature, which
-        // drivers ignore; the sampler is never used.
-        let sampler = unsafe { self.device.create_sampler(&info, None) }?;
-        // SAFETY: created above, unused.
-        unsafe { self.device.destroy_sampler(sampler, None) };
-        Ok(())
-    }
-
     /// Blocks until the queue is idle.
     pub fn wait_idle(&self) -> Result<(), VkError> {
         // SAFETY: the device is alive for &self.

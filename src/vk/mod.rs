@@ -5,11 +5,11 @@
 //! block states the invariant it relies on.
 
 mod buffer;
-// Test-only deliberate mistakes; see the `validation-checks` feature.
-#[cfg(feature = "validation-checks")]
-mod checks;
+// Test-only deliberate mistakes; see the `deliberate-misuse` feature.
 mod commands;
 mod context;
+#[cfg(feature = "deliberate-misuse")]
+mod deliberate_misuse;
 mod descriptors;
 mod image;
 mod pipeline;

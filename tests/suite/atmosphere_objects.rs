@@ -13,8 +13,8 @@
 
 use crate::common;
 
-use aerial::atmosphere::{reference, sun_light_at};
-use aerial::render::{render_reference_with, Transport};
+use aerial::atmosphere::{quadrature, sun_light_at};
+use aerial::render::{render_on_cpu_with, Transport};
 use aerial::scene::Scene;
 use glam::{DQuat, DVec3};
 
@@ -78,8 +78,8 @@ fn expected(scene: &Scene, normal: DVec3, x: u32, y: u32) -> DVec3 {
     let surface = KD
         * cos
         * sky.sun.irradiance
-        * reference::sun_transmittance(a, point - a.center, sky.sun.direction);
-    let (inscattered, view) = reference::aerial_perspective(a, &sky.sun, eye - a.center, d, t);
+        * quadrature::sun_transmittance(a, point - a.center, sky.sun.direction);
+    let (inscattered, view) = quadrature::aerial_perspective(a, &sky.sun, eye - a.center, d, t);
     surface * view + inscattered
 }
 
@@ -94,7 +94,7 @@ fn check_panel(label: &str, sun: [f64; 3], lighting: &str) -> DVec3 {
     let hdr = run.hdr.unwrap();
     // The CPU reference renderer draws the same thing in f64 (single
     // scattering, as the scene asks).
-    let cpu = render_reference_with(&scene, Transport::Single).unwrap();
+    let cpu = render_on_cpu_with(&scene, Transport::Single).unwrap();
     let mut worst = 0.0f64;
     for (x, y) in PROBES {
         let want = expected(&scene, normal, x, y);
@@ -136,8 +136,8 @@ fn a_panel_is_lit_by_the_transmitted_sun_in_forward_and_deferred_lighting() {
         // panel faces the sun in both, so the cosines are 1).
         let a = &panel_scene(NOON, lighting).0.sky.unwrap().atmosphere;
         let centre = DVec3::from(CENTRE) - a.center;
-        let t_noon = reference::sun_transmittance(a, centre, DVec3::from(NOON).normalize());
-        let t_sunset = reference::sun_transmittance(a, centre, DVec3::from(SUNSET).normalize());
+        let t_noon = quadrature::sun_transmittance(a, centre, DVec3::from(NOON).normalize());
+        let t_sunset = quadrature::sun_transmittance(a, centre, DVec3::from(SUNSET).normalize());
         let want = t_sunset / t_noon;
         let got = sunset / noon;
         println!("sunset / noon: {got} against transmittance ratio {want}");
@@ -219,7 +219,7 @@ fn earth_objects_matches_the_cpu_reference() {
     }
     let hdr = common::render(&scene, true).hdr.unwrap();
     let started = std::time::Instant::now();
-    let cpu = render_reference_with(&scene, Transport::Single).unwrap();
+    let cpu = render_on_cpu_with(&scene, Transport::Single).unwrap();
     println!(
         "CPU reference 48x27: {:.2} s",
         started.elapsed().as_secs_f64()
@@ -248,8 +248,8 @@ fn earth_objects_matches_the_cpu_reference() {
     assert!(at(0.95) <= 1e-2, "95th percentile {:e}", at(0.95));
 }
 
-/// The CPU reference renderer integrates at [`reference::IMAGE`] precision
-/// (16 initial panels, 1e-6), not the tests' [`reference::PRECISE`] (64
+/// The CPU reference renderer integrates at [`quadrature::IMAGE`] precision
+/// (16 initial panels, 1e-6), not the tests' [`quadrature::PRECISE`] (64
 /// panels, 1e-7): on the views that stress the quadrature (along the
 /// ground, grazing the horizon at sunset, the limb from orbit, the ground
 /// from 1e8 m, a 100 m Mie scale height) the two agree within 1e-5 of the
@@ -306,8 +306,8 @@ fn image_precision_agrees_with_the_oracle() {
         sun.direction = sun_direction;
         let origin = DVec3::new(0.0, r + altitude, 0.0);
         let d = direction.normalize();
-        let exact = reference::radiance(atmosphere, &sun, origin, d);
-        let image = reference::radiance_with(atmosphere, &sun, origin, d, reference::IMAGE);
+        let exact = quadrature::radiance(atmosphere, &sun, origin, d);
+        let image = quadrature::radiance_with(atmosphere, &sun, origin, d, quadrature::IMAGE);
         let e = (image - exact).abs().max_element() / exact.max_element();
         println!("{label}: {exact} (image precision off by {e:.1e})");
         assert!(exact.max_element() > 0.0, "{label}: black");

@@ -6,9 +6,9 @@
 
 use crate::common;
 
-use aerial::app::{self, RenderSettings};
 use aerial::bench::{self, BenchReport};
 use aerial::render::empty_pass::{CONSTANT_RGBA8, PASS_NAME};
+use aerial::render_run::{self, RenderSettings};
 use aerial::scene::{Light, Scene, KNOBS};
 use std::path::{Path, PathBuf};
 use std::process::Output;
@@ -154,7 +154,10 @@ fn bench_json_has_every_field_and_round_trips() {
         .empty_pass_between_frames
         .as_ref()
         .expect("empty pass timed between frames");
-    assert_eq!(floor.ms.count, 3 * aerial::app::EMPTY_PASSES_PER_FRAME);
+    assert_eq!(
+        floor.ms.count,
+        3 * aerial::render_run::EMPTY_PASSES_PER_FRAME
+    );
     assert!(floor.ms.min > 0.0);
     for p in s.passes.iter().chain(&s.gpu_total) {
         let m = p.empty_pass_multiple.expect("a multiple");
@@ -593,8 +596,8 @@ fn bad_bench_input_fails_with_a_message_not_a_panic() {
 
 #[test]
 fn empty_pass_is_clean_under_validation_and_takes_time() {
-    let run = app::run(
-        app::RunSource::EmptyPass {
+    let run = render_run::run(
+        render_run::RunSource::EmptyPass {
             width: 96,
             height: 64,
         },
@@ -628,8 +631,8 @@ fn empty_pass_is_clean_under_validation_and_takes_time() {
 
 #[test]
 fn empty_pass_rejects_a_zero_size() {
-    let e = app::run(
-        app::RunSource::EmptyPass {
+    let e = render_run::run(
+        render_run::RunSource::EmptyPass {
             width: 0,
             height: 64,
         },
@@ -716,7 +719,7 @@ fn bench_scenes_have_the_intended_load_and_render_cleanly() {
 fn the_sum_of_pass_times_does_not_exceed_the_cpu_frame_time() {
     let mut scene = aerial::scene::Scene::default_scene();
     scene.set_output_size(Some(160), Some(90)).unwrap();
-    let run = aerial::app::render(
+    let run = aerial::render_run::render(
         &scene,
         &RenderSettings {
             warmup: 1,

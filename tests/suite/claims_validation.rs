@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use aerial::app::{self, Misuse, RenderSettings, RunSource};
+use aerial::render_run::{self, Misuse, RenderSettings, RunSource};
 use aerial::vk::validation::{self, Validation, ValidationMessage, ALLOWED_MESSAGES};
 use aerial::vk::{Context, ContextOptions};
 use std::path::{Path, PathBuf};
@@ -19,7 +19,7 @@ fn settings(validate: Validation) -> RenderSettings {
 }
 
 fn messages_of(misuse: Misuse, validate: Validation) -> Vec<ValidationMessage> {
-    match app::run(
+    match render_run::run(
         RunSource::ValidationCheck(misuse),
         &settings(validate),
         &mut || {},
@@ -93,7 +93,7 @@ fn a_leaked_object_is_counted_on_a_context_dropped_by_hand() {
 
 #[test]
 fn a_failed_run_still_returns_the_validation_log() {
-    let err = app::run(
+    let err = render_run::run(
         RunSource::ValidationCheck(Misuse::LeakThenFail),
         &settings(Validation::All),
         &mut || {},
@@ -111,7 +111,7 @@ fn a_failed_run_still_returns_the_validation_log() {
 
 #[test]
 fn without_validation_nothing_is_recorded() {
-    let run = app::run(
+    let run = render_run::run(
         RunSource::ValidationCheck(Misuse::SyncHazard),
         &settings(Validation::Off),
         &mut || {},
@@ -149,7 +149,7 @@ fn every_allow_list_entry_has_an_id_and_a_reason() {
 #[test]
 fn every_scene_is_clean_under_every_mode() {
     for mode in [Validation::Core, Validation::BestPractices, Validation::All] {
-        let run = app::run(
+        let run = render_run::run(
             RunSource::EmptyPass {
                 width: 64,
                 height: 36,
@@ -168,7 +168,7 @@ fn every_scene_is_clean_under_every_mode() {
             height: 4,
             data: (0..8 * 4 * 4).map(|i| i as f32 * 0.05).collect(),
         };
-        let run = app::run(
+        let run = render_run::run(
             RunSource::HdrImage(
                 &hdr,
                 aerial::scene::ToneMap {
@@ -199,7 +199,7 @@ fn every_scene_is_clean_under_every_mode() {
         let mut scene = aerial::scene::Scene::load(path).unwrap();
         scene.set_output_size(Some(64), Some(36)).unwrap();
         for mode in [Validation::Core, Validation::BestPractices, Validation::All] {
-            let run = app::render(&scene, &settings(mode))
+            let run = render_run::render(&scene, &settings(mode))
                 .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
             assert!(
                 run.validation.is_empty(),

@@ -5,18 +5,11 @@
 
 use crate::common;
 
-use aerial::app::RenderRun;
 use aerial::render::tiles::{self, TILE_SIZE};
 use aerial::render::{FramePlan, Pixels, SceneGeometry};
+use aerial::render_run::RenderRun;
 use aerial::scene::{HdrFormat, Lighting, Scene, ToneMapOperator};
 use std::path::Path;
-
-fn example(name: &str) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("assets/scenes")
-        .join(name);
-    Scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
-}
 
 /// Largest per-channel difference between two 8-bit images, in LSB, and
 /// how many pixels differ at all.
@@ -71,7 +64,7 @@ fn deferred_and_forward_agree_on_every_example_scene() {
         "shading_models.toml",
         "transparency.toml",
     ] {
-        let mut scene = example(name);
+        let mut scene = common::example(name);
         scene.light_cutoff = 0.0;
         scene.set_output_size(Some(320), Some(180)).unwrap();
         let (forward, deferred) = forward_and_deferred(name, &scene, true);
@@ -114,7 +107,7 @@ fn deferred_and_forward_agree_with_each_scene_s_own_cutoff() {
         "smoothing.toml",
         "transparency.toml",
     ] {
-        let mut scene = example(name);
+        let mut scene = common::example(name);
         assert!(scene.light_cutoff > 0.0, "{name}: no cutoff to test");
         scene.set_output_size(Some(320), Some(180)).unwrap();
         let (forward, deferred) = forward_and_deferred(name, &scene, false);
@@ -227,7 +220,7 @@ fn a_light_whose_range_misses_a_tile_does_not_change_it() {
 /// (its rounding would change the PNG), so `--hdr` never changes the PNG.
 #[test]
 fn ldr_output_is_the_clamped_hdr_image() {
-    let mut scene = example("default.toml");
+    let mut scene = common::example("default.toml");
     scene.set_output_size(Some(200), Some(120)).unwrap();
     scene.tone_map.operator = ToneMapOperator::None;
     // rgba16f: the same frame with and without the HDR image read back.
@@ -282,7 +275,7 @@ fn ldr_output_is_the_clamped_hdr_image() {
 /// tone map.
 #[test]
 fn deferred_ldr_with_transparency_agrees_with_forward() {
-    let mut scene = example("transparency.toml");
+    let mut scene = common::example("transparency.toml");
     scene.light_cutoff = 0.0;
     scene.set_output_size(Some(240), Some(135)).unwrap();
     scene.tone_map.operator = ToneMapOperator::None;
@@ -436,8 +429,8 @@ fn static_lights_draw_what_uniform_blocks_draw() {
         "bench many_lights.toml",
         Scene::load(&bench).unwrap_or_else(|e| panic!("{e}")),
     )];
-    scenes.push(("default.toml", example("default.toml")));
-    let mut sixteen = example("many_lights.toml");
+    scenes.push(("default.toml", common::example("default.toml")));
+    let mut sixteen = common::example("many_lights.toml");
     sixteen.light_cutoff = 0.0;
     scenes.push(("many_lights.toml, no culling", sixteen));
     for (name, mut scene) in scenes {

@@ -29,9 +29,8 @@
 //! than a silently wrong value) and saves any input that panicked to
 //! `target/fuzz-crashes/` for replay.
 
-use aerial::image_io::{read_exr, read_png_text, write_exr, write_png};
+use aerial::image_io::{inspect_texture, read_exr, read_png_text, write_exr, write_png};
 use aerial::mesh::obj::{model_meshes, parse_obj, ModelOptions};
-use aerial::render::preflight::inspect_texture;
 use aerial::render::Pixels;
 use aerial::report::image_diff::{compare_files, Metric};
 use aerial::scene::Scene;

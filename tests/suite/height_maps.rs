@@ -38,12 +38,7 @@ fn centre(scene: &Scene) -> [f32; 3] {
     common::centre_rgb(&common::render(scene, false).output)
 }
 
-fn assert_close(a: [f32; 3], b: [f32; 3], what: &str) {
-    for c in 0..3 {
-        // The 8-bit normal map quantizes directions to about 0.2 degrees.
-        assert!((a[c] - b[c]).abs() <= 2.0, "{what}: {a:?} vs {b:?}");
-    }
-}
+use common::assert_close;
 
 #[test]
 fn a_height_ramp_shades_like_the_turned_plane() {

@@ -21,7 +21,8 @@ fn fixture(name: &str) -> PathBuf {
         .join(name)
 }
 
-fn aerial(args: &[&str], env: &[(&str, &str)]) -> Output {
+/// Runs `aerial` with `args` and the extra environment `env`.
+fn run_aerial(args: &[&str], env: &[(&str, &str)]) -> Output {
     let mut cmd = common::aerial();
     cmd.args(args);
     for (k, v) in env {
@@ -60,7 +61,7 @@ fn an_unmatched_device_lists_the_devices_and_exits_2() {
             if validate {
                 args.push("--validate");
             }
-            assert_fails(&aerial(&args, &[]), 2, &["no Vulkan 1.2 device", "0: "]);
+            assert_fails(&run_aerial(&args, &[]), 2, &["no Vulkan 1.2 device", "0: "]);
         }
     }
     let input = dir.path("in.exr");
@@ -70,7 +71,7 @@ fn an_unmatched_device_lists_the_devices_and_exits_2() {
         data: vec![0.5; 8],
     };
     aerial::image_io::write_exr(&input, &pixels).unwrap();
-    let tonemap = aerial(
+    let tonemap = run_aerial(
         &[
             "tonemap",
             s(&input),
@@ -90,7 +91,7 @@ fn an_unmatched_device_lists_the_devices_and_exits_2() {
 fn an_exr_whose_header_claims_a_huge_image_is_refused_before_reading() {
     let dir = Scratch::new();
     let out = dir.path("out.png");
-    let result = aerial(
+    let result = run_aerial(
         &["tonemap", s(&fixture("huge_header.exr")), "--out", s(&out)],
         &[],
     );
@@ -107,7 +108,7 @@ fn the_memory_budget_refuses_large_outputs_and_meshes_by_name() {
     let dir = Scratch::new();
     let out = dir.path("out.png");
     let budget = [("AERIAL_MEMORY_BUDGET", "64M")];
-    let big = aerial(
+    let big = run_aerial(
         &[
             "render",
             "--width",
@@ -128,7 +129,7 @@ fn the_memory_budget_refuses_large_outputs_and_meshes_by_name() {
             "64.0 MiB",
         ],
     );
-    let mesh = aerial(
+    let mesh = run_aerial(
         &[
             "render",
             s(&fixture("big_tessellation.toml")),
@@ -146,13 +147,13 @@ fn the_memory_budget_refuses_large_outputs_and_meshes_by_name() {
             "memory budget",
         ],
     );
-    let bad = aerial(
+    let bad = run_aerial(
         &["render", "--out", s(&out)],
         &[("AERIAL_MEMORY_BUDGET", "lots")],
     );
     assert_fails(&bad, 2, &["AERIAL_MEMORY_BUDGET=\"lots\""]);
     // The same size within the budget renders (small enough for a test).
-    let ok = aerial(
+    let ok = run_aerial(
         &[
             "render",
             "--width",
@@ -185,7 +186,7 @@ fn the_memory_budget_refuses_the_seeds_table_by_name() {
     .unwrap();
     let out = dir.path("out.png");
     let started = std::time::Instant::now();
-    let refused = aerial(
+    let refused = run_aerial(
         &["render", s(&scene), "--out", s(&out)],
         &[("AERIAL_MEMORY_BUDGET", "600M")],
     );
@@ -209,7 +210,7 @@ fn the_memory_budget_refuses_the_seeds_table_by_name() {
 fn textures_beyond_the_device_limits_are_refused_with_the_limit() {
     let dir = Scratch::new();
     let out = dir.path("out.png");
-    let wide = aerial(
+    let wide = run_aerial(
         &[
             "render",
             s(&fixture("texture_wide.toml")),
@@ -229,7 +230,7 @@ fn textures_beyond_the_device_limits_are_refused_with_the_limit() {
             "texture_wide.toml",
         ],
     );
-    let huge = aerial(
+    let huge = run_aerial(
         &["render", s(&fixture("texture_huge.toml")), "--out", s(&out)],
         &[],
     );
@@ -243,7 +244,7 @@ fn texture_formats_are_detected_from_the_content() {
     let dir = Scratch::new();
     for scene in ["texture_misnamed.toml", "texture_no_extension.toml"] {
         let out = dir.path(&format!("{scene}.png"));
-        let run = aerial(
+        let run = run_aerial(
             &["render", s(&fixture(scene)), "--validate", "--out", s(&out)],
             &[],
         );
@@ -251,7 +252,7 @@ fn texture_formats_are_detected_from_the_content() {
         assert!(out.is_file());
     }
     let out = dir.path("jpeg.png");
-    let jpeg = aerial(
+    let jpeg = run_aerial(
         &["render", s(&fixture("texture_jpeg.toml")), "--out", s(&out)],
         &[],
     );
@@ -262,7 +263,7 @@ fn texture_formats_are_detected_from_the_content() {
 #[test]
 fn outputs_are_never_renamed_over_non_regular_files() {
     let dir = Scratch::new();
-    let run = aerial(
+    let run = run_aerial(
         &[
             "render",
             "--width",
@@ -277,7 +278,7 @@ fn outputs_are_never_renamed_over_non_regular_files() {
     assert_fails(&run, 2, &["/dev/null", "not a regular file"]);
     let folder = dir.path("folder");
     std::fs::create_dir(&folder).unwrap();
-    let run = aerial(
+    let run = run_aerial(
         &[
             "render",
             "--width",
@@ -336,7 +337,7 @@ fn a_failed_run_leaves_none_of_its_outputs_and_keeps_old_files() {
     let missing = dir.path("nodir/x.exr");
     // An 8x8 render of the default scene to `out` and `hdr`.
     let render = |out: &Path, hdr: &Path| {
-        aerial(
+        run_aerial(
             &[
                 "render",
                 "--width",
@@ -371,7 +372,7 @@ fn a_failed_run_leaves_none_of_its_outputs_and_keeps_old_files() {
 fn bench_report(dir: &Scratch) -> PathBuf {
     let base = dir.path("base.json");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bench/triangle.toml");
-    let run = aerial(
+    let run = run_aerial(
         &[
             "bench",
             s(&scene),
@@ -425,7 +426,7 @@ fn the_bench_gate_fails_when_it_compared_nothing_and_exits_1_on_slowdowns() {
 
     // Writing the run over the baseline it is compared with is refused.
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bench/triangle.toml");
-    let same = aerial(
+    let same = run_aerial(
         &[
             "bench",
             s(&scene),
@@ -453,7 +454,7 @@ fn the_bench_gate_fails_when_it_compared_nothing_and_exits_1_on_slowdowns() {
     for (name, f) in [("zero.json", 0.0), ("negative.json", -1.0)] {
         let bad = dir.path(name);
         with_medians(&base, &bad, |_| f);
-        let gate = aerial(
+        let gate = run_aerial(
             &[
                 "bench",
                 "--from-json",
@@ -470,7 +471,7 @@ fn the_bench_gate_fails_when_it_compared_nothing_and_exits_1_on_slowdowns() {
     // A baseline 1000 times faster: a threshold failure, exit 1.
     let fast = dir.path("fast.json");
     with_medians(&base, &fast, |m| m / 1000.0);
-    let gate = aerial(
+    let gate = run_aerial(
         &[
             "bench",
             "--from-json",
@@ -484,7 +485,7 @@ fn the_bench_gate_fails_when_it_compared_nothing_and_exits_1_on_slowdowns() {
     );
     assert_fails(&gate, 1, &["slower than --max-ratio 1.5"]);
     // Against itself: passes.
-    let gate = aerial(
+    let gate = run_aerial(
         &[
             "bench",
             "--from-json",
@@ -506,7 +507,7 @@ fn sweeps_check_the_output_folder_and_knob_values_before_rendering() {
     let file = dir.path("FILE");
     std::fs::write(&file, b"keep").unwrap();
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/default.toml");
-    let run = aerial(
+    let run = run_aerial(
         &[
             "sweep",
             s(&scene),
@@ -520,7 +521,7 @@ fn sweeps_check_the_output_folder_and_knob_values_before_rendering() {
     assert_fails(&run, 2, &["FILE", "not a folder"]);
     // Failed before any render ("N combinations" is printed before them).
     assert!(!stderr(&run).contains("combinations"), "{}", stderr(&run));
-    let run = aerial(
+    let run = run_aerial(
         &[
             "sweep",
             s(&scene),
@@ -545,7 +546,7 @@ fn bad_scene_values_are_rejected_with_the_field_and_reason_or_render() {
         let path = entry.unwrap().path();
         let text = std::fs::read_to_string(&path).unwrap();
         let first = text.lines().next().unwrap();
-        let run = aerial(&["render", s(&path), "--validate", "--out", s(&out)], &[]);
+        let run = run_aerial(&["render", s(&path), "--validate", "--out", s(&out)], &[]);
         if let Some(expect) = first.strip_prefix("# expect: ") {
             let name = path.file_name().unwrap().to_str().unwrap();
             assert_fails(&run, 2, &[name, expect]);
@@ -582,7 +583,7 @@ fn too_many_lights_name_the_scene_file_and_the_object() {
     let path = dir.path("many.toml");
     std::fs::write(&path, scene).unwrap();
     let out = dir.path("out.png");
-    let run = aerial(&["render", s(&path), "--out", s(&out)], &[]);
+    let run = run_aerial(&["render", s(&path), "--out", s(&out)], &[]);
     assert_fails(
         &run,
         2,

@@ -3,7 +3,7 @@
 
 use crate::common;
 
-use aerial::app;
+use aerial::render_run;
 
 #[test]
 fn more_lights_than_a_uniform_block_holds_is_a_clear_error() {
@@ -29,7 +29,9 @@ shape = { type = "sphere", radius = 1.0 }
     }
     let scene = common::scene(&toml);
     let settings = common::validated_settings();
-    let err = app::render(&scene, &settings).err().expect("rejected");
+    let err = render_run::render(&scene, &settings)
+        .err()
+        .expect("rejected");
     // The failed run still returns the log, read after the device was
     // destroyed: the rejection left nothing behind for the layer to report.
     assert!(err.validation.is_empty(), "{err}");

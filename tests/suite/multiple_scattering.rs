@@ -14,7 +14,7 @@
 
 use crate::common;
 
-use aerial::atmosphere::reference;
+use aerial::atmosphere::quadrature;
 use aerial::atmosphere::transport::{full_radiance, TransportSettings, UNLIMITED};
 use aerial::scene::Scene;
 
@@ -183,12 +183,12 @@ fn a_camera_on_the_ground_sees_the_ground() {
         let sky = scene.sky.as_ref().unwrap();
         let origin = scene.camera.eye - sky.atmosphere.center;
         let d = common::pixel_ray(&scene, 8, 8);
-        let segment = reference::atmosphere_segment(&sky.atmosphere, origin, d);
+        let segment = quadrature::atmosphere_segment(&sky.atmosphere, origin, d);
         assert!(
             matches!(segment, Some((_, _, true))),
             "{label}: {segment:?}"
         );
-        let exact = reference::radiance(&sky.atmosphere, &sky.sun, origin, d);
+        let exact = quadrature::radiance(&sky.atmosphere, &sky.sun, origin, d);
         let got = common::hdr_pixel(&hdr, 8, 8);
         println!("{label}: {got} against {exact}");
         assert!(exact.min_element() > 0.0, "{label}: {exact}");

@@ -38,13 +38,7 @@ fn write_quad(path: &Path, mirrored: bool) {
 
 use common::tilt_scene as scene;
 
-fn assert_close(a: [f32; 3], b: [f32; 3], what: &str) {
-    for c in 0..3 {
-        // 8-bit map texels quantize the direction to ~0.2 degrees; allow
-        // 2/255 in the output.
-        assert!((a[c] - b[c]).abs() <= 2.0, "{what}: {a:?} vs {b:?}");
-    }
-}
+use common::assert_close;
 
 #[test]
 fn mapped_tilt_matches_rotated_geometry() {
@@ -222,7 +216,7 @@ fn non_png_normal_map_is_a_clear_error() {
         "{ type = \"plane\", width = 2, depth = 2 }",
         0.0,
     );
-    let error = match aerial::app::render(&s, &common::validated_settings()) {
+    let error = match aerial::render_run::render(&s, &common::validated_settings()) {
         Ok(_) => panic!("a JPEG normal map rendered"),
         Err(e) => e.to_string(),
     };

@@ -634,30 +634,9 @@ fn smoothing_and_tangent_time() {
     }
 }
 
-/// Writes the cut torus models of `docs/mesh-performance.md` (4v x v
-/// segments, v = sqrt(N / 8), cut into 8 objects along u, each object
-/// repeating its boundary vertices, with UVs and no normals) for the
-/// triangle counts in `AERIAL_TORUS_SIZES` (default `10000,100000,1000000`)
-/// into the folder `AERIAL_TORUS_DIR`, as `torus<N>.obj`:
-/// `AERIAL_TORUS_DIR=bench-models cargo test --release --test suite
-/// obj_models::write_cut_torus_models -- --ignored`.
-#[test]
-#[ignore = "writes benchmark models"]
-fn write_cut_torus_models() {
-    let Ok(dir) = std::env::var("AERIAL_TORUS_DIR") else {
-        return;
-    };
-    let sizes = std::env::var("AERIAL_TORUS_SIZES").unwrap_or("10000,100000,1000000".into());
-    for n in sizes.split(',') {
-        let n: usize = n.trim().parse().unwrap();
-        let v = ((n / 8) as f64).sqrt().round() as u32;
-        let text = grid_obj(torus, (4 * v, v), (8, 1));
-        std::fs::write(Path::new(&dir).join(format!("torus{n}.obj")), text).unwrap();
-    }
-}
-
 /// A digest of every OBJ model under the folders of `AERIAL_OBJ_DIRS`
-/// (separated by `:`) that loads, per smoothing mode and tangent method:
+/// (separated by `:`; the example assets if unset) that loads, per
+/// smoothing mode and tangent method:
 /// one line per model and mode, for comparing builds bit for bit. The
 /// meshes made with the file's vertex indices are checked against those
 /// made without (every corner's position hashed), bit for bit.
@@ -668,9 +647,8 @@ fn write_cut_torus_models() {
 fn model_file_digests() {
     use aerial::mesh::obj::TangentMethod;
     use std::hash::{Hash, Hasher};
-    let Ok(dirs) = std::env::var("AERIAL_OBJ_DIRS") else {
-        return;
-    };
+    let dirs = std::env::var("AERIAL_OBJ_DIRS")
+        .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/assets/models").into());
     fn walk(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
         let Ok(entries) = std::fs::read_dir(dir) else {
             return;
@@ -733,6 +711,7 @@ fn model_file_digests() {
         }
     }
     println!("{compared} models and modes compared");
+    assert!(compared > 0, "no OBJ model loaded under {dirs}");
 }
 
 /// The render check of the smoothing modes: the cut sphere, loaded from

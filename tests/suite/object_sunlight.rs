@@ -18,8 +18,8 @@
 use crate::common;
 
 use aerial::atmosphere::transport::{sky_irradiance, TransportSettings, UNLIMITED};
-use aerial::atmosphere::{reference, Atmosphere, Sun};
-use aerial::render::{render_reference_with, Transport};
+use aerial::atmosphere::{quadrature, Atmosphere, Sun};
+use aerial::render::{render_on_cpu_with, Transport};
 use aerial::scene::Scene;
 use glam::DVec3;
 
@@ -99,7 +99,7 @@ fn surface_radiance(scene: &Scene, pixel: DVec3, x: u32, y: u32) -> DVec3 {
     let eye = scene.camera.eye;
     let d = common::pixel_ray(scene, x, y);
     let (t, _, _) = hit(scene, x, y);
-    let (inscattered, view) = reference::aerial_perspective(a, &sky.sun, eye - a.center, d, t);
+    let (inscattered, view) = quadrature::aerial_perspective(a, &sky.sun, eye - a.center, d, t);
     (pixel - inscattered) / view
 }
 
@@ -107,7 +107,7 @@ fn surface_radiance(scene: &Scene, pixel: DVec3, x: u32, y: u32) -> DVec3 {
 fn sun_colour(scene: &Scene, point: DVec3) -> DVec3 {
     let sky = scene.sky.as_ref().unwrap();
     let a = &sky.atmosphere;
-    sky.sun.irradiance * reference::sun_transmittance(a, point - a.center, sky.sun.direction)
+    sky.sun.irradiance * quadrature::sun_transmittance(a, point - a.center, sky.sun.direction)
 }
 
 fn relative_error(got: DVec3, want: DVec3) -> f64 {
@@ -167,7 +167,7 @@ fn sun_on_a_600_m_sphere_follows_each_point() {
         }
         // The CPU reference renderer: the same sun at the pixel's point.
         let scene = sphere_scene(sun_degrees, normal, "phong", "forward", false);
-        let cpu = render_reference_with(&scene, Transport::Single).unwrap();
+        let cpu = render_on_cpu_with(&scene, Transport::Single).unwrap();
         let (x, y) = PROBE;
         let (_, point, n) = hit(&scene, x, y);
         let s = scene.sky.as_ref().unwrap().sun.direction;
@@ -189,7 +189,7 @@ fn sun_on_a_600_m_sphere_follows_each_point() {
 fn sun_on_horizontal(atmosphere: &Atmosphere, sun: &Sun, point: DVec3) -> (DVec3, DVec3) {
     let rel = point - atmosphere.center;
     let up = rel.normalize();
-    let transmittance = reference::sun_transmittance(atmosphere, rel, sun.direction);
+    let transmittance = quadrature::sun_transmittance(atmosphere, rel, sun.direction);
     (
         up,
         sun.irradiance * transmittance * up.dot(sun.direction).max(0.0),
@@ -315,7 +315,7 @@ fn sky_lights_the_shadowed_side_bluish() {
             assert!(e <= 0.08, "{shading} {lighting}, {elevation}°: {e:e}");
         }
         // The CPU reference: the same model from its own irradiance.
-        let cpu = render_reference_with(&probe_scene, Transport::Full { paths: 256 }).unwrap();
+        let cpu = render_on_cpu_with(&probe_scene, Transport::Full { paths: 256 }).unwrap();
         let got = surface_radiance(&probe_scene, common::hdr_pixel(&cpu, x, y), x, y);
         let e = relative_error(got, want);
         println!("shadowed side {elevation}°, CPU reference: {got}: {e:.2e}");

@@ -78,7 +78,7 @@ fn every_packaged_model_loads_cleanly_or_fails_with_its_name() {
     );
 }
 
-fn render_model(path: &str, eye: [f32; 3]) -> aerial::app::RenderRun {
+fn render_model(path: &str, eye: [f32; 3]) -> aerial::render_run::RenderRun {
     let toml = format!(
         "[output]\nwidth = 160\nheight = 120\n\
          [camera]\neye = {eye:?}\nlook_at = [0.0, 0.0, 0.0]\n\

@@ -176,7 +176,7 @@ fn keyed_text(mut text: Text, hdr_hash: String, arch: &str) -> Result<Text, Stri
                  render here could be compared bit for bit with the references"
             ));
         }
-        // The host's key is "VENDOR +fma -avx512f" (aerial::app::codegen_key).
+        // The host's key is "VENDOR +fma -avx512f" (aerial::render_run::codegen_key).
         let vendor = get(&text, CODEGEN)
             .and_then(|c| c.split_whitespace().next())
             .unwrap_or("unknown")
@@ -735,7 +735,7 @@ fn every_scene_matches_its_reference() {
 }
 
 /// The PNG text of a pinned lavapipe render on a host with `host_cpu`
-/// (model and extensions, as `aerial::app::host_cpu` writes it) and the
+/// (model and extensions, as `aerial::render_run::host_cpu` writes it) and the
 /// host code generation key `codegen`, keyed for `arch`.
 fn pinned_run(host_cpu: &str, codegen: &str, arch: &str) -> Result<Key, String> {
     let text: Text = [

@@ -5,6 +5,7 @@
 //! must contain TEXT. Keeping the expectation inside the file means a new
 //! case is just a new file.
 
+use crate::common;
 use std::path::{Path, PathBuf};
 
 use aerial::scene::{Scene, SceneError};
@@ -168,11 +169,9 @@ fn allowed_edge_cases_load() {
     assert!(scene.objects.is_empty());
 }
 
-fn aerial(args: &[&std::ffi::OsStr]) -> (Option<i32>, String) {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
-        .args(args)
-        .output()
-        .unwrap();
+/// Runs `aerial` with `args`: its exit code and standard error.
+fn exit_and_stderr(args: &[&std::ffi::OsStr]) -> (Option<i32>, String) {
+    let out = common::aerial().args(args).output().unwrap();
     (
         out.status.code(),
         String::from_utf8_lossy(&out.stderr).into_owned(),
@@ -218,7 +217,7 @@ fn messages_name_the_real_problem_and_where() {
         ("gone.png", "file not found"),
     ] {
         let scene = scene_with("s.toml", map);
-        let (code, err) = aerial(&[
+        let (code, err) = exit_and_stderr(&[
             &os("render"),
             scene.as_os_str(),
             &os("--out"),
@@ -246,7 +245,7 @@ fn messages_name_the_real_problem_and_where() {
     // Not UTF-8: the byte offset and line.
     let latin1 = d.join("latin1.toml");
     std::fs::write(&latin1, b"# ok\n# caf\xe9\n[camera]\n").unwrap();
-    let (code, err) = aerial(&[
+    let (code, err) = exit_and_stderr(&[
         &os("render"),
         latin1.as_os_str(),
         &os("--out"),
@@ -260,7 +259,7 @@ fn messages_name_the_real_problem_and_where() {
 
     // An endless input stops at the bound.
     let started = std::time::Instant::now();
-    let (code, err) = aerial(&[
+    let (code, err) = exit_and_stderr(&[
         &os("render"),
         &os("/dev/zero"),
         &os("--out"),
@@ -284,7 +283,7 @@ fn messages_name_the_real_problem_and_where() {
         let piped = piped.clone();
         std::thread::spawn(move || std::fs::write(piped, text).unwrap())
     };
-    let (code, err) = aerial(&[
+    let (code, err) = exit_and_stderr(&[
         &os("render"),
         piped.as_os_str(),
         &os("--out"),
@@ -295,7 +294,7 @@ fn messages_name_the_real_problem_and_where() {
     assert!(out.exists());
 
     // An output that is a pipe says so.
-    let (code, err) = aerial(&[&os("render"), &os("--out"), fifo.as_os_str()]);
+    let (code, err) = exit_and_stderr(&[&os("render"), &os("--out"), fifo.as_os_str()]);
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("a FIFO (named pipe)"), "{err}");
 
@@ -336,7 +335,7 @@ fn messages_name_the_real_problem_and_where() {
     ] {
         let model = d.join("m.obj");
         std::fs::write(&model, body).unwrap();
-        let (code, err) = aerial(&[&os("mesh"), model.as_os_str()]);
+        let (code, err) = exit_and_stderr(&[&os("mesh"), model.as_os_str()]);
         assert_eq!(code, Some(2), "{err}");
         assert!(err.contains(expected), "{err}");
     }

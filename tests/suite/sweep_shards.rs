@@ -14,21 +14,6 @@ const KNOBS: [&str; 3] = [
 ];
 const ERROR_COLUMNS: [&str; 4] = ["rmse", "max_rel_error", "flip_mean", "flip_p99"];
 
-/// `aerial` without any scheduler's variables from the environment the
-/// tests run in.
-fn aerial() -> Command {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_aerial"));
-    for var in [
-        "JOB_COMPLETION_INDEX",
-        "SLURM_ARRAY_TASK_ID",
-        "SLURM_ARRAY_TASK_MIN",
-        "SLURM_ARRAY_TASK_COUNT",
-    ] {
-        cmd.env_remove(var);
-    }
-    cmd
-}
-
 fn scene() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/shading_models.toml")
 }
@@ -36,7 +21,7 @@ fn scene() -> PathBuf {
 /// The tiny sweep (with `knobs`) into `out_dir`, one frame, under
 /// validation; `set` adjusts the command (shard, environment).
 fn sweep_with(knobs: &[&str], out_dir: &Path, set: impl FnOnce(&mut Command)) -> Output {
-    let mut cmd = aerial();
+    let mut cmd = common::aerial();
     cmd.arg("sweep").arg(scene()).arg("--out-dir").arg(out_dir);
     for k in knobs {
         cmd.args(["--knob", k]);
@@ -51,7 +36,7 @@ fn sweep(out_dir: &Path, set: impl FnOnce(&mut Command)) -> Output {
 }
 
 fn merge(dirs: &[&Path], out_dir: &Path) -> Output {
-    aerial()
+    common::aerial()
         .args(["sweep", "merge"])
         .args(dirs)
         .arg("--out-dir")

@@ -15,14 +15,14 @@
 
 use crate::common;
 
-use aerial::atmosphere::reference;
+use aerial::atmosphere::quadrature;
 use aerial::render::Pixels;
 use aerial::scene::Scene;
 use glam::DVec3;
 
 /// A sky-only 96×64 scene: camera at `eye` looking at `look_at`, sun
 /// towards `sun`, `[atmosphere]` fields `atmosphere`, single scattering
-/// (what `reference::radiance` integrates).
+/// (what `quadrature::radiance` integrates).
 fn scene(eye: [f64; 3], look_at: [f64; 3], fov: f64, sun: [f64; 3], atmosphere: &str) -> Scene {
     common::scene(&format!(
         "[output]\nwidth = 96\nheight = 64\nhdr_format = \"rgba32f\"\n\
@@ -72,11 +72,11 @@ fn errors(label: &str, scene: &Scene, hdr: &Pixels<f32>, probes: Probes) -> (f64
             if d.dot(sky.sun.direction) > 5f64.to_radians().cos() {
                 continue;
             }
-            match (probes, reference::atmosphere_segment(a, origin, d)) {
+            match (probes, quadrature::atmosphere_segment(a, origin, d)) {
                 (Probes::Sky, Some((_, _, false))) | (Probes::All, Some(_)) => {}
                 _ => continue,
             }
-            let exact = reference::radiance(a, &sky.sun, origin, d);
+            let exact = quadrature::radiance(a, &sky.sun, origin, d);
             samples.push((exact, common::hdr_pixel(hdr, x, y), (x, y)));
         }
     }

@@ -11,8 +11,8 @@
 
 use crate::common;
 
-use aerial::app::{self, RenderSettings, RunSource};
 use aerial::render::Pixels;
+use aerial::render_run::{self, RenderSettings, RunSource};
 use aerial::scene::{ToneMap, ToneMapOperator};
 
 fn srgb_encode(linear: f64) -> f64 {
@@ -101,7 +101,7 @@ fn tone_mapping_the_hdr_output_reproduces_the_render() {
     scene.set_output_size(Some(160), Some(90)).unwrap();
     let rendered = common::render(&scene, true);
     let hdr = rendered.hdr.as_ref().unwrap();
-    let again = app::run(
+    let again = render_run::run(
         RunSource::HdrImage(hdr, scene.tone_map),
         &common::validated_settings(),
         &mut || {},
@@ -118,7 +118,7 @@ fn a_mis_sized_image_is_an_error_not_a_crash() {
         height: 4,
         data: vec![0.0; 10],
     };
-    let result = app::run(
+    let result = render_run::run(
         RunSource::HdrImage(
             &image,
             ToneMap {
@@ -198,7 +198,7 @@ fn both_operators_apply_the_exposure() {
         (ToneMapOperator::Reinhard, reinhard),
     ] {
         for exposure in [0.3f32, 3.0] {
-            let run = app::run(
+            let run = render_run::run(
                 RunSource::HdrImage(&input, ToneMap { operator, exposure }),
                 &common::validated_settings(),
                 &mut || {},
@@ -294,7 +294,7 @@ fn the_srgb_encode_is_within_half_a_step_of_the_exact_curve() {
         operator: ToneMapOperator::None,
         exposure: 1.0,
     };
-    let run = app::run(
+    let run = render_run::run(
         RunSource::HdrImage(&image, tone_map),
         &common::validated_settings(),
         &mut || {},

@@ -1,5 +1,5 @@
 //! The error map as a PNG heat map (black is equal, bright is different),
-//! written atomically through `crate::files`.
+//! written atomically through `crate::safe_files`.
 
 use super::*;
 
@@ -100,9 +100,9 @@ pub fn write_diff_png(cmp: &ImageDiff, path: &Path) -> Result<(), CompareError> 
 }
 
 /// Writes through `write` into a temporary file for `path` and renames it
-/// into place ([`crate::files`], the crate's one file writer); on any
+/// into place ([`crate::safe_files`], the crate's one file writer); on any
 /// failure the temporary file is removed. The sweep report writes its files
-/// through `crate::files` directly.
+/// through `crate::safe_files` directly.
 fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> Result<(), CompareError>,
@@ -111,12 +111,12 @@ fn write_atomically(
         path: path.to_owned(),
         source,
     };
-    let as_io = |e: crate::files::FileError| match e {
-        crate::files::FileError::Io { error, .. } => io_err(error),
+    let as_io = |e: crate::safe_files::FileError| match e {
+        crate::safe_files::FileError::Io { error, .. } => io_err(error),
         refused => io_err(io::Error::other(refused.to_string())),
     };
-    crate::files::check_output(path, crate::files::Format::Png).map_err(as_io)?;
-    let pending = crate::files::PendingFile::create(path).map_err(as_io)?;
+    crate::safe_files::check_output(path, crate::safe_files::Format::Png).map_err(as_io)?;
+    let pending = crate::safe_files::PendingFile::create(path).map_err(as_io)?;
     let mut w = BufWriter::new(pending.file().try_clone().map_err(io_err)?);
     write(&mut w)?;
     w.flush().map_err(io_err)?;

@@ -72,57 +72,27 @@ fn load_png(path: &Path, bytes: &[u8]) -> Result<Loaded, CompareError> {
 }
 
 fn load_exr(path: &Path, bytes: &[u8]) -> Result<Loaded, CompareError> {
-    // Builder steps of the exr reader are trait methods.
-    use exr::prelude::{ReadChannels, ReadLayers};
-
     let exr_err = |source| CompareError::Exr {
         path: path.to_owned(),
         source,
     };
     // Check the claimed sizes before decoding, because the decoder allocates
     // whatever the header asks for.
-    let meta = guard(path, "OpenEXR", || {
-        exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(exr_err)
+    let sizes = guard(path, "OpenEXR", || {
+        crate::image_io::exr_layer_sizes_in(bytes).map_err(exr_err)
     })?;
-    for header in &meta.headers {
-        check_size(path, header.layer_size.0, header.layer_size.1)?;
-    }
-
-    struct Rgb {
-        width: usize,
-        data: Vec<f32>,
+    for (width, height) in sizes {
+        check_size(path, width, height)?;
     }
     let image = guard(path, "OpenEXR", || {
-        exr::prelude::read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .rgb_channels(
-                |size, _| Rgb {
-                    width: size.0,
-                    data: vec![0.0; size.0 * size.1 * 3],
-                },
-                |px: &mut Rgb, pos, (r, g, b): (f32, f32, f32)| {
-                    let i = (pos.1 * px.width + pos.0) * 3;
-                    if let Some(dst) = px.data.get_mut(i..i + 3) {
-                        dst.copy_from_slice(&[r, g, b]);
-                    }
-                },
-            )
-            .first_valid_layer()
-            .all_attributes()
-            .from_buffered(Cursor::new(bytes))
-            .map_err(exr_err)
+        crate::image_io::read_exr_rgb(bytes).map_err(exr_err)
     })?;
-
-    let size = image.layer_data.size;
-    let (width, height) = check_size(path, size.0, size.1)?;
-    let data = image.layer_data.channel_data.pixels.data;
-
-    check_finite(path, &data, size.0)?;
+    let (width, height) = check_size(path, image.width, image.height)?;
+    check_finite(path, &image.data, image.width)?;
     Ok(Loaded {
         width,
         height,
-        pixels: Samples::Linear(data),
+        pixels: Samples::Linear(image.data),
     })
 }
 
@@ -223,18 +193,14 @@ pub(super) fn header_size(path: &Path) -> Result<(usize, usize), CompareError> {
             Ok((reader.0 as usize, reader.1 as usize))
         }
         FileFormat::OpenExr => {
-            let meta = guard(path, "OpenEXR", || {
-                exr::meta::MetaData::read_from_file(path, false).map_err(|source| {
-                    CompareError::Exr {
-                        path: path.to_owned(),
-                        source,
-                    }
+            let sizes = guard(path, "OpenEXR", || {
+                crate::image_io::exr_layer_sizes(path).map_err(|source| CompareError::Exr {
+                    path: path.to_owned(),
+                    source,
                 })
             })?;
-            Ok(meta
-                .headers
-                .iter()
-                .map(|h| (h.layer_size.0, h.layer_size.1))
+            Ok(sizes
+                .into_iter()
                 .max_by_key(|&(w, h)| w.saturating_mul(h))
                 .unwrap_or((0, 0)))
         }

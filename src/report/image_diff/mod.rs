@@ -67,7 +67,7 @@
 
 use std::fmt;
 use std::fs::{self, File};
-use std::io::{self, BufWriter, Cursor, Write};
+use std::io::{self, BufWriter, Write};
 use std::panic::{self, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
@@ -320,7 +320,7 @@ pub enum CompareError {
         /// The file.
         path: PathBuf,
         /// Decoder error.
-        source: exr::error::Error,
+        source: crate::image_io::ExrError,
     },
     /// A decoder panicked on malformed input; reported instead of crashing.
     #[error("{}: the {format} decoder failed on malformed data", path.display())]

@@ -3,8 +3,8 @@
 
 #![allow(dead_code)]
 
-use aerial::app::{self, RenderRun, RenderSettings};
 use aerial::render::Pixels;
+use aerial::render_run::{self, RenderRun, RenderSettings};
 use aerial::scene::Scene;
 use glam::{DMat4, DVec3, DVec4};
 use std::path::Path;
@@ -21,7 +21,7 @@ pub fn scene(toml: &str) -> Scene {
 
 /// Renders with validation on and asserts the layer said nothing.
 pub fn render(scene: &Scene, keep_hdr: bool) -> RenderRun {
-    let run = app::render(
+    let run = render_run::render(
         scene,
         &RenderSettings {
             keep_hdr,
@@ -104,6 +104,23 @@ pub fn centre_rgb(p: &Pixels<u8>) -> [f32; 3] {
     sum
 }
 
+/// Asserts that two colours from [`centre_rgb`] agree within 2/255 per
+/// channel: 8-bit map texels quantize a direction to about 0.2 degrees.
+pub fn assert_close(a: [f32; 3], b: [f32; 3], what: &str) {
+    for c in 0..3 {
+        assert!((a[c] - b[c]).abs() <= 2.0, "{what}: {a:?} vs {b:?}");
+    }
+}
+
+/// The example scene `assets/scenes/NAME`, loaded as `aerial render`
+/// loads it.
+pub fn example(name: &str) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/scenes")
+        .join(name);
+    Scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
 /// Runs `command`, failing the test with its standard error unless it
 /// exits 0.
 pub fn succeed(command: &mut std::process::Command) -> std::process::Output {
@@ -116,9 +133,20 @@ pub fn succeed(command: &mut std::process::Command) -> std::process::Output {
     out
 }
 
-/// The `aerial` binary built for these tests, ready for arguments.
+/// The `aerial` binary built for these tests, ready for arguments,
+/// without any job scheduler's variables from the environment the tests
+/// run in (a sweep would take them for its shard).
 pub fn aerial() -> std::process::Command {
-    std::process::Command::new(env!("CARGO_BIN_EXE_aerial"))
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_aerial"));
+    for var in [
+        "JOB_COMPLETION_INDEX",
+        "SLURM_ARRAY_TASK_ID",
+        "SLURM_ARRAY_TASK_MIN",
+        "SLURM_ARRAY_TASK_COUNT",
+    ] {
+        command.env_remove(var);
+    }
+    command
 }
 
 /// `aerial bench` of `assets/bench/triangle.toml` at 32×18, `frames`
@@ -277,8 +305,11 @@ pub fn tone_map_on_gpu(
         height: 1,
         data: values.iter().flatten().copied().collect(),
     };
-    let run = app::run(
-        aerial::app::RunSource::HdrImage(&image, aerial::scene::ToneMap { operator, exposure }),
+    let run = render_run::run(
+        aerial::render_run::RunSource::HdrImage(
+            &image,
+            aerial::scene::ToneMap { operator, exposure },
+        ),
         &validated_settings(),
         &mut || {},
     )

@@ -1,13 +1,16 @@
-//! The one way this crate writes an output file: into a uniquely named
-//! temporary file in the destination's folder, renamed over the destination
-//! only once it is complete.
+//! Files handled safely: the one way this crate writes an output file
+//! (into a uniquely named temporary file in the destination's folder,
+//! renamed over the destination only once it is complete), and the one way
+//! it reads an input (bounded in size, and recorded so that no output ever
+//! replaces it).
 //!
 //! - Concurrent writers to the same path each get their own temporary file,
 //!   so the destination is always one whole file, never a mix.
 //! - A failed or interrupted write leaves no temporary file behind: the
 //!   temporary file is removed on drop (an interrupted run unwinds and
 //!   drops it, see [`crate::interrupt`]), and [`remove_pending`] removes
-//!   the ones still open when the process must end without unwinding.
+//!   the ones still open when the process must end without unwinding
+//!   (`main` registers it with [`crate::interrupt::on_forced_exit`]).
 //! - Only regular files are replaced. A destination that is a device, FIFO,
 //!   socket or folder is refused; a symbolic link is written through (its
 //!   target is replaced, the link stays).
@@ -425,25 +428,6 @@ pub fn check_room(outputs: &[(&Path, u64)]) -> Result<(), FileError> {
         }
     }
     Ok(())
-}
-
-/// An upper bound of the size of a PNG of `width` x `height` RGBA8 pixels
-/// as [`crate::image_io::png_file`] writes it: the filtered rows stored
-/// uncompressed (what the compressor falls back to for noise), the
-/// compressor's and the chunks' framing, and room for the header and the
-/// metadata text.
-pub fn png_size_bound(width: u32, height: u32) -> u64 {
-    let raw = u64::from(height) * (1 + 4 * u64::from(width));
-    raw + raw / 64 + (16 << 10)
-}
-
-/// An upper bound of the size of an OpenEXR of `width` x `height` RGBA
-/// 32-bit float pixels as [`crate::image_io::exr_file`] writes it: the
-/// pixels uncompressed (the lossless compression falls back to that), the
-/// chunk offset table and headers.
-pub fn exr_size_bound(width: u32, height: u32) -> u64 {
-    let raw = u64::from(width) * u64::from(height) * 16;
-    raw + raw / 64 + u64::from(height) * 16 + (16 << 10)
 }
 
 /// The file formats this crate writes images in. The name of an output

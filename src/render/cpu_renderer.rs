@@ -10,7 +10,7 @@
 //!
 //! With `[atmosphere]` the sun is one more directional light on every
 //! object, its colour the irradiance times the exact transmittance to the
-//! shaded point ([`atmosphere_reference::sun_transmittance`], zero in the
+//! shaded point ([`quadrature::sun_transmittance`], zero in the
 //! planet's shadow), and with every order of scattering ([`Transport::Full`])
 //! the sky lights the objects too, by the model the GPU uses
 //! (`glsl/include/object_air.glsl`) but from the reference's own
@@ -26,7 +26,7 @@
 //! transport). Every pixel
 //! then goes through
 //! the air as the atmosphere pass draws it, but from the f64 reference
-//! ([`crate::atmosphere::reference`], at its image precision): the sky or
+//! ([`crate::atmosphere::quadrature`], at its image precision): the sky or
 //! the lit ground sphere where no object is hit, plus the attenuated sun
 //! disc; aerial perspective (transmittance and in-scattering over the
 //! distance to the surface) where one is. By default the air's light is
@@ -39,7 +39,7 @@
 //! image. Rows are shared between the machine's cores.
 //!
 //! It lives in `render/` because it is a second renderer (scene in, linear
-//! RGBA out, like [`crate::app::RenderRun::hdr`]); `report/` only compares
+//! RGBA out, like the GPU renderer's HDR image); `report/` only compares
 //! images and stays free of any way of making them.
 //!
 //! # What "exact" means here, and what it does not cover
@@ -69,12 +69,12 @@ use super::Pixels;
 use crate::atmosphere::transport::{
     multiple_radiance, sky_irradiance, TransportSettings, UNLIMITED,
 };
-use crate::atmosphere::{reference as atmosphere_reference, Atmosphere, Sun};
+use crate::atmosphere::{quadrature, Atmosphere, Sun};
 use crate::scene::{Light, Scene, ShadingModel, Shape, Transform, MAX_OUTPUT_SIZE};
 
 /// Why a scene has no CPU reference.
 #[derive(Debug, thiserror::Error, PartialEq)]
-pub enum ReferenceError {
+pub enum CpuRenderError {
     #[error("object '{object}': the {shape} shape has no CPU reference (supported: sphere, plane, cylinder)")]
     UnsupportedShape { object: String, shape: &'static str },
     #[error("object '{object}', material '{material}': {feature} has no CPU reference (supported: opaque, untextured phong materials)")]
@@ -98,31 +98,31 @@ pub enum ReferenceError {
 ///
 /// # Errors
 ///
-/// [`ReferenceError`] naming the object (and material) whose shape or
+/// [`CpuRenderError`] naming the object (and material) whose shape or
 /// material has no CPU reference.
-pub fn render_reference(scene: &Scene) -> Result<Pixels<f32>, ReferenceError> {
-    Ok(ReferenceScene::new(scene)?.render())
+pub fn render_on_cpu(scene: &Scene) -> Result<Pixels<f32>, CpuRenderError> {
+    Ok(CpuScene::new(scene)?.render())
 }
 
-/// [`render_reference`] with the air's light transport `transport` instead
+/// [`render_on_cpu`] with the air's light transport `transport` instead
 /// of every order at [`IMAGE_PATHS`].
-pub fn render_reference_with(
+pub fn render_on_cpu_with(
     scene: &Scene,
     transport: Transport,
-) -> Result<Pixels<f32>, ReferenceError> {
-    let mut reference = ReferenceScene::new(scene)?;
+) -> Result<Pixels<f32>, CpuRenderError> {
+    let mut reference = CpuScene::new(scene)?;
     reference.transport = transport;
     Ok(reference.render())
 }
 
-/// Everything [`render_reference`] reads from a scene, in double precision.
+/// Everything [`render_on_cpu`] reads from a scene, in double precision.
 ///
-/// Two scenes with equal `ReferenceScene`s have identical reference images,
+/// Two scenes with equal `CpuScene`s have identical reference images,
 /// so a sweep can use it as a cache key: knobs that change only how the GPU
 /// renders (HDR format, tessellation apart from its effect on the light
 /// sets) leave it unchanged.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ReferenceScene {
+pub struct CpuScene {
     width: u32,
     height: u32,
     eye: DVec3,
@@ -134,7 +134,7 @@ pub struct ReferenceScene {
     near: f64,
     far: Option<f64>,
     ambient: DVec3,
-    objects: Vec<ReferenceObject>,
+    objects: Vec<CpuObject>,
     /// With `[atmosphere]`: the sun and the atmosphere, only (the pass's
     /// quality settings, `multiple_scattering` among them, do not change
     /// the exact image, so sweeping them reuses one reference).
@@ -171,7 +171,7 @@ pub const SKY_LIGHT_PATHS: u32 = 1 << 15;
 
 /// One object, ready for ray casting.
 #[derive(Clone, Debug, PartialEq)]
-struct ReferenceObject {
+struct CpuObject {
     surface: Surface,
     /// World to object space.
     world_to_object: DMat4,
@@ -184,7 +184,7 @@ struct ReferenceObject {
     shininess: f64,
     /// The lights that reach this object on the GPU, in scene order (the
     /// atmosphere's sun is not one of them: it is lit per point).
-    lights: Vec<ReferenceLight>,
+    lights: Vec<CpuLight>,
     /// The object's bounding sphere (world centre, radius), across which
     /// the sky light's horizontal irradiance is sampled.
     bounds: (DVec3, f64),
@@ -233,7 +233,7 @@ impl ObjectAir<'_> {
     fn at(&self, object: usize, p: DVec3, n: DVec3) -> (DVec3, DVec3) {
         let a = self.atmosphere;
         let rel = p - a.center;
-        let transmittance = atmosphere_reference::sun_transmittance(a, rel, self.sun.direction);
+        let transmittance = quadrature::sun_transmittance(a, rel, self.sun.direction);
         let sun = self.sun.irradiance * transmittance;
         let Some(skies) = &self.skies else {
             return (sun, DVec3::ZERO);
@@ -314,7 +314,7 @@ pub enum Surface {
 
 /// A light as the shader sees it (`GpuLight`).
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum ReferenceLight {
+enum CpuLight {
     Point {
         position: DVec3,
         color: DVec3,
@@ -343,7 +343,7 @@ pub struct Hit {
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct WorldHit {
     t: f64,
-    /// Index into `ReferenceScene::objects` (and `Scene::objects`).
+    /// Index into `CpuScene::objects` (and `Scene::objects`).
     object: usize,
     point: DVec3,
     /// Unit outward normal.
@@ -463,7 +463,7 @@ fn model_matrix(transform: &Transform) -> DMat4 {
     )
 }
 
-impl ReferenceScene {
+impl CpuScene {
     /// Checks that every object can be ray-cast and shaded exactly, and
     /// gathers what the reference needs.
     ///
@@ -471,10 +471,10 @@ impl ReferenceScene {
     ///
     /// The first object (in scene order) with an unsupported shape or
     /// material feature, or a material index out of range.
-    pub fn new(scene: &Scene) -> Result<ReferenceScene, ReferenceError> {
+    pub fn new(scene: &Scene) -> Result<CpuScene, CpuRenderError> {
         let (width, height) = (scene.output.width, scene.output.height);
         if !(1..=MAX_OUTPUT_SIZE).contains(&width) || !(1..=MAX_OUTPUT_SIZE).contains(&height) {
-            return Err(ReferenceError::Size { width, height });
+            return Err(CpuRenderError::Size { width, height });
         }
         let mut objects = Vec::with_capacity(scene.objects.len());
         for (index, object) in scene.objects.iter().enumerate() {
@@ -482,13 +482,13 @@ impl ReferenceScene {
                 scene
                     .materials
                     .get(object.material)
-                    .ok_or_else(|| ReferenceError::NoMaterial {
+                    .ok_or_else(|| CpuRenderError::NoMaterial {
                         object: object.name.clone(),
                         index: object.material,
                         count: scene.materials.len(),
                     })?;
             let surface =
-                Surface::of(&object.shape).ok_or_else(|| ReferenceError::UnsupportedShape {
+                Surface::of(&object.shape).ok_or_else(|| CpuRenderError::UnsupportedShape {
                     object: object.name.clone(),
                     shape: object.shape.kind_name(),
                 })?;
@@ -509,7 +509,7 @@ impl ReferenceScene {
                 }
             };
             if let Some(feature) = feature {
-                return Err(ReferenceError::UnsupportedMaterial {
+                return Err(CpuRenderError::UnsupportedMaterial {
                     object: object.name.clone(),
                     material: material.name.clone(),
                     feature,
@@ -525,7 +525,7 @@ impl ReferenceScene {
                         position,
                         color,
                         attenuation,
-                    } => ReferenceLight::Point {
+                    } => CpuLight::Point {
                         position,
                         color: color.as_dvec3(),
                         attenuation: attenuation.as_dvec3(),
@@ -534,7 +534,7 @@ impl ReferenceScene {
                     // The scene holds a unit travel direction; the shader
                     // is given its negation and normalizes it again, so the
                     // f64 normalization matches.
-                    Light::Directional { direction, color } => ReferenceLight::Directional {
+                    Light::Directional { direction, color } => CpuLight::Directional {
                         to_light: (-direction.as_dvec3()).normalize_or_zero(),
                         color: color.as_dvec3(),
                     },
@@ -545,7 +545,7 @@ impl ReferenceScene {
                 .map_or((model.transform_point3(DVec3::ZERO), 0.0), |(c, r)| {
                     (c, f64::from(r))
                 });
-            objects.push(ReferenceObject {
+            objects.push(CpuObject {
                 surface,
                 world_to_object: model.inverse(),
                 normal_matrix: DMat3::from_mat4(model).inverse().transpose(),
@@ -565,7 +565,7 @@ impl ReferenceScene {
         let forward = (camera.look_at - eye).normalize_or_zero();
         let right = forward.cross(camera.up.as_dvec3()).normalize_or_zero();
         let up = right.cross(forward);
-        Ok(ReferenceScene {
+        Ok(CpuScene {
             width,
             height,
             eye,
@@ -692,7 +692,7 @@ impl ReferenceScene {
             // shaders' order.
             let (sun, sky) = air.at(hit.object, hit.point, hit.normal);
             colour += object.light(
-                &ReferenceLight::Directional {
+                &CpuLight::Directional {
                     to_light: air.sun.direction,
                     color: sun,
                 },
@@ -747,7 +747,7 @@ struct Air<'a> {
 impl Air<'_> {
     /// What the atmosphere pass draws along the unit ray `dir` from `eye`
     /// (world space), from the f64 reference
-    /// ([`crate::atmosphere::reference`]): a surface at distance t with
+    /// ([`crate::atmosphere::quadrature`]): a surface at distance t with
     /// radiance L is seen as L·T + in-scattered light over the t metres
     /// in front of it, unless the ground sphere is nearer; otherwise the
     /// sky or the lit ground, plus the sun's disc (attenuated) where the
@@ -767,7 +767,7 @@ impl Air<'_> {
         };
         let higher =
             |from: DVec3| multiple_radiance(self.atmosphere, self.sun, from, dir, settings).0;
-        let segment = atmosphere_reference::atmosphere_segment(self.atmosphere, origin, dir);
+        let segment = quadrature::atmosphere_segment(self.atmosphere, origin, dir);
         let ground = match segment {
             Some((_, end, true)) => Some(end),
             _ => None,
@@ -777,12 +777,11 @@ impl Air<'_> {
                 let behind = origin + t * dir;
                 let view = match segment {
                     Some((start, _, _)) if t > start => {
-                        self.atmosphere
-                            .transmittance(atmosphere_reference::densities_between(
-                                self.atmosphere,
-                                origin + start * dir,
-                                behind,
-                            ))
+                        self.atmosphere.transmittance(quadrature::densities_between(
+                            self.atmosphere,
+                            origin + start * dir,
+                            behind,
+                        ))
                     }
                     _ => DVec3::ONE,
                 };
@@ -802,40 +801,32 @@ fn air(
     surface: Option<(f64, DVec3)>,
 ) -> DVec3 {
     let origin = eye - atmosphere.center;
-    let segment = atmosphere_reference::atmosphere_segment(atmosphere, origin, dir);
+    let segment = quadrature::atmosphere_segment(atmosphere, origin, dir);
     let ground = match segment {
         Some((_, end, true)) => Some(end),
         _ => None,
     };
     if let Some((t, radiance)) = surface {
         if ground.is_none_or(|g| t < g) {
-            let (inscattered, view) = atmosphere_reference::aerial_perspective_with(
+            let (inscattered, view) = quadrature::aerial_perspective_with(
                 atmosphere,
                 sun,
                 origin,
                 dir,
                 t,
-                atmosphere_reference::IMAGE,
+                quadrature::IMAGE,
             );
             return radiance * view + inscattered;
         }
     }
-    let mut colour = atmosphere_reference::radiance_with(
-        atmosphere,
-        sun,
-        origin,
-        dir,
-        atmosphere_reference::IMAGE,
-    );
+    let mut colour = quadrature::radiance_with(atmosphere, sun, origin, dir, quadrature::IMAGE);
     if sun.disc && ground.is_none() && dir.dot(sun.direction) >= sun.angular_radius.cos() {
         let view = match segment {
-            Some((start, end, _)) => {
-                atmosphere.transmittance(atmosphere_reference::densities_between(
-                    atmosphere,
-                    origin + start * dir,
-                    origin + end * dir,
-                ))
-            }
+            Some((start, end, _)) => atmosphere.transmittance(quadrature::densities_between(
+                atmosphere,
+                origin + start * dir,
+                origin + end * dir,
+            )),
             None => DVec3::ONE,
         };
         let disc = 1.0 / (std::f64::consts::PI * sun.angular_radius * sun.angular_radius);
@@ -844,7 +835,7 @@ fn air(
     colour
 }
 
-impl ReferenceObject {
+impl CpuObject {
     /// `blinn_phong` of `lighting.glsl`, in f64: `ka La` plus, for every
     /// light in front of the surface (`cos > 0`), `Le att (kd cos + ks
     /// max(N.H, 0)^shininess)`.
@@ -857,9 +848,9 @@ impl ReferenceObject {
     }
 
     /// One light's Blinn-Phong term.
-    fn light(&self, light: &ReferenceLight, p: DVec3, n: DVec3, v: DVec3) -> DVec3 {
+    fn light(&self, light: &CpuLight, p: DVec3, n: DVec3, v: DVec3) -> DVec3 {
         let (l, radiance) = match *light {
-            ReferenceLight::Point {
+            CpuLight::Point {
                 position,
                 color,
                 attenuation: a,
@@ -874,7 +865,7 @@ impl ReferenceObject {
                 let att = (1.0 / (a.x + a.y * d + a.z * d * d).max(1e-6) - window).max(0.0);
                 (l, color * att)
             }
-            ReferenceLight::Directional { to_light, color } => (to_light, color),
+            CpuLight::Directional { to_light, color } => (to_light, color),
         };
         let cos_theta = n.dot(l);
         if cos_theta > 0.0 {

@@ -158,10 +158,11 @@ impl Callgrind {
 
 /// The instruction total (`Ir`) of one callgrind dump file.
 fn read_dump_total(path: &Path) -> Result<u64, CountError> {
-    let text = crate::files::read_text(path, MAX_DUMP_BYTES).map_err(|e| CountError::Dump {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
+    let text =
+        crate::safe_files::read_text(path, MAX_DUMP_BYTES).map_err(|e| CountError::Dump {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
     parse_dump_total(&text).ok_or_else(|| CountError::Dump {
         path: path.to_path_buf(),
         reason: "no 'summary:' or 'totals:' line with an Ir count".to_string(),
@@ -205,13 +206,13 @@ pub fn parse_dump_total(text: &str) -> Option<u64> {
 /// counts compare.
 ///
 /// valgrind runs as a child of this process that dies with it (see
-/// [`crate::bench::child`]): an interrupt stops it and returns
+/// [`crate::child_process`]): an interrupt stops it and returns
 /// [`CountError::Interrupted`], and it is killed if this process ends
 /// without stopping it. Its temporary files (`TMPDIR`) and its error
 /// output go into `dir`, so removing `dir` leaves nothing behind; its
 /// debugger pipes are off (`--vgdb=no`).
 pub fn spawn_counting_run(args: &[std::ffi::OsString], dir: &Path) -> Result<(), CountError> {
-    use crate::bench::child::{self, ChildError};
+    use crate::child_process::{self as child, ChildError};
     let exe = std::env::current_exe().map_err(CountError::NoValgrind)?;
     let out = dir.join("callgrind.out");
     let log = dir.join("valgrind.log");

@@ -3,7 +3,7 @@
 
 use crate::common;
 
-use aerial::render::render_reference;
+use aerial::render::render_on_cpu;
 use std::path::Path;
 
 const SPHERE: &str = r#"
@@ -67,7 +67,7 @@ fn whole_number_and_fractional_shininess_match_the_reference() {
 fn gpu_matches_cpu_inside_silhouettes(text: &str) {
     let scene = common::scene(text);
     let gpu = common::render(&scene, true).hdr.unwrap();
-    let cpu = render_reference(&scene).unwrap();
+    let cpu = render_on_cpu(&scene).unwrap();
     assert_eq!((gpu.width, gpu.height), (cpu.width, cpu.height));
     let covered =
         |x: u32, y: u32| common::pixel(&gpu, x, y)[3] > 0.0 && common::pixel(&cpu, x, y)[3] > 0.0;
@@ -99,7 +99,7 @@ fn unsupported_features_are_named() {
         r#"shape = { type = "sphere", radius = 1.0 }"#,
         r#"shape = { type = "torus", major_radius = 1.0, minor_radius = 0.3 }"#,
     );
-    let err = render_reference(&common::scene(&torus))
+    let err = render_on_cpu(&common::scene(&torus))
         .unwrap_err()
         .to_string();
     assert!(err.contains("ellipsoid") && err.contains("torus"), "{err}");

@@ -1,5 +1,7 @@
-//! The child processes `bench` starts (the counting copy under valgrind,
-//! the rounds of `--against`): each dies with the run that started it.
+//! Child processes that die with the run that started them (the counting
+//! copy under valgrind, the rounds of `bench --against`). It stands on its
+//! own, beside `interrupt`, so both the bench and the instruction counting
+//! start children without depending on each other.
 //!
 //! - Each child leads a process group of its own, so whatever it starts in
 //!   turn (valgrind's tool, a wrapper script's commands) can be stopped

@@ -166,7 +166,7 @@ rotate = { axis = [0.0, 0.0, 1.0], degrees = 90.0 }
 translate = [0.25, 0.0, 0.0]"#,
         "",
     );
-    let reference = ReferenceScene::new(&scene(&toml)).unwrap();
+    let reference = CpuScene::new(&scene(&toml)).unwrap();
     let eye = DVec3::new(0.0, 0.0, 5.0);
     let c = DVec3::new(0.25, 0.0, 0.0);
     let mut checked = 0;
@@ -203,7 +203,7 @@ fn pixel_rays_follow_the_gpu_camera() {
     let toml = one_object(r#"shape = { type = "sphere", radius = 1.0 }"#, "")
         .replace("width = 5", "width = 10")
         .replace("height = 5", "height = 4");
-    let reference = ReferenceScene::new(&scene(&toml)).unwrap();
+    let reference = CpuScene::new(&scene(&toml)).unwrap();
     // Pixel (0, 0) is the top left: -X and +Y in view space (the camera
     // looks down -Z), at the centre of the pixel, aspect 10/4.
     let tan = (22.5f64).to_radians().tan();
@@ -223,7 +223,7 @@ fn shading_is_the_gpu_formula() {
         "ka = [0.2, 0.4, 0.6]\nks = [0.5, 0.25, 0.125]\nshininess = 10.0",
     )
     .replace("eye = [0.0, 0.0, 5.0]", "eye = [0.0, 3.0, 3.0]");
-    let image = render_reference(&scene(&toml)).unwrap();
+    let image = render_on_cpu(&scene(&toml)).unwrap();
     let px = |x: u32, y: u32| {
         let i = ((y * image.width + x) * 4) as usize;
         DVec3::new(
@@ -251,7 +251,7 @@ fn shading_is_the_gpu_formula() {
         "type = \"directional\"\ndirection = [0.0, -1.0, 0.0]",
         "type = \"point\"\nposition = [0.0, 2.0, 0.0]\nattenuation = [1.0, 0.5, 0.25]",
     );
-    let image = render_reference(&scene(&point)).unwrap();
+    let image = render_on_cpu(&scene(&point)).unwrap();
     let i = 12 * 4;
     let got = f64::from(image.data[i]);
     let window = f64::from(0.001f32);
@@ -274,7 +274,7 @@ fn culled_lights_are_left_out_as_on_the_gpu() {
     );
     let centre = |cutoff: &str| {
         let toml = format!("light_cutoff = {cutoff}\n{base}");
-        render_reference(&scene(&toml)).unwrap().data[12 * 4]
+        render_on_cpu(&scene(&toml)).unwrap().data[12 * 4]
     };
     let lit = centre("0.001");
     let culled = centre("0.1");
@@ -289,7 +289,7 @@ fn culled_lights_are_left_out_as_on_the_gpu() {
 #[test]
 fn unsupported_features_name_object_material_and_feature() {
     let error = |object: &str, material: &str| {
-        render_reference(&scene(&one_object(object, material)))
+        render_on_cpu(&scene(&one_object(object, material)))
             .unwrap_err()
             .to_string()
     };
@@ -348,7 +348,7 @@ fn unsupported_features_name_object_material_and_feature() {
     // panic.
     let mut bad = scene(&one_object(sphere, ""));
     bad.objects[0].material = 7;
-    let text = render_reference(&bad).unwrap_err().to_string();
+    let text = render_on_cpu(&bad).unwrap_err().to_string();
     assert!(
         text.contains("'thing'") && text.contains("material index 7"),
         "{text}"

@@ -2,10 +2,10 @@
 //!
 //! A validation run that reports nothing is only evidence when the layer
 //! would have reported a mistake. The tests make one of each kind the
-//! documentation promises is caught (a synchronization hazard, an object leaked
-//! at teardown) and assert the message arrives.
+//! documentation promises is caught (an API misuse, a synchronization
+//! hazard, an object leaked at teardown) and assert the message arrives.
 //!
-//! Compiled only with the `validation-checks` feature, which the test
+//! Compiled only with the `deliberate-misuse` feature, which the test
 //! suite turns on through its dev-dependency on this crate: the shipped
 //! library and binary have no way to make these mistakes.
 
@@ -15,6 +15,22 @@ use gpu_allocator::vulkan::{AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
 impl Context {
+    /// Makes one deliberate API misuse (a sampler with anisotropic
+    /// filtering, whose device feature was not enabled) so a caller can
+    /// check that the validation messenger is live and counting. The
+    /// sampler is destroyed again at once.
+    pub fn misuse_api_for_validation_check(&self) -> Result<(), VkError> {
+        let info = vk::SamplerCreateInfo::default()
+            .anisotropy_enable(true)
+            .max_anisotropy(4.0);
+        // SAFETY: the only invalid part is the disabled feature, which
+        // drivers ignore; the sampler is never used.
+        let sampler = unsafe { self.device.create_sampler(&info, None) }?;
+        // SAFETY: created above, unused.
+        unsafe { self.device.destroy_sampler(sampler, None) };
+        Ok(())
+    }
+
     /// Records (but never submits) a command buffer that clears one image
     /// twice with no barrier between the clears: a write-after-write
     /// hazard that only synchronization validation reports. Everything it

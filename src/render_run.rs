@@ -6,7 +6,7 @@
 //! pass that benchmarks measure the driver's floor with.
 
 use crate::budget::MemoryBudget;
-use crate::instructions::Callgrind;
+use crate::callgrind::Callgrind;
 use crate::render::{
     empty_pass, preflight, EmptyPass, FrameTiming, Pixels, PrefixFrames, RenderError, Renderer,
 };
@@ -40,7 +40,7 @@ pub struct RenderSettings {
     pub count_work: bool,
     /// Count each pass's CPU instructions ([`RenderRun::instruction_frames`]);
     /// only in a process started by
-    /// [`crate::instructions::spawn_counting_run`].
+    /// [`crate::callgrind::spawn_counting_run`].
     pub count_instructions: bool,
 }
 
@@ -61,7 +61,7 @@ pub struct RenderRun {
     pub empty_pass_frames: Vec<FrameTiming>,
     /// With [`RenderSettings::count_instructions`], per measured frame the
     /// instructions of each prefix of the frame (the first k passes, k =
-    /// 0..=passes); see [`crate::instructions`]. Empty otherwise.
+    /// 0..=passes); see [`crate::callgrind`]. Empty otherwise.
     pub instruction_frames: Vec<Vec<u64>>,
     /// Validation messages that were not on the allow-list (empty without
     /// validation).
@@ -209,15 +209,15 @@ pub enum RunSource<'a> {
     EmptyPass { width: u32, height: u32 },
     /// Draws nothing: makes a deliberate mistake on the run's device, so a
     /// test can check that the run reports the layer's message (see
-    /// [`Misuse`]). `output` is empty. Only with the `validation-checks`
+    /// [`Misuse`]). `output` is empty. Only with the `deliberate-misuse`
     /// feature, which the test suite turns on: it is no part of the
     /// shipped API.
-    #[cfg(feature = "validation-checks")]
+    #[cfg(feature = "deliberate-misuse")]
     ValidationCheck(Misuse),
 }
 
 /// The deliberate mistakes of [`RunSource::ValidationCheck`].
-#[cfg(feature = "validation-checks")]
+#[cfg(feature = "deliberate-misuse")]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Misuse {
     /// Two writes to one image with no barrier between them.
@@ -261,7 +261,7 @@ pub fn run(
         RunSource::EmptyPass { width, height } => {
             preflight::empty_pass_memory(width, height, &budget)?
         }
-        #[cfg(feature = "validation-checks")]
+        #[cfg(feature = "deliberate-misuse")]
         RunSource::ValidationCheck(_) => {}
     }
     // Safe points (see `crate::interrupt`): before the device is created,
@@ -343,14 +343,14 @@ fn produce(
                 instruction_frames,
             }
         }
-        #[cfg(feature = "validation-checks")]
+        #[cfg(feature = "deliberate-misuse")]
         RunSource::ValidationCheck(misuse) => make_mistake(ctx, misuse)?,
     })
 }
 
 /// Makes the deliberate mistake `misuse` on `ctx` (see
 /// [`RunSource::ValidationCheck`]); produces nothing.
-#[cfg(feature = "validation-checks")]
+#[cfg(feature = "deliberate-misuse")]
 fn make_mistake(ctx: &Context, misuse: Misuse) -> Result<Produced, RenderError> {
     match misuse {
         Misuse::SyncHazard => ctx.record_sync_hazard_for_validation_check()?,
@@ -458,8 +458,7 @@ fn count_prefixes(
     settings: &RenderSettings,
     on_frame: &mut dyn FnMut(),
 ) -> Result<(Vec<FrameTiming>, Vec<Vec<u64>>), RenderError> {
-    let callgrind =
-        Callgrind::from_env()?.ok_or(crate::instructions::CountError::NotUnderValgrind)?;
+    let callgrind = Callgrind::from_env()?.ok_or(crate::callgrind::CountError::NotUnderValgrind)?;
     let passes = frames.pass_count();
     // Warm-up runs every prefix too: the driver compiles some shader
     // variants on first use, which must not land in a counted frame.
@@ -504,7 +503,7 @@ fn context(settings: &RenderSettings) -> Result<std::sync::Arc<Context>, RenderE
         pipeline_cache: settings.pipeline_cache.clone(),
     })?;
     if settings.count_instructions && !ctx.device_info().cpu {
-        return Err(crate::instructions::CountError::NotCpuDevice {
+        return Err(crate::callgrind::CountError::NotCpuDevice {
             device: ctx.device_info().name.clone(),
         }
         .into());
