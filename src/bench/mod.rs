@@ -23,8 +23,7 @@ use crate::scene::{knob_settings, Scene, SceneError};
 use sha2::{Digest, Sha256};
 use std::path::{Path, PathBuf};
 
-/// The commit this binary was built from (see `build.rs`).
-pub const COMMIT: &str = env!("AERIAL_COMMIT");
+pub use crate::COMMIT;
 
 /// Why a benchmark could not run or a report could not be read.
 #[derive(Debug, thiserror::Error)]

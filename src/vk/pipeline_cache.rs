@@ -14,7 +14,7 @@
 //! UUID) is checked too. A file that fails a check is ignored with one
 //! warning naming it; an unwritable folder costs one warning and the run
 //! goes on without saving. The file is written at the end of the run,
-//! atomically (see [`crate::files`]), and only when the driver's data
+//! atomically (see [`crate::safe_files`]), and only when the driver's data
 //! differs from what was read.
 
 use super::VkError;
@@ -174,7 +174,7 @@ impl CacheIdentity {
 /// (or one outside git) a hash of the executable's size and modification
 /// time too, since the commit alone does not tell two such builds apart.
 fn build_key() -> String {
-    let commit = crate::bench::COMMIT;
+    let commit = crate::COMMIT;
     let clean = commit != "unknown" && !commit.ends_with("-dirty");
     let safe: String = commit
         .chars()
@@ -387,7 +387,8 @@ impl PipelineCache {
         let written = std::fs::create_dir_all(folder)
             .map_err(|e| format!("cannot make folder {}: {e}", folder.display()))
             .and_then(|()| {
-                crate::files::write_cache_bytes(path, &file_bytes(&data)).map_err(|e| e.to_string())
+                crate::safe_files::write_cache_bytes(path, &file_bytes(&data))
+                    .map_err(|e| e.to_string())
             });
         match written {
             Ok(()) => {

@@ -323,7 +323,7 @@ fn vertex_attributes(textured: bool, normal_mapped: bool, debug: bool) -> Vec<Ve
 mod tests {
     use super::*;
 
-    /// Every variant the pass can ask for is compiled: build.rs leaves out
+    /// Every variant the pass can ask for is compiled: the build script leaves out
     /// the combinations the object shaders' rules exclude (the
     /// atmosphere's light in a debug view, the sky without the sun), and
     /// none of them is one a pipeline key leads to. A debug view never
