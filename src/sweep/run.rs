@@ -603,27 +603,17 @@ fn image_errors(
     what: &str,
     test: &Images,
 ) -> Result<ImageErrors, SweepError> {
-    let compare_err = |source| SweepError::Compare {
-        what: what.to_string(),
-        source,
+    let compare = |reference, test, metric| {
+        compare_images(ref_name, reference, what, test, metric).map_err(|source| {
+            SweepError::Compare {
+                what: what.to_string(),
+                source,
+            }
+        })
     };
-    let rmse = compare_images(
-        ref_name,
-        linear(&reference.hdr),
-        what,
-        linear(&test.hdr),
-        Metric::Rmse,
-    )
-    .map_err(compare_err)?;
+    let rmse = compare(linear(&reference.hdr), linear(&test.hdr), Metric::Rmse)?;
     let max_rel_error = super::max_relative_error(&reference.hdr, &test.hdr);
-    let flip = compare_images(
-        ref_name,
-        srgb(&reference.output),
-        what,
-        srgb(&test.output),
-        Metric::Flip,
-    )
-    .map_err(compare_err)?;
+    let flip = compare(srgb(&reference.output), srgb(&test.output), Metric::Flip)?;
     Ok(ImageErrors {
         rmse: rmse.mean,
         max_rel_error,
