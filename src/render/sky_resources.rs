@@ -394,21 +394,15 @@ impl SkyResources {
         let layout = DescriptorSetLayout::new(ctx, &bindings)?;
         let pool = DescriptorPool::for_layouts(ctx, &[&layout])?;
         let set = pool.allocate(&layout)?;
-        set.write_buffer(
-            0,
-            DescriptorType::UNIFORM_BUFFER,
+        write_set(
+            &set,
             &uniforms,
-            uniforms.size(),
+            (&table_image, &sampler),
+            sky_view_image
+                .as_ref()
+                .map(|image| (image, sky_view_sampler.as_ref().unwrap_or(&sampler))),
+            aerial_volume.as_ref(),
         );
-        set.write_sampled_image(1, &table_image, &sampler);
-        if let Some(image) = &sky_view_image {
-            set.write_storage_image(2, image);
-            set.write_sampled_image(3, image, sky_view_sampler.as_ref().unwrap_or(&sampler));
-        }
-        if let Some(volume) = &aerial_volume {
-            set.write_storage_image(AERIAL_VOLUME_WRITE_BINDING, &volume.image);
-            set.write_sampled_image(AERIAL_VOLUME_BINDING, &volume.image, &volume._sampler);
-        }
         let static_fields = block.static_fields();
         let sun_tables = if sky.multiple_scattering {
             Some(bake_sun_tables(
@@ -584,6 +578,28 @@ fn descriptor_bindings(sky: &Sky, sky_view: bool, aerial_volume: bool) -> Vec<De
         });
     }
     bindings
+}
+
+/// Points the sky's descriptor set at the block, the optical-depth table,
+/// the sky-view table (written by its pass, read through its sampler) and
+/// the aerial-perspective volume (likewise), where the sky has them.
+fn write_set(
+    set: &DescriptorSet,
+    uniforms: &Buffer,
+    (table, sampler): (&Image, &Sampler),
+    sky_view: Option<(&Image, &Sampler)>,
+    aerial_volume: Option<&AerialVolume>,
+) {
+    set.write_buffer(0, DescriptorType::UNIFORM_BUFFER, uniforms, uniforms.size());
+    set.write_sampled_image(1, table, sampler);
+    if let Some((image, sampler)) = sky_view {
+        set.write_storage_image(2, image);
+        set.write_sampled_image(3, image, sampler);
+    }
+    if let Some(volume) = aerial_volume {
+        set.write_storage_image(AERIAL_VOLUME_WRITE_BINDING, &volume.image);
+        set.write_sampled_image(AERIAL_VOLUME_BINDING, &volume.image, &volume._sampler);
+    }
 }
 
 /// The multiple-scattering and sky-irradiance tables, baked. They are read

@@ -235,18 +235,7 @@ fn describe_attachments(
                 spec.name
             )));
         };
-        let mut usage = vk::ImageUsageFlags::empty();
-        for s in &users {
-            for u in &uses[*s][a] {
-                usage |= match u {
-                    Access::ColourWrite => vk::ImageUsageFlags::COLOR_ATTACHMENT,
-                    Access::DepthWrite | Access::DepthTest => {
-                        vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
-                    }
-                    Access::Input => vk::ImageUsageFlags::INPUT_ATTACHMENT,
-                };
-            }
-        }
+        let mut usage = attachment_usage(users.iter().flat_map(|&s| &uses[s][a]));
         let (load, initial) = match spec.start {
             AttachmentStart::Clear(_) => (vk::AttachmentLoadOp::CLEAR, vk::ImageLayout::UNDEFINED),
             AttachmentStart::Undefined => {
@@ -295,6 +284,20 @@ fn describe_attachments(
         described.usages.push(usage);
     }
     Ok(described)
+}
+
+/// The image usage an attachment needs for `accesses`, its uses in every
+/// subpass.
+fn attachment_usage<'a>(accesses: impl Iterator<Item = &'a Access>) -> vk::ImageUsageFlags {
+    let mut usage = vk::ImageUsageFlags::empty();
+    for u in accesses {
+        usage |= match u {
+            Access::ColourWrite => vk::ImageUsageFlags::COLOR_ATTACHMENT,
+            Access::DepthWrite | Access::DepthTest => vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            Access::Input => vk::ImageUsageFlags::INPUT_ATTACHMENT,
+        };
+    }
+    usage
 }
 
 /// The render pass: the subpasses' attachment references and the
