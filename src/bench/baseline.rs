@@ -323,6 +323,37 @@ pub fn compare(
     baseline: &BenchReport,
     metrics: &[Metric],
 ) -> BaselineComparison {
+    let warnings = setting_warnings(current, baseline);
+    let wanted = |r: &MetricRow| metrics.contains(&r.metric);
+    let current_rows: Vec<MetricRow> = rows(current).into_iter().filter(wanted).collect();
+    let baseline_rows: Vec<MetricRow> = rows(baseline).into_iter().filter(wanted).collect();
+    let same = |a: &MetricRow, b: &MetricRow| a.key == b.key && a.metric == b.metric;
+    let mut matched = Vec::new();
+    let mut new = Vec::new();
+    for c in &current_rows {
+        match baseline_rows.iter().find(|b| same(b, c)) {
+            Some(b) => matched.push(ratio_row(baseline, c, b)),
+            None => new.push(c.key.clone()),
+        }
+    }
+    let mut missing: Vec<RowKey> = baseline_rows
+        .iter()
+        .filter(|b| !current_rows.iter().any(|c| same(b, c)))
+        .map(|b| b.key.clone())
+        .collect();
+    missing.dedup();
+    new.dedup();
+    BaselineComparison {
+        rows: matched,
+        missing,
+        new,
+        warnings,
+    }
+}
+
+/// Warnings for every setting the two reports differ in: device, build,
+/// validation, frame counts, and each scene's resolution, file and knobs.
+fn setting_warnings(current: &BenchReport, baseline: &BenchReport) -> Vec<String> {
     let mut warnings = Vec::new();
     if current.device != baseline.device {
         warnings.push(format!(
@@ -383,19 +414,50 @@ pub fn compare(
             }
         }
     }
+    warnings
+}
 
-    let wanted = |r: &MetricRow| metrics.contains(&r.metric);
-    let current_rows: Vec<MetricRow> = rows(current).into_iter().filter(wanted).collect();
-    let baseline_rows: Vec<MetricRow> = rows(baseline).into_iter().filter(wanted).collect();
-    let same = |a: &MetricRow, b: &MetricRow| a.key == b.key && a.metric == b.metric;
-    // The time floor of a scene's rows: the baseline's empty pass at the
-    // scene's resolution (the cheapest pass that timestamps resolve).
+/// The comparison of the current row `c` with its baseline row `b`: the
+/// ratio of their medians, its interval, and why it is not judged, if so.
+fn ratio_row(baseline: &BenchReport, c: &MetricRow, b: &MetricRow) -> RatioRow {
+    let usable = b.median > 0.0 && b.median.is_finite() && c.median >= 0.0 && c.median.is_finite();
+    let interval = if !usable || c.samples.is_empty() {
+        None
+    } else if same_values(&c.samples, &b.samples) {
+        // One set of frames on both sides (a report compared
+        // with itself or a copy): resampling it twice, each
+        // side on its own, would invent a difference where
+        // there is none. The ratio is its medians'.
+        Some(Interval::point(c.median / b.median))
+    } else if b.samples.is_empty() {
+        ratio_interval(&c.samples, &[b.median])
+            .map(|i| around(i, &c.samples, &[b.median], c.median / b.median))
+    } else {
+        ratio_interval(&c.samples, &b.samples)
+            .map(|i| around(i, &c.samples, &b.samples, c.median / b.median))
+    };
+    RatioRow {
+        key: c.key.clone(),
+        metric: c.metric,
+        baseline: b.median,
+        current: c.median,
+        ratio: usable.then(|| c.median / b.median),
+        interval,
+        not_judged: not_judged(baseline, c, b),
+    }
+}
+
+/// Why the row `c` (baseline row `b`) is not judged, if it is not: too
+/// few instructions, or a pass's time below the time floor of its scene,
+/// the baseline's empty pass at the scene's resolution (the cheapest pass
+/// that timestamps resolve).
+fn not_judged(baseline: &BenchReport, c: &MetricRow, b: &MetricRow) -> Option<NotJudged> {
     let time_floor = |scene: &str| -> Option<f64> {
         let s = baseline.scenes.iter().find(|s| s.file == scene)?;
         let empty = baseline.empty_pass(s.resolution)?;
         empty.gpu.as_ref().map(|g| g.ms.median)
     };
-    let not_judged = |c: &MetricRow, b: &MetricRow| match c.metric {
+    match c.metric {
         Metric::Instructions if b.median < MIN_JUDGED_INSTRUCTIONS => {
             Some(NotJudged::FewInstructions)
         }
@@ -405,56 +467,6 @@ pub fn compare(
                 .map(|_| NotJudged::BelowEmptyPass)
         }
         _ => None,
-    };
-    let mut matched = Vec::new();
-    let mut new = Vec::new();
-    for c in &current_rows {
-        match baseline_rows.iter().find(|b| same(b, c)) {
-            Some(b) => {
-                let usable = b.median > 0.0
-                    && b.median.is_finite()
-                    && c.median >= 0.0
-                    && c.median.is_finite();
-                let interval = if !usable || c.samples.is_empty() {
-                    None
-                } else if same_values(&c.samples, &b.samples) {
-                    // One set of frames on both sides (a report compared
-                    // with itself or a copy): resampling it twice, each
-                    // side on its own, would invent a difference where
-                    // there is none. The ratio is its medians'.
-                    Some(Interval::point(c.median / b.median))
-                } else if b.samples.is_empty() {
-                    ratio_interval(&c.samples, &[b.median])
-                        .map(|i| around(i, &c.samples, &[b.median], c.median / b.median))
-                } else {
-                    ratio_interval(&c.samples, &b.samples)
-                        .map(|i| around(i, &c.samples, &b.samples, c.median / b.median))
-                };
-                matched.push(RatioRow {
-                    key: c.key.clone(),
-                    metric: c.metric,
-                    baseline: b.median,
-                    current: c.median,
-                    ratio: usable.then(|| c.median / b.median),
-                    interval,
-                    not_judged: not_judged(c, b),
-                })
-            }
-            None => new.push(c.key.clone()),
-        }
-    }
-    let mut missing: Vec<RowKey> = baseline_rows
-        .iter()
-        .filter(|b| !current_rows.iter().any(|c| same(b, c)))
-        .map(|b| b.key.clone())
-        .collect();
-    missing.dedup();
-    new.dedup();
-    BaselineComparison {
-        rows: matched,
-        missing,
-        new,
-        warnings,
     }
 }
 

@@ -188,19 +188,7 @@ pub fn run(
     if settings.frames == 0 {
         return Err(BenchError::NoFrames);
     }
-    for (i, s) in scenes.iter().enumerate() {
-        // Compared as files, so `s.toml` and `./s.toml` (or a link to it)
-        // are one scene: the report would list it twice under two names.
-        if let Some(t) = scenes[..i]
-            .iter()
-            .find(|t| crate::safe_files::same_file(&t.path, &s.path))
-        {
-            return Err(BenchError::DuplicateScene {
-                first: t.path.clone(),
-                second: s.path.clone(),
-            });
-        }
-    }
+    refuse_duplicate_scenes(scenes)?;
     let mut resolutions: Vec<Resolution> = Vec::new();
     for s in scenes {
         if !resolutions.contains(&s.resolution()) {
@@ -209,98 +197,17 @@ pub fn run(
     }
     let runs = (resolutions.len() + scenes.len()) as u64;
     progress.start(runs * (settings.warmup as u64 + settings.frames as u64));
-    let render_settings = RenderSettings {
-        validate: settings.validate,
-        device: settings.device.clone(),
-        pipeline_cache: settings.pipeline_cache.clone(),
-        warmup: settings.warmup,
-        frames: settings.frames,
-        keep_hdr: false,
-        // Counted runs need no floor timed between frames: the empty
-        // pass's count does not drift.
-        empty_pass_between_frames: !settings.counting,
-        count_work: settings.metrics.contains(&Metric::Work) && !settings.counting,
-        count_instructions: settings.counting,
-    };
+    let render_settings = render_settings(settings);
 
     let mut device = None;
     let mut empty_passes = Vec::new();
     for resolution in resolutions {
-        let label = baseline::empty_pass_scene(resolution);
-        progress.run(&label);
-        let run = render_run::run(
-            RunSource::EmptyPass {
-                width: resolution.width,
-                height: resolution.height,
-            },
-            &render_settings,
-            &mut || progress.frame(),
-        )
-        .map_err(|error| BenchError::Render {
-            run: label.clone(),
-            error,
-        })?;
-        check_validation(&label, &run)?;
-        let (mut passes, _, cpu_frame) = summarise(&label, &run)?;
-        device.get_or_insert_with(|| DeviceRecord::from(&run.device));
-        if let Some(c) = passes.first_mut().and_then(|p| p.instructions.as_mut()) {
-            c.empty_pass_multiple = Some(1.0);
-        }
-        empty_passes.push(EmptyPassReport {
-            resolution,
-            gpu: passes.pop(),
-            cpu_frame,
-        });
+        let empty_pass = bench_empty_pass(resolution, &render_settings, progress, &mut device)?;
+        empty_passes.push(empty_pass);
     }
-
     let mut reports = Vec::new();
     for s in scenes {
-        let label = s.path.display().to_string();
-        progress.run(&label);
-        let run = render_run::run(RunSource::Scene(&s.scene), &render_settings, &mut || {
-            progress.frame()
-        })
-        .map_err(|error| BenchError::Render {
-            run: label.clone(),
-            error,
-        })?;
-        check_validation(&label, &run)?;
-        let (passes, gpu_total, cpu_frame) = summarise(&label, &run)?;
-        let between = run
-            .empty_pass_frames
-            .iter()
-            .filter_map(|f| f.pass_ms.first().copied())
-            .collect::<Vec<f64>>();
-        let empty_pass_between_frames = if between.is_empty() {
-            None
-        } else {
-            Some(PassReport::timed(
-                empty_pass::PASS_NAME,
-                &between,
-                Summary::of(&between).ok_or_else(|| BenchError::BadSamples {
-                    run: label.clone(),
-                    what: "empty pass between frames".to_string(),
-                })?,
-            ))
-        };
-        reports.push(SceneReport {
-            file: label,
-            sha256: s.sha256.clone(),
-            resolution: s.resolution(),
-            triangles: (0..s.scene.objects.len())
-                .map(|i| s.scene.object_mesh(i).triangle_count() as u64)
-                .sum(),
-            knobs: knob_settings(&s.scene)
-                .into_iter()
-                .map(|(k, v)| (k.to_string(), v))
-                .collect(),
-            passes,
-            gpu_total,
-            cpu_frame,
-            empty_pass_between_frames,
-            asset_warnings: s.scene.warnings.len(),
-        });
-        device.get_or_insert_with(|| DeviceRecord::from(&run.device));
+        reports.push(bench_scene(s, &render_settings, progress, &mut device)?);
     }
 
     let mut report = BenchReport {
@@ -330,6 +237,133 @@ pub fn run(
         scenes: reports,
     };
     set_multiples(&mut report);
+    Ok(report)
+}
+
+/// Refuses a scene given twice. Compared as files, so `s.toml` and
+/// `./s.toml` (or a link to it) are one scene: the report would list it
+/// twice under two names.
+fn refuse_duplicate_scenes(scenes: &[BenchScene]) -> Result<(), BenchError> {
+    for (i, s) in scenes.iter().enumerate() {
+        if let Some(t) = scenes[..i]
+            .iter()
+            .find(|t| crate::safe_files::same_file(&t.path, &s.path))
+        {
+            return Err(BenchError::DuplicateScene {
+                first: t.path.clone(),
+                second: s.path.clone(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The settings of every run of the benchmark.
+fn render_settings(settings: &BenchSettings) -> RenderSettings {
+    RenderSettings {
+        validate: settings.validate,
+        device: settings.device.clone(),
+        pipeline_cache: settings.pipeline_cache.clone(),
+        warmup: settings.warmup,
+        frames: settings.frames,
+        keep_hdr: false,
+        // Counted runs need no floor timed between frames: the empty
+        // pass's count does not drift.
+        empty_pass_between_frames: !settings.counting,
+        count_work: settings.metrics.contains(&Metric::Work) && !settings.counting,
+        count_instructions: settings.counting,
+    }
+}
+
+/// Benchmarks the empty pass at `resolution`; `device` is set to the run's
+/// device if it is the first run.
+fn bench_empty_pass(
+    resolution: Resolution,
+    render_settings: &RenderSettings,
+    progress: &mut dyn Progress,
+    device: &mut Option<DeviceRecord>,
+) -> Result<EmptyPassReport, BenchError> {
+    let label = baseline::empty_pass_scene(resolution);
+    progress.run(&label);
+    let run = render_run::run(
+        RunSource::EmptyPass {
+            width: resolution.width,
+            height: resolution.height,
+        },
+        render_settings,
+        &mut || progress.frame(),
+    )
+    .map_err(|error| BenchError::Render {
+        run: label.clone(),
+        error,
+    })?;
+    check_validation(&label, &run)?;
+    let (mut passes, _, cpu_frame) = summarise(&label, &run)?;
+    device.get_or_insert_with(|| DeviceRecord::from(&run.device));
+    if let Some(c) = passes.first_mut().and_then(|p| p.instructions.as_mut()) {
+        c.empty_pass_multiple = Some(1.0);
+    }
+    Ok(EmptyPassReport {
+        resolution,
+        gpu: passes.pop(),
+        cpu_frame,
+    })
+}
+
+/// Benchmarks one scene; `device` is set to the run's device if it is the
+/// first run.
+fn bench_scene(
+    s: &BenchScene,
+    render_settings: &RenderSettings,
+    progress: &mut dyn Progress,
+    device: &mut Option<DeviceRecord>,
+) -> Result<SceneReport, BenchError> {
+    let label = s.path.display().to_string();
+    progress.run(&label);
+    let run = render_run::run(RunSource::Scene(&s.scene), render_settings, &mut || {
+        progress.frame()
+    })
+    .map_err(|error| BenchError::Render {
+        run: label.clone(),
+        error,
+    })?;
+    check_validation(&label, &run)?;
+    let (passes, gpu_total, cpu_frame) = summarise(&label, &run)?;
+    let between = run
+        .empty_pass_frames
+        .iter()
+        .filter_map(|f| f.pass_ms.first().copied())
+        .collect::<Vec<f64>>();
+    let empty_pass_between_frames = if between.is_empty() {
+        None
+    } else {
+        Some(PassReport::timed(
+            empty_pass::PASS_NAME,
+            &between,
+            Summary::of(&between).ok_or_else(|| BenchError::BadSamples {
+                run: label.clone(),
+                what: "empty pass between frames".to_string(),
+            })?,
+        ))
+    };
+    let report = SceneReport {
+        file: label,
+        sha256: s.sha256.clone(),
+        resolution: s.resolution(),
+        triangles: (0..s.scene.objects.len())
+            .map(|i| s.scene.object_mesh(i).triangle_count() as u64)
+            .sum(),
+        knobs: knob_settings(&s.scene)
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect(),
+        passes,
+        gpu_total,
+        cpu_frame,
+        empty_pass_between_frames,
+        asset_warnings: s.scene.warnings.len(),
+    };
+    device.get_or_insert_with(|| DeviceRecord::from(&run.device));
     Ok(report)
 }
 

@@ -159,29 +159,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         .as_deref()
         .map(|spec| Shard::parse(spec, |var| std::env::var(var).ok()))
         .transpose()?;
-    // A FIFO or device would block or never end: refused before opening.
-    if let Some(problem) = aerial::safe_files::input_file_problem(&scene_path) {
-        if std::fs::metadata(&scene_path).is_ok() {
-            anyhow::bail!(
-                "{problem}; a scene is read from a regular file of at most {}",
-                aerial::budget::Bytes(aerial::scene::MAX_SCENE_FILE_BYTES)
-            );
-        }
-        anyhow::bail!("{problem}");
-    }
-    let scene = Scene::load(&scene_path)?;
-    args.strict.apply(&scene)?;
-    aerial::safe_files::protect_inputs(&scene.files);
-    let scene_bytes =
-        aerial::safe_files::read_limited(&scene_path, aerial::scene::MAX_SCENE_FILE_BYTES)
-            .map_err(|e| match e {
-                Some(e) => anyhow::anyhow!("cannot read {}: {e}", scene_path.display()),
-                None => anyhow::anyhow!(
-                    "{}: longer than {} (reading stopped there)",
-                    scene_path.display(),
-                    aerial::budget::Bytes(aerial::scene::MAX_SCENE_FILE_BYTES)
-                ),
-            })?;
+    let (scene, scene_bytes) = read_scene(&args, &scene_path)?;
     // Before the work: a sweep takes minutes, a bad folder must not.
     check_out_dir(&args.out_dir)?;
     let axes = args
@@ -204,8 +182,74 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         },
     )?;
     sweep.set_scene_hash(sweep::scene_hash(&scene_bytes));
-    let all = sweep.combinations().len();
-    if let (Some(s), Some(spec)) = (shard, &args.shard) {
+    let total = announce_combinations(shard, args.shard.as_deref(), sweep.combinations().len())?;
+    let mut done = 0;
+    let result = sweep
+        .run_shard(
+            shard,
+            |scene: &Scene, job: Job| render_job(&args, scene, job),
+            |_, row| {
+                done += 1;
+                let settings: Vec<String> = row
+                    .settings
+                    .iter()
+                    .map(|(k, v)| format!("{k}={v}"))
+                    .collect();
+                eprintln!(
+                    "[{done}/{total}] {}: {:.3} ms, rmse {:.3e}",
+                    settings.join(" "),
+                    row.gpu_ms.median,
+                    row.rmse
+                );
+            },
+        )
+        .context("sweep failed; no output written")?;
+
+    print!("{}", sweep::to_table(&result));
+    for path in sweep::write_outputs(&result, &args.out_dir)? {
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// The scene to sweep, loaded and checked (`--strict`), and its file's
+/// bytes for the result's scene hash.
+fn read_scene(args: &SweepArgs, scene_path: &Path) -> anyhow::Result<(Scene, Vec<u8>)> {
+    // A FIFO or device would block or never end: refused before opening.
+    if let Some(problem) = aerial::safe_files::input_file_problem(scene_path) {
+        if std::fs::metadata(scene_path).is_ok() {
+            anyhow::bail!(
+                "{problem}; a scene is read from a regular file of at most {}",
+                aerial::budget::Bytes(aerial::scene::MAX_SCENE_FILE_BYTES)
+            );
+        }
+        anyhow::bail!("{problem}");
+    }
+    let scene = Scene::load(scene_path)?;
+    args.strict.apply(&scene)?;
+    aerial::safe_files::protect_inputs(&scene.files);
+    let scene_bytes =
+        aerial::safe_files::read_limited(scene_path, aerial::scene::MAX_SCENE_FILE_BYTES).map_err(
+            |e| match e {
+                Some(e) => anyhow::anyhow!("cannot read {}: {e}", scene_path.display()),
+                None => anyhow::anyhow!(
+                    "{}: longer than {} (reading stopped there)",
+                    scene_path.display(),
+                    aerial::budget::Bytes(aerial::scene::MAX_SCENE_FILE_BYTES)
+                ),
+            },
+        )?;
+    Ok((scene, scene_bytes))
+}
+
+/// Refuses a shard count above the sweep's `all` combinations, says how
+/// many combinations this run renders, and returns that number.
+fn announce_combinations(
+    shard: Option<Shard>,
+    spec: Option<&str>,
+    all: usize,
+) -> anyhow::Result<usize> {
+    if let (Some(s), Some(spec)) = (shard, spec) {
         if s.count > all {
             anyhow::bail!(
                 "--shard {spec}: {} shards{}, but the sweep has only {all} combinations, so \
@@ -215,7 +259,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             );
         }
     }
-    let total = match shard {
+    Ok(match shard {
         Some(s) => {
             let mine = s.combinations(all).len();
             eprintln!(
@@ -228,9 +272,18 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             eprintln!("{all} combinations");
             all
         }
-    };
+    })
+}
 
-    let settings = |warmup, frames, keep_hdr, empty_pass| RenderSettings {
+/// The render settings of one run of the sweep, on the GPU `args` choose.
+fn render_settings(
+    args: &SweepArgs,
+    warmup: u32,
+    frames: u32,
+    keep_hdr: bool,
+    empty_pass: bool,
+) -> RenderSettings {
+    RenderSettings {
         validate: args.gpu.validate.unwrap_or_default(),
         device: args.gpu.device.clone(),
         pipeline_cache: args.gpu.pipeline_cache(),
@@ -239,78 +292,60 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         keep_hdr,
         empty_pass_between_frames: empty_pass,
         ..Default::default()
-    };
-    let render = |scene: &Scene, job: Job| -> anyhow::Result<Rendered> {
-        let (warmup, frames, keep_hdr) = match job {
-            Job::Timing { warmup, frames } => (warmup, frames, false),
-            Job::Images => (0, 1, true),
-            Job::Reference => {
-                let hdr = render_on_cpu(scene)?;
-                // The sRGB output through the renderer's own tone-map
-                // pass, as the GPU images get theirs.
-                let run = render_run::run(
-                    RunSource::HdrImage(&hdr, scene.tone_map),
-                    &settings(0, 1, false, false),
-                    &mut || {},
-                )?;
-                validation::check(&run.validation)?;
-                return Ok(Rendered {
-                    device: run.device.name.clone(),
-                    passes: Vec::new(),
-                    frames: Vec::new(),
-                    output: run.output,
-                    hdr: Some(hdr),
-                    setup: Vec::new(),
-                    empty_pass_ms: Vec::new(),
-                });
-            }
-        };
-        // The timed run also times the empty pass between its frames: the
-        // floor its time is a multiple of.
-        let timing = matches!(job, Job::Timing { .. });
-        let run = render_run::render(scene, &settings(warmup, frames, keep_hdr, timing))?;
-        validation::check(&run.validation)?;
-        Ok(Rendered {
-            device: run.device.name.clone(),
-            passes: run.passes.iter().map(|p| p.to_string()).collect(),
-            frames: run.frames,
-            output: run.output,
-            hdr: run.hdr,
-            setup: run
-                .setup
-                .iter()
-                .map(|(name, value)| (name.to_string(), *value))
-                .collect(),
-            empty_pass_ms: run
-                .empty_pass_frames
-                .iter()
-                .map(|f| f.pass_ms.iter().sum())
-                .collect(),
-        })
-    };
-    let mut done = 0;
-    let result = sweep
-        .run_shard(shard, render, |_, row| {
-            done += 1;
-            let settings: Vec<String> = row
-                .settings
-                .iter()
-                .map(|(k, v)| format!("{k}={v}"))
-                .collect();
-            eprintln!(
-                "[{done}/{total}] {}: {:.3} ms, rmse {:.3e}",
-                settings.join(" "),
-                row.gpu_ms.median,
-                row.rmse
-            );
-        })
-        .context("sweep failed; no output written")?;
-
-    print!("{}", sweep::to_table(&result));
-    for path in sweep::write_outputs(&result, &args.out_dir)? {
-        eprintln!("wrote {}", path.display());
     }
-    Ok(())
+}
+
+/// Does the GPU (or CPU reference) work of `job` for `scene`.
+fn render_job(args: &SweepArgs, scene: &Scene, job: Job) -> anyhow::Result<Rendered> {
+    let (warmup, frames, keep_hdr) = match job {
+        Job::Timing { warmup, frames } => (warmup, frames, false),
+        Job::Images => (0, 1, true),
+        Job::Reference => {
+            let hdr = render_on_cpu(scene)?;
+            // The sRGB output through the renderer's own tone-map
+            // pass, as the GPU images get theirs.
+            let run = render_run::run(
+                RunSource::HdrImage(&hdr, scene.tone_map),
+                &render_settings(args, 0, 1, false, false),
+                &mut || {},
+            )?;
+            validation::check(&run.validation)?;
+            return Ok(Rendered {
+                device: run.device.name.clone(),
+                passes: Vec::new(),
+                frames: Vec::new(),
+                output: run.output,
+                hdr: Some(hdr),
+                setup: Vec::new(),
+                empty_pass_ms: Vec::new(),
+            });
+        }
+    };
+    // The timed run also times the empty pass between its frames: the
+    // floor its time is a multiple of.
+    let timing = matches!(job, Job::Timing { .. });
+    let run = render_run::render(
+        scene,
+        &render_settings(args, warmup, frames, keep_hdr, timing),
+    )?;
+    validation::check(&run.validation)?;
+    Ok(Rendered {
+        device: run.device.name.clone(),
+        passes: run.passes.iter().map(|p| p.to_string()).collect(),
+        frames: run.frames,
+        output: run.output,
+        hdr: run.hdr,
+        setup: run
+            .setup
+            .iter()
+            .map(|(name, value)| (name.to_string(), *value))
+            .collect(),
+        empty_pass_ms: run
+            .empty_pass_frames
+            .iter()
+            .map(|f| f.pass_ms.iter().sum())
+            .collect(),
+    })
 }
 
 /// `aerial sweep merge`: reads every shard, merges, and only then writes.

@@ -544,29 +544,99 @@ fn parse_scanned(
     corners: Corners,
     origin: DVec3,
 ) -> Result<ObjModel, ObjError> {
-    // `tobj` refuses a `usemtl` without a name; it names no material, so
-    // the line is left out (its faces keep the material before it).
     let mut warnings = Vec::new();
-    if !corners.empty_usemtl.is_empty() {
-        let lines: Vec<String> = corners
-            .empty_usemtl
-            .iter()
-            .map(|n| (n + 1).to_string())
-            .collect();
-        warnings.push(AssetWarning {
-            problem: format!(
-                "{file}: usemtl without a material name (line {})",
-                lines.join(", ")
-            ),
-            fallback: "left out: the faces after it keep the material before it".into(),
-        });
-    }
+    warnings.extend(empty_usemtl_warning(file, &corners.empty_usemtl));
     let text: std::borrow::Cow<str> = if corners.empty_usemtl.is_empty() && origin == DVec3::ZERO {
         text.into()
     } else {
         rewritten(text, &corners.empty_usemtl, origin).into()
     };
     drop(corners.used);
+    let LoadedObj {
+        models,
+        materials,
+        mut warnings,
+        origins,
+        libraries,
+    } = load_obj_text(&text, file, base_dir, warnings)?;
+    let materials: Vec<ObjMaterial> = materials
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            let origin = origins.get(i).cloned().unwrap_or_else(|| file.to_owned());
+            material(m, origin, base_dir)
+        })
+        .collect();
+    let unknown = unknown_materials_warning(file, &corners.usemtl, &materials, &warnings);
+    warnings.extend(unknown);
+    let mut parts = Vec::new();
+    for model in models {
+        let part = obj_part(
+            model,
+            file,
+            corners.all_uv,
+            corners.all_normal,
+            materials.len(),
+        )?;
+        parts.extend(part);
+    }
+    if parts.is_empty() {
+        return Err(ObjError::File {
+            file: file.to_owned(),
+            reason: "no faces (an OBJ model needs at least one triangle)".into(),
+        });
+    }
+    let mut files = libraries;
+    for m in &materials {
+        files.extend(m.texture.iter().chain(&m.normal_map).cloned());
+    }
+    Ok(ObjModel {
+        parts,
+        materials,
+        warnings,
+        files,
+        origin,
+    })
+}
+
+/// `tobj` refuses a `usemtl` without a name; it names no material, so
+/// the line is left out (its faces keep the material before it), with
+/// one warning naming the lines.
+fn empty_usemtl_warning(file: &str, empty_usemtl: &[usize]) -> Option<AssetWarning> {
+    if empty_usemtl.is_empty() {
+        return None;
+    }
+    let lines: Vec<String> = empty_usemtl.iter().map(|n| (n + 1).to_string()).collect();
+    Some(AssetWarning {
+        problem: format!(
+            "{file}: usemtl without a material name (line {})",
+            lines.join(", ")
+        ),
+        fallback: "left out: the faces after it keep the material before it".into(),
+    })
+}
+
+/// What `tobj` loads of an OBJ file and its MTL libraries.
+struct LoadedObj {
+    models: Vec<tobj::Model>,
+    materials: Vec<tobj::Material>,
+    /// The warnings so far, the libraries' appended.
+    warnings: Vec<AssetWarning>,
+    /// Each loaded material's `library:line`, in the order `tobj` appends
+    /// the materials (every library's `newmtl`s in file order).
+    origins: Vec<String>,
+    /// Every MTL library named, as a path.
+    libraries: Vec<PathBuf>,
+}
+
+/// Loads the OBJ `text` with `tobj`, reading its MTL libraries from
+/// `base_dir`; `warnings` are those so far.
+fn load_obj_text(
+    text: &str,
+    file: &str,
+    base_dir: &Path,
+    warnings: Vec<AssetWarning>,
+) -> Result<LoadedObj, ObjError> {
     let options = tobj::LoadOptions {
         triangulate: true,
         ignore_points: true,
@@ -578,8 +648,6 @@ fn parse_scanned(
     // materials (see `read_mtl`), so `tobj` never sees a failed load.
     let warnings = std::cell::RefCell::new(warnings);
     let libraries = std::cell::RefCell::new(Vec::new());
-    // Each loaded material's `library:line`, in the order `tobj` appends
-    // the materials (every library's `newmtl`s in file order).
     let origins = std::cell::RefCell::new(Vec::new());
     let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |names| {
         // One `mtllib` may name several libraries: read each, their
@@ -611,115 +679,113 @@ fn parse_scanned(
         file: file.to_owned(),
         reason: format!("cannot parse OBJ: {e}"),
     })?;
-    let mut warnings = warnings.into_inner();
+    let warnings = warnings.into_inner();
     let materials = materials.map_err(|e| ObjError::File {
         file: file.to_owned(),
         reason: format!("cannot load its MTL library: {e}"),
     })?;
-    let origins = origins.into_inner();
-    let materials: Vec<ObjMaterial> = materials
-        .iter()
-        .enumerate()
-        .map(|(i, m)| {
-            let origin = origins.get(i).cloned().unwrap_or_else(|| file.to_owned());
-            material(m, origin, base_dir)
-        })
-        .collect();
-    // `usemtl` lines naming no loaded material: their groups get the
-    // default. One warning for the file, and none when a library that
-    // failed to load already explains it.
+    Ok(LoadedObj {
+        models,
+        materials,
+        warnings,
+        origins: origins.into_inner(),
+        libraries: libraries.into_inner(),
+    })
+}
+
+/// `usemtl` lines naming no loaded material: their groups get the
+/// default. One warning for the file, and none when a library that
+/// failed to load already explains it.
+fn unknown_materials_warning(
+    file: &str,
+    usemtl: &[(usize, String)],
+    materials: &[ObjMaterial],
+    warnings: &[AssetWarning],
+) -> Option<AssetWarning> {
     let library_failed = warnings
         .iter()
         .any(|w| w.fallback == DEFAULT_MATERIAL_FALLBACK);
-    let unknown: Vec<String> = corners
-        .usemtl
+    let unknown: Vec<String> = usemtl
         .iter()
         .filter(|(_, name)| !materials.iter().any(|m| &m.name == name))
         .map(|(line, name)| format!("\"{name}\" (line {line})"))
         .collect();
-    if !unknown.is_empty() && !library_failed {
-        warnings.push(AssetWarning {
-            problem: format!(
-                "{file}: usemtl names materials no MTL library defines: {}",
-                unknown.join(", ")
-            ),
-            fallback: "their groups get the default material (grey, kd 0.8)".into(),
-        });
+    if unknown.is_empty() || library_failed {
+        return None;
     }
-    let mut parts = Vec::new();
-    for mut model in models {
-        let vertex_indices = std::mem::take(&mut model.mesh.indices);
-        let mesh = &model.mesh;
-        if vertex_indices.is_empty() {
-            continue;
-        }
-        // The corner's values in `array` (`n` per vertex), if in range.
-        fn corner(array: &[f32], index: u32, n: usize) -> Option<&[f32]> {
-            let start = index as usize * n;
-            array.get(start..start + n)
-        }
-        let out_of_range = |what: &str| ObjError::File {
-            file: file.to_owned(),
-            reason: format!("object \"{}\": {what} index out of range", model.name),
-        };
-        let positions = vertex_indices
-            .iter()
-            .map(|&i| corner(&mesh.positions, i, 3).map(|p| Vec3::new(p[0], p[1], p[2])))
-            .collect::<Option<Vec<_>>>()
-            .ok_or_else(|| out_of_range("vertex"))?;
-        let full = |indices: &[u32]| indices.len() == vertex_indices.len();
-        // `tobj` fills a corner without an index with a neighbour's value,
-        // so attributes are only used when the pre-scan saw them on every
-        // corner of the file.
-        let uvs = if corners.all_uv && full(&mesh.texcoord_indices) && !mesh.texcoords.is_empty() {
-            Some(
-                mesh.texcoord_indices
-                    .iter()
-                    .map(|&i| corner(&mesh.texcoords, i, 2).map(|t| Vec2::new(t[0], t[1])))
-                    .collect::<Option<Vec<_>>>()
-                    .ok_or_else(|| out_of_range("texture coordinate"))?,
-            )
-        } else {
-            None
-        };
-        let normals =
-            if corners.all_normal && full(&mesh.normal_indices) && !mesh.normals.is_empty() {
-                Some(
-                    mesh.normal_indices
-                        .iter()
-                        .map(|&i| corner(&mesh.normals, i, 3).map(|n| Vec3::new(n[0], n[1], n[2])))
-                        .collect::<Option<Vec<_>>>()
-                        .ok_or_else(|| out_of_range("normal"))?,
-                )
-            } else {
-                None
-            };
-        parts.push(ObjPart {
-            name: model.name.clone(),
-            positions,
-            vertex_indices: Some(vertex_indices),
-            uvs,
-            normals,
-            material: mesh.material_id.filter(|&m| m < materials.len()),
-        });
-    }
-    if parts.is_empty() {
-        return Err(ObjError::File {
-            file: file.to_owned(),
-            reason: "no faces (an OBJ model needs at least one triangle)".into(),
-        });
-    }
-    let mut files = libraries.into_inner();
-    for m in &materials {
-        files.extend(m.texture.iter().chain(&m.normal_map).cloned());
-    }
-    Ok(ObjModel {
-        parts,
-        materials,
-        warnings,
-        files,
-        origin,
+    Some(AssetWarning {
+        problem: format!(
+            "{file}: usemtl names materials no MTL library defines: {}",
+            unknown.join(", ")
+        ),
+        fallback: "their groups get the default material (grey, kd 0.8)".into(),
     })
+}
+
+/// The corner's values in `array` (`n` per vertex), if in range.
+fn corner(array: &[f32], index: u32, n: usize) -> Option<&[f32]> {
+    let start = index as usize * n;
+    array.get(start..start + n)
+}
+
+/// One loaded object as a part, or `None` if it has no faces. Texture
+/// coordinates and normals are kept only where the pre-scan saw them on
+/// every corner of the file (`all_uv`, `all_normal`).
+fn obj_part(
+    mut model: tobj::Model,
+    file: &str,
+    all_uv: bool,
+    all_normal: bool,
+    material_count: usize,
+) -> Result<Option<ObjPart>, ObjError> {
+    let vertex_indices = std::mem::take(&mut model.mesh.indices);
+    let mesh = &model.mesh;
+    if vertex_indices.is_empty() {
+        return Ok(None);
+    }
+    let out_of_range = |what: &str| ObjError::File {
+        file: file.to_owned(),
+        reason: format!("object \"{}\": {what} index out of range", model.name),
+    };
+    let positions = vertex_indices
+        .iter()
+        .map(|&i| corner(&mesh.positions, i, 3).map(|p| Vec3::new(p[0], p[1], p[2])))
+        .collect::<Option<Vec<_>>>()
+        .ok_or_else(|| out_of_range("vertex"))?;
+    let full = |indices: &[u32]| indices.len() == vertex_indices.len();
+    // `tobj` fills a corner without an index with a neighbour's value,
+    // so attributes are only used when the pre-scan saw them on every
+    // corner of the file.
+    let uvs = if all_uv && full(&mesh.texcoord_indices) && !mesh.texcoords.is_empty() {
+        Some(
+            mesh.texcoord_indices
+                .iter()
+                .map(|&i| corner(&mesh.texcoords, i, 2).map(|t| Vec2::new(t[0], t[1])))
+                .collect::<Option<Vec<_>>>()
+                .ok_or_else(|| out_of_range("texture coordinate"))?,
+        )
+    } else {
+        None
+    };
+    let normals = if all_normal && full(&mesh.normal_indices) && !mesh.normals.is_empty() {
+        Some(
+            mesh.normal_indices
+                .iter()
+                .map(|&i| corner(&mesh.normals, i, 3).map(|n| Vec3::new(n[0], n[1], n[2])))
+                .collect::<Option<Vec<_>>>()
+                .ok_or_else(|| out_of_range("normal"))?,
+        )
+    } else {
+        None
+    };
+    Ok(Some(ObjPart {
+        name: model.name.clone(),
+        positions,
+        vertex_indices: Some(vertex_indices),
+        uvs,
+        normals,
+        material: mesh.material_id.filter(|&m| m < material_count),
+    }))
 }
 
 fn material(m: &tobj::Material, origin: String, base_dir: &Path) -> ObjMaterial {
@@ -883,15 +949,7 @@ fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
         };
         let (slot, least) = match keyword {
             "usemtl" => {
-                // The name is the rest of the line, as `tobj` reads it.
-                let name = line.trim_start()["usemtl".len()..].trim();
-                if name.is_empty() {
-                    all.empty_usemtl.push(number);
-                    continue;
-                }
-                if !all.usemtl.iter().any(|(_, n)| n == name) {
-                    all.usemtl.push((number + 1, name.to_owned()));
-                }
+                all.scan_usemtl(line, number);
                 continue;
             }
             "v" => (0, 3),
@@ -900,88 +958,13 @@ fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
             "vt" => (1, 2),
             "vn" => (2, 3),
             "f" => {
-                let mut corners = 0;
-                for word in words {
-                    corners += 1;
-                    let mut slots = word.split('/');
-                    slots.next();
-                    all.all_uv &= slots.next().is_some_and(|t| !t.is_empty());
-                    all.all_normal &= slots.next().is_some_and(|n| !n.is_empty());
-                    for (k, index) in word.split('/').enumerate().take(3) {
-                        if index.is_empty() {
-                            if k == 0 {
-                                return Err(error(format!(
-                                    "face corner \"{word}\" has no vertex index"
-                                )));
-                            }
-                            continue;
-                        }
-                        let what = ["vertex", "texture coordinate", "normal"][k];
-                        let i: i64 = index.parse().map_err(|_| {
-                            error(format!(
-                                "face corner \"{word}\": \"{index}\" is not an integer"
-                            ))
-                        })?;
-                        let defined = counts[k] as i64;
-                        // unsigned_abs: -i overflows for i64::MIN (found by
-                        // the fuzzer).
-                        let valid = if i > 0 {
-                            i <= defined
-                        } else {
-                            i < 0 && i.unsigned_abs() <= defined as u64
-                        };
-                        if !valid {
-                            return Err(error(format!(
-                                "face corner \"{word}\": {what} index {i} is out of range \
-                                 ({defined} defined so far)"
-                            )));
-                        }
-                        if k == 0 {
-                            let vertex = if i > 0 { i - 1 } else { defined + i };
-                            all.used[vertex as usize] = true;
-                        }
-                    }
-                }
-                if corners < 3 {
-                    return Err(error(format!(
-                        "a face needs at least 3 corners, got {corners}"
-                    )));
-                }
+                all.scan_face(words, &counts, &error)?;
                 faces += 1;
-                all.triangles += corners as u64 - 2;
                 continue;
             }
             _ => continue,
         };
-        let name = ["vertex", "texture coordinate", "normal"][slot];
-        let mut values = Vec::new();
-        for word in words {
-            let x: f64 = word
-                .parse()
-                .map_err(|_| error(format!("{name}: \"{word}\" is not a number")))?;
-            if !x.is_finite() || (x as f32).is_infinite() {
-                return Err(error(format!("{name}: \"{word}\" is not a finite number")));
-            }
-            values.push(x);
-        }
-        let n = values.len();
-        if n < least {
-            return Err(error(format!(
-                "{name} needs at least {least} numbers, got {n}"
-            )));
-        }
-        // A position is x y z, then either a weight w or a colour r g b.
-        if slot == 0 && !matches!(n, 3 | 4 | 6) {
-            return Err(error(format!(
-                "vertex needs 3 numbers (x y z), 4 (with a weight w) or 6 (with a colour \
-                 r g b), got {n}"
-            )));
-        }
-        if slot == 0 && n == 4 && values[3] == 0.0 {
-            return Err(error(
-                "vertex weight w is 0 (the position is x/w, y/w, z/w)".into(),
-            ));
-        }
+        let values = scan_numbers(words, slot, least, &error)?;
         if slot == 0 {
             let p = position(&values);
             all.bounds = (all.bounds.0.min(p), all.bounds.1.max(p));
@@ -996,6 +979,121 @@ fn prescan(text: &str, file: &str) -> Result<Corners, ObjError> {
         });
     }
     Ok(all)
+}
+
+impl Corners {
+    /// Notes a `usemtl` line (zero-based `number`): its name the first
+    /// time it is used, or the line if it names nothing.
+    fn scan_usemtl(&mut self, line: &str, number: usize) {
+        // The name is the rest of the line, as `tobj` reads it.
+        let name = line.trim_start()["usemtl".len()..].trim();
+        if name.is_empty() {
+            self.empty_usemtl.push(number);
+            return;
+        }
+        if !self.usemtl.iter().any(|(_, n)| n == name) {
+            self.usemtl.push((number + 1, name.to_owned()));
+        }
+    }
+
+    /// Checks the corners (`words`) of an `f` line against the `counts` of
+    /// vertices, texture coordinates and normals defined so far, and notes
+    /// its triangles, the vertices it uses and the attributes it lacks.
+    fn scan_face<'a>(
+        &mut self,
+        words: impl Iterator<Item = &'a str>,
+        counts: &[usize; 3],
+        error: &dyn Fn(String) -> ObjError,
+    ) -> Result<(), ObjError> {
+        let mut corners = 0;
+        for word in words {
+            corners += 1;
+            let mut slots = word.split('/');
+            slots.next();
+            self.all_uv &= slots.next().is_some_and(|t| !t.is_empty());
+            self.all_normal &= slots.next().is_some_and(|n| !n.is_empty());
+            for (k, index) in word.split('/').enumerate().take(3) {
+                if index.is_empty() {
+                    if k == 0 {
+                        return Err(error(format!("face corner \"{word}\" has no vertex index")));
+                    }
+                    continue;
+                }
+                let what = ["vertex", "texture coordinate", "normal"][k];
+                let i: i64 = index.parse().map_err(|_| {
+                    error(format!(
+                        "face corner \"{word}\": \"{index}\" is not an integer"
+                    ))
+                })?;
+                let defined = counts[k] as i64;
+                // unsigned_abs: -i overflows for i64::MIN (found by
+                // the fuzzer).
+                let valid = if i > 0 {
+                    i <= defined
+                } else {
+                    i < 0 && i.unsigned_abs() <= defined as u64
+                };
+                if !valid {
+                    return Err(error(format!(
+                        "face corner \"{word}\": {what} index {i} is out of range \
+                         ({defined} defined so far)"
+                    )));
+                }
+                if k == 0 {
+                    let vertex = if i > 0 { i - 1 } else { defined + i };
+                    self.used[vertex as usize] = true;
+                }
+            }
+        }
+        if corners < 3 {
+            return Err(error(format!(
+                "a face needs at least 3 corners, got {corners}"
+            )));
+        }
+        self.triangles += corners as u64 - 2;
+        Ok(())
+    }
+}
+
+/// The numbers of a `v` (`slot` 0), `vt` (1) or `vn` (2) line, at least
+/// `least` of them, each finite in f32; a position is x y z, then either a
+/// weight w (not 0) or a colour r g b.
+fn scan_numbers<'a>(
+    words: impl Iterator<Item = &'a str>,
+    slot: usize,
+    least: usize,
+    error: &dyn Fn(String) -> ObjError,
+) -> Result<Vec<f64>, ObjError> {
+    let name = ["vertex", "texture coordinate", "normal"][slot];
+    let mut values = Vec::new();
+    for word in words {
+        let x: f64 = word
+            .parse()
+            .map_err(|_| error(format!("{name}: \"{word}\" is not a number")))?;
+        if !x.is_finite() || (x as f32).is_infinite() {
+            return Err(error(format!("{name}: \"{word}\" is not a finite number")));
+        }
+        values.push(x);
+    }
+    let n = values.len();
+    if n < least {
+        return Err(error(format!(
+            "{name} needs at least {least} numbers, got {n}"
+        )));
+    }
+    // A position is x y z, then either a weight w or a colour r g b.
+    if slot == 0 && !matches!(n, 3 | 4 | 6) {
+        return Err(error(format!(
+            "vertex needs 3 numbers (x y z), 4 (with a weight w) or 6 (with a colour \
+             r g b), got {n}"
+        )));
+    }
+    if slot == 0 && n == 4 && values[3] == 0.0 {
+        return Err(error(
+            "vertex weight w is 0 (the position is x/w, y/w, z/w)".into(),
+        ));
+    }
+    Ok(values)
 }
 
 /// How an [`ObjModel`] becomes meshes (`smoothing`, `crease_angle`,

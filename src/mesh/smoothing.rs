@@ -501,89 +501,16 @@ fn smooth_scope(
     let groups_of_corners = welded.group_of();
     let group_of = &*groups_of_corners;
     let count = group_of.len();
-
-    // Every group's sum, adding its corners in corner order: the order in
-    // which the direct comparison adds them, so the same bits.
-    let mut groups = vec![
-        Group {
-            sum: DVec3::ZERO,
-            count: 0,
-            shared: false,
-        };
-        welded.groups
-    ];
-    // The face angles the tangent stage needs are copied out on the way,
-    // so that the rest of the face data can be freed early (below).
-    let mut angles = Vec::with_capacity(faces.len());
-    for (face, corners) in faces.iter().zip(group_of.chunks_exact(3)) {
-        angles.push(FaceAngles::of(face));
-        for (j, &g) in corners.iter().enumerate() {
-            let group = &mut groups[g as usize];
-            group.sum += face.contribution(j);
-            group.count += 1;
-        }
-    }
-    for group in &mut groups {
-        if group.count as usize <= DIRECT_GROUP {
-            if let Some(direction) = group.sum.try_normalize() {
-                group.sum = direction;
-                group.shared = true;
-            }
-        }
-    }
-    // Where every pair of a group's faces is within the crease angle, each
-    // corner's sum of the faces within the crease angle of its own is the
-    // whole sum. Shown with a margin: each face lies within half the angle
-    // (less 1e-9 radians) of the sum's direction. At 180 degrees every pair
-    // is within.
+    let (mut groups, angles) = group_sums(&faces, group_of, welded.groups);
     if cos_crease > -1.0 {
-        let crease = cos_crease.clamp(-1.0, 1.0).acos();
-        let cos_half = ((crease - 1e-9) / 2.0).cos();
-        for (face, corners) in faces.iter().zip(group_of.chunks_exact(3)) {
-            // A degenerate face adds nothing to any sum and, in its own
-            // corners, takes the whole sum (its fallback) either way.
-            if face.normal == DVec3::ZERO {
-                continue;
-            }
-            for &g in corners {
-                let group = &mut groups[g as usize];
-                if group.shared && face.normal.dot(group.sum) < cos_half {
-                    group.shared = false;
-                }
-            }
-        }
+        unshare_creased(&mut groups, &faces, group_of, cos_crease);
     }
     let mut work: u64 = groups
         .iter()
         .filter(|g| g.shared)
         .map(|g| u64::from(g.count))
         .sum();
-
-    // The other groups' corners, as contiguous runs (a counting sort by
-    // group, corners ascending within each), compared corner by corner.
-    let mut run_of = vec![u32::MAX; groups.len()];
-    let mut starts = vec![0u32];
-    for (g, group) in groups.iter().enumerate() {
-        if !group.shared {
-            run_of[g] = starts.len() as u32 - 1;
-            starts.push(starts[starts.len() - 1] + group.count);
-        }
-    }
-    let runs = starts.len() - 1;
-    let mut order = vec![0u32; starts[runs] as usize];
-    let mut sorted = Vec::new();
-    if runs > 0 {
-        let mut next = starts.clone();
-        for (k, &g) in group_of.iter().enumerate() {
-            let run = run_of[g as usize];
-            if run != u32::MAX {
-                order[next[run as usize] as usize] = k as u32;
-                next[run as usize] += 1;
-            }
-        }
-        sorted = smooth_runs(&starts, &order, &faces, cos_crease, &mut work);
-    }
-    drop(run_of);
+    let unshared = smooth_unshared(&groups, group_of, &faces, cos_crease, &mut work);
 
     // Of the face data only the angles are needed from here on (by the
     // tangent stage): the rest is freed before the normals are written,
@@ -604,7 +531,7 @@ fn smooth_scope(
             }
         })
     });
-    if runs > 0 {
+    if let Some((order, sorted)) = unshared {
         // Back to each corner's own slice.
         let first = {
             let mut first = Vec::with_capacity(slices.len() + 1);
@@ -624,6 +551,106 @@ fn smooth_scope(
     }
     drop(groups_of_corners);
     (normals, work, (welded.position_of, angles))
+}
+
+/// Every group's sum, adding its corners in corner order: the order in
+/// which the direct comparison adds them, so the same bits. Small groups
+/// take their normalised sum in every corner (`shared`) where it has a
+/// direction. Also returns the face angles the tangent stage needs,
+/// copied out on the way, so that the rest of the face data can be freed
+/// early.
+fn group_sums(
+    faces: &[Face],
+    group_of: &[u32],
+    group_count: usize,
+) -> (Vec<Group>, Vec<FaceAngles>) {
+    let mut groups = vec![
+        Group {
+            sum: DVec3::ZERO,
+            count: 0,
+            shared: false,
+        };
+        group_count
+    ];
+    let mut angles = Vec::with_capacity(faces.len());
+    for (face, corners) in faces.iter().zip(group_of.chunks_exact(3)) {
+        angles.push(FaceAngles::of(face));
+        for (j, &g) in corners.iter().enumerate() {
+            let group = &mut groups[g as usize];
+            group.sum += face.contribution(j);
+            group.count += 1;
+        }
+    }
+    for group in &mut groups {
+        if group.count as usize <= DIRECT_GROUP {
+            if let Some(direction) = group.sum.try_normalize() {
+                group.sum = direction;
+                group.shared = true;
+            }
+        }
+    }
+    (groups, angles)
+}
+
+/// Unshares the groups some face of which is not shown to be within the
+/// crease angle of every other. Where every pair of a group's faces is
+/// within the crease angle, each corner's sum of the faces within the
+/// crease angle of its own is the whole sum. Shown with a margin: each
+/// face lies within half the angle (less 1e-9 radians) of the sum's
+/// direction. At 180 degrees (`cos_crease` -1) every pair is within, and
+/// this is not called.
+fn unshare_creased(groups: &mut [Group], faces: &[Face], group_of: &[u32], cos_crease: f64) {
+    let crease = cos_crease.clamp(-1.0, 1.0).acos();
+    let cos_half = ((crease - 1e-9) / 2.0).cos();
+    for (face, corners) in faces.iter().zip(group_of.chunks_exact(3)) {
+        // A degenerate face adds nothing to any sum and, in its own
+        // corners, takes the whole sum (its fallback) either way.
+        if face.normal == DVec3::ZERO {
+            continue;
+        }
+        for &g in corners {
+            let group = &mut groups[g as usize];
+            if group.shared && face.normal.dot(group.sum) < cos_half {
+                group.shared = false;
+            }
+        }
+    }
+}
+
+/// The normals of the corners of the groups that are not shared: the
+/// corners (ascending, as contiguous runs, a counting sort by group) and
+/// their normals, compared corner by corner; `None` when every group is
+/// shared. Adds the crease comparisons made to `work`.
+fn smooth_unshared(
+    groups: &[Group],
+    group_of: &[u32],
+    faces: &[Face],
+    cos_crease: f64,
+    work: &mut u64,
+) -> Option<(Vec<u32>, Vec<Vec3>)> {
+    let mut run_of = vec![u32::MAX; groups.len()];
+    let mut starts = vec![0u32];
+    for (g, group) in groups.iter().enumerate() {
+        if !group.shared {
+            run_of[g] = starts.len() as u32 - 1;
+            starts.push(starts[starts.len() - 1] + group.count);
+        }
+    }
+    let runs = starts.len() - 1;
+    if runs == 0 {
+        return None;
+    }
+    let mut order = vec![0u32; starts[runs] as usize];
+    let mut next = starts.clone();
+    for (k, &g) in group_of.iter().enumerate() {
+        let run = run_of[g as usize];
+        if run != u32::MAX {
+            order[next[run as usize] as usize] = k as u32;
+            next[run as usize] += 1;
+        }
+    }
+    let sorted = smooth_runs(&starts, &order, faces, cos_crease, work);
+    Some((order, sorted))
 }
 
 /// The normals of the runs of corners `order[starts[r]..starts[r + 1]]`

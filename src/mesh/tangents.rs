@@ -152,55 +152,18 @@ pub(crate) fn build_mesh_in(
         let mut kept = 0;
         for (slot, t) in (first..(first + BATCH).min(corners / 3)).enumerate() {
             let corner_positions = [0, 1, 2].map(|k| positions[3 * t + k]);
-            let [a, b, c] = corner_positions.map(|p| p.as_dvec3());
-            let [ta, tb, tc] = [0, 1, 2].map(|k| uv(3 * t + k).as_dvec2());
-            let (e1, e2) = (b - a, c - a);
-            let (d1, d2) = (tb - ta, tc - ta);
-            let det = d1.x * d2.y - d2.x * d1.y;
-            let area = e1.cross(e2).length();
-            let uv_scale = d1.length_squared().max(d2.length_squared());
-            let valid = area > 0.0 && det.abs() > 1e-12 * uv_scale && det.is_finite();
-            // Unit T and B (zero when degenerate), handedness.
-            let (tangent, bitangent, sign) = if valid {
-                let tangent = (e1 * d2.y - e2 * d1.y) / det;
-                let bitangent = (e2 * d1.x - e1 * d2.x) / det;
-                let sign = if det < 0.0 { -1.0 } else { 1.0 };
-                if sign < 0.0 {
-                    stats.mirrored += 1;
-                }
-                (
-                    tangent.try_normalize().unwrap_or(DVec3::ZERO),
-                    bitangent.try_normalize().unwrap_or(DVec3::ZERO),
-                    sign,
-                )
-            } else {
-                stats.degenerate += 1;
-                (DVec3::ZERO, DVec3::ZERO, 1.0)
-            };
-            // `is_collapsed`, from the edges and area already at hand.
-            if collapsed_edges(e1, e2, c - b, area) {
-                stats.collapsed += 1;
+            let corners = corner_positions.map(|p| p.as_dvec3());
+            let corner_uvs = [0, 1, 2].map(|k| uv(3 * t + k).as_dvec2());
+            let Some((tangent, bitangent, sign)) = triangle_frame(corners, corner_uvs, &mut stats)
+            else {
                 continue;
-            }
-            frames[slot] = (tangent, bitangent);
-            // Weighted by the corner angle, like the normals, so that how
-            // the surface is cut into triangles does not bias the frame.
-            let angle = |here: DVec3, next: DVec3, prev: DVec3| {
-                let angle = f64::from(corner_angle(
-                    (next - here).as_vec3(),
-                    (prev - here).as_vec3(),
-                ));
-                if angle.is_finite() {
-                    angle
-                } else {
-                    0.0
-                }
             };
+            frames[slot] = (tangent, bitangent);
             // Smoothing measured the same angles of every face with a
             // normal (all finite); the others are measured here.
             let corner_weights = match face_angles.and_then(|f| f[t].angles()) {
                 Some(angles) => angles.map(f64::from),
-                None => [angle(a, b, c), angle(b, c, a), angle(c, a, b)],
+                None => corner_weights(corners),
             };
             for (k, weight) in corner_weights.into_iter().enumerate() {
                 let c = 3 * t + k;
@@ -244,7 +207,75 @@ pub(crate) fn build_mesh_in(
         }
     }
     drop(table);
+    finish_tangents(&mut vertices, sums, &mut stats);
+    (Mesh { vertices, indices }, stats)
+}
 
+/// A triangle's unit tangent and bitangent (zero when degenerate) and its
+/// handedness, from its `corners` and their `uvs`; `None` for a triangle
+/// collapsed to a line or point. Counts mirrored, degenerate and
+/// collapsed triangles in `stats`.
+#[inline]
+fn triangle_frame(
+    corners: [DVec3; 3],
+    uvs: [glam::DVec2; 3],
+    stats: &mut TangentStats,
+) -> Option<(DVec3, DVec3, f64)> {
+    let [a, b, c] = corners;
+    let [ta, tb, tc] = uvs;
+    let (e1, e2) = (b - a, c - a);
+    let (d1, d2) = (tb - ta, tc - ta);
+    let det = d1.x * d2.y - d2.x * d1.y;
+    let area = e1.cross(e2).length();
+    let uv_scale = d1.length_squared().max(d2.length_squared());
+    let valid = area > 0.0 && det.abs() > 1e-12 * uv_scale && det.is_finite();
+    // Unit T and B (zero when degenerate), handedness.
+    let (tangent, bitangent, sign) = if valid {
+        let tangent = (e1 * d2.y - e2 * d1.y) / det;
+        let bitangent = (e2 * d1.x - e1 * d2.x) / det;
+        let sign = if det < 0.0 { -1.0 } else { 1.0 };
+        if sign < 0.0 {
+            stats.mirrored += 1;
+        }
+        (
+            tangent.try_normalize().unwrap_or(DVec3::ZERO),
+            bitangent.try_normalize().unwrap_or(DVec3::ZERO),
+            sign,
+        )
+    } else {
+        stats.degenerate += 1;
+        (DVec3::ZERO, DVec3::ZERO, 1.0)
+    };
+    // `is_collapsed`, from the edges and area already at hand.
+    if collapsed_edges(e1, e2, c - b, area) {
+        stats.collapsed += 1;
+        return None;
+    }
+    Some((tangent, bitangent, sign))
+}
+
+/// The weights of a triangle's corners in the vertices' frames: the
+/// corner angles, like the normals', so that how the surface is cut into
+/// triangles does not bias the frame (0 where an angle is not finite).
+#[inline]
+fn corner_weights([a, b, c]: [DVec3; 3]) -> [f64; 3] {
+    let angle = |here: DVec3, next: DVec3, prev: DVec3| {
+        let angle = f64::from(corner_angle(
+            (next - here).as_vec3(),
+            (prev - here).as_vec3(),
+        ));
+        if angle.is_finite() {
+            angle
+        } else {
+            0.0
+        }
+    };
+    [angle(a, b, c), angle(b, c, a), angle(c, a, b)]
+}
+
+/// Each vertex's tangent from its frame sums: orthogonalised against the
+/// normal, with the handedness the vertex holds.
+fn finish_tangents(vertices: &mut [Vertex], sums: &[(DVec3, DVec3)], stats: &mut TangentStats) {
     for (vertex, &(t, b)) in vertices.iter_mut().zip(sums.iter()) {
         let n = Vec3::from(vertex.normal).as_dvec3();
         let sign = f64::from(vertex.tangent[3]);
@@ -273,7 +304,6 @@ pub(crate) fn build_mesh_in(
             sign as f32,
         ];
     }
-    (Mesh { vertices, indices }, stats)
 }
 
 /// The vertices of each position, for [`build_mesh_numbered`]: the last

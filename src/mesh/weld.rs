@@ -317,101 +317,141 @@ fn weld_by_distance(points: &[Vec3], distance: f64) -> Vec<u32> {
     // Union-find whose root is always the smallest index of its set, so
     // that groups can be numbered in order of first appearance below.
     let mut parent: Vec<u32> = (0..points.len() as u32).collect();
-    fn find(parent: &mut [u32], mut i: u32) -> u32 {
-        while parent[i as usize] != i {
-            let grand = parent[parent[i as usize] as usize];
-            parent[i as usize] = grand;
-            i = grand;
-        }
-        i
+    let grid = Grid::new(points, distance);
+    let sorted = grid.sorted(points);
+    join_within(points, &sorted, distance, &mut parent);
+    // Number the groups in order of their smallest point (the root).
+    let mut group = vec![0u32; points.len()];
+    let mut groups = 0;
+    for i in 0..points.len() as u32 {
+        let root = find_root(&mut parent, i);
+        group[i as usize] = if root == i {
+            groups += 1;
+            groups - 1
+        } else {
+            group[root as usize]
+        };
     }
-    // Non-finite points are never within any distance of another point
-    // (the difference is infinite or NaN): only finite ones go on the grid.
-    let finite = |p: &Vec3| p.is_finite();
-    let extent = finite_extent(points);
-    // Cells four tolerances wide, or wider when the tolerance is below the
-    // coordinates' own precision, so that scaled coordinates stay within
-    // 2^19: a cell's coordinates then pack into one 64-bit key (21 bits
-    // each), and their rounding error (below 2^-32 of a cell) stays far
-    // below the margin that decides which neighbouring cells to search.
-    let size = (4.0 * distance).max(f64::from(extent) * 2f64.powi(-19));
-    let inv = 1.0 / size;
-    // A point whose scaled coordinate is within `reach` of a cell face
-    // may have partners in the neighbouring cell on that side; otherwise
-    // only in its own.
-    let reach = distance * inv + 1e-3;
-    // Coordinates offset to be positive (and never at the ends of their 21
-    // bits), so that truncation is the floor and a neighbour's key is the
-    // key plus a constant.
-    const OFFSET: f64 = ((1 << 19) + 2) as f64;
-    // Per axis, the neighbours whose offset along it is -1, 0 or +1.
-    let along = |axis: usize, step: i64| -> u32 {
-        (0..FORWARD.len())
-            .filter(|&k| FORWARD[k][axis] == step)
-            .fold(0, |m, k| m | 1 << k)
-    };
-    let masks: [[u32; 3]; 3] = [0, 1, 2].map(|a| [along(a, -1), along(a, 0), along(a, 1)]);
+    group
+}
 
-    // The finite points sorted by cell: the grid's cells become runs of one
-    // array, and a neighbouring cell's run is found by a cursor moving
-    // forward through it, so every access is sequential (a table of cells
-    // costs a cache miss per lookup once the points outgrow the caches).
-    let mut sorted: Vec<OnGrid> = Vec::with_capacity(points.len());
-    for (i, p) in points.iter().enumerate() {
-        if !finite(p) {
-            continue;
-        }
-        let scaled = p.as_dvec3() * inv + OFFSET;
-        let (mut key, mut near) = (0, u32::MAX);
-        for (axis, &s) in scaled.to_array().iter().enumerate() {
-            // Positive: the truncation (to i64, one instruction) is the floor.
-            let cell = s as i64;
-            let fraction = s - cell as f64;
-            // Masks, not branches: which faces of its cell a point lies
-            // near is as good as random, and branches on it cost twice the
-            // rest of this loop (14 to 16 ms against 5 ms for half a million).
-            // `below_zero(x - y)` is `x < y`: a difference has the sign of
-            // the exact difference, and only equal values give (+)0.
-            let below_zero = |x: f64| 0u32.wrapping_sub((x.to_bits() >> 63) as u32);
-            let [below, level, above] = masks[axis];
-            near &= level
-                | below & below_zero(fraction - reach)
-                | above & below_zero((1.0 - reach) - fraction);
-            key += cell as u64 * AXIS[axis];
-        }
-        sorted.push(OnGrid {
-            key,
-            index: i as u32,
-            near,
-        });
+/// The root of `i`'s set in the union-find `parent`, halving the path on
+/// the way.
+fn find_root(parent: &mut [u32], mut i: u32) -> u32 {
+    while parent[i as usize] != i {
+        let grand = parent[parent[i as usize] as usize];
+        parent[i as usize] = grand;
+        i = grand;
     }
-    sorted.sort_unstable_by_key(|g| g.key);
+    i
+}
+
+/// The grid [`weld_by_distance`] sorts the points into.
+struct Grid {
+    /// One over the cells' size.
+    inv: f64,
+    /// A point whose scaled coordinate is within `reach` of a cell face
+    /// may have partners in the neighbouring cell on that side; otherwise
+    /// only in its own.
+    reach: f64,
+    /// Per axis, the neighbours whose offset along it is -1, 0 or +1.
+    masks: [[u32; 3]; 3],
+}
+
+impl Grid {
+    fn new(points: &[Vec3], distance: f64) -> Grid {
+        let extent = finite_extent(points);
+        // Cells four tolerances wide, or wider when the tolerance is below the
+        // coordinates' own precision, so that scaled coordinates stay within
+        // 2^19: a cell's coordinates then pack into one 64-bit key (21 bits
+        // each), and their rounding error (below 2^-32 of a cell) stays far
+        // below the margin that decides which neighbouring cells to search.
+        let size = (4.0 * distance).max(f64::from(extent) * 2f64.powi(-19));
+        let inv = 1.0 / size;
+        let reach = distance * inv + 1e-3;
+        let along = |axis: usize, step: i64| -> u32 {
+            (0..FORWARD.len())
+                .filter(|&k| FORWARD[k][axis] == step)
+                .fold(0, |m, k| m | 1 << k)
+        };
+        let masks: [[u32; 3]; 3] = [0, 1, 2].map(|a| [along(a, -1), along(a, 0), along(a, 1)]);
+        Grid { inv, reach, masks }
+    }
+
+    /// The finite points sorted by cell: the grid's cells become runs of one
+    /// array, and a neighbouring cell's run is found by a cursor moving
+    /// forward through it, so every access is sequential (a table of cells
+    /// costs a cache miss per lookup once the points outgrow the caches).
+    /// Non-finite points are never within any distance of another point
+    /// (the difference is infinite or NaN): only finite ones go on the grid.
+    fn sorted(&self, points: &[Vec3]) -> Vec<OnGrid> {
+        // Coordinates offset to be positive (and never at the ends of their 21
+        // bits), so that truncation is the floor and a neighbour's key is the
+        // key plus a constant.
+        const OFFSET: f64 = ((1 << 19) + 2) as f64;
+        let reach = self.reach;
+        let mut sorted: Vec<OnGrid> = Vec::with_capacity(points.len());
+        for (i, p) in points.iter().enumerate() {
+            if !p.is_finite() {
+                continue;
+            }
+            let scaled = p.as_dvec3() * self.inv + OFFSET;
+            let (mut key, mut near) = (0, u32::MAX);
+            for (axis, &s) in scaled.to_array().iter().enumerate() {
+                // Positive: the truncation (to i64, one instruction) is the floor.
+                let cell = s as i64;
+                let fraction = s - cell as f64;
+                // Masks, not branches: which faces of its cell a point lies
+                // near is as good as random, and branches on it cost twice the
+                // rest of this loop (14 to 16 ms against 5 ms for half a million).
+                // `below_zero(x - y)` is `x < y`: a difference has the sign of
+                // the exact difference, and only equal values give (+)0.
+                let below_zero = |x: f64| 0u32.wrapping_sub((x.to_bits() >> 63) as u32);
+                let [below, level, above] = self.masks[axis];
+                near &= level
+                    | below & below_zero(fraction - reach)
+                    | above & below_zero((1.0 - reach) - fraction);
+                key += cell as u64 * AXIS[axis];
+            }
+            sorted.push(OnGrid {
+                key,
+                index: i as u32,
+                near,
+            });
+        }
+        sorted.sort_unstable_by_key(|g| g.key);
+        sorted
+    }
+}
+
+/// Joins in `parent` every two points of `sorted` within `distance`. Each
+/// pair of points is compared once, from the point whose cell comes first:
+/// within its own cell, the points after it; and the forward neighbouring
+/// cells within its reach, each through a cursor that moves forward as the
+/// keys do.
+fn join_within(points: &[Vec3], sorted: &[OnGrid], distance: f64, parent: &mut [u32]) {
     let delta = FORWARD.map(|offset| {
         offset.iter().zip(AXIS).fold(0u64, |k, (&o, axis)| {
             k.wrapping_add((o as u64).wrapping_mul(axis))
         })
     });
-    let join = |i: u32, j: u32, parent: &mut Vec<u32>| {
+    let join = |i: u32, j: u32, parent: &mut [u32]| {
         if points[j as usize]
             .as_dvec3()
             .distance(points[i as usize].as_dvec3())
             <= distance
         {
-            let (a, b) = (find(parent, i), find(parent, j));
+            let (a, b) = (find_root(parent, i), find_root(parent, j));
             parent[a.max(b) as usize] = a.min(b);
         }
     };
-    // Each pair of points is compared once, from the point whose cell
-    // comes first: within its own cell, the points after it; and the
-    // forward neighbouring cells within its reach, each through a cursor
-    // that moves forward as the keys do.
     let mut cursors = [0usize; FORWARD.len()];
     for (s, here) in sorted.iter().enumerate() {
         for other in &sorted[s + 1..] {
             if other.key != here.key {
                 break;
             }
-            join(here.index, other.index, &mut parent);
+            join(here.index, other.index, parent);
         }
         let mut near = here.near;
         while near != 0 {
@@ -426,23 +466,10 @@ fn weld_by_distance(points: &[Vec3], distance: f64) -> Vec<u32> {
                 if other.key != target {
                     break;
                 }
-                join(here.index, other.index, &mut parent);
+                join(here.index, other.index, parent);
             }
         }
     }
-    // Number the groups in order of their smallest point (the root).
-    let mut group = vec![0u32; points.len()];
-    let mut groups = 0;
-    for i in 0..points.len() as u32 {
-        let root = find(&mut parent, i);
-        group[i as usize] = if root == i {
-            groups += 1;
-            groups - 1
-        } else {
-            group[root as usize]
-        };
-    }
-    group
 }
 
 #[cfg(test)]

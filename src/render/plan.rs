@@ -329,16 +329,54 @@ pub struct FrameGraph {
     pub passes: Vec<PassDecl>,
 }
 
+/// What decides a frame's attachments and passes.
+struct FrameShape {
+    /// Lit in a G-buffer and a lighting pass rather than while drawing.
+    deferred: bool,
+    /// Some object is drawn in the transparent pass.
+    any_transparent: bool,
+    /// An atmosphere pass draws the sky over the surfaces.
+    sky: bool,
+    /// Drawn straight into the sRGB output, without an HDR target.
+    direct: bool,
+    /// The attachment the objects are drawn into.
+    target: &'static str,
+}
+
 impl FrameGraph {
     /// The graph for `scene`; `keep_hdr` reads the linear HDR image back too.
     pub fn new(scene: &Scene, keep_hdr: bool) -> FrameGraph {
-        let debug = scene.output.debug_view.map_or(0, |v| v as u32);
-        let deferred = uses_deferred_lighting(scene);
-        let lighting = if deferred {
+        use attachment::*;
+        let shape = FrameShape::of(scene, keep_hdr);
+        let lighting = if shape.deferred {
             Lighting::Deferred
         } else {
             Lighting::Forward
         };
+        let mut attachments = frame_attachments(scene, &shape);
+        let mut passes = compute_passes(scene, &shape);
+        passes.extend(render_passes(&shape));
+        // Cleared attachments first, so the render pass needs no clear
+        // value for an attachment it does not clear.
+        attachments.sort_by_key(|a| a.clear.is_none());
+        let mut reads = vec![OUTPUT];
+        if keep_hdr {
+            reads.push(HDR);
+        }
+        passes.push(PassDecl::transfer(PassKind::Readback, reads, vec![]));
+        FrameGraph {
+            lighting,
+            attachments,
+            passes,
+        }
+    }
+}
+
+impl FrameShape {
+    fn of(scene: &Scene, keep_hdr: bool) -> FrameShape {
+        use attachment::*;
+        let debug = scene.output.debug_view.map_or(0, |v| v as u32);
+        let deferred = uses_deferred_lighting(scene);
         // Drawn in the transparent pass: every object whose material is
         // not opaque, outside the debug views (see `DrawList`).
         let any_transparent = debug == 0
@@ -346,7 +384,6 @@ impl FrameGraph {
                 .objects
                 .iter()
                 .any(|o| scene.materials[o.material].opacity < 1.0);
-        use attachment::*;
         // LDR output without --hdr: draw straight into the sRGB output when
         // that gives exactly clamp(exposure * HDR): exposure 1, each pixel
         // written once (no transparent object blended over a clamped
@@ -376,130 +413,150 @@ impl FrameGraph {
         } else {
             HDR
         };
-        let black = Some([0.0; 4]);
-        let mut attachments = vec![AttachmentDecl {
-            name: OUTPUT,
-            format: OUTPUT_FORMAT,
-            // The tone map writes every pixel (alpha 1); drawn directly, the
-            // background is opaque black like the tone-mapped one.
-            clear: if direct {
-                Some([0.0, 0.0, 0.0, 1.0])
-            } else {
-                None
-            },
-        }];
-        if !direct {
-            attachments.push(AttachmentDecl {
-                name: HDR,
-                format: hdr_format(scene.output.hdr_format),
-                clear: black,
-            });
-        }
-        if sky {
-            attachments.push(AttachmentDecl {
-                name: SURFACE,
-                format: hdr_format(scene.output.hdr_format),
-                clear: black,
-            });
-        }
-        attachments.push(AttachmentDecl {
-            name: DEPTH,
-            format: DEPTH_FORMAT,
-            // Reversed-Z: the far plane is 0.
-            clear: Some([0.0; 4]),
-        });
-        let mut passes = Vec::new();
-        if sky && scene.sky.as_ref().is_some_and(|s| s.sky_view.is_some()) {
-            // Marched for a grid of directions before the render pass;
-            // the atmosphere subpass reads it for pixels without a surface.
-            passes.push(PassDecl {
-                kind: PassKind::SkyView,
-                io: PassIo::Compute,
-            });
-        }
-        // The aerial-perspective volume only serves pixels with a surface:
-        // a frame without objects has none to read it.
-        if sky
-            && !scene.objects.is_empty()
-            && scene
-                .sky
-                .as_ref()
-                .is_some_and(|s| s.aerial_perspective == AerialPerspective::Volume)
-        {
-            passes.push(PassDecl {
-                kind: PassKind::AerialVolume,
-                io: PassIo::Compute,
-            });
-        }
-        if deferred {
-            let wide = gbuffer_format(scene);
-            for (name, format) in [(ALBEDO, wide), (NORMAL, NORMAL_FORMAT), (MATERIAL, wide)] {
-                // Written wherever depth is; the lighting pass only reads
-                // pixels that have a surface.
-                attachments.push(AttachmentDecl {
-                    name,
-                    format,
-                    clear: None,
-                });
-            }
-            passes.push(PassDecl::subpass(
-                PassKind::GBuffer,
-                vec![target, ALBEDO, NORMAL, MATERIAL],
-                Some((DEPTH, DepthUse::Write)),
-                vec![],
-            ));
-            passes.push(PassDecl::subpass(
-                PassKind::Lighting,
-                vec![target],
-                Some((DEPTH, DepthUse::Test)),
-                vec![ALBEDO, NORMAL, MATERIAL, DEPTH],
-            ));
-        } else {
-            passes.push(PassDecl::subpass(
-                PassKind::Opaque,
-                vec![target],
-                Some((DEPTH, DepthUse::Write)),
-                vec![],
-            ));
-        }
-        if any_transparent {
-            passes.push(PassDecl::subpass(
-                PassKind::Transparent,
-                vec![target],
-                Some((DEPTH, DepthUse::Test)),
-                vec![],
-            ));
-        }
-        if sky {
-            passes.push(PassDecl::subpass(
-                PassKind::Atmosphere,
-                vec![HDR],
-                Some((DEPTH, DepthUse::Test)),
-                vec![SURFACE, DEPTH],
-            ));
-        }
-        if !direct {
-            passes.push(PassDecl::subpass(
-                PassKind::ToneMap,
-                vec![OUTPUT],
-                None,
-                vec![HDR],
-            ));
-        }
-        // Cleared attachments first, so the render pass needs no clear
-        // value for an attachment it does not clear.
-        attachments.sort_by_key(|a| a.clear.is_none());
-        let mut reads = vec![OUTPUT];
-        if keep_hdr {
-            reads.push(HDR);
-        }
-        passes.push(PassDecl::transfer(PassKind::Readback, reads, vec![]));
-        FrameGraph {
-            lighting,
-            attachments,
-            passes,
+        FrameShape {
+            deferred,
+            any_transparent,
+            sky,
+            direct,
+            target,
         }
     }
+}
+
+/// The frame's attachments, in the order they are declared (not yet
+/// sorted by clearing).
+fn frame_attachments(scene: &Scene, shape: &FrameShape) -> Vec<AttachmentDecl> {
+    use attachment::*;
+    let black = Some([0.0; 4]);
+    let mut attachments = vec![AttachmentDecl {
+        name: OUTPUT,
+        format: OUTPUT_FORMAT,
+        // The tone map writes every pixel (alpha 1); drawn directly, the
+        // background is opaque black like the tone-mapped one.
+        clear: if shape.direct {
+            Some([0.0, 0.0, 0.0, 1.0])
+        } else {
+            None
+        },
+    }];
+    if !shape.direct {
+        attachments.push(AttachmentDecl {
+            name: HDR,
+            format: hdr_format(scene.output.hdr_format),
+            clear: black,
+        });
+    }
+    if shape.sky {
+        attachments.push(AttachmentDecl {
+            name: SURFACE,
+            format: hdr_format(scene.output.hdr_format),
+            clear: black,
+        });
+    }
+    attachments.push(AttachmentDecl {
+        name: DEPTH,
+        format: DEPTH_FORMAT,
+        // Reversed-Z: the far plane is 0.
+        clear: Some([0.0; 4]),
+    });
+    if shape.deferred {
+        let wide = gbuffer_format(scene);
+        for (name, format) in [(ALBEDO, wide), (NORMAL, NORMAL_FORMAT), (MATERIAL, wide)] {
+            // Written wherever depth is; the lighting pass only reads
+            // pixels that have a surface.
+            attachments.push(AttachmentDecl {
+                name,
+                format,
+                clear: None,
+            });
+        }
+    }
+    attachments
+}
+
+/// The compute passes before the render pass: the sky-view table and the
+/// aerial-perspective volume, where the frame has them.
+fn compute_passes(scene: &Scene, shape: &FrameShape) -> Vec<PassDecl> {
+    let sky = shape.sky;
+    let mut passes = Vec::new();
+    if sky && scene.sky.as_ref().is_some_and(|s| s.sky_view.is_some()) {
+        // Marched for a grid of directions before the render pass;
+        // the atmosphere subpass reads it for pixels without a surface.
+        passes.push(PassDecl {
+            kind: PassKind::SkyView,
+            io: PassIo::Compute,
+        });
+    }
+    // The aerial-perspective volume only serves pixels with a surface:
+    // a frame without objects has none to read it.
+    if sky
+        && !scene.objects.is_empty()
+        && scene
+            .sky
+            .as_ref()
+            .is_some_and(|s| s.aerial_perspective == AerialPerspective::Volume)
+    {
+        passes.push(PassDecl {
+            kind: PassKind::AerialVolume,
+            io: PassIo::Compute,
+        });
+    }
+    passes
+}
+
+/// The subpasses of the render pass: the objects (deferred or forward),
+/// the transparent ones, the atmosphere and the tone map, where the frame
+/// has them.
+fn render_passes(shape: &FrameShape) -> Vec<PassDecl> {
+    use attachment::*;
+    let target = shape.target;
+    let mut passes = Vec::new();
+    if shape.deferred {
+        passes.push(PassDecl::subpass(
+            PassKind::GBuffer,
+            vec![target, ALBEDO, NORMAL, MATERIAL],
+            Some((DEPTH, DepthUse::Write)),
+            vec![],
+        ));
+        passes.push(PassDecl::subpass(
+            PassKind::Lighting,
+            vec![target],
+            Some((DEPTH, DepthUse::Test)),
+            vec![ALBEDO, NORMAL, MATERIAL, DEPTH],
+        ));
+    } else {
+        passes.push(PassDecl::subpass(
+            PassKind::Opaque,
+            vec![target],
+            Some((DEPTH, DepthUse::Write)),
+            vec![],
+        ));
+    }
+    if shape.any_transparent {
+        passes.push(PassDecl::subpass(
+            PassKind::Transparent,
+            vec![target],
+            Some((DEPTH, DepthUse::Test)),
+            vec![],
+        ));
+    }
+    if shape.sky {
+        passes.push(PassDecl::subpass(
+            PassKind::Atmosphere,
+            vec![HDR],
+            Some((DEPTH, DepthUse::Test)),
+            vec![SURFACE, DEPTH],
+        ));
+    }
+    if !shape.direct {
+        passes.push(PassDecl::subpass(
+            PassKind::ToneMap,
+            vec![OUTPUT],
+            None,
+            vec![HDR],
+        ));
+    }
+    passes
 }
 
 impl FrameGraph {

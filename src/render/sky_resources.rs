@@ -353,18 +353,7 @@ impl SkyResources {
         camera: &Camera,
         plan: &FramePlan,
     ) -> Result<SkyResources, RenderError> {
-        let table = OpticalDepthTable::bake(
-            &sky.atmosphere,
-            sky.table_size.0,
-            sky.table_size.1,
-            sky.table_mapping,
-        );
-        log::info!(
-            "optical-depth table {}x{} baked in {:.3} s",
-            table.width,
-            table.height,
-            table.bake_seconds
-        );
+        let table = bake_optical_depth_table(sky);
         let block = plan_uniforms(sky, camera, plan, (table.width, table.height));
         let uniforms = Buffer::with_data(
             ctx,
@@ -372,60 +361,9 @@ impl SkyResources {
             bytemuck::bytes_of(&block),
             BufferUsage::Uniform,
         )?;
-        let table_image = Image::new(
-            ctx,
-            "optical-depth table",
-            ImageDesc {
-                width: table.width,
-                height: table.height,
-                format: TABLE_FORMAT,
-                usage: ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_DST,
-                mip_levels: 1,
-                aspect: ImageAspectFlags::COLOR,
-            },
-        )?;
-        let staging = Buffer::with_data(
-            ctx,
-            "optical-depth table staging",
-            bytemuck::cast_slice(&table.texels),
-            BufferUsage::Upload,
-        )?;
-        CommandBuffer::run_once(ctx, |cmd| {
-            cmd.copy_buffer_to_image(&staging, &table_image);
-            cmd.transition(&table_image, crate::vk::ImageUse::ShaderSampled);
-        })?;
-        let sky_view_image = sky
-            .sky_view
-            .map(|(w, h)| {
-                Image::new(
-                    ctx,
-                    "sky-view table",
-                    ImageDesc {
-                        width: sky.sky_view_panels() * w,
-                        height: h,
-                        format: TABLE_FORMAT,
-                        usage: ImageUsageFlags::STORAGE | ImageUsageFlags::SAMPLED,
-                        mip_levels: 1,
-                        aspect: ImageAspectFlags::COLOR,
-                    },
-                )
-            })
-            .transpose()?;
-        // Tables are read with texelFetch and filtered by hand, except the
-        // optical-depth table with od_filter = hardware: then the sampler
-        // filters it (texel centres: the shader adds half a texel).
-        let filter = if sky.table_filter == TableFilter::Hardware {
-            if !crate::vk::supports_linear_sampling(ctx, TABLE_FORMAT) {
-                return Err(RenderError::Frame(format!(
-                    "atmosphere.od_filter = \"hardware\": this device cannot filter {TABLE_FORMAT:?} \
-                     images linearly; use \"manual\""
-                )));
-            }
-            SamplerFilter::Bilinear
-        } else {
-            SamplerFilter::Nearest
-        };
-        let sampler = Sampler::clamped(ctx, filter)?;
+        let table_image = upload_optical_depth_table(ctx, &table)?;
+        let sky_view_image = sky_view_image(ctx, sky)?;
+        let sampler = table_sampler(ctx, sky)?;
         // The sky-view table is filtered by the sampler wherever the device
         // can (glsl/atmosphere.frag, SKY_VIEW_HARDWARE_FILTER), and fetched
         // and filtered by hand where it cannot.
@@ -434,95 +372,33 @@ impl SkyResources {
             Some(_) if linear_filter => Some(Sampler::clamped(ctx, SamplerFilter::Bilinear)?),
             _ => None,
         };
-        // The block and the tables the object shaders read for the sun and
-        // sky light on objects are visible to vertex shaders too (Gouraud
-        // lights per vertex).
-        let both =
-            ShaderStageFlags::VERTEX | ShaderStageFlags::FRAGMENT | ShaderStageFlags::COMPUTE;
-        let mut bindings = vec![
-            DescriptorBinding {
-                binding: 0,
-                kind: DescriptorType::UNIFORM_BUFFER,
-                stages: both,
-            },
-            DescriptorBinding {
-                binding: 1,
-                kind: DescriptorType::COMBINED_IMAGE_SAMPLER,
-                stages: both,
-            },
-        ];
-        if sky_view_image.is_some() {
-            bindings.push(DescriptorBinding {
-                binding: 2,
-                kind: DescriptorType::STORAGE_IMAGE,
-                stages: ShaderStageFlags::COMPUTE,
-            });
-            bindings.push(DescriptorBinding {
-                binding: 3,
-                kind: DescriptorType::COMBINED_IMAGE_SAMPLER,
-                stages: ShaderStageFlags::FRAGMENT,
-            });
-        }
-        if sky.multiple_scattering {
-            for binding in [4, 5] {
-                bindings.push(DescriptorBinding {
-                    binding,
-                    kind: DescriptorType::COMBINED_IMAGE_SAMPLER,
-                    stages: both,
-                });
-            }
-        }
         let aerial_volume = if plan.has(PassKind::AerialVolume) {
-            bindings.push(DescriptorBinding {
-                binding: AERIAL_VOLUME_WRITE_BINDING,
-                kind: DescriptorType::STORAGE_IMAGE,
-                stages: ShaderStageFlags::COMPUTE,
-            });
-            bindings.push(DescriptorBinding {
-                binding: AERIAL_VOLUME_BINDING,
-                kind: DescriptorType::COMBINED_IMAGE_SAMPLER,
-                stages: ShaderStageFlags::FRAGMENT,
-            });
             Some(AerialVolume::new(ctx, sky, linear_filter)?)
         } else {
             None
         };
+        let bindings = descriptor_bindings(sky, sky_view_image.is_some(), aerial_volume.is_some());
         let layout = DescriptorSetLayout::new(ctx, &bindings)?;
         let pool = DescriptorPool::for_layouts(ctx, &[&layout])?;
         let set = pool.allocate(&layout)?;
-        set.write_buffer(
-            0,
-            DescriptorType::UNIFORM_BUFFER,
+        write_set(
+            &set,
             &uniforms,
-            uniforms.size(),
+            (&table_image, &sampler),
+            sky_view_image
+                .as_ref()
+                .map(|image| (image, sky_view_sampler.as_ref().unwrap_or(&sampler))),
+            aerial_volume.as_ref(),
         );
-        set.write_sampled_image(1, &table_image, &sampler);
-        if let Some(image) = &sky_view_image {
-            set.write_storage_image(2, image);
-            set.write_sampled_image(3, image, sky_view_sampler.as_ref().unwrap_or(&sampler));
-        }
-        if let Some(volume) = &aerial_volume {
-            set.write_storage_image(AERIAL_VOLUME_WRITE_BINDING, &volume.image);
-            set.write_sampled_image(AERIAL_VOLUME_BINDING, &volume.image, &volume._sampler);
-        }
-        // The multiple-scattering and sky-irradiance tables are read
-        // through the sampler's filter where the device can filter their
-        // format (the other tables' too), by four fetches and a blend where
-        // it cannot.
         let static_fields = block.static_fields();
         let sun_tables = if sky.multiple_scattering {
-            let constants = [
-                &crate::render::passes::atmosphere::table_constants(sky)[..],
-                &static_constants(static_fields, linear_filter),
-            ]
-            .concat();
-            Some(SunTables::bake(
+            Some(bake_sun_tables(
                 ctx,
                 sky,
                 &layout,
                 &set,
                 linear_filter,
-                &constants,
+                static_fields,
             )?)
         } else {
             None
@@ -546,4 +422,188 @@ impl SkyResources {
             static_fields,
         })
     }
+}
+
+/// The sky's optical-depth table, baked on the CPU (the time logged).
+fn bake_optical_depth_table(sky: &Sky) -> OpticalDepthTable {
+    let table = OpticalDepthTable::bake(
+        &sky.atmosphere,
+        sky.table_size.0,
+        sky.table_size.1,
+        sky.table_mapping,
+    );
+    log::info!(
+        "optical-depth table {}x{} baked in {:.3} s",
+        table.width,
+        table.height,
+        table.bake_seconds
+    );
+    table
+}
+
+/// The optical-depth table's image, filled from `table` and left ready to
+/// sample.
+fn upload_optical_depth_table(
+    ctx: &Arc<Context>,
+    table: &OpticalDepthTable,
+) -> Result<Image, RenderError> {
+    let table_image = Image::new(
+        ctx,
+        "optical-depth table",
+        ImageDesc {
+            width: table.width,
+            height: table.height,
+            format: TABLE_FORMAT,
+            usage: ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_DST,
+            mip_levels: 1,
+            aspect: ImageAspectFlags::COLOR,
+        },
+    )?;
+    let staging = Buffer::with_data(
+        ctx,
+        "optical-depth table staging",
+        bytemuck::cast_slice(&table.texels),
+        BufferUsage::Upload,
+    )?;
+    CommandBuffer::run_once(ctx, |cmd| {
+        cmd.copy_buffer_to_image(&staging, &table_image);
+        cmd.transition(&table_image, crate::vk::ImageUse::ShaderSampled);
+    })?;
+    Ok(table_image)
+}
+
+/// The sky-view table's image, where the sky has one.
+fn sky_view_image(ctx: &Arc<Context>, sky: &Sky) -> Result<Option<Image>, RenderError> {
+    Ok(sky
+        .sky_view
+        .map(|(w, h)| {
+            Image::new(
+                ctx,
+                "sky-view table",
+                ImageDesc {
+                    width: sky.sky_view_panels() * w,
+                    height: h,
+                    format: TABLE_FORMAT,
+                    usage: ImageUsageFlags::STORAGE | ImageUsageFlags::SAMPLED,
+                    mip_levels: 1,
+                    aspect: ImageAspectFlags::COLOR,
+                },
+            )
+        })
+        .transpose()?)
+}
+
+/// The sampler of the tables. Tables are read with texelFetch and filtered
+/// by hand, except the optical-depth table with od_filter = hardware: then
+/// the sampler filters it (texel centres: the shader adds half a texel).
+fn table_sampler(ctx: &Arc<Context>, sky: &Sky) -> Result<Sampler, RenderError> {
+    let filter = if sky.table_filter == TableFilter::Hardware {
+        if !crate::vk::supports_linear_sampling(ctx, TABLE_FORMAT) {
+            return Err(RenderError::Frame(format!(
+                "atmosphere.od_filter = \"hardware\": this device cannot filter {TABLE_FORMAT:?} \
+                 images linearly; use \"manual\""
+            )));
+        }
+        SamplerFilter::Bilinear
+    } else {
+        SamplerFilter::Nearest
+    };
+    Ok(Sampler::clamped(ctx, filter)?)
+}
+
+/// The bindings of the sky's descriptor set: the block and the
+/// optical-depth table, then the sky-view table, the sun tables and the
+/// aerial-perspective volume where the sky has them.
+fn descriptor_bindings(sky: &Sky, sky_view: bool, aerial_volume: bool) -> Vec<DescriptorBinding> {
+    // The block and the tables the object shaders read for the sun and
+    // sky light on objects are visible to vertex shaders too (Gouraud
+    // lights per vertex).
+    let both = ShaderStageFlags::VERTEX | ShaderStageFlags::FRAGMENT | ShaderStageFlags::COMPUTE;
+    let mut bindings = vec![
+        DescriptorBinding {
+            binding: 0,
+            kind: DescriptorType::UNIFORM_BUFFER,
+            stages: both,
+        },
+        DescriptorBinding {
+            binding: 1,
+            kind: DescriptorType::COMBINED_IMAGE_SAMPLER,
+            stages: both,
+        },
+    ];
+    if sky_view {
+        bindings.push(DescriptorBinding {
+            binding: 2,
+            kind: DescriptorType::STORAGE_IMAGE,
+            stages: ShaderStageFlags::COMPUTE,
+        });
+        bindings.push(DescriptorBinding {
+            binding: 3,
+            kind: DescriptorType::COMBINED_IMAGE_SAMPLER,
+            stages: ShaderStageFlags::FRAGMENT,
+        });
+    }
+    if sky.multiple_scattering {
+        for binding in [4, 5] {
+            bindings.push(DescriptorBinding {
+                binding,
+                kind: DescriptorType::COMBINED_IMAGE_SAMPLER,
+                stages: both,
+            });
+        }
+    }
+    if aerial_volume {
+        bindings.push(DescriptorBinding {
+            binding: AERIAL_VOLUME_WRITE_BINDING,
+            kind: DescriptorType::STORAGE_IMAGE,
+            stages: ShaderStageFlags::COMPUTE,
+        });
+        bindings.push(DescriptorBinding {
+            binding: AERIAL_VOLUME_BINDING,
+            kind: DescriptorType::COMBINED_IMAGE_SAMPLER,
+            stages: ShaderStageFlags::FRAGMENT,
+        });
+    }
+    bindings
+}
+
+/// Points the sky's descriptor set at the block, the optical-depth table,
+/// the sky-view table (written by its pass, read through its sampler) and
+/// the aerial-perspective volume (likewise), where the sky has them.
+fn write_set(
+    set: &DescriptorSet,
+    uniforms: &Buffer,
+    (table, sampler): (&Image, &Sampler),
+    sky_view: Option<(&Image, &Sampler)>,
+    aerial_volume: Option<&AerialVolume>,
+) {
+    set.write_buffer(0, DescriptorType::UNIFORM_BUFFER, uniforms, uniforms.size());
+    set.write_sampled_image(1, table, sampler);
+    if let Some((image, sampler)) = sky_view {
+        set.write_storage_image(2, image);
+        set.write_sampled_image(3, image, sampler);
+    }
+    if let Some(volume) = aerial_volume {
+        set.write_storage_image(AERIAL_VOLUME_WRITE_BINDING, &volume.image);
+        set.write_sampled_image(AERIAL_VOLUME_BINDING, &volume.image, &volume._sampler);
+    }
+}
+
+/// The multiple-scattering and sky-irradiance tables, baked. They are read
+/// through the sampler's filter where the device can filter their format
+/// (the other tables' too), by four fetches and a blend where it cannot.
+fn bake_sun_tables(
+    ctx: &Arc<Context>,
+    sky: &Sky,
+    layout: &DescriptorSetLayout,
+    set: &DescriptorSet,
+    linear_filter: bool,
+    static_fields: [[f32; 4]; 9],
+) -> Result<SunTables, RenderError> {
+    let constants = [
+        &crate::render::passes::atmosphere::table_constants(sky)[..],
+        &static_constants(static_fields, linear_filter),
+    ]
+    .concat();
+    SunTables::bake(ctx, sky, layout, set, linear_filter, &constants)
 }

@@ -299,10 +299,14 @@ fn x_label(v: f64, step: f64) -> String {
     }
 }
 
+/// The SVG's whole drawing area.
+type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
+/// The plot's chart on it, in time and error coordinates.
+type Chart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<Ticked, Ticked>>;
+
 fn draw(plot: &Plot<'_>, axes: &Axes, svg: &mut String) -> Result<(), Box<dyn std::error::Error>> {
     let points = plot.points;
     let at = |p: &PlotPoint| axes.at(p);
-    let floor = axes.floor_exp;
     let root = SVGBackend::with_string(svg, (WIDTH, HEIGHT)).into_drawing_area();
     root.fill(&WHITE)?;
     root.draw(&Text::new(
@@ -342,7 +346,32 @@ fn draw(plot: &Plot<'_>, axes: &Axes, svg: &mut String) -> Result<(), Box<dyn st
         .light_line_style(WHITE)
         .bold_line_style(RGBColor(225, 225, 225))
         .draw()?;
+    draw_points(&mut chart, points, axes)?;
 
+    // Labels, in pixels of the whole picture (chart coordinates map to the
+    // same backend pixels).
+    let pixel: Vec<(i32, i32)> = points.iter().map(|p| chart.backend_coord(&at(p))).collect();
+    let (xs, ys) = chart.plotting_area().get_pixel_range();
+    let area = Rect {
+        x0: xs.start,
+        y0: ys.start,
+        x1: xs.end,
+        y1: ys.end,
+    };
+    draw_labels(&root, points, &pixel, &area)?;
+    root.present()?;
+    Ok(())
+}
+
+/// The floor line, the front, the other points, the reference's ring and
+/// the legend.
+fn draw_points<'a, 'b: 'a>(
+    chart: &mut Chart<'a, 'b>,
+    points: &[PlotPoint],
+    axes: &Axes,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let at = |p: &PlotPoint| axes.at(p);
+    let floor = axes.floor_exp;
     // The floor line, only when something sits on it.
     let any_zero = points.iter().any(|p| p.y <= 0.0);
     let (x0, x1) = (axes.x.start, axes.x.end);
@@ -394,21 +423,21 @@ fn draw(plot: &Plot<'_>, axes: &Axes, svg: &mut String) -> Result<(), Box<dyn st
         .background_style(WHITE.mix(0.9))
         .border_style(RGBColor(200, 200, 200))
         .draw()?;
+    Ok(())
+}
 
-    // Labels, in pixels of the whole picture (chart coordinates map to the
-    // same backend pixels).
-    let pixel: Vec<(i32, i32)> = points.iter().map(|p| chart.backend_coord(&at(p))).collect();
-    let (xs, ys) = chart.plotting_area().get_pixel_range();
-    let area = Rect {
-        x0: xs.start,
-        y0: ys.start,
-        x1: xs.end,
-        y1: ys.end,
-    };
+/// Every point's label, placed where it overlaps the least with the
+/// markers (at `pixel`), the legend and the labels placed before it.
+fn draw_labels(
+    root: &Area<'_>,
+    points: &[PlotPoint],
+    pixel: &[(i32, i32)],
+    area: &Rect,
+) -> Result<(), Box<dyn std::error::Error>> {
     // Markers are obstacles too; the reference's ring is larger.
     let mut taken: Vec<Rect> = points
         .iter()
-        .zip(&pixel)
+        .zip(pixel)
         .map(|(p, &(x, y))| {
             let r = if p.reference { 11 } else { 6 };
             Rect {
@@ -443,7 +472,7 @@ fn draw(plot: &Plot<'_>, axes: &Axes, svg: &mut String) -> Result<(), Box<dyn st
         } else {
             p.label.clone()
         };
-        let spot = place(&text, pixel[i], &area, &taken);
+        let spot = place(&text, pixel[i], area, &taken);
         taken.push(spot.rect);
         // A label pushed away from its point gets a thin leader line, so
         // it is clear which of two close points it belongs to.
@@ -463,7 +492,6 @@ fn draw(plot: &Plot<'_>, axes: &Axes, svg: &mut String) -> Result<(), Box<dyn st
         let style = style.pos(Pos::new(spot.align.into(), VPos::Top));
         root.draw(&Text::new(text, spot.anchor, style))?;
     }
-    root.present()?;
     Ok(())
 }
 

@@ -140,6 +140,25 @@ fn default_angular_radius() -> f64 {
     0.004675
 }
 
+/// Rayleigh scattering, Mie scattering and Mie extinction as the file
+/// gives them: written out, derived (`rayleigh_from`, `mie_from`) or left
+/// out (`None`, Earth's).
+struct GivenCoefficients {
+    rayleigh_scattering: Option<[f64; 3]>,
+    mie_scattering: Option<[f64; 3]>,
+    mie_extinction: Option<[f64; 3]>,
+}
+
+/// The sizes and sample counts of the sky's tables and march, checked.
+struct SkyTables {
+    samples: u32,
+    table_size: (u32, u32),
+    sky_view: Option<(u32, u32)>,
+    ms_table_size: (u32, u32),
+    irradiance_table_size: (u32, u32),
+    aerial_volume: (u32, u32, u32),
+}
+
 impl Check<'_> {
     /// Validates the two tables. `[atmosphere]` needs `[sun]` and the other
     /// way round: the sun only exists in this renderer as light through the
@@ -166,17 +185,37 @@ impl Check<'_> {
             }
             (Some(s), Some(a)) => (s, a),
         };
-        // Radii and scale heights, kept in f64: above 0 and at most
-        // MAX_RADIUS (the scene's length bound, without its lower end).
-        let planet_length = |field: &str, x: f64| -> Result<f64> {
-            self.within(
-                field,
-                x,
-                &|x| x > 0.0 && x <= MAX_RADIUS,
-                &format!("greater than 0 and at most {MAX_RADIUS:e}"),
-            )
-        };
+        let sun = self.sun(&sun)?;
+        let shell = self.atmosphere(&atmosphere)?;
+        let tables = self.sky_tables(&atmosphere)?;
+        Ok(Some(Sky {
+            sky_view: tables.sky_view,
+            aerial_perspective: atmosphere
+                .aerial_perspective
+                .unwrap_or(AerialPerspective::March),
+            aerial_volume: tables.aerial_volume,
+            multiple_scattering: atmosphere.multiple_scattering.unwrap_or(true),
+            ms_table_size: tables.ms_table_size,
+            irradiance_table_size: tables.irradiance_table_size,
+            table_size: tables.table_size,
+            table_mapping: match atmosphere.od_table_mapping {
+                None | Some(TableMappingField::Horizon) => TableMapping::Horizon,
+                Some(TableMappingField::Linear) => TableMapping::Linear,
+                Some(TableMappingField::Seed) => {
+                    warnings.push(seed_renamed(self.file, "atmosphere.od_table_mapping"));
+                    TableMapping::Linear
+                }
+            },
+            table_filter: atmosphere.od_filter.unwrap_or(TableFilter::Manual),
+            ozone_depth: atmosphere.od_ozone.unwrap_or(OzoneDepth::Exact),
+            sun,
+            atmosphere: shell,
+            samples: tables.samples,
+        }))
+    }
 
+    /// `[sun]`, checked.
+    fn sun(&self, sun: &SunFile) -> Result<Sun> {
         let direction = self.direction("sun.direction", sun.direction, "direction")?;
         let irradiance = self.components_up_to("sun.irradiance", sun.irradiance, 1e6)?;
         let angular_radius = self.within(
@@ -185,13 +224,113 @@ impl Check<'_> {
             &|x| x > 0.0 && x < std::f64::consts::FRAC_PI_2,
             "between 0 and pi/2 radians (exclusive)",
         )?;
+        Ok(Sun {
+            direction,
+            irradiance,
+            angular_radius,
+            disc: sun.disc,
+        })
+    }
 
+    /// Radii and scale heights, kept in f64: above 0 and at most
+    /// MAX_RADIUS (the scene's length bound, without its lower end).
+    fn planet_length(&self, field: &str, x: f64) -> Result<f64> {
+        self.within(
+            field,
+            x,
+            &|x| x > 0.0 && x <= MAX_RADIUS,
+            &format!("greater than 0 and at most {MAX_RADIUS:e}"),
+        )
+    }
+
+    /// The physical atmosphere of `[atmosphere]`, checked field by field in
+    /// the order the errors are reported; Earth's values where one is left
+    /// out.
+    fn atmosphere(&self, atmosphere: &AtmosphereFile) -> Result<Atmosphere> {
         let earth = Atmosphere::earth();
-        let bottom_radius = planet_length(
+        let (center, bottom_radius, top_radius) = self.shell(atmosphere, &earth)?;
+        let coefficient = |name: &str, v: Option<[f64; 3]>, default: DVec3| {
+            self.components_up_to(
+                &format!("atmosphere.{name}"),
+                v.unwrap_or(default.to_array()),
+                1.0,
+            )
+        };
+        let given = self.given_coefficients(atmosphere)?;
+        let rayleigh_scattering = coefficient(
+            "rayleigh_scattering",
+            given.rayleigh_scattering,
+            earth.rayleigh_scattering,
+        )?;
+        let mie_scattering =
+            coefficient("mie_scattering", given.mie_scattering, earth.mie_scattering)?;
+        let mie_extinction =
+            coefficient("mie_extinction", given.mie_extinction, earth.mie_extinction)?;
+        for i in 0..3 {
+            if mie_extinction[i] < mie_scattering[i] {
+                return Err(self.invalid(
+                    "atmosphere.mie_extinction",
+                    format!(
+                        "component {i} ({:e}) must be at least mie_scattering ({:e}): \
+                         extinction is scattering plus absorption",
+                        mie_extinction[i], mie_scattering[i]
+                    ),
+                ));
+            }
+        }
+        let ozone_absorption = coefficient(
+            "ozone_absorption",
+            atmosphere.ozone_absorption,
+            earth.ozone_absorption,
+        )?;
+        let ground_albedo = self.components_up_to(
+            "atmosphere.ground_albedo",
+            atmosphere
+                .ground_albedo
+                .unwrap_or(earth.ground_albedo.to_array()),
+            1.0,
+        )?;
+        let rayleigh_scale_height = self.scale_height(
+            "rayleigh_scale_height",
+            atmosphere.rayleigh_scale_height,
+            earth.rayleigh_scale_height,
+        )?;
+        let mie_scale_height = self.scale_height(
+            "mie_scale_height",
+            atmosphere.mie_scale_height,
+            earth.mie_scale_height,
+        )?;
+        // |g| -> 1 makes the phase function a delta; 0.999 already peaks at 1e8.
+        let mie_g = self.within(
+            "atmosphere.mie_g",
+            atmosphere.mie_g.unwrap_or(earth.mie_g),
+            &|g| g.abs() <= 0.999,
+            "between -0.999 and 0.999",
+        )?;
+        let ozone_layer = self.ozone_layer(atmosphere.ozone_layer.unwrap_or(earth.ozone_layer))?;
+        Ok(Atmosphere {
+            center,
+            bottom_radius,
+            top_radius,
+            rayleigh_scattering,
+            rayleigh_scale_height,
+            mie_scattering,
+            mie_extinction,
+            mie_scale_height,
+            mie_g,
+            ozone_absorption,
+            ozone_layer,
+            ground_albedo,
+        })
+    }
+
+    /// The planet's centre and the shell's bottom and top radii.
+    fn shell(&self, atmosphere: &AtmosphereFile, earth: &Atmosphere) -> Result<(DVec3, f64, f64)> {
+        let bottom_radius = self.planet_length(
             "atmosphere.bottom_radius",
             atmosphere.bottom_radius.unwrap_or(earth.bottom_radius),
         )?;
-        let top_radius = planet_length(
+        let top_radius = self.planet_length(
             "atmosphere.top_radius",
             atmosphere.top_radius.unwrap_or(earth.top_radius),
         )?;
@@ -219,13 +358,11 @@ impl Check<'_> {
                 ),
             ));
         }
-        let coefficient = |name: &str, v: Option<[f64; 3]>, default: DVec3| {
-            self.components_up_to(
-                &format!("atmosphere.{name}"),
-                v.unwrap_or(default.to_array()),
-                1.0,
-            )
-        };
+        Ok((center, bottom_radius, top_radius))
+    }
+
+    /// The coefficients as given, derived ones computed and checked.
+    fn given_coefficients(&self, atmosphere: &AtmosphereFile) -> Result<GivenCoefficients> {
         // The derived coefficients (the seed's formulas) replace the explicit
         // ones; giving both is refused rather than one silently winning.
         if atmosphere.rayleigh_from.is_some() && atmosphere.rayleigh_scattering.is_some() {
@@ -242,7 +379,28 @@ impl Check<'_> {
                 "give either mie_scattering and mie_extinction or mie_from, not both",
             ));
         }
-        let wavelengths = match atmosphere.wavelengths {
+        let wavelengths = self.wavelengths(atmosphere)?;
+        let rayleigh_given = match &atmosphere.rayleigh_from {
+            None => atmosphere.rayleigh_scattering,
+            Some(from) => Some(self.rayleigh_from(from, wavelengths)?),
+        };
+        let (mie_scattering_given, mie_extinction_given) = match &atmosphere.mie_from {
+            None => (atmosphere.mie_scattering, atmosphere.mie_extinction),
+            Some(from) => {
+                let (scattering, extinction) = self.mie_from(from, wavelengths)?;
+                (Some(scattering), Some(extinction))
+            }
+        };
+        Ok(GivenCoefficients {
+            rayleigh_scattering: rayleigh_given,
+            mie_scattering: mie_scattering_given,
+            mie_extinction: mie_extinction_given,
+        })
+    }
+
+    /// The wavelengths (nm) the derived coefficients are computed at.
+    fn wavelengths(&self, atmosphere: &AtmosphereFile) -> Result<DVec3> {
+        Ok(match atmosphere.wavelengths {
             Some(_) if atmosphere.rayleigh_from.is_none() && atmosphere.mie_from.is_none() => {
                 return Err(self.invalid(
                     "atmosphere.wavelengths",
@@ -263,143 +421,99 @@ impl Check<'_> {
                 w
             }
             None => DVec3::from(coefficients::WAVELENGTHS_NM),
-        };
-        let derived = |field: &str, v: DVec3| -> Result<[f64; 3]> {
-            if let Some(i) = (0..3).find(|&i| !(v[i].is_finite() && v[i] <= 1.0)) {
-                return Err(self.invalid(
-                    field,
-                    format!(
-                        "gives a coefficient of {:e} 1/m in channel {i}; at most 1 is accepted",
-                        v[i]
-                    ),
-                ));
-            }
-            Ok(v.to_array())
-        };
-        let rayleigh_given = match &atmosphere.rayleigh_from {
-            None => atmosphere.rayleigh_scattering,
-            Some(from) => {
-                let n = self.within(
-                    "atmosphere.rayleigh_from.refractive_index",
-                    from.refractive_index
-                        .unwrap_or(coefficients::AIR_REFRACTIVE_INDEX),
-                    &|n| n > 1.0 && n <= 2.0,
-                    "above 1 and at most 2",
-                )?;
-                let number_density = self.within(
-                    "atmosphere.rayleigh_from.number_density",
-                    from.number_density
-                        .unwrap_or(coefficients::AIR_NUMBER_DENSITY),
-                    &|x| (1e10..=1e35).contains(&x),
-                    "between 1e10 and 1e35 per m^3",
-                )?;
-                // (6 + 3p)/(6 - 7p): physical factors are 0..0.5.
-                let p = self.within(
-                    "atmosphere.rayleigh_from.depolarization",
-                    from.depolarization
-                        .unwrap_or(coefficients::AIR_DEPOLARIZATION),
-                    &|p| (0.0..=0.5).contains(&p),
-                    "between 0 and 0.5",
-                )?;
-                let beta = DVec3::from_array(std::array::from_fn(|i| {
-                    coefficients::rayleigh_scattering(n, number_density, p, wavelengths[i] * 1e-9)
-                }));
-                Some(derived("atmosphere.rayleigh_from", beta)?)
-            }
-        };
-        let (mie_scattering_given, mie_extinction_given) = match &atmosphere.mie_from {
-            None => (atmosphere.mie_scattering, atmosphere.mie_extinction),
-            Some(from) => {
-                let t = self.within(
-                    "atmosphere.mie_from.turbidity",
-                    from.turbidity,
-                    &|t| t > coefficients::MIN_TURBIDITY && t <= 1000.0,
-                    &format!(
-                        "above {:.4} (where the formula's aerosol concentration \
-                         0.6544 T - 0.6510 turns positive) and at most 1000",
-                        coefficients::MIN_TURBIDITY
-                    ),
-                )?;
-                let k = self.components_up_to(
-                    "atmosphere.mie_from.k",
-                    from.k.unwrap_or([coefficients::MIE_K; 3]),
-                    10.0,
-                )?;
-                let albedo = self.within(
-                    "atmosphere.mie_from.albedo",
-                    from.albedo.unwrap_or(0.9),
-                    &|a| a > 0.0 && a <= 1.0,
-                    "above 0 and at most 1",
-                )?;
-                let beta = DVec3::from_array(std::array::from_fn(|i| {
-                    coefficients::mie_scattering(t, k[i], wavelengths[i] * 1e-9)
-                }));
-                let scattering = derived("atmosphere.mie_from.turbidity", beta)?;
-                let extinction = derived("atmosphere.mie_from", beta / albedo)?;
-                (Some(scattering), Some(extinction))
-            }
-        };
-        let rayleigh_scattering = coefficient(
-            "rayleigh_scattering",
-            rayleigh_given,
-            earth.rayleigh_scattering,
-        )?;
-        let mie_scattering =
-            coefficient("mie_scattering", mie_scattering_given, earth.mie_scattering)?;
-        let mie_extinction =
-            coefficient("mie_extinction", mie_extinction_given, earth.mie_extinction)?;
-        for i in 0..3 {
-            if mie_extinction[i] < mie_scattering[i] {
-                return Err(self.invalid(
-                    "atmosphere.mie_extinction",
-                    format!(
-                        "component {i} ({:e}) must be at least mie_scattering ({:e}): \
-                         extinction is scattering plus absorption",
-                        mie_extinction[i], mie_scattering[i]
-                    ),
-                ));
-            }
+        })
+    }
+
+    /// A derived coefficient, refused where a channel is not finite or
+    /// above 1 per metre.
+    fn derived(&self, field: &str, v: DVec3) -> Result<[f64; 3]> {
+        if let Some(i) = (0..3).find(|&i| !(v[i].is_finite() && v[i] <= 1.0)) {
+            return Err(self.invalid(
+                field,
+                format!(
+                    "gives a coefficient of {:e} 1/m in channel {i}; at most 1 is accepted",
+                    v[i]
+                ),
+            ));
         }
-        let ozone_absorption = coefficient(
-            "ozone_absorption",
-            atmosphere.ozone_absorption,
-            earth.ozone_absorption,
+        Ok(v.to_array())
+    }
+
+    /// Rayleigh scattering from the gas, `atmosphere.rayleigh_from`.
+    fn rayleigh_from(&self, from: &RayleighFromFile, wavelengths: DVec3) -> Result<[f64; 3]> {
+        let n = self.within(
+            "atmosphere.rayleigh_from.refractive_index",
+            from.refractive_index
+                .unwrap_or(coefficients::AIR_REFRACTIVE_INDEX),
+            &|n| n > 1.0 && n <= 2.0,
+            "above 1 and at most 2",
         )?;
-        let ground_albedo = self.components_up_to(
-            "atmosphere.ground_albedo",
-            atmosphere
-                .ground_albedo
-                .unwrap_or(earth.ground_albedo.to_array()),
-            1.0,
+        let number_density = self.within(
+            "atmosphere.rayleigh_from.number_density",
+            from.number_density
+                .unwrap_or(coefficients::AIR_NUMBER_DENSITY),
+            &|x| (1e10..=1e35).contains(&x),
+            "between 1e10 and 1e35 per m^3",
         )?;
-        // Scale heights below a metre make the density a step the table and
-        // the march cannot resolve; above 1e9 they are meaningless.
-        let scale_height = |name: &str, x: Option<f64>, default: f64| {
-            let field = format!("atmosphere.{name}");
-            let x = planet_length(&field, x.unwrap_or(default))?;
-            if x < 1.0 {
-                return Err(self.invalid(&field, format!("must be at least 1 m, got {x:e}")));
-            }
-            Ok(x)
-        };
-        let rayleigh_scale_height = scale_height(
-            "rayleigh_scale_height",
-            atmosphere.rayleigh_scale_height,
-            earth.rayleigh_scale_height,
+        // (6 + 3p)/(6 - 7p): physical factors are 0..0.5.
+        let p = self.within(
+            "atmosphere.rayleigh_from.depolarization",
+            from.depolarization
+                .unwrap_or(coefficients::AIR_DEPOLARIZATION),
+            &|p| (0.0..=0.5).contains(&p),
+            "between 0 and 0.5",
         )?;
-        let mie_scale_height = scale_height(
-            "mie_scale_height",
-            atmosphere.mie_scale_height,
-            earth.mie_scale_height,
+        let beta = DVec3::from_array(std::array::from_fn(|i| {
+            coefficients::rayleigh_scattering(n, number_density, p, wavelengths[i] * 1e-9)
+        }));
+        self.derived("atmosphere.rayleigh_from", beta)
+    }
+
+    /// Mie scattering and extinction from the turbidity,
+    /// `atmosphere.mie_from`.
+    fn mie_from(&self, from: &MieFromFile, wavelengths: DVec3) -> Result<([f64; 3], [f64; 3])> {
+        let t = self.within(
+            "atmosphere.mie_from.turbidity",
+            from.turbidity,
+            &|t| t > coefficients::MIN_TURBIDITY && t <= 1000.0,
+            &format!(
+                "above {:.4} (where the formula's aerosol concentration \
+                 0.6544 T - 0.6510 turns positive) and at most 1000",
+                coefficients::MIN_TURBIDITY
+            ),
         )?;
-        // |g| -> 1 makes the phase function a delta; 0.999 already peaks at 1e8.
-        let mie_g = self.within(
-            "atmosphere.mie_g",
-            atmosphere.mie_g.unwrap_or(earth.mie_g),
-            &|g| g.abs() <= 0.999,
-            "between -0.999 and 0.999",
+        let k = self.components_up_to(
+            "atmosphere.mie_from.k",
+            from.k.unwrap_or([coefficients::MIE_K; 3]),
+            10.0,
         )?;
-        let ozone_layer = atmosphere.ozone_layer.unwrap_or(earth.ozone_layer);
+        let albedo = self.within(
+            "atmosphere.mie_from.albedo",
+            from.albedo.unwrap_or(0.9),
+            &|a| a > 0.0 && a <= 1.0,
+            "above 0 and at most 1",
+        )?;
+        let beta = DVec3::from_array(std::array::from_fn(|i| {
+            coefficients::mie_scattering(t, k[i], wavelengths[i] * 1e-9)
+        }));
+        let scattering = self.derived("atmosphere.mie_from.turbidity", beta)?;
+        let extinction = self.derived("atmosphere.mie_from", beta / albedo)?;
+        Ok((scattering, extinction))
+    }
+
+    /// Scale heights below a metre make the density a step the table and
+    /// the march cannot resolve; above 1e9 they are meaningless.
+    fn scale_height(&self, name: &str, x: Option<f64>, default: f64) -> Result<f64> {
+        let field = format!("atmosphere.{name}");
+        let x = self.planet_length(&field, x.unwrap_or(default))?;
+        if x < 1.0 {
+            return Err(self.invalid(&field, format!("must be at least 1 m, got {x:e}")));
+        }
+        Ok(x)
+    }
+
+    /// The ozone layer's increasing altitudes `[start, peak, end]`.
+    fn ozone_layer(&self, ozone_layer: [f64; 3]) -> Result<[f64; 3]> {
         for (i, x) in ozone_layer.iter().enumerate() {
             if !x.is_finite() || *x < 0.0 || *x > MAX_RADIUS {
                 return Err(self.invalid(
@@ -417,6 +531,11 @@ impl Check<'_> {
                 ),
             ));
         }
+        Ok(ozone_layer)
+    }
+
+    /// The sample count and the tables' sizes.
+    fn sky_tables(&self, atmosphere: &AtmosphereFile) -> Result<SkyTables> {
         let samples = atmosphere.samples.unwrap_or(DEFAULT_ATMOSPHERE_SAMPLES);
         if !(1..=MAX_ATMOSPHERE_SAMPLES).contains(&samples) {
             return Err(self.invalid(
@@ -429,7 +548,7 @@ impl Check<'_> {
             .map_or(DEFAULT_TABLE_SIZE, |[w, h]| (w, h));
         check_table_size(table_size.0, table_size.1)
             .map_err(|e| self.invalid("atmosphere.od_table_size", e))?;
-        let sky_view = match atmosphere.sky_view {
+        let sky_view = match &atmosphere.sky_view {
             None => DEFAULT_SKY_VIEW,
             Some(SkyViewField::Word(w)) if w == "off" => None,
             Some(SkyViewField::Word(w)) => {
@@ -439,8 +558,8 @@ impl Check<'_> {
                 ))
             }
             Some(SkyViewField::Size([w, h])) => {
-                check_sky_view(w, h).map_err(|e| self.invalid("atmosphere.sky_view", e))?;
-                Some((w, h))
+                check_sky_view(*w, *h).map_err(|e| self.invalid("atmosphere.sky_view", e))?;
+                Some((*w, *h))
             }
         };
         let sun_table = |field: &str, size: Option<[u32; 2]>, default: (u32, u32)| {
@@ -465,48 +584,14 @@ impl Check<'_> {
                 parse_aerial_volume(v).map_err(|e| self.invalid("atmosphere.aerial_volume", e))?
             }
         };
-        Ok(Some(Sky {
+        Ok(SkyTables {
+            samples,
+            table_size,
             sky_view,
-            aerial_perspective: atmosphere
-                .aerial_perspective
-                .unwrap_or(AerialPerspective::March),
-            aerial_volume,
-            multiple_scattering: atmosphere.multiple_scattering.unwrap_or(true),
             ms_table_size,
             irradiance_table_size,
-            table_size,
-            table_mapping: match atmosphere.od_table_mapping {
-                None | Some(TableMappingField::Horizon) => TableMapping::Horizon,
-                Some(TableMappingField::Linear) => TableMapping::Linear,
-                Some(TableMappingField::Seed) => {
-                    warnings.push(seed_renamed(self.file, "atmosphere.od_table_mapping"));
-                    TableMapping::Linear
-                }
-            },
-            table_filter: atmosphere.od_filter.unwrap_or(TableFilter::Manual),
-            ozone_depth: atmosphere.od_ozone.unwrap_or(OzoneDepth::Exact),
-            sun: Sun {
-                direction,
-                irradiance,
-                angular_radius,
-                disc: sun.disc,
-            },
-            atmosphere: Atmosphere {
-                center,
-                bottom_radius,
-                top_radius,
-                rayleigh_scattering,
-                rayleigh_scale_height,
-                mie_scattering,
-                mie_extinction,
-                mie_scale_height,
-                mie_g,
-                ozone_absorption,
-                ozone_layer,
-                ground_albedo,
-            },
-            samples,
-        }))
+            aerial_volume,
+        })
     }
 }
 

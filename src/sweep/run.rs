@@ -363,137 +363,171 @@ impl Sweep {
             .collect();
         self.check_memory(&chosen)?;
         let cpu = self.options.reference == ReferenceKind::Cpu;
-        // GPU images kept because they serve as references (none with a
-        // CPU reference: then every GPU image is compared once).
-        let references: HashSet<&[String]> = chosen
-            .iter()
-            .filter(|_| !cpu)
-            .map(|(_, c)| c.reference.as_slice())
-            .collect();
-        let mut cache: HashMap<Vec<String>, Rc<Images>> = HashMap::new();
-        // CPU references by what they depend on; a short list, searched
-        // linearly (`CpuScene` holds floats, so it is not `Hash`).
-        let mut cpu_cache: Vec<(CpuScene, Rc<Images>)> = Vec::new();
-        let mut device = String::new();
-        let mut passes: Vec<String> = Vec::new();
-        let mut setup_names: Vec<String> = Vec::new();
+        let mut state = ShardState {
+            images: ComparisonImages {
+                cpu,
+                // GPU images kept because they serve as references (none
+                // with a CPU reference: then every GPU image is compared
+                // once).
+                references: chosen
+                    .iter()
+                    .filter(|_| !cpu)
+                    .map(|(_, c)| c.reference.as_slice())
+                    .collect(),
+                cache: HashMap::new(),
+                cpu_cache: Vec::new(),
+            },
+            device: String::new(),
+            passes: Vec::new(),
+            setup_names: Vec::new(),
+        };
         let mut rows = Vec::with_capacity(chosen.len());
-
         for (index, c) in chosen {
-            let what = self.describe(&c.values);
-            let scene = self.scene_for(&c.values)?;
-            let job = Job::Timing {
-                warmup: self.options.warmup,
-                frames: self.options.frames.max(1),
-            };
-            let timed = render(&scene, job).map_err(|e| render_error(&what, "timed run", e))?;
-            let Timings {
-                pass_median_ms,
-                gpu_ms,
-                cpu_ms,
-            } = timings(&what, &timed)?;
-            if device.is_empty() {
-                device = timed.device.clone();
-            }
-            add_new_names(&mut passes, &timed.passes);
-            add_new_names(&mut setup_names, timed.setup.iter().map(|(name, _)| name));
-            let setup = timed.setup.clone();
-            let empty_median_ms = Summary::of(&timed.empty_pass_ms).map(|s| s.median);
-            drop(timed);
-
-            let mut images = |values: &[String]| -> Result<Rc<Images>, SweepError> {
-                if let Some(hit) = cache.get(values) {
-                    return Ok(hit.clone());
-                }
-                let what = self.describe(values);
-                let run = render(&self.scene_for(values)?, Job::Images)
-                    .map_err(|e| render_error(&what, "image run", e))?;
-                let hdr = run.hdr.ok_or_else(|| SweepError::Render {
-                    what: what.clone(),
-                    reason: "the image run returned no HDR image".into(),
-                })?;
-                let images = Rc::new(Images {
-                    output: run.output,
-                    hdr,
-                });
-                // Only references are needed again; other images are
-                // dropped after their one comparison.
-                if references.contains(values) {
-                    cache.insert(values.to_vec(), images.clone());
-                }
-                Ok(images)
-            };
-            let test = images(&c.values)?;
-            let (reference, ref_name) = if cpu {
-                let key = self.cpu_reference_scene(&c.values)?;
-                let hit = cpu_cache.iter().find(|(k, _)| *k == key);
-                let reference = match hit {
-                    Some((_, images)) => images.clone(),
-                    None => {
-                        let run = render(&scene, Job::Reference)
-                            .map_err(|e| render_error(&what, "CPU reference", e))?;
-                        let hdr = run.hdr.ok_or_else(|| SweepError::Render {
-                            what: format!("{what} (CPU reference)"),
-                            reason: "no HDR image was returned".into(),
-                        })?;
-                        let images = Rc::new(Images {
-                            output: run.output,
-                            hdr,
-                        });
-                        cpu_cache.push((key, images.clone()));
-                        images
-                    }
-                };
-                (reference, format!("CPU reference ({what})"))
-            } else {
-                let name = format!("reference ({})", self.describe(&c.reference));
-                (images(&c.reference)?, name)
-            };
-            let compare_err = |source| SweepError::Compare {
-                what: what.clone(),
-                source,
-            };
-            let rmse = compare_images(
-                &ref_name,
-                linear(&reference.hdr),
-                &what,
-                linear(&test.hdr),
-                Metric::Rmse,
-            )
-            .map_err(compare_err)?;
-            let max_rel_error = super::max_relative_error(&reference.hdr, &test.hdr);
-            let flip = compare_images(
-                &ref_name,
-                srgb(&reference.output),
-                &what,
-                srgb(&test.output),
-                Metric::Flip,
-            )
-            .map_err(compare_err)?;
-
-            let row = Row {
-                index,
-                settings: self.pairs(&c.values),
-                reference: self.pairs(&c.reference),
-                is_reference: !cpu && c.values == c.reference,
-                pass_median_ms,
-                gpu_x_empty: empty_median_ms
-                    .filter(|&e| e > 0.0)
-                    .map(|e| gpu_ms.median / e),
-                empty_median_ms,
-                gpu_ms,
-                cpu_ms,
-                rmse: rmse.mean,
-                max_rel_error,
-                flip_mean: flip.mean,
-                flip_p99: flip.p99,
-                setup,
-                pareto: false,
-            };
+            let row = self.run_combination(index, c, &mut state, &mut render)?;
             on_row(index, &row);
             rows.push(row);
         }
+        Ok(self.shard_result(shard, rows, state))
+    }
 
+    /// Times one combination, renders its images and its reference's, and
+    /// measures the errors: its row, not yet marked on the Pareto front.
+    fn run_combination<E>(
+        &self,
+        index: usize,
+        c: &Combination,
+        state: &mut ShardState<'_>,
+        render: &mut impl FnMut(&Scene, Job) -> Result<Rendered, E>,
+    ) -> Result<Row, SweepError>
+    where
+        E: Into<Box<dyn std::error::Error + Send + Sync>>,
+    {
+        let what = self.describe(&c.values);
+        let scene = self.scene_for(&c.values)?;
+        let job = Job::Timing {
+            warmup: self.options.warmup,
+            frames: self.options.frames.max(1),
+        };
+        let timed = render(&scene, job).map_err(|e| render_error(&what, "timed run", e))?;
+        let Timings {
+            pass_median_ms,
+            gpu_ms,
+            cpu_ms,
+        } = timings(&what, &timed)?;
+        if state.device.is_empty() {
+            state.device = timed.device.clone();
+        }
+        add_new_names(&mut state.passes, &timed.passes);
+        add_new_names(
+            &mut state.setup_names,
+            timed.setup.iter().map(|(name, _)| name),
+        );
+        let setup = timed.setup.clone();
+        let empty_median_ms = Summary::of(&timed.empty_pass_ms).map(|s| s.median);
+        drop(timed);
+
+        let images = &mut state.images;
+        let test = self.gpu_images(images, render, &c.values)?;
+        let (reference, ref_name) = if images.cpu {
+            let reference = self.cpu_reference_images(images, render, &scene, &c.values, &what)?;
+            (reference, format!("CPU reference ({what})"))
+        } else {
+            let name = format!("reference ({})", self.describe(&c.reference));
+            (self.gpu_images(images, render, &c.reference)?, name)
+        };
+        let errors = image_errors(&ref_name, &reference, &what, &test)?;
+        Ok(Row {
+            index,
+            settings: self.pairs(&c.values),
+            reference: self.pairs(&c.reference),
+            is_reference: !images.cpu && c.values == c.reference,
+            pass_median_ms,
+            gpu_x_empty: empty_median_ms
+                .filter(|&e| e > 0.0)
+                .map(|e| gpu_ms.median / e),
+            empty_median_ms,
+            gpu_ms,
+            cpu_ms,
+            rmse: errors.rmse,
+            max_rel_error: errors.max_rel_error,
+            flip_mean: errors.flip_mean,
+            flip_p99: errors.flip_p99,
+            setup,
+            pareto: false,
+        })
+    }
+
+    /// The GPU images of the combination `values`: from the cache if it is
+    /// a reference already rendered, else rendered now.
+    fn gpu_images<E>(
+        &self,
+        images: &mut ComparisonImages<'_>,
+        render: &mut impl FnMut(&Scene, Job) -> Result<Rendered, E>,
+        values: &[String],
+    ) -> Result<Rc<Images>, SweepError>
+    where
+        E: Into<Box<dyn std::error::Error + Send + Sync>>,
+    {
+        if let Some(hit) = images.cache.get(values) {
+            return Ok(hit.clone());
+        }
+        let what = self.describe(values);
+        let run = render(&self.scene_for(values)?, Job::Images)
+            .map_err(|e| render_error(&what, "image run", e))?;
+        let hdr = run.hdr.ok_or_else(|| SweepError::Render {
+            what: what.clone(),
+            reason: "the image run returned no HDR image".into(),
+        })?;
+        let rendered = Rc::new(Images {
+            output: run.output,
+            hdr,
+        });
+        // Only references are needed again; other images are
+        // dropped after their one comparison.
+        if images.references.contains(values) {
+            images.cache.insert(values.to_vec(), rendered.clone());
+        }
+        Ok(rendered)
+    }
+
+    /// The CPU reference of the combination `values` (its `scene`), shared
+    /// by every combination it does not depend on.
+    fn cpu_reference_images<E>(
+        &self,
+        images: &mut ComparisonImages<'_>,
+        render: &mut impl FnMut(&Scene, Job) -> Result<Rendered, E>,
+        scene: &Scene,
+        values: &[String],
+        what: &str,
+    ) -> Result<Rc<Images>, SweepError>
+    where
+        E: Into<Box<dyn std::error::Error + Send + Sync>>,
+    {
+        let key = self.cpu_reference_scene(values)?;
+        if let Some((_, hit)) = images.cpu_cache.iter().find(|(k, _)| *k == key) {
+            return Ok(hit.clone());
+        }
+        let run =
+            render(scene, Job::Reference).map_err(|e| render_error(what, "CPU reference", e))?;
+        let hdr = run.hdr.ok_or_else(|| SweepError::Render {
+            what: format!("{what} (CPU reference)"),
+            reason: "no HDR image was returned".into(),
+        })?;
+        let rendered = Rc::new(Images {
+            output: run.output,
+            hdr,
+        });
+        images.cpu_cache.push((key, rendered.clone()));
+        Ok(rendered)
+    }
+
+    /// The sweep's result from the shard's rows, the front marked.
+    fn shard_result(
+        &self,
+        shard: Option<Shard>,
+        mut rows: Vec<Row>,
+        state: ShardState<'_>,
+    ) -> SweepResult {
         let points: Vec<(f64, f64)> = rows
             .iter()
             .map(|r| (TimeAxis::GpuMedianMs.of(r), r.rmse))
@@ -501,7 +535,8 @@ impl Sweep {
         for (row, on_front) in rows.iter_mut().zip(pareto_front(&points)) {
             row.pareto = on_front;
         }
-        Ok(SweepResult {
+        let device = state.device;
+        SweepResult {
             aerial_version: env!("CARGO_PKG_VERSION").to_string(),
             scene: self.scene_name.clone(),
             scene_hash: self.scene_hash.clone(),
@@ -521,12 +556,70 @@ impl Sweep {
                 .into_iter()
                 .collect(),
             time_axis: TimeAxis::GpuMedianMs,
-            passes,
-            setup: setup_names,
+            passes: state.passes,
+            setup: state.setup_names,
             asset_warnings: self.base.warnings.len(),
             rows,
-        })
+        }
     }
+}
+
+/// What a shard's run gathers across its combinations.
+struct ShardState<'a> {
+    images: ComparisonImages<'a>,
+    /// The device of the first timed run.
+    device: String,
+    /// Pass names, in the order first seen.
+    passes: Vec<String>,
+    /// Setup step names, in the order first seen.
+    setup_names: Vec<String>,
+}
+
+/// The images rendered for comparison, and the references kept for reuse.
+struct ComparisonImages<'a> {
+    /// Whether the references are the CPU's.
+    cpu: bool,
+    /// The combinations whose GPU images serve as references.
+    references: HashSet<&'a [String]>,
+    cache: HashMap<Vec<String>, Rc<Images>>,
+    /// CPU references by what they depend on; a short list, searched
+    /// linearly (`CpuScene` holds floats, so it is not `Hash`).
+    cpu_cache: Vec<(CpuScene, Rc<Images>)>,
+}
+
+/// A combination's errors against its reference.
+struct ImageErrors {
+    rmse: f64,
+    max_rel_error: f64,
+    flip_mean: f64,
+    flip_p99: f64,
+}
+
+/// RMSE (linear HDR), the largest relative error, and FLIP (sRGB output)
+/// of `test` against `reference`.
+fn image_errors(
+    ref_name: &str,
+    reference: &Images,
+    what: &str,
+    test: &Images,
+) -> Result<ImageErrors, SweepError> {
+    let compare = |reference, test, metric| {
+        compare_images(ref_name, reference, what, test, metric).map_err(|source| {
+            SweepError::Compare {
+                what: what.to_string(),
+                source,
+            }
+        })
+    };
+    let rmse = compare(linear(&reference.hdr), linear(&test.hdr), Metric::Rmse)?;
+    let max_rel_error = super::max_relative_error(&reference.hdr, &test.hdr);
+    let flip = compare(srgb(&reference.output), srgb(&test.output), Metric::Flip)?;
+    Ok(ImageErrors {
+        rmse: rmse.mean,
+        max_rel_error,
+        flip_mean: flip.mean,
+        flip_p99: flip.p99,
+    })
 }
 
 /// Appends the names in `names` that `seen` does not hold yet, in order.

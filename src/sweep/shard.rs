@@ -17,7 +17,8 @@
 //! count), a shard given twice, missing shards (listing them) and a shard
 //! whose rows are not its slice.
 
-use super::{pareto_front, Row, SweepResult, TimeAxis};
+use super::run::{reference_values, Axis};
+use super::{pareto_front, ReferenceKind, Row, SweepResult, TimeAxis};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -427,8 +428,18 @@ pub fn merge(shards: Vec<(PathBuf, SweepResult)>) -> Result<SweepResult, ShardEr
 /// 1, the floor above 0, `gpu_x_empty` the GPU median over the floor). A
 /// row that contradicts its index would be merged under another label.
 fn check_rows(path: &Path, result: &SweepResult) -> Result<(), ShardError> {
-    use super::run::{reference_values, Axis};
-    use super::ReferenceKind;
+    let axes = sweep_axes(path, result)?;
+    for (n, row) in result.rows.iter().enumerate() {
+        let check = RowCheck { path, n, row };
+        let own = check.labels(result, &axes)?;
+        check.numbers(own)?;
+    }
+    Ok(())
+}
+
+/// The axes of a shard's result, which its knobs and number of
+/// combinations must agree with.
+fn sweep_axes(path: &Path, result: &SweepResult) -> Result<Vec<Axis>, ShardError> {
     let field_error = |field: &'static str, reason: String| ShardError::BadField {
         path: path.to_path_buf(),
         field,
@@ -464,16 +475,34 @@ fn check_rows(path: &Path, result: &SweepResult) -> Result<(), ShardError> {
             ),
         ));
     }
-    for (n, row) in result.rows.iter().enumerate() {
-        let bad = |field: &str, reason: String| ShardError::BadRow {
-            path: path.to_path_buf(),
-            row: n,
-            index: row.index,
+    Ok(axes)
+}
+
+/// The checks of one row (the `n`th) of a shard's result.
+struct RowCheck<'a> {
+    path: &'a Path,
+    n: usize,
+    row: &'a Row,
+}
+
+impl RowCheck<'_> {
+    fn bad(&self, field: &str, reason: String) -> ShardError {
+        ShardError::BadRow {
+            path: self.path.to_path_buf(),
+            row: self.n,
+            index: self.row.index,
             field: field.to_string(),
             reason,
-        };
+        }
+    }
+
+    /// Checks the row's settings, reference and `is_reference` against
+    /// the combination its index names; returns whether the combination
+    /// is its own reference.
+    fn labels(&self, result: &SweepResult, axes: &[Axis]) -> Result<bool, ShardError> {
+        let row = self.row;
         if row.index >= result.combinations {
-            return Err(bad(
+            return Err(self.bad(
                 "index",
                 format!("beyond the sweep's {} combinations", result.combinations),
             ));
@@ -482,7 +511,7 @@ fn check_rows(path: &Path, result: &SweepResult) -> Result<(), ShardError> {
         // axis the fastest digit.
         let mut values = vec![String::new(); axes.len()];
         let mut rest = row.index;
-        for (slot, axis) in values.iter_mut().zip(&axes).rev() {
+        for (slot, axis) in values.iter_mut().zip(axes).rev() {
             *slot = axis.values[rest % axis.values.len()].clone();
             rest /= axis.values.len();
         }
@@ -494,15 +523,14 @@ fn check_rows(path: &Path, result: &SweepResult) -> Result<(), ShardError> {
                 .join(" ")
         };
         let pairs = |values: &[String]| -> Vec<(String, String)> {
-            names
-                .iter()
+            axes.iter()
                 .zip(values)
-                .map(|(k, v)| (k.to_string(), v.clone()))
+                .map(|(a, v)| (a.knob.name.to_string(), v.clone()))
                 .collect()
         };
         let expected = pairs(&values);
         if row.settings != expected {
-            return Err(bad(
+            return Err(self.bad(
                 "settings",
                 format!(
                     "'{}' contradicts the row's index, which is '{}' in this sweep",
@@ -512,12 +540,12 @@ fn check_rows(path: &Path, result: &SweepResult) -> Result<(), ShardError> {
             ));
         }
         let reference_of = match result.reference {
-            ReferenceKind::GpuBest => reference_values(&axes, &values),
+            ReferenceKind::GpuBest => reference_values(axes, &values),
             ReferenceKind::Cpu => values.clone(),
         };
         let reference = pairs(&reference_of);
         if row.reference != reference {
-            return Err(bad(
+            return Err(self.bad(
                 "reference",
                 format!(
                     "'{}', but this combination's reference is '{}'",
@@ -528,7 +556,7 @@ fn check_rows(path: &Path, result: &SweepResult) -> Result<(), ShardError> {
         }
         let own = result.reference == ReferenceKind::GpuBest && values == reference_of;
         if row.is_reference != own {
-            return Err(bad(
+            return Err(self.bad(
                 "is_reference",
                 format!(
                     "{}, but this combination {} its own reference",
@@ -537,38 +565,47 @@ fn check_rows(path: &Path, result: &SweepResult) -> Result<(), ShardError> {
                 ),
             ));
         }
-        let number = |field: &str, v: f64, max: f64| -> Result<(), ShardError> {
-            if !v.is_finite() || v < 0.0 || v > max {
-                let range = if max.is_finite() {
-                    format!("a number from 0 to {max}")
-                } else {
-                    "a finite number, at least 0".to_string()
-                };
-                return Err(bad(field, format!("{v} is not {range}")));
-            }
-            Ok(())
-        };
+        Ok(own)
+    }
+
+    /// Refuses `v` unless it is finite, at least 0 and at most `max`.
+    fn number(&self, field: &str, v: f64, max: f64) -> Result<(), ShardError> {
+        if !v.is_finite() || v < 0.0 || v > max {
+            let range = if max.is_finite() {
+                format!("a number from 0 to {max}")
+            } else {
+                "a finite number, at least 0".to_string()
+            };
+            return Err(self.bad(field, format!("{v} is not {range}")));
+        }
+        Ok(())
+    }
+
+    /// Checks every measured value of the row: errors (all 0 where the
+    /// combination is `own` reference), times and the floor.
+    fn numbers(&self, own: bool) -> Result<(), ShardError> {
+        let row = self.row;
         let any = f64::INFINITY;
-        number("rmse", row.rmse, any)?;
-        number("max_rel_error", row.max_rel_error, any)?;
-        number("flip_mean", row.flip_mean, 1.0)?;
-        number("flip_p99", row.flip_p99, 1.0)?;
+        self.number("rmse", row.rmse, any)?;
+        self.number("max_rel_error", row.max_rel_error, any)?;
+        self.number("flip_mean", row.flip_mean, 1.0)?;
+        self.number("flip_p99", row.flip_p99, 1.0)?;
         if own && (row.rmse, row.max_rel_error, row.flip_mean, row.flip_p99) != (0.0, 0.0, 0.0, 0.0)
         {
-            return Err(bad(
+            return Err(self.bad(
                 "rmse",
                 "a combination compared with itself has every error 0".to_string(),
             ));
         }
         for (name, s) in [("gpu_ms", &row.gpu_ms), ("cpu_ms", &row.cpu_ms)] {
             for (stat, v) in s.named() {
-                number(&format!("{name}.{stat}"), v, any)?;
+                self.number(&format!("{name}.{stat}"), v, any)?;
             }
             if s.count == 0 {
-                return Err(bad(&format!("{name}.count"), "0 frames".to_string()));
+                return Err(self.bad(&format!("{name}.count"), "0 frames".to_string()));
             }
             if !(s.min <= s.median && s.median <= s.p95 && s.p95 <= s.max) {
-                return Err(bad(
+                return Err(self.bad(
                     name,
                     format!(
                         "min {} <= median {} <= p95 {} <= max {} does not hold",
@@ -578,37 +615,45 @@ fn check_rows(path: &Path, result: &SweepResult) -> Result<(), ShardError> {
             }
         }
         for (pass, ms) in &row.pass_median_ms {
-            number(&format!("pass_median_ms.{pass}"), *ms, any)?;
+            self.number(&format!("pass_median_ms.{pass}"), *ms, any)?;
         }
         for (name, v) in &row.setup {
-            number(&format!("setup.{name}"), *v, any)?;
+            self.number(&format!("setup.{name}"), *v, any)?;
         }
+        self.floor()
+    }
+
+    /// The empty pass's median and `gpu_x_empty`: both or neither, the
+    /// floor above 0, and `gpu_x_empty` the GPU median over it.
+    fn floor(&self) -> Result<(), ShardError> {
+        let row = self.row;
+        let any = f64::INFINITY;
         match (row.empty_median_ms, row.gpu_x_empty) {
             (None, None) => {}
             (Some(floor), Some(x)) => {
-                number("empty_median_ms", floor, any)?;
+                self.number("empty_median_ms", floor, any)?;
                 if floor == 0.0 {
-                    return Err(bad(
+                    return Err(self.bad(
                         "empty_median_ms",
                         "0; the empty pass always takes time".to_string(),
                     ));
                 }
-                number("gpu_x_empty", x, any)?;
+                self.number("gpu_x_empty", x, any)?;
                 let expected = row.gpu_ms.median / floor;
                 if (x - expected).abs() > 1e-9 * expected.abs().max(x.abs()) {
-                    return Err(bad(
+                    return Err(self.bad(
                         "gpu_x_empty",
                         format!("{x} is not gpu_ms.median / empty_median_ms ({expected})"),
                     ));
                 }
             }
             (floor, x) => {
-                return Err(bad(
+                return Err(self.bad(
                     "gpu_x_empty",
                     format!("{x:?} with empty_median_ms {floor:?}: one is given without the other"),
                 ))
             }
         }
+        Ok(())
     }
-    Ok(())
 }

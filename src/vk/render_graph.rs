@@ -145,218 +145,271 @@ impl RenderTargets {
         attachments: &[AttachmentSpec],
         subpasses: &[SubpassSpec],
     ) -> Result<RenderTargets, VkError> {
-        let n = attachments.len();
-        // uses[s][a]: what subpass s does with attachment a.
-        let uses: Vec<Vec<Vec<Access>>> = subpasses
-            .iter()
-            .map(|s| {
-                let mut u = vec![Vec::new(); n];
-                for &c in &s.colour {
-                    u[c].push(Access::ColourWrite);
-                }
-                if let Some((d, how)) = s.depth {
-                    u[d].push(match how {
-                        DepthUse::Write => Access::DepthWrite,
-                        DepthUse::Test => Access::DepthTest,
-                    });
-                }
-                for &i in &s.inputs {
-                    u[i].push(Access::Input);
-                }
-                u
-            })
-            .collect();
-        for (s, spec) in subpasses.iter().enumerate() {
-            for (a, u) in uses[s].iter().enumerate() {
-                if u.contains(&Access::Input) && u.iter().any(|x| x.writes()) {
-                    return Err(VkError::Graph(format!(
-                        "subpass '{}' both writes and reads attachment '{}'",
-                        spec.name, attachments[a].name
-                    )));
-                }
-            }
-        }
-        let used_in = |a: usize| -> Vec<usize> {
-            (0..subpasses.len())
-                .filter(|&s| !uses[s][a].is_empty())
-                .collect()
-        };
-
-        let mut descriptions = Vec::with_capacity(n);
-        let mut initial_layouts = Vec::with_capacity(n);
-        let mut final_layouts = Vec::with_capacity(n);
-        let mut usages = Vec::with_capacity(n);
-        for (a, spec) in attachments.iter().enumerate() {
-            let depth = is_depth(spec.format);
-            let users = used_in(a);
-            let (Some(&first), Some(&last)) = (users.first(), users.last()) else {
-                return Err(VkError::Graph(format!(
-                    "attachment '{}' is used by no subpass",
-                    spec.name
-                )));
-            };
-            let mut usage = vk::ImageUsageFlags::empty();
-            for s in &users {
-                for u in &uses[*s][a] {
-                    usage |= match u {
-                        Access::ColourWrite => vk::ImageUsageFlags::COLOR_ATTACHMENT,
-                        Access::DepthWrite | Access::DepthTest => {
-                            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
-                        }
-                        Access::Input => vk::ImageUsageFlags::INPUT_ATTACHMENT,
-                    };
-                }
-            }
-            let (load, initial) = match spec.start {
-                AttachmentStart::Clear(_) => {
-                    (vk::AttachmentLoadOp::CLEAR, vk::ImageLayout::UNDEFINED)
-                }
-                AttachmentStart::Undefined => {
-                    (vk::AttachmentLoadOp::DONT_CARE, vk::ImageLayout::UNDEFINED)
-                }
-                AttachmentStart::Loaded if depth => {
-                    return Err(VkError::Graph(format!(
-                        "attachment '{}': loading a depth attachment is not supported",
-                        spec.name
-                    )));
-                }
-                AttachmentStart::Loaded => {
-                    usage |= vk::ImageUsageFlags::TRANSFER_DST;
-                    (
-                        vk::AttachmentLoadOp::LOAD,
-                        layout_for(depth, &uses[first][a]),
-                    )
-                }
-            };
-            // Stored only when something reads it after the pass.
-            let (store, final_layout) = if spec.read_after {
-                usage |= vk::ImageUsageFlags::TRANSFER_SRC;
-                (
-                    vk::AttachmentStoreOp::STORE,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                )
-            } else {
-                (
-                    vk::AttachmentStoreOp::DONT_CARE,
-                    layout_for(depth, &uses[last][a]),
-                )
-            };
-            descriptions.push(
-                vk::AttachmentDescription::default()
-                    .format(spec.format)
-                    .samples(vk::SampleCountFlags::TYPE_1)
-                    .load_op(load)
-                    .store_op(store)
-                    .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
-                    .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
-                    .initial_layout(initial)
-                    .final_layout(final_layout),
-            );
-            initial_layouts.push(initial);
-            final_layouts.push(final_layout);
-            usages.push(usage);
-        }
-
-        // Attachment references, kept alive until the pass is created.
-        let reference = |s: usize, a: usize| vk::AttachmentReference {
-            attachment: a as u32,
-            layout: layout_for(is_depth(attachments[a].format), &uses[s][a]),
-        };
-        let colour_refs: Vec<Vec<vk::AttachmentReference>> = subpasses
-            .iter()
-            .enumerate()
-            .map(|(s, spec)| spec.colour.iter().map(|&a| reference(s, a)).collect())
-            .collect();
-        let input_refs: Vec<Vec<vk::AttachmentReference>> = subpasses
-            .iter()
-            .enumerate()
-            .map(|(s, spec)| spec.inputs.iter().map(|&a| reference(s, a)).collect())
-            .collect();
-        let depth_refs: Vec<Option<vk::AttachmentReference>> = subpasses
-            .iter()
-            .enumerate()
-            .map(|(s, spec)| spec.depth.map(|(a, _)| reference(s, a)))
-            .collect();
-        let descs: Vec<vk::SubpassDescription> = (0..subpasses.len())
-            .map(|s| {
-                let mut d = vk::SubpassDescription::default()
-                    .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
-                    .color_attachments(&colour_refs[s])
-                    .input_attachments(&input_refs[s]);
-                if let Some(r) = &depth_refs[s] {
-                    d = d.depth_stencil_attachment(r);
-                }
-                d
-            })
-            .collect();
-
-        let dependencies = dependencies(attachments, &uses);
-        let info = vk::RenderPassCreateInfo::default()
-            .attachments(&descriptions)
-            .subpasses(&descs)
-            .dependencies(&dependencies);
-        // SAFETY: valid device; every referenced array is a local alive for
-        // the call, and attachment indices are within `descriptions`.
-        let handle = unsafe { ctx.device.create_render_pass(&info, None) }?;
-        let render_pass = RenderPass {
-            ctx: ctx.clone(),
-            handle,
-        };
-
-        let images = attachments
-            .iter()
-            .zip(&usages)
-            .map(|(spec, &usage)| {
-                Image::new(
-                    ctx,
-                    spec.name,
-                    ImageDesc {
-                        width,
-                        height,
-                        format: spec.format,
-                        usage,
-                        mip_levels: 1,
-                        aspect: if is_depth(spec.format) {
-                            vk::ImageAspectFlags::DEPTH
-                        } else {
-                            vk::ImageAspectFlags::COLOR
-                        },
-                    },
-                )
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        let uses = attachment_uses(attachments, subpasses)?;
+        let described = describe_attachments(attachments, &uses)?;
+        let render_pass =
+            create_render_pass(ctx, attachments, subpasses, &uses, &described.descriptions)?;
+        let images = create_attachment_images(ctx, width, height, attachments, &described.usages)?;
         let refs: Vec<&Image> = images.iter().collect();
         let framebuffer = Framebuffer::new(ctx, &render_pass, &refs)?;
-        // Clear values up to the last cleared attachment only: best-practices
-        // validation warns about values given for attachments that are not
-        // cleared (callers list cleared attachments first to avoid any).
-        let cleared = attachments
-            .iter()
-            .rposition(|a| matches!(a.start, AttachmentStart::Clear(_)))
-            .map_or(0, |i| i + 1);
-        let clears = attachments[..cleared]
-            .iter()
-            .map(|spec| {
-                let v = match spec.start {
-                    AttachmentStart::Clear(v) => v,
-                    _ => [0.0; 4],
-                };
-                if is_depth(spec.format) {
-                    super::clear_depth(v[0])
-                } else {
-                    super::clear_color(v)
-                }
-            })
-            .collect();
         Ok(RenderTargets {
             render_pass,
             framebuffer,
             images,
-            clears,
-            final_layouts,
-            initial_layouts,
+            clears: clear_values(attachments),
+            final_layouts: described.final_layouts,
+            initial_layouts: described.initial_layouts,
         })
     }
+}
+
+/// `uses[s][a]`: what subpass s does with attachment a. A subpass may not
+/// both write and read (as an input) the same attachment.
+fn attachment_uses(
+    attachments: &[AttachmentSpec],
+    subpasses: &[SubpassSpec],
+) -> Result<Vec<Vec<Vec<Access>>>, VkError> {
+    let n = attachments.len();
+    let uses: Vec<Vec<Vec<Access>>> = subpasses
+        .iter()
+        .map(|s| {
+            let mut u = vec![Vec::new(); n];
+            for &c in &s.colour {
+                u[c].push(Access::ColourWrite);
+            }
+            if let Some((d, how)) = s.depth {
+                u[d].push(match how {
+                    DepthUse::Write => Access::DepthWrite,
+                    DepthUse::Test => Access::DepthTest,
+                });
+            }
+            for &i in &s.inputs {
+                u[i].push(Access::Input);
+            }
+            u
+        })
+        .collect();
+    for (s, spec) in subpasses.iter().enumerate() {
+        for (a, u) in uses[s].iter().enumerate() {
+            if u.contains(&Access::Input) && u.iter().any(|x| x.writes()) {
+                return Err(VkError::Graph(format!(
+                    "subpass '{}' both writes and reads attachment '{}'",
+                    spec.name, attachments[a].name
+                )));
+            }
+        }
+    }
+    Ok(uses)
+}
+
+/// What the render pass and the images need to know of each attachment,
+/// one entry per [`AttachmentSpec`] in the same order.
+struct DescribedAttachments {
+    descriptions: Vec<vk::AttachmentDescription>,
+    initial_layouts: Vec<vk::ImageLayout>,
+    final_layouts: Vec<vk::ImageLayout>,
+    usages: Vec<vk::ImageUsageFlags>,
+}
+
+/// The description, layouts and image usage of every attachment, from
+/// how it starts, whether it is read after the pass, and its uses.
+fn describe_attachments(
+    attachments: &[AttachmentSpec],
+    uses: &[Vec<Vec<Access>>],
+) -> Result<DescribedAttachments, VkError> {
+    let n = attachments.len();
+    let mut described = DescribedAttachments {
+        descriptions: Vec::with_capacity(n),
+        initial_layouts: Vec::with_capacity(n),
+        final_layouts: Vec::with_capacity(n),
+        usages: Vec::with_capacity(n),
+    };
+    for (a, spec) in attachments.iter().enumerate() {
+        let depth = is_depth(spec.format);
+        let users: Vec<usize> = (0..uses.len())
+            .filter(|&s| !uses[s][a].is_empty())
+            .collect();
+        let (Some(&first), Some(&last)) = (users.first(), users.last()) else {
+            return Err(VkError::Graph(format!(
+                "attachment '{}' is used by no subpass",
+                spec.name
+            )));
+        };
+        let mut usage = attachment_usage(users.iter().flat_map(|&s| &uses[s][a]));
+        let (load, initial) = match spec.start {
+            AttachmentStart::Clear(_) => (vk::AttachmentLoadOp::CLEAR, vk::ImageLayout::UNDEFINED),
+            AttachmentStart::Undefined => {
+                (vk::AttachmentLoadOp::DONT_CARE, vk::ImageLayout::UNDEFINED)
+            }
+            AttachmentStart::Loaded if depth => {
+                return Err(VkError::Graph(format!(
+                    "attachment '{}': loading a depth attachment is not supported",
+                    spec.name
+                )));
+            }
+            AttachmentStart::Loaded => {
+                usage |= vk::ImageUsageFlags::TRANSFER_DST;
+                (
+                    vk::AttachmentLoadOp::LOAD,
+                    layout_for(depth, &uses[first][a]),
+                )
+            }
+        };
+        // Stored only when something reads it after the pass.
+        let (store, final_layout) = if spec.read_after {
+            usage |= vk::ImageUsageFlags::TRANSFER_SRC;
+            (
+                vk::AttachmentStoreOp::STORE,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            )
+        } else {
+            (
+                vk::AttachmentStoreOp::DONT_CARE,
+                layout_for(depth, &uses[last][a]),
+            )
+        };
+        described.descriptions.push(
+            vk::AttachmentDescription::default()
+                .format(spec.format)
+                .samples(vk::SampleCountFlags::TYPE_1)
+                .load_op(load)
+                .store_op(store)
+                .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+                .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+                .initial_layout(initial)
+                .final_layout(final_layout),
+        );
+        described.initial_layouts.push(initial);
+        described.final_layouts.push(final_layout);
+        described.usages.push(usage);
+    }
+    Ok(described)
+}
+
+/// The image usage an attachment needs for `accesses`, its uses in every
+/// subpass.
+fn attachment_usage<'a>(accesses: impl Iterator<Item = &'a Access>) -> vk::ImageUsageFlags {
+    let mut usage = vk::ImageUsageFlags::empty();
+    for u in accesses {
+        usage |= match u {
+            Access::ColourWrite => vk::ImageUsageFlags::COLOR_ATTACHMENT,
+            Access::DepthWrite | Access::DepthTest => vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            Access::Input => vk::ImageUsageFlags::INPUT_ATTACHMENT,
+        };
+    }
+    usage
+}
+
+/// The render pass: the subpasses' attachment references and the
+/// dependencies their uses imply.
+fn create_render_pass(
+    ctx: &Arc<Context>,
+    attachments: &[AttachmentSpec],
+    subpasses: &[SubpassSpec],
+    uses: &[Vec<Vec<Access>>],
+    descriptions: &[vk::AttachmentDescription],
+) -> Result<RenderPass, VkError> {
+    // Attachment references, kept alive until the pass is created.
+    let reference = |s: usize, a: usize| vk::AttachmentReference {
+        attachment: a as u32,
+        layout: layout_for(is_depth(attachments[a].format), &uses[s][a]),
+    };
+    let colour_refs: Vec<Vec<vk::AttachmentReference>> = subpasses
+        .iter()
+        .enumerate()
+        .map(|(s, spec)| spec.colour.iter().map(|&a| reference(s, a)).collect())
+        .collect();
+    let input_refs: Vec<Vec<vk::AttachmentReference>> = subpasses
+        .iter()
+        .enumerate()
+        .map(|(s, spec)| spec.inputs.iter().map(|&a| reference(s, a)).collect())
+        .collect();
+    let depth_refs: Vec<Option<vk::AttachmentReference>> = subpasses
+        .iter()
+        .enumerate()
+        .map(|(s, spec)| spec.depth.map(|(a, _)| reference(s, a)))
+        .collect();
+    let descs: Vec<vk::SubpassDescription> = (0..subpasses.len())
+        .map(|s| {
+            let mut d = vk::SubpassDescription::default()
+                .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+                .color_attachments(&colour_refs[s])
+                .input_attachments(&input_refs[s]);
+            if let Some(r) = &depth_refs[s] {
+                d = d.depth_stencil_attachment(r);
+            }
+            d
+        })
+        .collect();
+
+    let dependencies = dependencies(attachments, uses);
+    let info = vk::RenderPassCreateInfo::default()
+        .attachments(descriptions)
+        .subpasses(&descs)
+        .dependencies(&dependencies);
+    // SAFETY: valid device; every referenced array is a local alive for
+    // the call, and attachment indices are within `descriptions`.
+    let handle = unsafe { ctx.device.create_render_pass(&info, None) }?;
+    Ok(RenderPass {
+        ctx: ctx.clone(),
+        handle,
+    })
+}
+
+/// One `width`×`height` image per attachment, with the usage its uses need.
+fn create_attachment_images(
+    ctx: &Arc<Context>,
+    width: u32,
+    height: u32,
+    attachments: &[AttachmentSpec],
+    usages: &[vk::ImageUsageFlags],
+) -> Result<Vec<Image>, VkError> {
+    attachments
+        .iter()
+        .zip(usages)
+        .map(|(spec, &usage)| {
+            Image::new(
+                ctx,
+                spec.name,
+                ImageDesc {
+                    width,
+                    height,
+                    format: spec.format,
+                    usage,
+                    mip_levels: 1,
+                    aspect: if is_depth(spec.format) {
+                        vk::ImageAspectFlags::DEPTH
+                    } else {
+                        vk::ImageAspectFlags::COLOR
+                    },
+                },
+            )
+        })
+        .collect()
+}
+
+/// Clear values up to the last cleared attachment only: best-practices
+/// validation warns about values given for attachments that are not
+/// cleared (callers list cleared attachments first to avoid any).
+fn clear_values(attachments: &[AttachmentSpec]) -> Vec<vk::ClearValue> {
+    let cleared = attachments
+        .iter()
+        .rposition(|a| matches!(a.start, AttachmentStart::Clear(_)))
+        .map_or(0, |i| i + 1);
+    attachments[..cleared]
+        .iter()
+        .map(|spec| {
+            let v = match spec.start {
+                AttachmentStart::Clear(v) => v,
+                _ => [0.0; 4],
+            };
+            if is_depth(spec.format) {
+                super::clear_depth(v[0])
+            } else {
+                super::clear_color(v)
+            }
+        })
+        .collect()
 }
 
 /// The dependencies the uses imply:

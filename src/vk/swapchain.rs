@@ -136,6 +136,114 @@ pub struct Swapchain {
 /// holding sRGB-encoded values.
 const SOURCE_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 
+/// The swapchain's format, and whether the output is blitted into it
+/// (rather than copied).
+fn choose_format(
+    ctx: &Context,
+    formats: &[vk::SurfaceFormatKHR],
+) -> Result<(vk::SurfaceFormatKHR, bool), VkError> {
+    let pd = ctx.physical_device;
+    // The output holds sRGB-encoded bytes in a UNORM image: the window
+    // must show those bytes as they are. RGBA order takes a plain copy,
+    // which moves bytes unchanged into a UNORM or an sRGB image (both
+    // show encoded bytes in the sRGB colour space); BGRA a blit, which
+    // swaps the channels exactly only into a UNORM image (into an sRGB
+    // one it would encode the encoded values again).
+    let srgb = vk::ColorSpaceKHR::SRGB_NONLINEAR;
+    let pick = |f: vk::Format| {
+        formats
+            .iter()
+            .find(|s| s.format == f && s.color_space == srgb)
+            .copied()
+    };
+    let copied = pick(vk::Format::R8G8B8A8_UNORM).or_else(|| pick(vk::Format::R8G8B8A8_SRGB));
+    let (chosen, blit) = match (copied, pick(vk::Format::B8G8R8A8_UNORM)) {
+        (Some(f), _) => (f, false),
+        (None, Some(f)) => (f, true),
+        (None, None) => {
+            return Err(VkError::Surface(format!(
+                "the window offers no 8-bit format that shows sRGB-encoded bytes as they are \
+                 (R8G8B8A8_UNORM, R8G8B8A8_SRGB or B8G8R8A8_UNORM in the sRGB colour space); \
+                 it offers {:?}",
+                formats.iter().map(|f| f.format).collect::<Vec<_>>()
+            )))
+        }
+    };
+    if blit {
+        // SAFETY: valid physical device.
+        let src = unsafe {
+            ctx.instance
+                .get_physical_device_format_properties(pd, SOURCE_FORMAT)
+        };
+        // SAFETY: valid physical device.
+        let dst = unsafe {
+            ctx.instance
+                .get_physical_device_format_properties(pd, chosen.format)
+        };
+        if !src
+            .optimal_tiling_features
+            .contains(vk::FormatFeatureFlags::BLIT_SRC)
+            || !dst
+                .optimal_tiling_features
+                .contains(vk::FormatFeatureFlags::BLIT_DST)
+        {
+            return Err(VkError::Surface(format!(
+                "the window's format {:?} cannot be blitted to from {SOURCE_FORMAT:?} on this device",
+                chosen.format
+            )));
+        }
+    }
+    Ok((chosen, blit))
+}
+
+/// The images' size: the surface's own where it has one, else about
+/// `width`×`height` within the surface's bounds; refused without area.
+fn choose_extent(
+    caps: &vk::SurfaceCapabilitiesKHR,
+    width: u32,
+    height: u32,
+) -> Result<vk::Extent2D, VkError> {
+    let extent = if caps.current_extent.width != u32::MAX {
+        caps.current_extent
+    } else {
+        vk::Extent2D {
+            width: width.clamp(caps.min_image_extent.width, caps.max_image_extent.width),
+            height: height.clamp(caps.min_image_extent.height, caps.max_image_extent.height),
+        }
+    };
+    if extent.width == 0 || extent.height == 0 {
+        return Err(VkError::Surface(
+            "the window has no area (minimized); no swapchain can be made for it".into(),
+        ));
+    }
+    Ok(extent)
+}
+
+/// One more image than the minimum, so acquiring never waits for the
+/// presentation engine to release one; three where allowed.
+fn image_count(caps: &vk::SurfaceCapabilitiesKHR) -> u32 {
+    let count = (caps.min_image_count + 1).max(3);
+    if caps.max_image_count != 0 {
+        count.min(caps.max_image_count)
+    } else {
+        count
+    }
+}
+
+/// Opaque composition where the surface offers it, else the first mode it
+/// offers of the others.
+fn composite_alpha(caps: &vk::SurfaceCapabilitiesKHR) -> vk::CompositeAlphaFlagsKHR {
+    [
+        vk::CompositeAlphaFlagsKHR::OPAQUE,
+        vk::CompositeAlphaFlagsKHR::INHERIT,
+        vk::CompositeAlphaFlagsKHR::PRE_MULTIPLIED,
+        vk::CompositeAlphaFlagsKHR::POST_MULTIPLIED,
+    ]
+    .into_iter()
+    .find(|a| caps.supported_composite_alpha.contains(*a))
+    .unwrap_or(vk::CompositeAlphaFlagsKHR::OPAQUE)
+}
+
 impl Swapchain {
     /// A swapchain for `surface` of about `width`×`height` (the surface's
     /// own size when it has one), presenting with `mode`. `old` is the
@@ -163,56 +271,7 @@ impl Swapchain {
                 modes
             )));
         }
-        // The output holds sRGB-encoded bytes in a UNORM image: the window
-        // must show those bytes as they are. RGBA order takes a plain copy,
-        // which moves bytes unchanged into a UNORM or an sRGB image (both
-        // show encoded bytes in the sRGB colour space); BGRA a blit, which
-        // swaps the channels exactly only into a UNORM image (into an sRGB
-        // one it would encode the encoded values again).
-        let srgb = vk::ColorSpaceKHR::SRGB_NONLINEAR;
-        let pick = |f: vk::Format| {
-            formats
-                .iter()
-                .find(|s| s.format == f && s.color_space == srgb)
-                .copied()
-        };
-        let copied = pick(vk::Format::R8G8B8A8_UNORM).or_else(|| pick(vk::Format::R8G8B8A8_SRGB));
-        let (chosen, blit) = match (copied, pick(vk::Format::B8G8R8A8_UNORM)) {
-            (Some(f), _) => (f, false),
-            (None, Some(f)) => (f, true),
-            (None, None) => {
-                return Err(VkError::Surface(format!(
-                    "the window offers no 8-bit format that shows sRGB-encoded bytes as they are \
-                     (R8G8B8A8_UNORM, R8G8B8A8_SRGB or B8G8R8A8_UNORM in the sRGB colour space); \
-                     it offers {:?}",
-                    formats.iter().map(|f| f.format).collect::<Vec<_>>()
-                )))
-            }
-        };
-        if blit {
-            // SAFETY: valid physical device.
-            let src = unsafe {
-                ctx.instance
-                    .get_physical_device_format_properties(pd, SOURCE_FORMAT)
-            };
-            // SAFETY: valid physical device.
-            let dst = unsafe {
-                ctx.instance
-                    .get_physical_device_format_properties(pd, chosen.format)
-            };
-            if !src
-                .optimal_tiling_features
-                .contains(vk::FormatFeatureFlags::BLIT_SRC)
-                || !dst
-                    .optimal_tiling_features
-                    .contains(vk::FormatFeatureFlags::BLIT_DST)
-            {
-                return Err(VkError::Surface(format!(
-                    "the window's format {:?} cannot be blitted to from {SOURCE_FORMAT:?} on this device",
-                    chosen.format
-                )));
-            }
-        }
+        let (chosen, blit) = choose_format(ctx, &formats)?;
         if !caps
             .supported_usage_flags
             .contains(vk::ImageUsageFlags::TRANSFER_DST)
@@ -221,37 +280,10 @@ impl Swapchain {
                 "the window's images cannot be copied to (no TRANSFER_DST usage)".into(),
             ));
         }
-        let extent = if caps.current_extent.width != u32::MAX {
-            caps.current_extent
-        } else {
-            vk::Extent2D {
-                width: width.clamp(caps.min_image_extent.width, caps.max_image_extent.width),
-                height: height.clamp(caps.min_image_extent.height, caps.max_image_extent.height),
-            }
-        };
-        if extent.width == 0 || extent.height == 0 {
-            return Err(VkError::Surface(
-                "the window has no area (minimized); no swapchain can be made for it".into(),
-            ));
-        }
-        // One more image than the minimum, so acquiring never waits for the
-        // presentation engine to release one; three where allowed.
-        let mut count = (caps.min_image_count + 1).max(3);
-        if caps.max_image_count != 0 {
-            count = count.min(caps.max_image_count);
-        }
-        let alpha = [
-            vk::CompositeAlphaFlagsKHR::OPAQUE,
-            vk::CompositeAlphaFlagsKHR::INHERIT,
-            vk::CompositeAlphaFlagsKHR::PRE_MULTIPLIED,
-            vk::CompositeAlphaFlagsKHR::POST_MULTIPLIED,
-        ]
-        .into_iter()
-        .find(|a| caps.supported_composite_alpha.contains(*a))
-        .unwrap_or(vk::CompositeAlphaFlagsKHR::OPAQUE);
+        let extent = choose_extent(&caps, width, height)?;
         let info = vk::SwapchainCreateInfoKHR::default()
             .surface(surface.handle)
-            .min_image_count(count)
+            .min_image_count(image_count(&caps))
             .image_format(chosen.format)
             .image_color_space(chosen.color_space)
             .image_extent(extent)
@@ -259,7 +291,7 @@ impl Swapchain {
             .image_usage(vk::ImageUsageFlags::TRANSFER_DST)
             .image_sharing_mode(vk::SharingMode::EXCLUSIVE)
             .pre_transform(caps.current_transform)
-            .composite_alpha(alpha)
+            .composite_alpha(composite_alpha(&caps))
             .present_mode(mode.vk())
             .clipped(true)
             .old_swapchain(old.as_ref().map_or(vk::SwapchainKHR::null(), |o| o.handle));
@@ -289,30 +321,37 @@ impl Swapchain {
         // From here, Drop destroys whatever was created.
         // SAFETY: the swapchain was just created.
         swapchain.images = unsafe { swapchain.loader.get_swapchain_images(handle) }?;
-        let device = &ctx.device;
+        swapchain.create_frame_objects()?;
+        Ok(swapchain)
+    }
+
+    /// The semaphores, the fence and the command pool and buffer a frame
+    /// needs, stored as each is created so that Drop destroys them.
+    fn create_frame_objects(&mut self) -> Result<(), VkError> {
+        let device = &self.ctx.device;
         // SAFETY: valid device; each handle is stored at once so Drop
         // destroys it.
         unsafe {
-            swapchain.acquired = device.create_semaphore(&Default::default(), None)?;
-            for _ in 0..swapchain.images.len() {
+            self.acquired = device.create_semaphore(&Default::default(), None)?;
+            for _ in 0..self.images.len() {
                 let s = device.create_semaphore(&Default::default(), None)?;
-                swapchain.copied.push(s);
+                self.copied.push(s);
             }
-            swapchain.fence = device.create_fence(&Default::default(), None)?;
-            swapchain.pool = device.create_command_pool(
+            self.fence = device.create_fence(&Default::default(), None)?;
+            self.pool = device.create_command_pool(
                 &vk::CommandPoolCreateInfo::default()
                     .flags(vk::CommandPoolCreateFlags::TRANSIENT)
-                    .queue_family_index(ctx.queue_family),
+                    .queue_family_index(self.ctx.queue_family),
                 None,
             )?;
-            swapchain.cmd = device.allocate_command_buffers(
+            self.cmd = device.allocate_command_buffers(
                 &vk::CommandBufferAllocateInfo::default()
-                    .command_pool(swapchain.pool)
+                    .command_pool(self.pool)
                     .level(vk::CommandBufferLevel::PRIMARY)
                     .command_buffer_count(1),
             )?[0];
         }
-        Ok(swapchain)
+        Ok(())
     }
 
     /// The size of the images, which the presented source must have.

@@ -29,6 +29,7 @@ mod debug_view;
 mod docs_links;
 mod examples;
 mod frame_graph;
+mod function_length;
 mod fuzz;
 mod gbuffer_range;
 mod height_maps;

@@ -13,7 +13,7 @@
 
 use super::{InputAttachments, PassResources, PassSetup, RecordPass};
 use crate::render::gpu_types::GpuLight;
-use crate::render::scene_resources::{gpu_light, pack_blocks};
+use crate::render::scene_resources::{gpu_light, pack_blocks, SceneResources};
 use crate::render::shader_ids::{SPEC_LIGHT_ARRAY_LENGTH, SPEC_LIGHT_COUNT};
 use crate::render::static_lights;
 use crate::render::RenderError;
@@ -65,32 +65,11 @@ fn group_block(scene: &crate::scene::Scene, lights: &[usize]) -> Vec<u8> {
 pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     let ctx = setup.ctx;
     let resources = setup.scene_resources()?;
-    let plan = setup.plan;
-    let (w, h) = (plan.width as f32, plan.height as f32);
-
-    // Each group's tiles as two triangles per rectangle, in NDC, and its
-    // lights as one block.
-    let mut vertex_data: Vec<[f32; 2]> = Vec::new();
-    let mut blocks = Vec::new();
-    let mut groups = Vec::new();
-    for group in &plan.tile_groups {
-        let first = vertex_data.len();
-        for r in &group.rects {
-            let x0 = r.x0 as f32 / w * 2.0 - 1.0;
-            let x1 = r.x1 as f32 / w * 2.0 - 1.0;
-            let y0 = r.y0 as f32 / h * 2.0 - 1.0;
-            let y1 = r.y1 as f32 / h * 2.0 - 1.0;
-            vertex_data.extend([[x0, y0], [x1, y0], [x1, y1], [x0, y0], [x1, y1], [x0, y1]]);
-        }
-        blocks.push(group_block(setup.scene, &group.lights));
-        groups.push(GroupDraw {
-            lights: group.lights.clone(),
-            pipeline: 0,
-            vertex_offset: (first * std::mem::size_of::<[f32; 2]>()) as u64,
-            vertex_count: (vertex_data.len() - first) as u32,
-            block_offset: 0,
-        });
-    }
+    let TileGroups {
+        vertices: mut vertex_data,
+        blocks,
+        mut groups,
+    } = tile_groups(setup);
     let (block_bytes, offsets, block_range) =
         pack_blocks(ctx, &blocks, 0, |i| format!("screen tile group {i}"))?;
     for (g, offset) in groups.iter_mut().zip(offsets) {
@@ -129,7 +108,69 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         ctx,
         &[&resources.frame_layout, &lights_layout, &inputs.layout],
     )?;
+    let pipelines = create_pipelines(setup, resources, &layout, &mut groups)?;
+    Ok(Box::new(DeferredLightingPass {
+        groups,
+        pipelines,
+        layout,
+        lights_set,
+        _pool: pool,
+        _lights_layout: lights_layout,
+        inputs,
+        vertices,
+        light_blocks,
+    }))
+}
 
+/// The tile groups' draws (their pipelines and block offsets not yet
+/// set), vertices and light blocks.
+struct TileGroups {
+    /// Each group's tiles as two triangles per rectangle, in NDC.
+    vertices: Vec<[f32; 2]>,
+    /// Each group's lights as one block.
+    blocks: Vec<Vec<u8>>,
+    groups: Vec<GroupDraw>,
+}
+
+fn tile_groups(setup: &PassSetup<'_>) -> TileGroups {
+    let plan = setup.plan;
+    let (w, h) = (plan.width as f32, plan.height as f32);
+    let mut vertex_data: Vec<[f32; 2]> = Vec::new();
+    let mut blocks = Vec::new();
+    let mut groups = Vec::new();
+    for group in &plan.tile_groups {
+        let first = vertex_data.len();
+        for r in &group.rects {
+            let x0 = r.x0 as f32 / w * 2.0 - 1.0;
+            let x1 = r.x1 as f32 / w * 2.0 - 1.0;
+            let y0 = r.y0 as f32 / h * 2.0 - 1.0;
+            let y1 = r.y1 as f32 / h * 2.0 - 1.0;
+            vertex_data.extend([[x0, y0], [x1, y0], [x1, y1], [x0, y0], [x1, y1], [x0, y1]]);
+        }
+        blocks.push(group_block(setup.scene, &group.lights));
+        groups.push(GroupDraw {
+            lights: group.lights.clone(),
+            pipeline: 0,
+            vertex_offset: (first * std::mem::size_of::<[f32; 2]>()) as u64,
+            vertex_count: (vertex_data.len() - first) as u32,
+            block_offset: 0,
+        });
+    }
+    TileGroups {
+        vertices: vertex_data,
+        blocks,
+        groups,
+    }
+}
+
+/// The groups' pipelines, each group's index into them set.
+fn create_pipelines(
+    setup: &PassSetup<'_>,
+    resources: &SceneResources,
+    layout: &PipelineLayout,
+    groups: &mut [GroupDraw],
+) -> Result<Vec<GraphicsPipeline>, RenderError> {
+    let ctx = setup.ctx;
     let vert = ShaderModule::new(ctx, shaders::TILES_VERT.base())?;
     let frag = ShaderModule::new(ctx, shaders::DEFERRED_LIGHTING_FRAG.base())?;
     let attributes = [VertexAttribute {
@@ -144,7 +185,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     let static_lights = static_lights::enabled(setup.scene, fitting.count());
     let mut pipelines = Vec::new();
     let mut by_count: BTreeMap<usize, usize> = BTreeMap::new();
-    for g in &mut groups {
+    for g in groups.iter_mut() {
         let count = g.lights.len();
         let carried = static_lights && static_lights::fits(&g.lights);
         if !carried {
@@ -166,7 +207,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         ));
         let pipeline = GraphicsPipeline::new(
             ctx,
-            &layout,
+            layout,
             &setup.render_pass()?.render_pass,
             &GraphicsPipelineDesc {
                 vertex_shader: &vert,
@@ -185,17 +226,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
         )?;
         pipelines.push(pipeline);
     }
-    Ok(Box::new(DeferredLightingPass {
-        groups,
-        pipelines,
-        layout,
-        lights_set,
-        _pool: pool,
-        _lights_layout: lights_layout,
-        inputs,
-        vertices,
-        light_blocks,
-    }))
+    Ok(pipelines)
 }
 
 impl RecordPass for DeferredLightingPass {
