@@ -138,6 +138,7 @@ void shade() {
 #endif
     vec3 kd = object.kd.rgb * base.rgb;
     vec3 ka = object.ka.rgb * base.rgb;
+    vec4 ks = object.ks;
 #ifdef DEBUG_VIEW
     // The frame as the normal map uses it: T re-orthogonalized against the
     // (mapped) normal, B = sign * cross(N, T).
@@ -157,10 +158,10 @@ void shade() {
         // Ambient (and the atmosphere's sun and sky, if the scene has
         // one; the object's block holds no lights here); the lighting
         // pass adds the scene's lights.
-        out_color = vec4(blinn_phong(in_world_position, n, v, kd, ka), alpha);
+        out_color = vec4(blinn_phong(in_world_position, n, v, kd, ka, ks), alpha);
         out_albedo = vec4(kd, 1.0);
         out_normal = octahedral_encode(n);
-        out_material = object.ks;
+        out_material = ks;
         return;
     }
     out_albedo = vec4(0.0);
@@ -168,10 +169,10 @@ void shade() {
     out_material = vec4(0.0);
 #endif
     if (SHADING_MODEL == SHADING_TOON) {
-        vec3 c = abs(dot(n, v)) < TOON_SILHOUETTE ? vec3(0.0) : toon(in_world_position, n, v, kd, ka);
+        vec3 c = abs(dot(n, v)) < TOON_SILHOUETTE ? vec3(0.0) : toon(in_world_position, n, v, kd, ka, ks);
         out_color = vec4(c, alpha);
     } else {
-        out_color = vec4(blinn_phong(in_world_position, n, v, kd, ka), alpha);
+        out_color = vec4(blinn_phong(in_world_position, n, v, kd, ka, ks), alpha);
     }
 #endif
 #endif

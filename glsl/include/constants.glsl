@@ -28,6 +28,9 @@
 // Object pipelines: both sides drawn, back faces shaded with the normal
 // reversed.
 #define SPEC_TWO_SIDED 6
+// Object pipelines: the material maps selected by this bit mask rather
+// than by a shader variant (scene::material_maps).
+#define SPEC_MATERIAL_MAPS 7
 // Object pipelines drawing straight into the 8-bit output: the shader
 // encodes sRGB.
 #define SPEC_ENCODE_SRGB 15

@@ -28,6 +28,10 @@ pub const SPEC_SHININESS_EXPONENT: u32 = 4;
 /// Whether an object pipeline draws both sides (back faces shaded with
 /// the normal reversed).
 pub const SPEC_TWO_SIDED: u32 = 6;
+/// The material maps an object pipeline reads that are selected by a
+/// constant rather than a shader variant: a bit mask
+/// (`scene::material_maps::Selection::Constant`).
+pub const SPEC_MATERIAL_MAPS: u32 = 7;
 /// Whether an object pipeline draws straight into the 8-bit output, whose
 /// values the shader then sRGB-encodes (the output is UNORM).
 pub const SPEC_ENCODE_SRGB: u32 = 15;
@@ -97,6 +101,7 @@ mod tests {
             ("SPEC_DEBUG_ATTRIBUTE", SPEC_DEBUG_ATTRIBUTE),
             ("SPEC_SHININESS_EXPONENT", SPEC_SHININESS_EXPONENT),
             ("SPEC_TWO_SIDED", SPEC_TWO_SIDED),
+            ("SPEC_MATERIAL_MAPS", SPEC_MATERIAL_MAPS),
             ("SPEC_ENCODE_SRGB", SPEC_ENCODE_SRGB),
             ("SPEC_STATIC_LIGHTS", SPEC_STATIC_LIGHTS),
             ("SPEC_STATIC_LIGHT_DATA", SPEC_STATIC_LIGHT_DATA),

@@ -14,10 +14,11 @@ use super::checks::{Check, Result, MAX_COLOUR};
 use super::file::{
     Description, MaterialRef, ModelObject, ObjectDescription, PendingMaterial, DEFAULT_TESSELLATION,
 };
-use super::{
-    AssetWarning, Material, Object, Scene, SceneError, SceneWarning, ShadingModel, Shape, Texture,
-};
+use super::material_maps::{MapKind, MapSource, MaterialMaps};
+use super::{AssetWarning, Material, Object, Scene, SceneError, SceneWarning, ShadingModel, Shape};
 use crate::mesh::obj;
+use crate::mesh::tangents::TangentStats;
+use crate::mesh::Mesh;
 
 impl Check<'_> {
     /// The scene a parsed file describes: every OBJ model it names is
@@ -59,9 +60,7 @@ impl Check<'_> {
         scene.warnings = warnings;
 
         for m in &scene.materials {
-            let texture = m.texture.as_ref().and_then(|t| t.file());
-            files.extend(texture.map(Path::to_path_buf));
-            files.extend(m.normal_map.iter().cloned());
+            files.extend(m.maps.files().map(Path::to_path_buf));
         }
         let mut seen = std::collections::HashSet::new();
         files.retain(|f| seen.insert(f.clone()));
@@ -87,42 +86,7 @@ impl Check<'_> {
     ) -> Result<Vec<Object>> {
         let field = |name: &str| format!("{}.{name}", model.field);
         let resolved = &model.path;
-        // A bad budget setting is the setting's fault, not the model's: its
-        // error names the setting alone.
-        let model_error = |e: obj::ObjError| match e {
-            obj::ObjError::Budget(_) => SceneError::Model(e),
-            e => self.invalid(field("shape.path"), e.to_string()),
-        };
-        // A model is parsed, smoothed and given frames when the scene is
-        // loaded, before the renderer's own memory estimate: refuse here,
-        // from the file's size, what cannot fit the budget.
-        if let Ok(meta) = std::fs::metadata(resolved) {
-            let budget = crate::budget::MemoryBudget::from_env()
-                .map_err(|e| model_error(obj::ObjError::Budget(e)))?;
-            budget
-                .check(
-                    format!("model {}", resolved.display()),
-                    meta.len().saturating_mul(obj::MEMORY_PER_FILE_BYTE),
-                )
-                .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
-        }
-        // Parsing, smoothing and tangent frames each reuse the memory the
-        // stage before freed, and the free memory goes back to the system
-        // once the meshes are made.
-        let _reuse = crate::mesh::heap::HeapReuse::enter();
-        let loaded = obj::load_obj(resolved).map_err(model_error)?;
-        files.extend(loaded.files.iter().cloned());
-        let meshes = obj::model_meshes(&loaded, &model.options, &resolved.display().to_string())
-            .map_err(|e| {
-                // Only a smoothing mode the file cannot satisfy is the
-                // option's fault; anything else is the model's.
-                match e {
-                    obj::ObjError::Smoothing { .. } => {
-                        self.invalid(field("smoothing"), e.to_string())
-                    }
-                    e => model_error(e),
-                }
-            })?;
+        let (loaded, meshes) = self.read_model(&model, files)?;
         let over = match &model.material {
             None => None,
             Some(MaterialRef::Index(i)) => Some(*i),
@@ -180,17 +144,8 @@ impl Check<'_> {
             } else {
                 part.name.clone()
             };
-            // Without UVs there is no tangent space to read a map in.
-            if materials[material].normal_map.is_some() && part.uvs.is_none() {
-                return Err(self.invalid(
-                    field("shape.path"),
-                    format!(
-                        "{}: object \"{part_name}\" has faces without texture coordinates, \
-                         but its material \"{}\" has a normal map",
-                        resolved.display(),
-                        materials[material].name
-                    ),
-                ));
+            if part.uvs.is_none() {
+                self.check_no_tangent_map(&model, &part_name, &materials[material])?;
             }
             objects.push(Object {
                 name: format!("{}/{part_name}", model.name),
@@ -214,6 +169,82 @@ impl Check<'_> {
             ));
         }
         Ok(objects)
+    }
+
+    /// Reads `model`'s file (adding the files read to `files`) and makes
+    /// its meshes: smoothed, with tangent frames.
+    fn read_model(
+        &self,
+        model: &ModelObject,
+        files: &mut Vec<PathBuf>,
+    ) -> Result<(obj::ObjModel, Vec<(Mesh, TangentStats)>)> {
+        let field = |name: &str| format!("{}.{name}", model.field);
+        let resolved = &model.path;
+        // A bad budget setting is the setting's fault, not the model's: its
+        // error names the setting alone.
+        let model_error = |e: obj::ObjError| match e {
+            obj::ObjError::Budget(_) => SceneError::Model(e),
+            e => self.invalid(field("shape.path"), e.to_string()),
+        };
+        // A model is parsed, smoothed and given frames when the scene is
+        // loaded, before the renderer's own memory estimate: refuse here,
+        // from the file's size, what cannot fit the budget.
+        if let Ok(meta) = std::fs::metadata(resolved) {
+            let budget = crate::budget::MemoryBudget::from_env()
+                .map_err(|e| model_error(obj::ObjError::Budget(e)))?;
+            budget
+                .check(
+                    format!("model {}", resolved.display()),
+                    meta.len().saturating_mul(obj::MEMORY_PER_FILE_BYTE),
+                )
+                .map_err(|e| self.invalid(field("shape.path"), e.to_string()))?;
+        }
+        // Parsing, smoothing and tangent frames each reuse the memory the
+        // stage before freed, and the free memory goes back to the system
+        // once the meshes are made.
+        let _reuse = crate::mesh::heap::HeapReuse::enter();
+        let loaded = obj::load_obj(resolved).map_err(model_error)?;
+        files.extend(loaded.files.iter().cloned());
+        let meshes = obj::model_meshes(&loaded, &model.options, &resolved.display().to_string())
+            .map_err(|e| {
+                // Only a smoothing mode the file cannot satisfy is the
+                // option's fault; anything else is the model's.
+                match e {
+                    obj::ObjError::Smoothing { .. } => {
+                        self.invalid(field("smoothing"), e.to_string())
+                    }
+                    e => model_error(e),
+                }
+            })?;
+        Ok((loaded, meshes))
+    }
+
+    /// Refuses `material` on `model`'s part `part_name`, which has faces
+    /// without texture coordinates, when it has a map that needs tangents:
+    /// without UVs there is no tangent space to read the map in.
+    fn check_no_tangent_map(
+        &self,
+        model: &ModelObject,
+        part_name: &str,
+        material: &Material,
+    ) -> Result<()> {
+        let Some((kind, _)) = material
+            .maps
+            .iter()
+            .find(|(kind, _)| kind.info().needs_tangents)
+        else {
+            return Ok(());
+        };
+        Err(self.invalid(
+            format!("{}.shape.path", model.field),
+            format!(
+                "{}: object \"{part_name}\" has faces without texture coordinates, \
+                 but its material \"{}\" has a {}",
+                model.path.display(),
+                material.name,
+                kind.info().mtl_name
+            ),
+        ))
     }
 
     /// The index of a material named after a model, among the materials
@@ -251,8 +282,7 @@ impl Check<'_> {
             ks: Vec3::ZERO,
             shininess: 32.0,
             opacity: 1.0,
-            texture: None,
-            normal_map: None,
+            maps: Vec::new(),
         };
         let mtl = mtl.unwrap_or(&default);
         let name = format!("{object}/{}", mtl.name);
@@ -263,51 +293,52 @@ impl Check<'_> {
             ));
         }
         let values = checked_mtl_values(mtl, warn);
-        let mut usable = |path: &Option<std::path::PathBuf>, what: &str, fallback: &str| {
-            let path = path.as_ref()?;
-            let problem = if let Some(problem) = crate::files::input_file_problem(path) {
-                problem
-            } else {
-                match crate::render::preflight::inspect_texture(path) {
-                    Ok(_) => return Some(Ok(path.clone())),
-                    Err(e) => format!("is not usable: {e}"),
-                }
-            };
-            warn(AssetWarning {
-                problem: format!("{model}: material \"{}\": {what} {problem}", mtl.name),
-                fallback: fallback.to_owned(),
-            });
-            Some(Err(()))
-        };
-        let texture = usable(
-            &mtl.texture,
-            "map_Kd",
-            "drawn with a magenta/black checker instead",
-        )
-        .map(|t| t.map_or(Texture::Placeholder, Texture::File));
-        let normal_map = usable(
-            &mtl.normal_map,
-            "normal map",
-            "drawn with the flat normal (0, 0, 1) instead (the surface's own normals)",
-        )
-        .and_then(|usable| usable.ok());
+        let mut maps = MaterialMaps::default();
+        for (kind, path) in &mtl.maps {
+            maps.set(*kind, usable_map(*kind, path, model, &mtl.name, warn));
+        }
         materials.push(Material {
             name: name.clone(),
             ka: values.ka,
             kd: values.kd,
             ks: values.ks,
             shininess: values.shininess,
-            texture,
+            maps,
             opacity: values.opacity,
-            normal_map,
-            normal_map_green_down: false,
-            height_scale: None,
             shading: ShadingModel::Phong,
             two_sided: false,
         });
         by_name.insert(name, materials.len() - 1);
         Ok(materials.len() - 1)
     }
+}
+
+/// A model's map of `kind` at `path` (of `material` in `model`), or, when
+/// the file is missing or not a readable PNG or JPEG (by its header), a
+/// warning and the kind's placeholder or nothing.
+fn usable_map(
+    kind: MapKind,
+    path: &Path,
+    model: &str,
+    material: &str,
+    warn: &mut dyn FnMut(AssetWarning),
+) -> Option<MapSource> {
+    let problem = match crate::files::input_file_problem(path) {
+        Some(problem) => problem,
+        None => match crate::render::preflight::inspect_texture(path) {
+            Ok(_) => return Some(MapSource::file(path.to_path_buf())),
+            Err(e) => format!("is not usable: {e}"),
+        },
+    };
+    let info = kind.info();
+    warn(AssetWarning {
+        problem: format!(
+            "{model}: material \"{material}\": {} {problem}",
+            info.mtl_name
+        ),
+        fallback: info.missing_fallback.to_owned(),
+    });
+    info.placeholder_when_missing.then(MapSource::placeholder)
 }
 
 /// An MTL material's colours, exponent and opacity after the checks.

@@ -18,6 +18,7 @@ use crate::render::plan::{attachment, AirLight, Draw, FramePlan, PassIo, Pipelin
 use crate::render::shader_ids::*;
 use crate::render::static_lights;
 use crate::render::RenderError;
+use crate::scene::material_maps::MapMask;
 use crate::scene::Scene;
 use crate::shaders;
 use crate::vk::CompareOp;
@@ -128,7 +129,7 @@ impl SurfacePass {
                     modules.insert(features.clone(), (vert, frag));
                 }
                 let (vert, frag) = &modules[&features];
-                let attributes = vertex_attributes(key.textured, key.normal_mapped, key.debug != 0);
+                let attributes = vertex_attributes(key.maps, key.debug != 0);
                 let mut specialization = vec![
                     (SPEC_SHADING_MODEL, key.shading as u32),
                     (SPEC_LIGHT_COUNT, key.lights),
@@ -140,6 +141,11 @@ impl SurfacePass {
                 // ones keep its default (false) and their cull mode.
                 if key.two_sided {
                     specialization.push((SPEC_TWO_SIDED, 1));
+                }
+                // Likewise the maps selected by a constant: a pipeline
+                // without them is created as if the constant did not exist.
+                if key.maps.constant() != 0 {
+                    specialization.push((SPEC_MATERIAL_MAPS, key.maps.constant()));
                 }
                 if encode_srgb {
                     specialization.push((SPEC_ENCODE_SRGB, 1));
@@ -223,7 +229,7 @@ impl RecordPass for SurfacePass {
                 &resources.object_set,
                 &[resources.block_offsets[d.object]],
             );
-            if let Some(set) = resources.material_set(d.texture, d.normal_map) {
+            if let Some(set) = resources.material_set(&d.maps) {
                 cmd.bind_descriptor_set(layout, MATERIAL_SET, set, &[]);
             }
             cmd.bind_geometry(&resources.geometry, range.vertex_offset, range.index_offset);
@@ -258,13 +264,7 @@ impl RecordPass for SurfacePass {
 
 /// The object shaders' features for a pipeline of `key` in `form`.
 fn shader_features(key: &PipelineKey, form: Form) -> Vec<&'static str> {
-    let mut features = Vec::new();
-    if key.textured {
-        features.push("BASE_COLOR_TEXTURE");
-    }
-    if key.normal_mapped {
-        features.push("NORMAL_MAP");
-    }
+    let mut features = key.maps.shader_features();
     if form == Form::GBuffer {
         features.push("GBUFFER");
     }
@@ -278,10 +278,10 @@ fn shader_features(key: &PipelineKey, form: Form) -> Vec<&'static str> {
 }
 
 /// The vertex attributes a pipeline consumes: position and normal always,
-/// UVs for textured or normal-mapped materials, tangents only for
-/// normal-mapped ones (shaders that do not read them are not fed them);
-/// a debug view reads both.
-fn vertex_attributes(textured: bool, normal_mapped: bool, debug: bool) -> Vec<VertexAttribute> {
+/// UVs for materials with maps, tangents only for those with a map that
+/// needs them (shaders that do not read them are not fed them); a debug
+/// view reads both.
+fn vertex_attributes(maps: MapMask, debug: bool) -> Vec<VertexAttribute> {
     let offset = |f: usize| f as u32;
     let mut attributes = vec![
         VertexAttribute {
@@ -295,14 +295,14 @@ fn vertex_attributes(textured: bool, normal_mapped: bool, debug: bool) -> Vec<Ve
             offset: offset(std::mem::offset_of!(Vertex, normal)),
         },
     ];
-    if normal_mapped || debug {
+    if maps.needs_tangents() || debug {
         attributes.push(VertexAttribute {
             location: 2,
             format: Format::R32G32B32A32_SFLOAT,
             offset: offset(std::mem::offset_of!(Vertex, tangent)),
         });
     }
-    if textured || normal_mapped || debug {
+    if maps.needs_uvs() || debug {
         attributes.push(VertexAttribute {
             location: 3,
             format: Format::R32G32_SFLOAT,
@@ -315,6 +315,7 @@ fn vertex_attributes(textured: bool, normal_mapped: bool, debug: bool) -> Vec<Ve
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::material_maps::{MapKind, MAP_KIND_COUNT};
 
     /// Every variant the pass can ask for is compiled: build.rs leaves out
     /// the combinations the object shaders' rules exclude (the
@@ -331,11 +332,13 @@ mod tests {
                         if debug != 0 && air != AirLight::None {
                             continue;
                         }
-                        for bits in 0..4u32 {
+                        for bits in 0..1u32 << MAP_KIND_COUNT {
+                            let maps = MapKind::all()
+                                .filter(|&kind| bits & 1 << kind as u32 != 0)
+                                .fold(MapMask::default(), MapMask::with);
                             let key = PipelineKey {
                                 shading,
-                                textured: bits & 1 != 0,
-                                normal_mapped: bits & 2 != 0,
+                                maps,
                                 blended: false,
                                 lights: 0,
                                 debug,
@@ -352,7 +355,7 @@ mod tests {
                 }
             }
         }
-        assert_eq!(asked, 3 * 3 * 4 * 4);
+        assert_eq!(asked, 3 * 3 * 4 * (1 << MAP_KIND_COUNT));
         // And a left-out combination has no SPIR-V.
         let left_out = shaders::OBJECT_FRAG
             .features
