@@ -352,6 +352,8 @@ mod tests {
     fn the_table_is_in_kind_order_with_distinct_bindings_fields_and_bits() {
         for (i, info) in MAP_KINDS.iter().enumerate() {
             assert_eq!(info.kind as usize, i, "{info:?}");
+            // No sRGB format has 16 bits per channel.
+            assert!(!(info.keeps_sixteen_bit && info.color_space == ColorSpace::Srgb));
             for other in &MAP_KINDS[..i] {
                 assert_ne!(info.binding, other.binding);
                 assert_ne!(info.field, other.field);
@@ -362,6 +364,55 @@ mod tests {
                     assert_eq!(a & b, 0);
                 }
             }
+        }
+    }
+
+    /// Every kind is read from its scene-file field and from the first of
+    /// its MTL statements, as a map of that kind and no other.
+    const CAMERA: &str = "[camera]\neye = [0, 2, 3]\nlook_at = [0, 0, 0]\n";
+
+    #[test]
+    fn every_kind_loads_from_its_field_and_its_mtl_statement() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        image::RgbaImage::from_pixel(2, 2, image::Rgba([128, 128, 255, 255]))
+            .save(d.join("map.png"))
+            .unwrap();
+        std::fs::write(
+            d.join("quad.obj"),
+            "mtllib quad.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 1 1 0\n\
+             vt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\n",
+        )
+        .unwrap();
+        for info in &MAP_KINDS {
+            let only = |material: &crate::scene::Material| {
+                let kinds: Vec<MapKind> = material.maps.iter().map(|(k, _)| k).collect();
+                assert_eq!(kinds, [info.kind], "{info:?}");
+                assert_eq!(
+                    material.map(info.kind).and_then(|m| m.path()),
+                    Some(d.join("map.png").as_path())
+                );
+            };
+            let toml = format!(
+                "{CAMERA}[[materials]]\nname = \"m\"\nkd = [1, 1, 1]\n{} = \"map.png\"\n\
+                 [[objects]]\nname = \"o\"\nmaterial = \"m\"\n\
+                 shape = {{ type = \"plane\", width = 1, depth = 1 }}\n",
+                info.field
+            );
+            let scene = crate::scene::Scene::from_toml(&toml, "t.toml", d).unwrap();
+            only(&scene.materials[0]);
+            std::fs::write(
+                d.join("quad.mtl"),
+                format!("newmtl m\nKd 1 1 1\n{} map.png\n", info.mtl[0]),
+            )
+            .unwrap();
+            let toml = format!(
+                "{CAMERA}[[objects]]\nname = \"q\"\n\
+                 shape = {{ type = \"obj\", path = \"quad.obj\" }}\n"
+            );
+            let scene = crate::scene::Scene::from_toml(&toml, "t.toml", d).unwrap();
+            assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+            only(&scene.materials[scene.objects[0].material]);
         }
     }
 
