@@ -69,6 +69,14 @@ layout(set = MATERIAL_SET, binding = BASE_COLOR_BINDING) uniform sampler2D base_
 #ifdef NORMAL_MAP
 layout(set = MATERIAL_SET, binding = NORMAL_MAP_BINDING) uniform sampler2D normal_map;
 #endif
+// Maps selected by a bit of MATERIAL_MAPS rather than a variant, read in
+// the variants with the material set and UVs: the driver folds a clear
+// bit's branch away when it creates the pipeline.
+layout(constant_id = SPEC_MATERIAL_MAPS) const uint MATERIAL_MAPS = 0u;
+#if defined(BASE_COLOR_TEXTURE) || defined(NORMAL_MAP)
+// The specular map multiplies ks (sRGB, like the base colour).
+layout(set = MATERIAL_SET, binding = SPECULAR_MAP_BINDING) uniform sampler2D specular_map;
+#endif
 
 #ifndef GOURAUD
 layout(constant_id = SPEC_TWO_SIDED) const bool TWO_SIDED = false;
@@ -139,6 +147,11 @@ void shade() {
     vec3 kd = object.kd.rgb * base.rgb;
     vec3 ka = object.ka.rgb * base.rgb;
     vec4 ks = object.ks;
+#if defined(BASE_COLOR_TEXTURE) || defined(NORMAL_MAP)
+    if ((MATERIAL_MAPS & SPECULAR_MAP_BIT) != 0u) {
+        ks.rgb *= texture(specular_map, vec2(in_uv.x, 1.0 - in_uv.y)).rgb;
+    }
+#endif
 #ifdef DEBUG_VIEW
     // The frame as the normal map uses it: T re-orthogonalized against the
     // (mapped) normal, B = sign * cross(N, T).

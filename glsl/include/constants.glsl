@@ -11,6 +11,7 @@
 #define MATERIAL_SET 2
 #define BASE_COLOR_BINDING 0
 #define NORMAL_MAP_BINDING 1
+#define SPECULAR_MAP_BINDING 2
 // Object pipelines lit by an atmosphere's sun and sky (object_air.glsl):
 // the atmosphere's own set (its block and tables, atmosphere.glsl), with
 // the atmosphere shaders' specialization constants moved up by
@@ -31,6 +32,7 @@
 // Object pipelines: the material maps selected by this bit mask rather
 // than by a shader variant (scene::material_maps).
 #define SPEC_MATERIAL_MAPS 7
+#define SPECULAR_MAP_BIT 1
 // Object pipelines drawing straight into the 8-bit output: the shader
 // encodes sRGB.
 #define SPEC_ENCODE_SRGB 15

@@ -11,6 +11,7 @@ pub const OBJECT_SET: u32 = 1;
 pub const MATERIAL_SET: u32 = 2;
 pub const BASE_COLOR_BINDING: u32 = 0;
 pub const NORMAL_MAP_BINDING: u32 = 1;
+pub const SPECULAR_MAP_BINDING: u32 = 2;
 /// Object pipelines lit by an atmosphere's sun and sky: the atmosphere's
 /// own set (`SkyResources::set`), after the material set.
 pub const SKY_SET: u32 = 3;
@@ -32,6 +33,8 @@ pub const SPEC_TWO_SIDED: u32 = 6;
 /// constant rather than a shader variant: a bit mask
 /// (`scene::material_maps::Selection::Constant`).
 pub const SPEC_MATERIAL_MAPS: u32 = 7;
+/// The specular map's bit of `SPEC_MATERIAL_MAPS`.
+pub const SPECULAR_MAP_BIT: u32 = 1;
 /// Whether an object pipeline draws straight into the 8-bit output, whose
 /// values the shader then sRGB-encodes (the output is UNORM).
 pub const SPEC_ENCODE_SRGB: u32 = 15;
@@ -93,6 +96,7 @@ mod tests {
             ("MATERIAL_SET", MATERIAL_SET),
             ("BASE_COLOR_BINDING", BASE_COLOR_BINDING),
             ("NORMAL_MAP_BINDING", NORMAL_MAP_BINDING),
+            ("SPECULAR_MAP_BINDING", SPECULAR_MAP_BINDING),
             ("SKY_SET", SKY_SET),
             ("SPEC_OBJECT_SKY_OFFSET", SPEC_OBJECT_SKY_OFFSET),
             ("SPEC_SHADING_MODEL", SPEC_SHADING_MODEL),
@@ -102,6 +106,7 @@ mod tests {
             ("SPEC_SHININESS_EXPONENT", SPEC_SHININESS_EXPONENT),
             ("SPEC_TWO_SIDED", SPEC_TWO_SIDED),
             ("SPEC_MATERIAL_MAPS", SPEC_MATERIAL_MAPS),
+            ("SPECULAR_MAP_BIT", SPECULAR_MAP_BIT),
             ("SPEC_ENCODE_SRGB", SPEC_ENCODE_SRGB),
             ("SPEC_STATIC_LIGHTS", SPEC_STATIC_LIGHTS),
             ("SPEC_STATIC_LIGHT_DATA", SPEC_STATIC_LIGHT_DATA),

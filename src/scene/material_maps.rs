@@ -15,7 +15,9 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::render::shader_ids::{BASE_COLOR_BINDING, NORMAL_MAP_BINDING};
+use crate::render::shader_ids::{
+    BASE_COLOR_BINDING, NORMAL_MAP_BINDING, SPECULAR_MAP_BINDING, SPECULAR_MAP_BIT,
+};
 use crate::vk::Format;
 
 use super::material::Texture;
@@ -28,10 +30,12 @@ pub enum MapKind {
     BaseColor,
     /// A tangent-space normal map (or a height map converted to one).
     Normal,
+    /// A specular map: multiplies `ks`.
+    Specular,
 }
 
 /// How many kinds [`MAP_KINDS`] has.
-pub const MAP_KIND_COUNT: usize = 2;
+pub const MAP_KIND_COUNT: usize = 3;
 
 /// How a map's texels are decoded.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -157,6 +161,26 @@ pub const MAP_KINDS: [MapKindInfo; MAP_KIND_COUNT] = [
         missing_fallback:
             "drawn with the flat normal (0, 0, 1) instead (the surface's own normals)",
         reference: ReferenceUse::Unsupported("a normal map"),
+    },
+    MapKindInfo {
+        kind: MapKind::Specular,
+        field: "specular_map",
+        mtl: &["map_Ks"],
+        mtl_name: "map_Ks",
+        // A colour, sRGB-encoded like `map_Kd` (the MTL convention: both
+        // scale a colour, `Ks` and `Kd`).
+        color_space: ColorSpace::Srgb,
+        keeps_sixteen_bit: false,
+        binding: SPECULAR_MAP_BINDING,
+        // UVs only, no new vertex data: no variant of its own.
+        selection: Selection::Constant(SPECULAR_MAP_BIT),
+        needs_tangents: false,
+        // Gouraud lights the vertices, highlight included.
+        per_pixel_only: true,
+        empty_slot: [255; 4],
+        placeholder_when_missing: false,
+        missing_fallback: "drawn with the material's ks alone instead",
+        reference: ReferenceUse::ScalesSpecular,
     },
 ];
 
@@ -329,6 +353,7 @@ macro_rules! material_file_with_maps {
             $($(#[$fmeta])* $field: $ty,)*
             texture: Option<PathBuf>,
             normal_map: Option<PathBuf>,
+            specular_map: Option<PathBuf>,
         }
 
         impl $name {
@@ -337,6 +362,7 @@ macro_rules! material_file_with_maps {
                 [
                     (MapKind::BaseColor, self.texture.take()),
                     (MapKind::Normal, self.normal_map.take()),
+                    (MapKind::Specular, self.specular_map.take()),
                 ]
             }
         }
@@ -425,5 +451,14 @@ mod tests {
         assert_eq!(normal.shader_features(), ["NORMAL_MAP"]);
         assert!(normal.needs_tangents() && !base.needs_tangents());
         assert!(MapMask::default().shader_features().is_empty());
+        // The specular map alone reads UVs through the base colour's
+        // variant (over its white default); with a normal map, that one's.
+        let specular = MapMask::default().with(MapKind::Specular);
+        assert_eq!(specular.shader_features(), ["BASE_COLOR_TEXTURE"]);
+        assert_eq!(specular.constant(), SPECULAR_MAP_BIT);
+        assert!(!specular.needs_tangents());
+        let both = normal.with(MapKind::Specular);
+        assert_eq!(both.shader_features(), ["NORMAL_MAP"]);
+        assert_eq!(both.constant(), SPECULAR_MAP_BIT);
     }
 }

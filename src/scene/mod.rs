@@ -294,6 +294,7 @@ impl Scene {
     /// shading = "phong"                    # ["phong"] | "gouraud" | "toon"
     /// normal_map = "bumps.png"             # optional tangent-space normal map, relative to the scene file
     /// normal_map_green = "up"              # ["up"] | "down"
+    /// specular_map = "shine.png"           # optional, multiplies ks; sRGB, relative to the scene file
     /// two_sided = false                    # [false]; both sides of the faces drawn
     /// [[objects]]
     /// name = "ball"                        # required, not empty
