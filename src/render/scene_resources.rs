@@ -87,23 +87,8 @@ impl SceneResources {
         let (object_buffer, block_offsets, block_range) = object_blocks(ctx, scene, plan)?;
         let maps = MaterialImages::new(ctx, scene, plan)?;
 
-        let all_stages = ShaderStageFlags::VERTEX | ShaderStageFlags::FRAGMENT;
-        let frame_layout = DescriptorSetLayout::new(
-            ctx,
-            &[DescriptorBinding {
-                binding: 0,
-                kind: DescriptorType::UNIFORM_BUFFER,
-                stages: all_stages,
-            }],
-        )?;
-        let object_layout = DescriptorSetLayout::new(
-            ctx,
-            &[DescriptorBinding {
-                binding: 0,
-                kind: DescriptorType::UNIFORM_BUFFER_DYNAMIC,
-                stages: all_stages,
-            }],
-        )?;
+        let frame_layout = uniform_layout(ctx, DescriptorType::UNIFORM_BUFFER)?;
+        let object_layout = uniform_layout(ctx, DescriptorType::UNIFORM_BUFFER_DYNAMIC)?;
         let mut pool_layouts = vec![&frame_layout, &object_layout];
         if let Some(m) = &maps.layout {
             pool_layouts.extend(std::iter::repeat_n(m, maps.combinations.len()));
@@ -179,6 +164,22 @@ impl SceneResources {
             .find(|(slots, _)| slots == maps)
             .map(|(_, set)| set)
     }
+}
+
+/// A set layout of one uniform buffer of `kind` at binding 0, read by
+/// both stages (the frame's and the objects' sets).
+fn uniform_layout(
+    ctx: &Arc<Context>,
+    kind: DescriptorType,
+) -> Result<DescriptorSetLayout, RenderError> {
+    Ok(DescriptorSetLayout::new(
+        ctx,
+        &[DescriptorBinding {
+            binding: 0,
+            kind,
+            stages: ShaderStageFlags::VERTEX | ShaderStageFlags::FRAGMENT,
+        }],
+    )?)
 }
 
 /// The per-object blocks, each at an aligned offset, all read through one

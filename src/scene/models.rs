@@ -15,7 +15,9 @@ use super::file::{
     Description, MaterialRef, ModelObject, ObjectDescription, PendingMaterial, DEFAULT_TESSELLATION,
 };
 use super::material_maps::{MapKind, MapSource, MaterialMaps};
-use super::{AssetWarning, Material, Object, Scene, SceneError, SceneWarning, ShadingModel, Shape};
+use super::{
+    AssetWarning, Material, Object, Scene, SceneError, SceneWarning, ShadingModel, Shape, Transform,
+};
 use crate::mesh::obj;
 use crate::mesh::tangents::TangentStats;
 use crate::mesh::Mesh;
@@ -90,9 +92,7 @@ impl Check<'_> {
         let over = match &model.material {
             None => None,
             Some(MaterialRef::Index(i)) => Some(*i),
-            Some(MaterialRef::Pending(pending)) => {
-                Some(self.pending_material(pending, materials, by_name)?)
-            }
+            Some(MaterialRef::Pending(p)) => Some(self.pending_material(p, materials, by_name)?),
         };
         let mut warn = |warning: AssetWarning| {
             warnings.push(SceneWarning {
@@ -104,13 +104,7 @@ impl Check<'_> {
         if over.is_none() {
             loaded.warnings.iter().cloned().for_each(&mut warn);
         }
-        // A far-off model's positions are measured from its centre
-        // (`ObjModel::origin`): the centre goes into the translation, in
-        // f64, where the renderer keeps world positions exact.
-        let mut transform = model.transform;
-        if loaded.origin != glam::DVec3::ZERO {
-            transform.translate = model.transform.matrix_f64().transform_point3(loaded.origin);
-        }
+        let transform = placed_transform(model.transform, loaded.origin);
         // The model's own materials, added on first use as `name/material`.
         let mut own: HashMap<Option<usize>, usize> = HashMap::new();
         let mut objects = Vec::with_capacity(meshes.len());
@@ -311,6 +305,17 @@ impl Check<'_> {
         by_name.insert(name, materials.len() - 1);
         Ok(materials.len() - 1)
     }
+}
+
+/// The transform of a model whose positions are measured from `origin`
+/// (`ObjModel::origin`): a far-off model's centre goes into the
+/// translation, in f64, where the renderer keeps world positions exact.
+fn placed_transform(transform: Transform, origin: glam::DVec3) -> Transform {
+    let mut placed = transform;
+    if origin != glam::DVec3::ZERO {
+        placed.translate = transform.matrix_f64().transform_point3(origin);
+    }
+    placed
 }
 
 /// A model's map of `kind` at `path` (of `material` in `model`), or, when
