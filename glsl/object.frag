@@ -69,6 +69,14 @@ layout(set = MATERIAL_SET, binding = BASE_COLOR_BINDING) uniform sampler2D base_
 #ifdef NORMAL_MAP
 layout(set = MATERIAL_SET, binding = NORMAL_MAP_BINDING) uniform sampler2D normal_map;
 #endif
+// Maps selected by a bit of MATERIAL_MAPS rather than a variant, read in
+// the variants with the material set and UVs: the driver folds a clear
+// bit's branch away when it creates the pipeline.
+layout(constant_id = SPEC_MATERIAL_MAPS) const uint MATERIAL_MAPS = 0u;
+#if defined(BASE_COLOR_TEXTURE) || defined(NORMAL_MAP)
+// The specular map multiplies ks (sRGB, like the base colour).
+layout(set = MATERIAL_SET, binding = SPECULAR_MAP_BINDING) uniform sampler2D specular_map;
+#endif
 
 #ifndef GOURAUD
 layout(constant_id = SPEC_TWO_SIDED) const bool TWO_SIDED = false;
@@ -88,6 +96,11 @@ layout(constant_id = SPEC_DEBUG_ATTRIBUTE) const uint DEBUG_ATTRIBUTE = DEBUG_NO
 layout(constant_id = SPEC_ENCODE_SRGB) const bool ENCODE_SRGB = false;
 
 void shade();
+
+// The object's specular reflectance times `scale` (rgb) and shininess (a).
+vec4 scaled_ks(vec3 scale) {
+    return vec4(object.ks.rgb * scale, object.ks.a);
+}
 
 void main() {
     shade();
@@ -138,6 +151,15 @@ void shade() {
 #endif
     vec3 kd = object.kd.rgb * base.rgb;
     vec3 ka = object.ka.rgb * base.rgb;
+    // The specular map's factor on ks (1 without one). ks itself is read
+    // where it is used (scaled_ks): read here, ahead of the branches, it
+    // cost lavapipe 0.4 % more instructions in a textured scene.
+    vec3 ks_scale = vec3(1.0);
+#if defined(BASE_COLOR_TEXTURE) || defined(NORMAL_MAP)
+    if ((MATERIAL_MAPS & SPECULAR_MAP_BIT) != 0u) {
+        ks_scale = texture(specular_map, vec2(in_uv.x, 1.0 - in_uv.y)).rgb;
+    }
+#endif
 #ifdef DEBUG_VIEW
     // The frame as the normal map uses it: T re-orthogonalized against the
     // (mapped) normal, B = sign * cross(N, T).
@@ -157,10 +179,10 @@ void shade() {
         // Ambient (and the atmosphere's sun and sky, if the scene has
         // one; the object's block holds no lights here); the lighting
         // pass adds the scene's lights.
-        out_color = vec4(blinn_phong(in_world_position, n, v, kd, ka), alpha);
+        out_color = vec4(blinn_phong(in_world_position, n, v, kd, ka, scaled_ks(ks_scale)), alpha);
         out_albedo = vec4(kd, 1.0);
         out_normal = octahedral_encode(n);
-        out_material = object.ks;
+        out_material = scaled_ks(ks_scale);
         return;
     }
     out_albedo = vec4(0.0);
@@ -168,10 +190,10 @@ void shade() {
     out_material = vec4(0.0);
 #endif
     if (SHADING_MODEL == SHADING_TOON) {
-        vec3 c = abs(dot(n, v)) < TOON_SILHOUETTE ? vec3(0.0) : toon(in_world_position, n, v, kd, ka);
+        vec3 c = abs(dot(n, v)) < TOON_SILHOUETTE ? vec3(0.0) : toon(in_world_position, n, v, kd, ka, scaled_ks(ks_scale));
         out_color = vec4(c, alpha);
     } else {
-        out_color = vec4(blinn_phong(in_world_position, n, v, kd, ka), alpha);
+        out_color = vec4(blinn_phong(in_world_position, n, v, kd, ka, scaled_ks(ks_scale)), alpha);
     }
 #endif
 #endif

@@ -73,7 +73,7 @@ void main() {
     }
     // Gouraud lights with the material colour; the fragment stage
     // multiplies in the texture, which is the classic approximation.
-    out_gouraud = blinn_phong(world.xyz, n, v, object.kd.rgb, object.ka.rgb);
+    out_gouraud = blinn_phong(world.xyz, n, v, object.kd.rgb, object.ka.rgb, object.ks);
 #endif
     gl_Position = frame.view_projection * world;
 }

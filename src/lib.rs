@@ -22,6 +22,7 @@ pub mod render_run;
 pub mod report;
 pub mod safe_files;
 pub mod scene;
+pub mod shader_ids;
 pub mod sweep;
 pub mod viewer;
 pub mod vk;

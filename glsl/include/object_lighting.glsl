@@ -5,10 +5,12 @@
 
 // Blinn-Phong: ka * La plus the sum over the object's lights, then the
 // sun (a directional light of the point's own colour) and the sky's
-// irradiance times kd (diffuse only: no specular from the sky).
-vec3 blinn_phong(vec3 p, vec3 n, vec3 v, vec3 kd, vec3 ka) {
+// irradiance times kd (diffuse only: no specular from the sky). `ks`:
+// the specular reflectance (rgb) and shininess (a), the object's own or
+// scaled by a map.
+vec3 blinn_phong(vec3 p, vec3 n, vec3 v, vec3 kd, vec3 ka, vec4 ks) {
     vec3 color = ka * frame.ambient.rgb;
-#define PHONG_TERM(light) color += blinn_phong_light(light, p, n, v, kd, object.ks)
+#define PHONG_TERM(light) color += blinn_phong_light(light, p, n, v, kd, ks)
     FOR_EACH_LIGHT(object, PHONG_TERM)
 #ifdef SUN_LIGHT
     AirLights air = air_lights(p, n);
@@ -21,22 +23,22 @@ vec3 blinn_phong(vec3 p, vec3 n, vec3 v, vec3 kd, vec3 ka) {
 
 // Adds one light's toon terms to `color`: a diffuse tone and the specular
 // spot.
-void add_toon_light(inout vec3 color, Light light, vec3 p, vec3 n, vec3 v, vec3 kd) {
+void add_toon_light(inout vec3 color, Light light, vec3 p, vec3 n, vec3 v, vec3 kd, vec4 ks) {
     vec3 l, radiance;
     light_at(light, p, l, radiance);
     float cos_theta = dot(n, l);
     float tone = cos_theta > 0.5 ? 1.0 : (cos_theta > 0.0 ? 0.4 : 0.0);
     color += radiance * kd * tone;
-    if (cos_theta > 0.0 && specular_power(dot(n, normalize(l + v)), object.ks.a) > 0.5) {
-        color += radiance * object.ks.rgb;
+    if (cos_theta > 0.0 && specular_power(dot(n, normalize(l + v)), ks.a) > 0.5) {
+        color += radiance * ks.rgb;
     }
 }
 
 // Toon: two diffuse tones and a hard specular spot; the silhouette is drawn
-// by the caller where |N.V| is small.
-vec3 toon(vec3 p, vec3 n, vec3 v, vec3 kd, vec3 ka) {
+// by the caller where |N.V| is small. `ks` as for blinn_phong.
+vec3 toon(vec3 p, vec3 n, vec3 v, vec3 kd, vec3 ka, vec4 ks) {
     vec3 color = ka * frame.ambient.rgb;
-#define TOON_TERM(light) add_toon_light(color, light, p, n, v, kd)
+#define TOON_TERM(light) add_toon_light(color, light, p, n, v, kd, ks)
     FOR_EACH_LIGHT(object, TOON_TERM)
 #ifdef SUN_LIGHT
     // The sun in tones like any light; the sky's light, which comes from

@@ -109,12 +109,28 @@ pub struct ObjMaterial {
     pub shininess: f32,
     /// `d` (default 1, opaque), as written.
     pub opacity: f32,
-    /// `map_Kd`, resolved against the OBJ's folder (not checked: the file
-    /// may be missing).
-    pub texture: Option<PathBuf>,
-    /// `norm` / `map_Bump` / `bump`, read as a tangent-space normal map;
-    /// resolved like `texture`.
-    pub normal_map: Option<PathBuf>,
+    /// Its texture statements ([`TEXTURE_STATEMENTS`] that it has, in that
+    /// order) with their files resolved against the OBJ's folder (not
+    /// checked: the file may be missing). Which map kind each one feeds is
+    /// the scene's business (`scene::material_maps`).
+    pub maps: Vec<(&'static str, PathBuf)>,
+}
+
+/// The MTL statements that name a texture file. `tobj` reads `map_Bump`
+/// and `bump` into one field, so a material with either has both.
+pub const TEXTURE_STATEMENTS: &[&str] = &[
+    "map_Ka", "map_Kd", "map_Ks", "map_Ns", "map_d", "map_Bump", "bump", "norm", "disp", "decal",
+    "refl",
+];
+
+impl ObjMaterial {
+    /// The file of texture statement `statement`, if the material has it.
+    pub fn map(&self, statement: &str) -> Option<&Path> {
+        self.maps
+            .iter()
+            .find(|(s, _)| *s == statement)
+            .map(|(_, path)| path.as_path())
+    }
 }
 
 /// One object or group of the file, triangulated: three corners per
@@ -373,12 +389,13 @@ fn read_mtl(
     warnings: &mut Vec<AssetWarning>,
     origins: &mut Vec<String>,
 ) -> tobj::MTLLoadResult {
+    let nothing = || Ok((Vec::new(), Default::default()));
     if name.as_os_str().is_empty() {
         warnings.push(AssetWarning {
             problem: format!("{file}: mtllib without a file name"),
             fallback: DEFAULT_MATERIAL_FALLBACK.to_owned(),
         });
-        return Ok((Vec::new(), Default::default()));
+        return nothing();
     }
     let path = base_dir.join(name.to_string_lossy().replace('\\', "/"));
     let failed = |reason: String| AssetWarning {
@@ -389,99 +406,65 @@ fn read_mtl(
         ),
         fallback: DEFAULT_MATERIAL_FALLBACK.to_owned(),
     };
-    let nothing = || Ok((Vec::new(), Default::default()));
-    // Read within the budget: an endless file is refused like an unreadable
-    // one. A library is read, decoded and rewritten once each.
-    let bytes = match read_within_budget(&path, &path.display().to_string(), "an MTL library", 4) {
-        Ok(bytes) => bytes,
-        Err(ObjError::Io { reason, .. }) => {
-            warnings.push(failed(reason.to_string()));
-            return nothing();
-        }
-        Err(e @ ObjError::Budget(_)) => {
-            warnings.push(failed(e.to_string()));
-            return nothing();
-        }
-        Err(e) => {
-            let message = e.to_string();
-            let reason = message.split_once(": ").map_or(message.as_str(), |x| x.1);
-            warnings.push(failed(reason.to_owned()));
-            return nothing();
-        }
-    };
-    let text = match decode_text(&bytes) {
+    let text = match read_mtl_text(&path) {
         Ok(text) => text,
         Err(reason) => {
             warnings.push(failed(reason));
             return nothing();
         }
     };
-    // `tobj` refuses a whole library for one `newmtl` without a name; that
-    // material cannot be used by any `usemtl`, so it is named here and the
-    // rest of the library loads.
-    //
-    // A colour statement (`Kd r g b`) may give one number for all three
-    // (`Kd 0.5`, the MTL rule); `tobj` panics on fewer than three, so the
-    // one number is repeated here, and a statement with two numbers or in
-    // another form (`Kd spectral file.rfl`, `Kd xyz x y z`) is left out
-    // with a warning.
+    let (fixed, defined) = fix_mtl_text(&text, &path, warnings, origins);
+    let first_origin = origins.len() - defined;
+    match tobj::load_mtl_buf(&mut std::io::BufReader::new(fixed.as_bytes())) {
+        Ok(loaded) => Ok(loaded),
+        Err(e) => {
+            origins.truncate(first_origin);
+            warnings.push(failed(format!("cannot parse it: {e}")));
+            nothing()
+        }
+    }
+}
+
+/// The text of the MTL library at `path`, or why it cannot be read. Read
+/// within the budget: an endless file is refused like an unreadable one. A
+/// library is read, decoded and rewritten once each.
+fn read_mtl_text(path: &Path) -> Result<String, String> {
+    let bytes = match read_within_budget(path, &path.display().to_string(), "an MTL library", 4) {
+        Ok(bytes) => bytes,
+        Err(ObjError::Io { reason, .. }) => return Err(reason.to_string()),
+        Err(e @ ObjError::Budget(_)) => return Err(e.to_string()),
+        Err(e) => {
+            let message = e.to_string();
+            let reason = message.split_once(": ").map_or(message.as_str(), |x| x.1);
+            return Err(reason.to_owned());
+        }
+    };
+    decode_text(&bytes)
+}
+
+/// The MTL library `text` (of `path`) with what `tobj` cannot take fixed,
+/// and the number of its `newmtl` lines, whose origins are added to
+/// `origins`.
+///
+/// `tobj` refuses a whole library for one `newmtl` without a name; that
+/// material cannot be used by any `usemtl`, so it is named here and the
+/// rest of the library loads. A colour statement with one number or a
+/// scalar statement that is not a number is fixed or left out by
+/// [`fixed_number_statement`].
+fn fix_mtl_text(
+    text: &str,
+    path: &Path,
+    warnings: &mut Vec<AssetWarning>,
+    origins: &mut Vec<String>,
+) -> (String, usize) {
     let mut fixed = String::with_capacity(text.len());
     let mut newmtl_lines: Vec<(String, usize)> = Vec::new();
     for (number, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
         let keyword = words.next();
-        if let Some(colour @ ("Ka" | "Kd" | "Ks" | "Ke")) = keyword {
-            let values: Vec<&str> = line
-                .split('#')
-                .next()
-                .unwrap_or("")
-                .split_whitespace()
-                .skip(1)
-                .collect();
-            let numbers = values.iter().all(|v| v.parse::<f32>().is_ok());
-            match values.as_slice() {
-                [one] if numbers => {
-                    fixed.push_str(&format!("{colour} {one} {one} {one}\n"));
-                    continue;
-                }
-                [_, _, _, ..] if numbers => {}
-                _ => {
-                    warnings.push(AssetWarning {
-                        problem: format!(
-                            "{}:{}: {colour} needs one or three numbers, got \"{}\"",
-                            path.display(),
-                            number + 1,
-                            values.join(" ")
-                        ),
-                        fallback: "the statement is left out".into(),
-                    });
-                    fixed.push('\n');
-                    continue;
-                }
-            }
-        }
-        // Numbers `tobj` would refuse the whole library for: the statement
-        // is left out with a warning naming its line, and the rest loads.
-        if let Some(scalar @ ("Ns" | "Ni" | "d" | "Tr")) = keyword {
-            let value = line
-                .split('#')
-                .next()
-                .unwrap_or("")
-                .split_whitespace()
-                .nth(1);
-            if value.and_then(|v| v.parse::<f32>().ok()).is_none() {
-                warnings.push(AssetWarning {
-                    problem: format!(
-                        "{}:{}: {scalar} needs a number, got \"{}\"",
-                        path.display(),
-                        number + 1,
-                        value.unwrap_or("")
-                    ),
-                    fallback: "the statement is left out".into(),
-                });
-                fixed.push('\n');
-                continue;
-            }
+        if let Some(replacement) = fixed_number_statement(keyword, line, path, number, warnings) {
+            fixed.push_str(&replacement);
+            continue;
         }
         if keyword == Some("newmtl") {
             origins.push(format!("{}:{}", path.display(), number + 1));
@@ -516,14 +499,62 @@ fn read_mtl(
         }
         fixed.push('\n');
     }
-    let first_origin = origins.len() - newmtl_lines.len();
-    match tobj::load_mtl_buf(&mut std::io::BufReader::new(fixed.as_bytes())) {
-        Ok(loaded) => Ok(loaded),
-        Err(e) => {
-            origins.truncate(first_origin);
-            warnings.push(failed(format!("cannot parse it: {e}")));
-            nothing()
+    (fixed, newmtl_lines.len())
+}
+
+/// The replacement for line `number` (zero-based) of `path` when it is a
+/// statement of numbers `tobj` would mishandle, with a warning naming the
+/// line when it is left out; `None` to keep the line.
+///
+/// A colour statement (`Kd r g b`) may give one number for all three
+/// (`Kd 0.5`, the MTL rule); `tobj` panics on fewer than three, so the one
+/// number is repeated, and a statement with two numbers or in another form
+/// (`Kd spectral file.rfl`, `Kd xyz x y z`) is left out. A scalar `tobj`
+/// would refuse the whole library for is left out too, and the rest loads.
+fn fixed_number_statement(
+    keyword: Option<&str>,
+    line: &str,
+    path: &Path,
+    number: usize,
+    warnings: &mut Vec<AssetWarning>,
+) -> Option<String> {
+    let values: Vec<&str> = line
+        .split('#')
+        .next()
+        .unwrap_or("")
+        .split_whitespace()
+        .skip(1)
+        .collect();
+    let mut left_out = |problem: String| {
+        warnings.push(AssetWarning {
+            problem: format!("{}:{}: {problem}", path.display(), number + 1),
+            fallback: "the statement is left out".into(),
+        });
+        Some("\n".to_owned())
+    };
+    match keyword {
+        Some(colour @ ("Ka" | "Kd" | "Ks" | "Ke")) => {
+            let numbers = values.iter().all(|v| v.parse::<f32>().is_ok());
+            match values.as_slice() {
+                [one] if numbers => Some(format!("{colour} {one} {one} {one}\n")),
+                [_, _, _, ..] if numbers => None,
+                _ => left_out(format!(
+                    "{colour} needs one or three numbers, got \"{}\"",
+                    values.join(" ")
+                )),
+            }
         }
+        Some(scalar @ ("Ns" | "Ni" | "d" | "Tr")) => {
+            let value = values.first().copied();
+            if value.and_then(|v| v.parse::<f32>().ok()).is_some() {
+                return None;
+            }
+            left_out(format!(
+                "{scalar} needs a number, got \"{}\"",
+                value.unwrap_or("")
+            ))
+        }
+        _ => None,
     }
 }
 
@@ -588,7 +619,7 @@ fn parse_scanned(
     }
     let mut files = libraries;
     for m in &materials {
-        files.extend(m.texture.iter().chain(&m.normal_map).cloned());
+        files.extend(m.maps.iter().map(|(_, path)| path.clone()));
     }
     Ok(ObjModel {
         parts,
@@ -789,17 +820,17 @@ fn obj_part(
 }
 
 fn material(m: &tobj::Material, origin: String, base_dir: &Path) -> ObjMaterial {
-    let texture = |name: &Option<String>| -> Option<PathBuf> {
+    let texture = |name: &String| -> Option<PathBuf> {
         // Texture statements may carry options (`-bm 1.0 file.png`); the
         // file name is the last word.
-        let last = name.as_deref()?.split_whitespace().last()?;
+        let last = name.split_whitespace().last()?;
         // Windows exporters write `.\\dir\\file.jpg`.
         Some(base_dir.join(last.replace('\\', "/")))
     };
-    let normal_name = m
-        .normal_texture
-        .clone()
-        .or_else(|| m.unknown_param.get("norm").cloned());
+    let maps = TEXTURE_STATEMENTS
+        .iter()
+        .filter_map(|&statement| Some((statement, texture(mtl_statement(m, statement)?)?)))
+        .collect();
     ObjMaterial {
         name: m.name.clone(),
         origin,
@@ -808,8 +839,21 @@ fn material(m: &tobj::Material, origin: String, base_dir: &Path) -> ObjMaterial 
         ks: m.specular.map_or(Vec3::ZERO, Vec3::from),
         shininess: m.shininess.unwrap_or(32.0),
         opacity: m.dissolve.unwrap_or(1.0),
-        texture: texture(&m.diffuse_texture),
-        normal_map: texture(&normal_name),
+        maps,
+    }
+}
+
+/// The value of the texture statement `name` in `m`: `tobj` keeps the ones
+/// it knows in fields (`map_Bump` and `bump` in one), the others by name.
+fn mtl_statement<'a>(m: &'a tobj::Material, name: &str) -> Option<&'a String> {
+    match name {
+        "map_Ka" => m.ambient_texture.as_ref(),
+        "map_Kd" => m.diffuse_texture.as_ref(),
+        "map_Ks" => m.specular_texture.as_ref(),
+        "map_Ns" => m.shininess_texture.as_ref(),
+        "map_d" => m.dissolve_texture.as_ref(),
+        "map_Bump" | "bump" => m.normal_texture.as_ref(),
+        _ => m.unknown_param.get(name),
     }
 }
 

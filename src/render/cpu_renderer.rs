@@ -59,9 +59,12 @@
 //!   near plane or beyond a finite far plane are skipped, as the GPU clips
 //!   them.
 //! - Shapes without a closed-form intersection here (torus, flag) and
-//!   material features the formula does not cover (textures, opacity below
-//!   1, two-sided faces, Gouraud and toon shading) are refused with an error naming the
-//!   object, its material and the feature, never approximated.
+//!   material features the formula does not cover (textures and normal
+//!   maps, opacity below 1, two-sided faces, Gouraud and toon shading) are
+//!   refused with an error naming the object, its material and the
+//!   feature, never approximated. A map whose `MapKindInfo::reference`
+//!   says how (a specular map) is applied, on planes, sampled at the
+//!   nearest texel (`texture_filter = "nearest"`).
 
 use glam::{DMat3, DMat4, DQuat, DVec3};
 
@@ -70,7 +73,11 @@ use crate::atmosphere::transport::{
     multiple_radiance, sky_irradiance, TransportSettings, UNLIMITED,
 };
 use crate::atmosphere::{quadrature, Atmosphere, Sun};
-use crate::scene::{Light, Scene, ShadingModel, Shape, Transform, MAX_OUTPUT_SIZE};
+use crate::scene::material_maps::{ColorSpace, MapKindInfo, MapSource, ReferenceUse};
+use crate::scene::{
+    placeholder_texels, Light, Material, Scene, ShadingModel, Shape, Texture, TextureFilter,
+    Transform, MAX_OUTPUT_SIZE, PLACEHOLDER_TEXTURE,
+};
 
 /// Why a scene has no CPU reference.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -181,6 +188,8 @@ struct CpuObject {
     ka: DVec3,
     kd: DVec3,
     ks: DVec3,
+    /// A map multiplying `ks` (`ReferenceUse::ScalesSpecular`).
+    specular_map: Option<ReferenceMap>,
     shininess: f64,
     /// The lights that reach this object on the GPU, in scene order (the
     /// atmosphere's sun is not one of them: it is lit per point).
@@ -350,7 +359,115 @@ struct WorldHit {
     normal: DVec3,
 }
 
+/// The maps of `material` the reference applies, on `surface` sampled
+/// with `filter`: the one that scales `ks`, if any. Errors with the phrase
+/// for the first map (in table order) it cannot apply.
+fn reference_maps(
+    material: &Material,
+    surface: &Surface,
+    filter: TextureFilter,
+) -> Result<Option<ReferenceMap>, String> {
+    let mut specular = None;
+    for (kind, source) in material.maps.iter() {
+        let info = kind.info();
+        match info.reference {
+            ReferenceUse::Unsupported(phrase) => return Err(phrase.to_string()),
+            ReferenceUse::ScalesSpecular => {
+                if surface.uv(DVec3::ZERO).is_none() {
+                    return Err(format!(
+                        "a {} on a {} (the reference has texture coordinates for planes only)",
+                        info.field,
+                        surface.name()
+                    ));
+                }
+                if filter != TextureFilter::Nearest {
+                    return Err(format!(
+                        "a {} filtered with texture_filter = \"{}\" (the reference samples \
+                         the nearest texel: use \"nearest\")",
+                        info.field,
+                        format!("{filter:?}").to_lowercase()
+                    ));
+                }
+                specular = Some(ReferenceMap::load(info, source)?);
+            }
+        }
+    }
+    Ok(specular)
+}
+
+/// A map's texels as the shader reads them (decoded from sRGB for a
+/// colour map), top row first.
+#[derive(Clone, Debug, PartialEq)]
+struct ReferenceMap {
+    width: u32,
+    height: u32,
+    texels: Vec<DVec3>,
+}
+
+impl ReferenceMap {
+    fn load(info: &MapKindInfo, source: &MapSource) -> Result<ReferenceMap, String> {
+        let (width, height, bytes) = match &source.texture {
+            Texture::File(path) => {
+                let image = crate::image_io::decode(path)
+                    .map_err(|reason| format!("{}: {reason}", path.display()))?
+                    .to_rgba8();
+                (image.width(), image.height(), image.into_raw())
+            }
+            Texture::Placeholder => {
+                let (side, _) = PLACEHOLDER_TEXTURE;
+                (side, side, placeholder_texels())
+            }
+        };
+        let decode = |c: u8| {
+            let c = f64::from(c) / 255.0;
+            match info.color_space {
+                ColorSpace::Linear => c,
+                ColorSpace::Srgb if c <= 0.04045 => c / 12.92,
+                ColorSpace::Srgb => ((c + 0.055) / 1.055).powf(2.4),
+            }
+        };
+        let texels = bytes
+            .chunks_exact(4)
+            .map(|t| DVec3::new(decode(t[0]), decode(t[1]), decode(t[2])))
+            .collect();
+        Ok(ReferenceMap {
+            width,
+            height,
+            texels,
+        })
+    }
+
+    /// The texel nearest `(u, v)` (`v` up the image, as the shaders flip
+    /// it), repeating outside `[0, 1)` as the sampler does.
+    fn nearest(&self, u: f64, v: f64) -> DVec3 {
+        let x = (u * f64::from(self.width)).floor() as i64;
+        let y = ((1.0 - v) * f64::from(self.height)).floor() as i64;
+        let x = x.rem_euclid(i64::from(self.width)) as usize;
+        let y = y.rem_euclid(i64::from(self.height)) as usize;
+        self.texels[y * self.width as usize + x]
+    }
+}
+
 impl Surface {
+    /// The texture coordinates of the object-space point `p` on the
+    /// surface, as the tessellated mesh has them (`mesh::PlaneSurface`:
+    /// `u` along `+X`, `v` along `-Z`); `None` for surfaces the reference
+    /// has none for.
+    fn uv(&self, p: DVec3) -> Option<(f64, f64)> {
+        match *self {
+            Surface::Plane { width, depth } => Some((p.x / width + 0.5, 0.5 - p.z / depth)),
+            Surface::Sphere { .. } | Surface::Cylinder { .. } => None,
+        }
+    }
+
+    fn name(&self) -> &'static str {
+        match self {
+            Surface::Sphere { .. } => "sphere",
+            Surface::Plane { .. } => "plane",
+            Surface::Cylinder { .. } => "cylinder",
+        }
+    }
+
     fn of(shape: &Shape) -> Option<Surface> {
         let f = f64::from;
         match *shape {
@@ -492,11 +609,14 @@ impl CpuScene {
                     object: object.name.clone(),
                     shape: object.shape.kind_name(),
                 })?;
-            let feature = if material.texture.is_some() {
-                Some("a texture".to_string())
-            } else if material.normal_map.is_some() {
-                Some("a normal map".to_string())
-            } else if material.is_transparent() {
+            let unsupported = |feature: String| CpuRenderError::UnsupportedMaterial {
+                object: object.name.clone(),
+                material: material.name.clone(),
+                feature,
+            };
+            let specular_map = reference_maps(material, &surface, scene.output.texture_filter)
+                .map_err(unsupported)?;
+            let feature = if material.is_transparent() {
                 Some(format!("transparency (opacity {})", material.opacity))
             } else if object.is_two_sided(material) {
                 // The reference culls back faces, as one-sided draws do.
@@ -509,11 +629,7 @@ impl CpuScene {
                 }
             };
             if let Some(feature) = feature {
-                return Err(CpuRenderError::UnsupportedMaterial {
-                    object: object.name.clone(),
-                    material: material.name.clone(),
-                    feature,
-                });
+                return Err(unsupported(feature));
             }
             let model = model_matrix(&object.transform);
             let lights = scene
@@ -552,6 +668,7 @@ impl CpuScene {
                 ka: material.ka.as_dvec3(),
                 kd: material.kd.as_dvec3(),
                 ks: material.ks.as_dvec3(),
+                specular_map,
                 shininess: f64::from(material.shininess),
                 lights,
                 bounds,
@@ -686,7 +803,8 @@ impl CpuScene {
         let hit = self.trace(dir)?;
         let object = &self.objects[hit.object];
         let v = -dir;
-        let mut colour = object.blinn_phong(hit.point, hit.normal, v, self.ambient);
+        let ks = object.ks_at(hit.point);
+        let mut colour = object.blinn_phong(hit.point, hit.normal, v, self.ambient, ks);
         if let Some(air) = air {
             // The sun after the object's lights, then the sky, in the
             // shaders' order.
@@ -699,6 +817,7 @@ impl CpuScene {
                 hit.point,
                 hit.normal,
                 v,
+                ks,
             );
             colour += object.kd * sky;
         }
@@ -838,17 +957,27 @@ fn air(
 impl CpuObject {
     /// `blinn_phong` of `lighting.glsl`, in f64: `ka La` plus, for every
     /// light in front of the surface (`cos > 0`), `Le att (kd cos + ks
-    /// max(N.H, 0)^shininess)`.
-    fn blinn_phong(&self, p: DVec3, n: DVec3, v: DVec3, ambient: DVec3) -> DVec3 {
+    /// max(N.H, 0)^shininess)`, with `ks` at `p` ([`Self::ks_at`]).
+    fn blinn_phong(&self, p: DVec3, n: DVec3, v: DVec3, ambient: DVec3, ks: DVec3) -> DVec3 {
         let mut color = self.ka * ambient;
         for light in &self.lights {
-            color += self.light(light, p, n, v);
+            color += self.light(light, p, n, v, ks);
         }
         color
     }
 
+    /// The specular reflectance at the world point `p`: `ks` times the
+    /// specular map's nearest texel there, if the object has one.
+    fn ks_at(&self, p: DVec3) -> DVec3 {
+        let uv = self.surface.uv(self.world_to_object.transform_point3(p));
+        match (&self.specular_map, uv) {
+            (Some(map), Some((u, v))) => self.ks * map.nearest(u, v),
+            _ => self.ks,
+        }
+    }
+
     /// One light's Blinn-Phong term.
-    fn light(&self, light: &CpuLight, p: DVec3, n: DVec3, v: DVec3) -> DVec3 {
+    fn light(&self, light: &CpuLight, p: DVec3, n: DVec3, v: DVec3, ks: DVec3) -> DVec3 {
         let (l, radiance) = match *light {
             CpuLight::Point {
                 position,
@@ -871,7 +1000,7 @@ impl CpuObject {
         if cos_theta > 0.0 {
             let h = (l + v).normalize();
             let specular = n.dot(h).max(0.0).powf(self.shininess);
-            return radiance * (self.kd * cos_theta + self.ks * specular);
+            return radiance * (self.kd * cos_theta + ks * specular);
         }
         DVec3::ZERO
     }

@@ -3,13 +3,13 @@
 //! depth test (opaque front to back, transparent back to front).
 
 use super::geometry::SceneGeometry;
-use crate::scene::{Scene, ShadingModel, Texture};
-use std::collections::BTreeMap;
-use std::path::PathBuf;
+use crate::scene::material_maps::{MapKind, MapMask, MapSource, MAP_KIND_COUNT};
+use crate::scene::{Material, Scene, ShadingModel};
 
 /// A pipeline variant: shading model, light count and whole-number
-/// shininess (specialization constants), base colour texture (a shader variant with its own
-/// descriptor set) and alpha blending (the transparent pass).
+/// shininess (specialization constants), the material maps it reads (shader
+/// variants or a specialization constant, with the material descriptor
+/// set) and alpha blending (the transparent pass).
 ///
 /// The light count is a constant so the driver compiles the light loop with
 /// a fixed trip count (unrolled, with constant offsets into the light
@@ -18,10 +18,9 @@ use std::path::PathBuf;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct PipelineKey {
     pub shading: ShadingKey,
-    pub textured: bool,
-    /// Tangent-space normal map (shader feature `NORMAL_MAP`, the tangent
-    /// attribute and one more descriptor set).
-    pub normal_mapped: bool,
+    /// The kinds of map the draw samples (each selected as its row of
+    /// `MAP_KINDS` says; see [`MapMask::shader_features`]).
+    pub maps: MapMask,
     pub blended: bool,
     /// Lights in the object's block.
     pub lights: u32,
@@ -119,10 +118,8 @@ impl From<ShadingModel> for ShadingKey {
 pub struct Draw {
     pub object: usize,
     pub pipeline: PipelineKey,
-    /// Index into `FramePlan::textures`.
-    pub texture: Option<usize>,
-    /// Index into `FramePlan::normal_maps`.
-    pub normal_map: Option<usize>,
+    /// Its maps, by kind (in table order): indices into `FramePlan::maps`.
+    pub maps: MapSlots,
     /// Indices into `Scene::lights` evaluated while drawing the object
     /// (empty for surfaces lit later by the deferred lighting pass). The
     /// atmosphere's sun and sky are not among them: see
@@ -130,13 +127,9 @@ pub struct Draw {
     pub lights: Vec<usize>,
 }
 
-/// Where a normal map comes from: a normal-map file, or a height map
-/// converted when the textures are loaded (`height_scale` set).
-#[derive(Clone, Debug, PartialEq)]
-pub struct NormalMapSource {
-    pub path: PathBuf,
-    pub height_scale: Option<f32>,
-}
+/// A draw's maps: for each kind (in table order), an index into the
+/// frame's list of distinct maps.
+pub type MapSlots = [Option<usize>; MAP_KIND_COUNT];
 
 /// The frame's draws and the textures they use, each loaded once.
 #[derive(Clone, Debug, Default)]
@@ -146,10 +139,8 @@ pub struct DrawList {
     pub opaque: Vec<Draw>,
     /// Transparent draws, back to front from the camera.
     pub transparent: Vec<Draw>,
-    /// Distinct base-colour textures.
-    pub textures: Vec<Texture>,
-    /// Distinct normal maps (linear, not sRGB).
-    pub normal_maps: Vec<NormalMapSource>,
+    /// Distinct map images, each of one kind.
+    pub maps: Vec<(MapKind, MapSource)>,
 }
 
 impl DrawList {
@@ -157,10 +148,7 @@ impl DrawList {
     /// `deferred` when opaque Phong surfaces are lit in the lighting pass
     /// (they then carry no lights of their own).
     pub fn new(scene: &Scene, geometry: &SceneGeometry, deferred: bool) -> DrawList {
-        let mut textures: Vec<Texture> = Vec::new();
-        let mut texture_index = BTreeMap::new();
-        let mut normal_maps: Vec<NormalMapSource> = Vec::new();
-        let mut normal_map_index = BTreeMap::new();
+        let mut maps: Vec<(MapKind, MapSource)> = Vec::new();
         let mut opaque = Vec::new();
         let mut transparent = Vec::new();
         // A debug view draws attributes, not light: every surface opaque,
@@ -169,31 +157,12 @@ impl DrawList {
         let air = AirLight::of(scene);
         for (i, object) in scene.objects.iter().enumerate() {
             let material = &scene.materials[object.material];
-            let texture = material.texture.as_ref().map(|source| {
-                *texture_index.entry(source.clone()).or_insert_with(|| {
-                    textures.push(source.clone());
-                    textures.len() - 1
-                })
-            });
-            // Per-vertex lighting cannot use a per-pixel normal (the scene
-            // warned): the map is left out, so no variant interpolates
-            // tangents nobody reads. Debug views draw it whatever the shading.
-            let lit_per_vertex = material.shading == ShadingModel::Gouraud && debug == 0;
-            let normal_map = material
-                .normal_map
-                .as_ref()
-                .filter(|_| !lit_per_vertex)
-                .map(|path| {
-                    let source = NormalMapSource {
-                        path: path.clone(),
-                        height_scale: material.height_scale,
-                    };
-                    let key = (path.clone(), material.height_scale.map(f32::to_bits));
-                    *normal_map_index.entry(key).or_insert_with(|| {
-                        normal_maps.push(source);
-                        normal_maps.len() - 1
-                    })
-                });
+            let slots = map_slots(material, debug, &mut maps);
+            let mask = slots
+                .iter()
+                .zip(MapKind::all())
+                .filter(|(slot, _)| slot.is_some())
+                .fold(MapMask::default(), |mask, (_, kind)| mask.with(kind));
             let blended = material.opacity < 1.0 && debug == 0;
             let lit_later = deferred && !blended && material.shading == ShadingModel::Phong;
             let lights = if lit_later || debug != 0 {
@@ -206,8 +175,7 @@ impl DrawList {
                 object: i,
                 pipeline: PipelineKey {
                     shading: material.shading.into(),
-                    textured: texture.is_some(),
-                    normal_mapped: normal_map.is_some(),
+                    maps: mask,
                     blended,
                     lights: lights.len() as u32,
                     debug,
@@ -224,8 +192,7 @@ impl DrawList {
                     // lighting pass's tiles.
                     air,
                 },
-                texture,
-                normal_map,
+                maps: slots,
                 lights,
             };
             if blended {
@@ -248,7 +215,7 @@ impl DrawList {
                 shininess_exponent: 0,
                 ..d.pipeline
             };
-            (pipeline, d.texture, d.normal_map)
+            (pipeline, d.maps)
         };
         keyed.sort_by(|a, b| group(&a.1).cmp(&group(&b.1)).then(a.0.total_cmp(&b.0)));
         let opaque: Vec<Draw> = keyed.into_iter().map(|(_, d)| d).collect();
@@ -261,8 +228,30 @@ impl DrawList {
         DrawList {
             opaque,
             transparent,
-            textures,
-            normal_maps,
+            maps,
         }
     }
+}
+
+/// The slots of `material`'s maps in `maps` (the frame's distinct map
+/// images), adding those not there yet. Per-vertex lighting cannot use a
+/// per-pixel map (the scene warned): such a map is left out, so no variant
+/// reads what nobody uses. Debug views draw it whatever the shading.
+fn map_slots(material: &Material, debug: u32, maps: &mut Vec<(MapKind, MapSource)>) -> MapSlots {
+    let lit_per_vertex = material.shading == ShadingModel::Gouraud && debug == 0;
+    let mut slots = MapSlots::default();
+    for (kind, source) in material.maps.iter() {
+        if lit_per_vertex && kind.info().per_pixel_only {
+            continue;
+        }
+        let index = maps
+            .iter()
+            .position(|(k, s)| *k == kind && s.same_image(source))
+            .unwrap_or_else(|| {
+                maps.push((kind, source.clone()));
+                maps.len() - 1
+            });
+        slots[kind as usize] = Some(index);
+    }
+    slots
 }

@@ -4,6 +4,14 @@
 
 use bytemuck::{Pod, Zeroable};
 
+// A field moved, renamed or resized on either side fails here, at compile
+// time, naming the block, the member and the shader.
+include!(concat!(env!("OUT_DIR"), "/layout_checks.rs"));
+
+// The blocks' fields that pipelines carry as specialization constants, in
+// the order the shaders declare them (`sky_static_fields`).
+include!(concat!(env!("OUT_DIR"), "/block_constants.rs"));
+
 /// The per-frame uniform block (std140).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]

@@ -19,7 +19,6 @@ pub mod plan;
 pub mod preflight;
 mod renderer;
 mod scene_resources;
-pub mod shader_ids;
 pub mod sky_resources;
 mod static_lights;
 mod sun_tables;

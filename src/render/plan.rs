@@ -10,14 +10,13 @@
 //! tone-map subpass when the scene asks for LDR output.
 
 pub use super::draw_list::{
-    shininess_exponent, AirLight, Draw, DrawList, NormalMapSource, PipelineKey, ShadingKey,
+    shininess_exponent, AirLight, Draw, DrawList, MapSlots, PipelineKey, ShadingKey,
     MAX_SHININESS_EXPONENT,
 };
 use super::geometry::SceneGeometry;
 use super::tiles::{self, TileGroup};
-use crate::scene::{
-    AerialPerspective, HdrFormat, Lighting, Scene, ShadingModel, Texture, ToneMapOperator,
-};
+use crate::scene::material_maps::{MapKind, MapSource};
+use crate::scene::{AerialPerspective, HdrFormat, Lighting, Scene, ShadingModel, ToneMapOperator};
 use crate::vk::{DepthUse, Format};
 
 /// The attachment names passes refer to.
@@ -224,10 +223,9 @@ pub struct FramePlan {
     pub opaque: Vec<Draw>,
     /// Transparent draws, back to front from the camera.
     pub transparent: Vec<Draw>,
-    /// Distinct base-colour textures, each loaded once.
-    pub textures: Vec<Texture>,
-    /// Distinct normal maps, each loaded once (linear, not sRGB).
-    pub normal_maps: Vec<NormalMapSource>,
+    /// Distinct map images (base colour, normal map, ...), each of one
+    /// kind, each loaded once.
+    pub maps: Vec<(MapKind, MapSource)>,
     /// Deferred lighting: screen tiles grouped by the lights that reach
     /// them (empty in forward mode).
     pub tile_groups: Vec<TileGroup>,
@@ -260,8 +258,7 @@ impl FramePlan {
             lighting: graph.lighting,
             opaque: draws.opaque,
             transparent: draws.transparent,
-            textures: draws.textures,
-            normal_maps: draws.normal_maps,
+            maps: draws.maps,
             tile_groups,
             aerial_volume_reach: graph
                 .passes
@@ -285,8 +282,7 @@ impl FramePlan {
             lighting: graph.lighting,
             opaque: Vec::new(),
             transparent: Vec::new(),
-            textures: Vec::new(),
-            normal_maps: Vec::new(),
+            maps: Vec::new(),
             tile_groups: Vec::new(),
             attachments: graph.attachments,
             passes: graph.passes,
@@ -804,10 +800,10 @@ mod tests {
     fn a_scene_without_transparency_or_textures_gets_neither() {
         let (_, plan) = load("default.toml");
         assert_eq!(plan.pass_names(), vec!["opaque", "tonemap", "readback"]);
-        assert!(plan.textures.is_empty());
+        assert!(plan.maps.is_empty());
         assert!(plan
             .draws()
-            .all(|d| !d.pipeline.textured && !d.pipeline.blended));
+            .all(|d| d.pipeline.maps.is_empty() && !d.pipeline.blended));
         assert!(!plan.has_attachment(attachment::ALBEDO));
     }
 
@@ -830,8 +826,11 @@ mod tests {
     #[test]
     fn textures_are_loaded_once_and_only_when_used() {
         let (_, plan) = load("flag.toml");
-        assert_eq!(plan.textures.len(), 1);
-        let textured = plan.draws().filter(|d| d.texture.is_some()).count();
+        assert_eq!(plan.maps.len(), 1);
+        let textured = plan
+            .draws()
+            .filter(|d| d.maps[MapKind::BaseColor as usize].is_some())
+            .count();
         assert!(textured >= 1);
     }
 

@@ -17,7 +17,7 @@ use crate::budget::{Bytes, MemoryBudget};
 use crate::image_io::{inspect_texture, TextureInfo};
 use crate::scene::Scene;
 use crate::vk::{bytes_per_texel, Context};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The largest decoded texture (RGBA, 8 bits per channel) the PNG decoder
 /// accepts: the `image` crate's default allocation limit.
@@ -75,11 +75,42 @@ pub fn scene_bytes(
     extra_per_pixel: u64,
     budget: &MemoryBudget,
 ) -> Result<u64, RenderError> {
+    let (geometry, largest) = geometry_bytes(scene, budget)?;
+    let (w, h) = (scene.output.width as u64, scene.output.height as u64);
+    // Every attachment the renderer will create (the G-buffer and the
+    // atmosphere's surface copy included), from the same graph.
+    let graph = FrameGraph::new(scene, keep_hdr);
+    let attachments =
+        attachment_bytes(w, h, &graph).saturating_add((w * h).saturating_mul(extra_per_pixel));
+    let size_what = format!("output size {w}x{h}");
+    budget.check(&size_what, attachments)?;
+    let total = geometry
+        .saturating_add(attachments)
+        .saturating_add(map_bytes(scene, budget)?)
+        .saturating_add(sky_bytes(scene, &graph, budget)?);
+    if total > budget.bytes {
+        // Each part fits but the sum does not: name the biggest parts.
+        let what = match largest {
+            Some((object, n)) if n > attachments => {
+                format!("the scene (largest part: {object})")
+            }
+            _ => format!("the scene (largest part: {size_what})"),
+        };
+        budget.check(what, total)?;
+    }
+    Ok(total)
+}
+
+/// The objects' geometry, and the largest object (named) with its bytes.
+/// Every mesh is held on the CPU, copied into one upload array (which may
+/// briefly exist twice while it grows) and into the geometry buffer, so
+/// about three copies; plus the f64 positions of the object being
+/// tessellated.
+fn geometry_bytes(
+    scene: &Scene,
+    budget: &MemoryBudget,
+) -> Result<(u64, Option<(String, u64)>), RenderError> {
     let mut total = 0u64;
-    // Geometry: every mesh is held on the CPU, copied into one upload
-    // array (which may briefly exist twice while it grows) and into the
-    // geometry buffer, so about three copies; plus the f64 positions of the
-    // object being tessellated.
     let mut largest_transient = 0u64;
     let mut largest: Option<(String, u64)> = None;
     for (i, object) in scene.objects.iter().enumerate() {
@@ -105,31 +136,18 @@ pub fn scene_bytes(
         }
         total = total.saturating_add(need);
     }
-    total = total.saturating_add(largest_transient);
-    let (w, h) = (scene.output.width as u64, scene.output.height as u64);
-    // Every attachment the renderer will create (the G-buffer and the
-    // atmosphere's surface copy included), from the same graph.
-    let graph = FrameGraph::new(scene, keep_hdr);
-    let attachments =
-        attachment_bytes(w, h, &graph).saturating_add((w * h).saturating_mul(extra_per_pixel));
-    let size_what = format!("output size {w}x{h}");
-    budget.check(&size_what, attachments)?;
-    total = total.saturating_add(attachments);
+    Ok((total.saturating_add(largest_transient), largest))
+}
+
+/// The materials' maps, each file once: every kind costs the same (see
+/// `MapKindInfo::keeps_sixteen_bit`), plus, for a height map, the
+/// conversion's working arrays.
+fn map_bytes(scene: &Scene, budget: &MemoryBudget) -> Result<u64, RenderError> {
+    let mut total = 0u64;
     let mut seen: Vec<&Path> = Vec::new();
-    // Base-colour textures and normal maps cost the same, plus, for a
-    // height map, the conversion's working arrays.
-    let images = scene.materials.iter().flat_map(|m| {
-        m.texture
-            .iter()
-            .filter_map(|t| t.file())
-            .map(|p| (p, false))
-            .chain(
-                m.normal_map
-                    .iter()
-                    .map(|p| (p.as_path(), m.height_scale.is_some())),
-            )
-    });
-    for (path, from_heights) in images {
+    let maps = scene.materials.iter().flat_map(|m| m.maps.iter());
+    for (_, source) in maps {
+        let Some(path) = source.path() else { continue };
         if seen.contains(&path) {
             continue;
         }
@@ -152,7 +170,7 @@ pub fn scene_bytes(
         // Decoded pixels (twice during conversion to RGBA), staging buffer
         // and the mipmapped image.
         let mut need = 3 * base + with_mips;
-        if from_heights {
+        if source.height_scale.is_some() {
             need += height_conversion_bytes(info.width, info.height);
         }
         budget.check(
@@ -166,53 +184,50 @@ pub fn scene_bytes(
         )?;
         total = total.saturating_add(need);
     }
-    if let Some(sky) = &scene.sky {
-        // The optical-depth table: its texels on the CPU, in the staging
-        // buffer and in the image.
-        let (w, h) = sky.table_size;
-        let need = u64::from(w) * u64::from(h) * 16 * 3;
-        budget.check(format!("optical-depth table {w}x{h}"), need)?;
+    Ok(total)
+}
+
+/// The atmosphere's tables and, in frames of `graph` that have it, its
+/// aerial-perspective volume.
+fn sky_bytes(scene: &Scene, graph: &FrameGraph, budget: &MemoryBudget) -> Result<u64, RenderError> {
+    let Some(sky) = &scene.sky else {
+        return Ok(0);
+    };
+    // The optical-depth table: its texels on the CPU, in the staging
+    // buffer and in the image.
+    let (w, h) = sky.table_size;
+    let need = u64::from(w) * u64::from(h) * 16 * 3;
+    budget.check(format!("optical-depth table {w}x{h}"), need)?;
+    let mut total = need;
+    // The sky-view table: RGBA32F panels of w x h.
+    if let Some((w, h)) = sky.sky_view {
+        let need = u64::from(w) * u64::from(h) * 16 * u64::from(sky.sky_view_panels());
+        budget.check(format!("sky-view table {w}x{h}"), need)?;
         total = total.saturating_add(need);
-        // The sky-view table: RGBA32F panels of w x h.
-        if let Some((w, h)) = sky.sky_view {
-            let need = u64::from(w) * u64::from(h) * 16 * u64::from(sky.sky_view_panels());
-            budget.check(format!("sky-view table {w}x{h}"), need)?;
-            total = total.saturating_add(need);
-        }
-        // The aerial-perspective volume: two RGBA32F panels, in frames
-        // that have it.
-        if graph
-            .passes
-            .iter()
-            .any(|p| p.kind == PassKind::AerialVolume)
-        {
-            let (w, h, d) = sky.aerial_volume;
-            let need = crate::render::sky_resources::AerialVolume::bytes(sky.aerial_volume);
-            budget.check(format!("aerial-perspective volume {w}x{h}x{d}"), need)?;
-            total = total.saturating_add(need);
-        }
-        // The multiple-scattering and sky-irradiance tables, RGBA32F
-        // images written on the device.
-        if sky.multiple_scattering {
-            for (what, (w, h)) in [
-                ("multiple-scattering table", sky.ms_table_size),
-                ("sky-irradiance table", sky.irradiance_table_size),
-            ] {
-                let need = u64::from(w) * u64::from(h) * 16;
-                budget.check(format!("{what} {w}x{h}"), need)?;
-                total = total.saturating_add(need);
-            }
-        }
     }
-    if total > budget.bytes {
-        // Each part fits but the sum does not: name the biggest parts.
-        let what = match largest {
-            Some((object, n)) if n > attachments => {
-                format!("the scene (largest part: {object})")
-            }
-            _ => format!("the scene (largest part: {size_what})"),
-        };
-        budget.check(what, total)?;
+    // The aerial-perspective volume: two RGBA32F panels, in frames
+    // that have it.
+    if graph
+        .passes
+        .iter()
+        .any(|p| p.kind == PassKind::AerialVolume)
+    {
+        let (w, h, d) = sky.aerial_volume;
+        let need = crate::render::sky_resources::AerialVolume::bytes(sky.aerial_volume);
+        budget.check(format!("aerial-perspective volume {w}x{h}x{d}"), need)?;
+        total = total.saturating_add(need);
+    }
+    // The multiple-scattering and sky-irradiance tables, RGBA32F
+    // images written on the device.
+    if sky.multiple_scattering {
+        for (what, (w, h)) in [
+            ("multiple-scattering table", sky.ms_table_size),
+            ("sky-irradiance table", sky.irradiance_table_size),
+        ] {
+            let need = u64::from(w) * u64::from(h) * 16;
+            budget.check(format!("{what} {w}x{h}"), need)?;
+            total = total.saturating_add(need);
+        }
     }
     Ok(total)
 }
@@ -275,14 +290,9 @@ pub fn empty_pass_memory(w: u32, h: u32, budget: &MemoryBudget) -> Result<(), Re
 /// Checks `scene` against `ctx`'s limits; see the module documentation.
 pub fn scene_on_device(scene: &Scene, ctx: &Context) -> Result<(), RenderError> {
     let max_side = ctx.limits.max_image_dimension2_d;
-    // Base-colour textures and normal maps (both decoded by content): only
-    // the device's size limit applies here.
-    let textures = scene.materials.iter().flat_map(|m| {
-        m.texture
-            .iter()
-            .filter_map(|t| t.file())
-            .chain(m.normal_map.iter().map(PathBuf::as_path))
-    });
+    // Maps of every kind (decoded by content): only the device's size
+    // limit applies here.
+    let textures = scene.materials.iter().flat_map(|m| m.maps.files());
     for path in textures {
         let info = inspect_texture(path)?;
         if info.width == 0 || info.height == 0 || info.width.max(info.height) > max_side {

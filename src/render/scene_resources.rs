@@ -1,31 +1,25 @@
 //! GPU resources shared by every pass that draws the scene's objects: one
 //! geometry buffer, the per-frame uniforms, the per-object blocks (a
-//! dynamic uniform buffer, std140) and the base-colour textures, with
-//! one material descriptor set per (base colour, normal map) pair, and the
+//! dynamic uniform buffer, std140) and the material maps, with one
+//! material descriptor set per combination of maps a draw uses, and the
 //! one pipeline layout object pipelines use (with the atmosphere's set
 //! when its sun and sky light the objects).
 
 use super::geometry::SceneGeometry;
 use super::gpu_types::{GpuLight, ObjectHeader, ViewUniforms};
-use super::plan::{AirLight, Draw, FramePlan};
-use super::shader_ids::{BASE_COLOR_BINDING, MATERIAL_SET, NORMAL_MAP_BINDING, SKY_SET};
+use super::plan::{AirLight, Draw, FramePlan, MapSlots};
 use super::sky_resources::SkyResources;
 use super::RenderError;
 use crate::mesh::height::{encode_normal_map, GreenAxis, HeightEdge, HeightFilter, HeightMap};
+use crate::scene::material_maps::{MapKind, MapKindInfo, MapSource, MAP_KINDS, MAP_KIND_COUNT};
 use crate::scene::{placeholder_texels, Light, Scene, Texture, TextureFilter, PLACEHOLDER_TEXTURE};
+use crate::shader_ids::{MATERIAL_SET, SKY_SET};
 use crate::vk::{
     self, Buffer, BufferUsage, CommandBuffer, Context, DescriptorBinding, DescriptorPool,
     DescriptorSet, DescriptorSetLayout, DescriptorType, Format, Image, ImageAspectFlags, ImageDesc,
     ImageUsageFlags, PipelineLayout, Sampler, SamplerFilter, ShaderStageFlags,
 };
 use std::sync::Arc;
-
-const TEXTURE_FORMAT: Format = Format::R8G8B8A8_SRGB;
-/// Normal maps: linear 8-bit, decoded as `2 * texel - 1` in the shader.
-const NORMAL_MAP_FORMAT: Format = Format::R8G8B8A8_UNORM;
-/// Normal maps stored with 16 bits per channel keep them: an 8-bit map
-/// quantizes directions to about 0.2 degrees, a 16-bit one to 0.001.
-const NORMAL_MAP_FORMAT_16: Format = Format::R16G16B16A16_UNORM;
 
 /// One object's range inside the shared geometry buffer.
 pub struct GeometryRange {
@@ -34,19 +28,14 @@ pub struct GeometryRange {
     pub index_count: u32,
 }
 
-/// A draw's base-colour texture and normal map, by index into the plan's
-/// lists.
-type ImagePair = (Option<usize>, Option<usize>);
-
 /// Fields drop in declaration order: sets before their pool, layouts after
 /// the pipelines' users are gone.
 pub struct SceneResources {
     pub frame_set: DescriptorSet,
     pub object_set: DescriptorSet,
-    /// One material set per distinct (base colour, normal map) pair the
-    /// draws use, by indices into `FramePlan::textures` and
-    /// `FramePlan::normal_maps`.
-    material_sets: Vec<(ImagePair, DescriptorSet)>,
+    /// One material set per distinct combination of maps the draws use,
+    /// by indices into `FramePlan::maps`.
+    material_sets: Vec<(MapSlots, DescriptorSet)>,
     _pool: DescriptorPool,
     /// The one layout of object pipelines: frame, object and (when some
     /// draw samples an image) material sets, and, when the atmosphere
@@ -60,7 +49,7 @@ pub struct SceneResources {
     /// set follows it and no draw samples an image (a pipeline layout
     /// numbers its sets without gaps).
     _empty_layout: Option<DescriptorSetLayout>,
-    /// Textures, normal maps and the 1x1 defaults the sets point at.
+    /// The maps and the 1x1 defaults the sets point at.
     _images: Vec<Image>,
     _sampler: Option<Sampler>,
     pub geometry: Buffer,
@@ -95,131 +84,14 @@ impl SceneResources {
             BufferUsage::Uniform,
         )?;
 
-        // Per-object blocks, each at an aligned offset, all read through one
-        // dynamic uniform-buffer descriptor whose range fits the largest.
-        let blocks: Vec<Vec<u8>> = (0..scene.objects.len())
-            .map(|i| object_block(scene, i, plan.draws().find(|d| d.object == i)))
-            .collect();
-        let (object_bytes, block_offsets, block_range) =
-            pack_blocks(ctx, &blocks, std::mem::size_of::<ObjectHeader>(), |i| {
-                format!("objects[{i}] \"{}\"", scene.objects[i].name)
-            })?;
-        let object_buffer = Buffer::with_data(ctx, "objects", &object_bytes, BufferUsage::Uniform)?;
+        let (object_buffer, block_offsets, block_range) = object_blocks(ctx, scene, plan)?;
+        let maps = MaterialImages::new(ctx, scene, plan)?;
 
-        // Textures, only if some material has one.
-        let sampler = if plan.textures.is_empty() && plan.normal_maps.is_empty() {
-            None
-        } else {
-            Some(Sampler::new(
-                ctx,
-                match scene.output.texture_filter {
-                    TextureFilter::Nearest => SamplerFilter::Nearest,
-                    TextureFilter::Bilinear => SamplerFilter::Bilinear,
-                    TextureFilter::Trilinear => SamplerFilter::Trilinear,
-                },
-                16,
-            )?)
-        };
-        let textures = plan
-            .textures
-            .iter()
-            .map(|source| match source {
-                Texture::File(path) => load_texture(ctx, path, TEXTURE_FORMAT),
-                Texture::Placeholder => {
-                    let (side, _) = PLACEHOLDER_TEXTURE;
-                    upload_texture(ctx, side, side, &placeholder_texels(), TEXTURE_FORMAT)
-                }
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        // Normal maps hold vectors, not colours: decoding them as sRGB
-        // would bend every normal.
-        let normal_maps = plan
-            .normal_maps
-            .iter()
-            .map(|source| match source.height_scale {
-                None => load_normal_map(ctx, &source.path),
-                Some(scale) => {
-                    let heights =
-                        HeightMap::load(&source.path).map_err(|e| RenderError::Texture {
-                            path: source.path.clone(),
-                            reason: e.to_string(),
-                        })?;
-                    let normals = heights
-                        .normals(scale, HeightFilter::Central, HeightEdge::Wrap)
-                        .map_err(|e| RenderError::Texture {
-                            path: source.path.clone(),
-                            reason: e.to_string(),
-                        })?;
-                    upload_texture(
-                        ctx,
-                        heights.width,
-                        heights.height,
-                        &encode_normal_map(&normals, GreenAxis::Up),
-                        NORMAL_MAP_FORMAT,
-                    )
-                }
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-
-        let all_stages = ShaderStageFlags::VERTEX | ShaderStageFlags::FRAGMENT;
-        let frame_layout = DescriptorSetLayout::new(
-            ctx,
-            &[DescriptorBinding {
-                binding: 0,
-                kind: DescriptorType::UNIFORM_BUFFER,
-                stages: all_stages,
-            }],
-        )?;
-        let object_layout = DescriptorSetLayout::new(
-            ctx,
-            &[DescriptorBinding {
-                binding: 0,
-                kind: DescriptorType::UNIFORM_BUFFER_DYNAMIC,
-                stages: all_stages,
-            }],
-        )?;
-        // One material layout with fixed bindings (base colour, normal
-        // map), only when some draw samples an image. Each distinct pair a
-        // draw uses gets one set; a slot the pair leaves empty holds a 1x1
-        // default (white, or the flat normal) that no variant reads.
-        let material_layout = if textures.is_empty() && normal_maps.is_empty() {
-            None
-        } else {
-            Some(DescriptorSetLayout::new(
-                ctx,
-                &[BASE_COLOR_BINDING, NORMAL_MAP_BINDING].map(|binding| DescriptorBinding {
-                    binding,
-                    kind: DescriptorType::COMBINED_IMAGE_SAMPLER,
-                    stages: ShaderStageFlags::FRAGMENT,
-                }),
-            )?)
-        };
-        let mut pairs: Vec<ImagePair> = plan
-            .draws()
-            .map(|d| (d.texture, d.normal_map))
-            .filter(|pair| *pair != (None, None))
-            .collect();
-        pairs.sort_unstable();
-        pairs.dedup();
-        let default_colour = if pairs.iter().any(|p| p.0.is_none()) {
-            Some(upload_texture(ctx, 1, 1, &[255; 4], TEXTURE_FORMAT)?)
-        } else {
-            None
-        };
-        let default_normal = if pairs.iter().any(|p| p.1.is_none()) {
-            Some(upload_texture(
-                ctx,
-                1,
-                1,
-                &[128, 128, 255, 255],
-                NORMAL_MAP_FORMAT,
-            )?)
-        } else {
-            None
-        };
+        let frame_layout = uniform_layout(ctx, DescriptorType::UNIFORM_BUFFER)?;
+        let object_layout = uniform_layout(ctx, DescriptorType::UNIFORM_BUFFER_DYNAMIC)?;
         let mut pool_layouts = vec![&frame_layout, &object_layout];
-        if let Some(m) = &material_layout {
-            pool_layouts.extend(std::iter::repeat_n(m, pairs.len()));
+        if let Some(m) = &maps.layout {
+            pool_layouts.extend(std::iter::repeat_n(m, maps.combinations.len()));
         }
         let pool = DescriptorPool::for_layouts(ctx, &pool_layouts)?;
         let frame_set = pool.allocate(&frame_layout)?;
@@ -236,48 +108,14 @@ impl SceneResources {
             &object_buffer,
             block_range,
         );
-        let mut material_sets = Vec::new();
-        if let (Some(layout), Some(sampler)) = (&material_layout, &sampler) {
-            for &(t, n) in &pairs {
-                let set = pool.allocate(layout)?;
-                let colour = t.map(|t| &textures[t]).or(default_colour.as_ref());
-                let normal = n.map(|n| &normal_maps[n]).or(default_normal.as_ref());
-                let (Some(colour), Some(normal)) = (colour, normal) else {
-                    unreachable!("a default exists for every empty slot of a pair");
-                };
-                set.write_sampled_image(BASE_COLOR_BINDING, colour, sampler);
-                set.write_sampled_image(NORMAL_MAP_BINDING, normal, sampler);
-                material_sets.push(((t, n), set));
-            }
-        }
-        let mut set_layouts = vec![&frame_layout, &object_layout];
-        set_layouts.extend(&material_layout);
-        let air_lit = plan.draws().any(|d| d.pipeline.air != AirLight::None);
-        let sky_layout = match sky {
-            Some(sky) if air_lit => Some(&sky.layout),
-            None if air_lit => {
-                return Err(RenderError::Frame(
-                    "objects lit by the atmosphere, but the frame has no atmosphere resources"
-                        .into(),
-                ))
-            }
-            _ => None,
-        };
-        let empty_layout = match (&sky_layout, &material_layout) {
-            (Some(_), None) => Some(DescriptorSetLayout::new(ctx, &[])?),
-            _ => None,
-        };
-        if let Some(sky_layout) = sky_layout {
-            set_layouts.extend(&empty_layout);
-            debug_assert_eq!(set_layouts.len() as u32, MATERIAL_SET + 1);
-            debug_assert_eq!(SKY_SET, MATERIAL_SET + 1);
-            set_layouts.push(sky_layout);
-        }
-        let layout = PipelineLayout::new(ctx, &set_layouts)?;
-        let mut images = textures;
-        images.extend(normal_maps);
-        images.extend(default_colour);
-        images.extend(default_normal);
+        let material_sets = maps.sets(&pool)?;
+        let (layout, empty_layout) = pipeline_layout(
+            ctx,
+            plan,
+            sky,
+            [&frame_layout, &object_layout],
+            maps.layout.as_ref(),
+        )?;
         Ok(SceneResources {
             frame_set,
             object_set,
@@ -286,10 +124,14 @@ impl SceneResources {
             layout,
             frame_layout,
             object_layout,
-            _material_layout: material_layout,
+            _material_layout: maps.layout,
             _empty_layout: empty_layout,
-            _images: images,
-            _sampler: sampler,
+            _images: maps
+                .images
+                .into_iter()
+                .chain(maps.defaults.into_iter().flatten())
+                .collect(),
+            _sampler: maps.sampler,
             geometry: geometry_buffer,
             ranges,
             block_offsets,
@@ -314,17 +156,183 @@ impl SceneResources {
         }
     }
 
-    /// The material set of a draw with this base-colour texture and normal
-    /// map (indices into the plan's lists), `None` for a draw with neither.
-    pub fn material_set(
-        &self,
-        texture: Option<usize>,
-        normal_map: Option<usize>,
-    ) -> Option<&DescriptorSet> {
+    /// The material set of a draw with these maps (indices into the
+    /// plan's list), `None` for a draw without maps.
+    pub fn material_set(&self, maps: &MapSlots) -> Option<&DescriptorSet> {
         self.material_sets
             .iter()
-            .find(|(pair, _)| *pair == (texture, normal_map))
+            .find(|(slots, _)| slots == maps)
             .map(|(_, set)| set)
+    }
+}
+
+/// A set layout of one uniform buffer of `kind` at binding 0, read by
+/// both stages (the frame's and the objects' sets).
+fn uniform_layout(
+    ctx: &Arc<Context>,
+    kind: DescriptorType,
+) -> Result<DescriptorSetLayout, RenderError> {
+    Ok(DescriptorSetLayout::new(
+        ctx,
+        &[DescriptorBinding {
+            binding: 0,
+            kind,
+            stages: ShaderStageFlags::VERTEX | ShaderStageFlags::FRAGMENT,
+        }],
+    )?)
+}
+
+/// The per-object blocks, each at an aligned offset, all read through one
+/// dynamic uniform-buffer descriptor whose range fits the largest: the
+/// buffer, each block's offset and the range.
+fn object_blocks(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    plan: &FramePlan,
+) -> Result<(Buffer, Vec<u32>, u64), RenderError> {
+    let blocks: Vec<Vec<u8>> = (0..scene.objects.len())
+        .map(|i| object_block(scene, i, plan.draws().find(|d| d.object == i)))
+        .collect();
+    let (object_bytes, block_offsets, block_range) =
+        pack_blocks(ctx, &blocks, std::mem::size_of::<ObjectHeader>(), |i| {
+            format!("objects[{i}] \"{}\"", scene.objects[i].name)
+        })?;
+    let object_buffer = Buffer::with_data(ctx, "objects", &object_bytes, BufferUsage::Uniform)?;
+    Ok((object_buffer, block_offsets, block_range))
+}
+
+/// The one layout of object pipelines: `sets` (frame, object), the
+/// material set's layout when some draw samples a map, and the
+/// atmosphere's set when it lights the objects (which `sky` must then
+/// hold), after an empty layout in the material set's place when there is
+/// none (a pipeline layout numbers its sets without gaps). Returns the
+/// layout and that empty layout.
+fn pipeline_layout(
+    ctx: &Arc<Context>,
+    plan: &FramePlan,
+    sky: Option<&SkyResources>,
+    sets: [&DescriptorSetLayout; 2],
+    material_layout: Option<&DescriptorSetLayout>,
+) -> Result<(PipelineLayout, Option<DescriptorSetLayout>), RenderError> {
+    let mut set_layouts = sets.to_vec();
+    set_layouts.extend(material_layout);
+    let air_lit = plan.draws().any(|d| d.pipeline.air != AirLight::None);
+    let sky_layout = match sky {
+        Some(sky) if air_lit => Some(&sky.layout),
+        None if air_lit => {
+            return Err(RenderError::Frame(
+                "objects lit by the atmosphere, but the frame has no atmosphere resources".into(),
+            ))
+        }
+        _ => None,
+    };
+    let empty_layout = match (&sky_layout, material_layout) {
+        (Some(_), None) => Some(DescriptorSetLayout::new(ctx, &[])?),
+        _ => None,
+    };
+    if let Some(sky_layout) = sky_layout {
+        set_layouts.extend(&empty_layout);
+        debug_assert_eq!(set_layouts.len() as u32, MATERIAL_SET + 1);
+        debug_assert_eq!(SKY_SET, MATERIAL_SET + 1);
+        set_layouts.push(sky_layout);
+    }
+    Ok((PipelineLayout::new(ctx, &set_layouts)?, empty_layout))
+}
+
+/// The images of the plan's maps, and what their material sets need: one
+/// layout with a fixed binding per map kind and a sampler, only when some
+/// draw samples a map. Each distinct combination of maps a draw uses gets
+/// one set; a slot the combination leaves empty holds its kind's 1x1
+/// default (`MapKindInfo::empty_slot`), made only when some set needs it.
+struct MaterialImages {
+    sampler: Option<Sampler>,
+    layout: Option<DescriptorSetLayout>,
+    /// By index into `FramePlan::maps`.
+    images: Vec<Image>,
+    /// By kind.
+    defaults: [Option<Image>; MAP_KIND_COUNT],
+    /// The distinct combinations of maps the draws use (none empty).
+    combinations: Vec<MapSlots>,
+}
+
+impl MaterialImages {
+    fn new(
+        ctx: &Arc<Context>,
+        scene: &Scene,
+        plan: &FramePlan,
+    ) -> Result<MaterialImages, RenderError> {
+        let mut combinations: Vec<MapSlots> = plan
+            .draws()
+            .map(|d| d.maps)
+            .filter(|slots| slots.iter().any(Option::is_some))
+            .collect();
+        combinations.sort_unstable();
+        combinations.dedup();
+        if plan.maps.is_empty() {
+            return Ok(MaterialImages {
+                sampler: None,
+                layout: None,
+                images: Vec::new(),
+                defaults: Default::default(),
+                combinations,
+            });
+        }
+        let sampler = Sampler::new(
+            ctx,
+            match scene.output.texture_filter {
+                TextureFilter::Nearest => SamplerFilter::Nearest,
+                TextureFilter::Bilinear => SamplerFilter::Bilinear,
+                TextureFilter::Trilinear => SamplerFilter::Trilinear,
+            },
+            16,
+        )?;
+        let images = plan
+            .maps
+            .iter()
+            .map(|(kind, source)| load_map(ctx, kind.info(), source))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut defaults: [Option<Image>; MAP_KIND_COUNT] = Default::default();
+        for (info, default) in MAP_KINDS.iter().zip(&mut defaults) {
+            if combinations.iter().any(|c| c[info.kind as usize].is_none()) {
+                let format = info.format(false);
+                *default = Some(upload_texture(ctx, 1, 1, &info.empty_slot, format)?);
+            }
+        }
+        let bindings = MAP_KINDS.map(|info| DescriptorBinding {
+            binding: info.binding,
+            kind: DescriptorType::COMBINED_IMAGE_SAMPLER,
+            stages: ShaderStageFlags::FRAGMENT,
+        });
+        Ok(MaterialImages {
+            sampler: Some(sampler),
+            layout: Some(DescriptorSetLayout::new(ctx, &bindings)?),
+            images,
+            defaults,
+            combinations,
+        })
+    }
+
+    /// One set from `pool` per combination, each slot written with its map
+    /// or its kind's default.
+    fn sets(&self, pool: &DescriptorPool) -> Result<Vec<(MapSlots, DescriptorSet)>, RenderError> {
+        let (Some(layout), Some(sampler)) = (&self.layout, &self.sampler) else {
+            return Ok(Vec::new());
+        };
+        let mut sets = Vec::with_capacity(self.combinations.len());
+        for slots in &self.combinations {
+            let set = pool.allocate(layout)?;
+            for (info, slot) in MAP_KINDS.iter().zip(slots) {
+                let image = match slot {
+                    Some(i) => &self.images[*i],
+                    None => self.defaults[info.kind as usize]
+                        .as_ref()
+                        .expect("a default exists for every kind a set leaves empty"),
+                };
+                set.write_sampled_image(info.binding, image, sampler);
+            }
+            sets.push((*slots, set));
+        }
+        Ok(sets)
     }
 }
 
@@ -429,7 +437,7 @@ fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
         // y: 1 when the normal map's green channel points down the image.
         counts: [
             lights.len() as u32,
-            u32::from(material.normal_map_green_down),
+            u32::from(material.map(MapKind::Normal).is_some_and(|m| m.green_down)),
             0,
             0,
         ],
@@ -469,39 +477,63 @@ fn decode_texture(path: &std::path::Path) -> Result<image::DynamicImage, RenderE
     })
 }
 
-/// Loads a texture as `format` (8 bits per channel) with a full mip chain.
-fn load_texture(
+/// The image of a map of the kind `info` from `source`: the placeholder's
+/// texels, a height map converted to a normal map, or the file with a full
+/// mip chain (16 bits per channel where the file and the kind keep them
+/// and the device can blit them).
+fn load_map(
     ctx: &Arc<Context>,
-    path: &std::path::Path,
-    format: Format,
+    info: &MapKindInfo,
+    source: &MapSource,
 ) -> Result<Image, RenderError> {
-    let img = decode_texture(path)?.to_rgba8();
-    let (w, h) = img.dimensions();
-    upload_texture(ctx, w, h, img.as_raw(), format)
-}
-
-/// Loads a normal map (linear, not sRGB), keeping 16-bit channels where the
-/// file has them.
-fn load_normal_map(ctx: &Arc<Context>, path: &std::path::Path) -> Result<Image, RenderError> {
+    let path = match (&source.texture, source.height_scale) {
+        (Texture::Placeholder, _) => {
+            let (side, _) = PLACEHOLDER_TEXTURE;
+            let format = info.format(false);
+            return upload_texture(ctx, side, side, &placeholder_texels(), format);
+        }
+        (Texture::File(path), Some(scale)) => return load_height_map(ctx, info, path, scale),
+        (Texture::File(path), None) => path,
+    };
     let img = decode_texture(path)?;
     // More than one byte per channel (the same rule as the preflight's
     // memory estimate).
     let sixteen_bit = img.color().bytes_per_pixel() > img.color().channel_count();
-    if sixteen_bit && vk::supports_linear_blits(ctx, NORMAL_MAP_FORMAT_16) {
+    let wide = info.format(sixteen_bit);
+    if wide != info.format(false) && vk::supports_linear_blits(ctx, wide) {
         let img = img.to_rgba16();
         let (w, h) = img.dimensions();
-        upload_texture(
-            ctx,
-            w,
-            h,
-            bytemuck::cast_slice(img.as_raw()),
-            NORMAL_MAP_FORMAT_16,
-        )
+        upload_texture(ctx, w, h, bytemuck::cast_slice(img.as_raw()), wide)
     } else {
         let img = img.to_rgba8();
         let (w, h) = img.dimensions();
-        upload_texture(ctx, w, h, img.as_raw(), NORMAL_MAP_FORMAT)
+        upload_texture(ctx, w, h, img.as_raw(), info.format(false))
     }
+}
+
+/// A height map at `path` turned into a normal map with `scale` (see
+/// `crate::mesh::height`), in the kind's 8-bit format.
+fn load_height_map(
+    ctx: &Arc<Context>,
+    info: &MapKindInfo,
+    path: &std::path::Path,
+    scale: f32,
+) -> Result<Image, RenderError> {
+    let texture_error = |reason: String| RenderError::Texture {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let heights = HeightMap::load(path).map_err(|e| texture_error(e.to_string()))?;
+    let normals = heights
+        .normals(scale, HeightFilter::Central, HeightEdge::Wrap)
+        .map_err(|e| texture_error(e.to_string()))?;
+    upload_texture(
+        ctx,
+        heights.width,
+        heights.height,
+        &encode_normal_map(&normals, GreenAxis::Up),
+        info.format(false),
+    )
 }
 
 /// A `w`×`h` texture from tightly packed `pixels` in `format` (top row

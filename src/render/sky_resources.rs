@@ -14,14 +14,14 @@
 //! shaders camera-relative.
 
 use super::plan::{FramePlan, PassKind};
-use super::shader_ids::{
-    float_constants, AERIAL_VOLUME_BINDING, AERIAL_VOLUME_WRITE_BINDING, SPEC_OBJECT_SKY_OFFSET,
-    SPEC_SKY_STATIC,
-};
 use super::sun_tables::{self, SunTables};
 use super::RenderError;
 use crate::atmosphere::OpticalDepthTable;
 use crate::scene::{Camera, Sky, TableFilter};
+use crate::shader_ids::{
+    float_constants, AERIAL_VOLUME_BINDING, AERIAL_VOLUME_WRITE_BINDING, SPEC_OBJECT_SKY_OFFSET,
+    SPEC_SKY_STATIC,
+};
 use crate::vk::{
     Buffer, BufferUsage, CommandBuffer, Context, DescriptorBinding, DescriptorPool, DescriptorSet,
     DescriptorSetLayout, DescriptorType, Format, Image, ImageAspectFlags, ImageDesc,
@@ -244,7 +244,7 @@ impl SkyUniforms {
     /// The fields the frame never changes, in the order the shaders
     /// declare their constants (both generated from glsl/interface.toml).
     fn static_fields(&self) -> [[f32; 4]; 9] {
-        crate::render::shader_ids::sky_static_fields(self)
+        super::gpu_types::sky_static_fields(self)
     }
 }
 

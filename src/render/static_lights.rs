@@ -20,10 +20,10 @@
 
 use super::gpu_types::GpuLight;
 use super::scene_resources::gpu_light;
-use super::shader_ids::{
+use crate::scene::Scene;
+use crate::shader_ids::{
     float_constants, MAX_STATIC_LIGHTS, SPEC_STATIC_LIGHTS, SPEC_STATIC_LIGHT_DATA,
 };
-use crate::scene::Scene;
 
 /// The most pipelines a pass specializes by their lights: each costs a
 /// shader compile when the renderer is made.

@@ -16,10 +16,10 @@
 //! uniforms as the atmosphere pass, through its descriptor set (set 0);
 //! each writes its table through a set of its own (set 1).
 
-use super::shader_ids::SPEC_SUN_TABLES_LINEAR_FILTER;
 use super::sky_resources::TABLE_FORMAT;
 use super::RenderError;
 use crate::scene::Sky;
+use crate::shader_ids::SPEC_SUN_TABLES_LINEAR_FILTER;
 use crate::shaders;
 use crate::vk::{
     CommandBuffer, ComputePipeline, Context, DescriptorBinding, DescriptorPool, DescriptorSet,

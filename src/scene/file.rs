@@ -23,10 +23,13 @@ use std::path::PathBuf;
 use glam::Vec3;
 use serde::Deserialize;
 
+use super::material_maps::{
+    material_file_with_maps, MapKind, MapSource, MaterialMaps, MAP_KIND_COUNT,
+};
 use super::value_checks::{Check, Result, MAX_COLOUR, MAX_LENGTH, MIN_LENGTH};
 use super::{
     Camera, DebugView, HdrFormat, Light, Lighting, Material, Object, Output, Scene, SceneError,
-    ShadingModel, Shape, Texture, TextureFilter, ToneMap, ToneMapOperator, Transform,
+    ShadingModel, Shape, TextureFilter, ToneMap, ToneMapOperator, Transform,
 };
 
 use crate::mesh::obj;
@@ -153,27 +156,31 @@ struct LightFile {
     attenuation: Option<[f64; 3]>,
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct MaterialFile {
-    name: String,
-    ka: Option<[f64; 3]>,
-    kd: [f64; 3],
-    #[serde(default)]
-    ks: [f64; 3],
-    #[serde(default = "default_shininess")]
-    shininess: f64,
-    texture: Option<PathBuf>,
-    normal_map: Option<PathBuf>,
-    normal_map_green: Option<GreenFile>,
-    height_map: Option<PathBuf>,
-    height_scale: Option<f64>,
-    #[serde(default = "one")]
-    opacity: f64,
-    #[serde(default = "default_shading")]
-    shading: ShadingModel,
-    #[serde(default)]
-    two_sided: bool,
+/// Resolves a file field (named, as given) against the scene's folder.
+type FileField<'a> = dyn Fn(&str, Option<PathBuf>) -> Result<Option<PathBuf>> + 'a;
+
+material_file_with_maps! {
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct MaterialFile {
+        name: String,
+        ka: Option<[f64; 3]>,
+        kd: [f64; 3],
+        #[serde(default)]
+        ks: [f64; 3],
+        #[serde(default = "default_shininess")]
+        shininess: f64,
+        // The normal map's source properties (its file is a map field).
+        normal_map_green: Option<GreenFile>,
+        height_map: Option<PathBuf>,
+        height_scale: Option<f64>,
+        #[serde(default = "one")]
+        opacity: f64,
+        #[serde(default = "default_shading")]
+        shading: ShadingModel,
+        #[serde(default)]
+        two_sided: bool,
+    }
 }
 
 #[derive(Deserialize)]
@@ -627,7 +634,7 @@ impl Check<'_> {
         }
     }
 
-    fn material(&self, path: &str, raw: MaterialFile) -> Result<Material> {
+    fn material(&self, path: &str, mut raw: MaterialFile) -> Result<Material> {
         let field = |name: &str| format!("{path}.{name}");
         if raw.name.trim().is_empty() {
             return Err(self.invalid(field("name"), "must not be empty"));
@@ -668,14 +675,44 @@ impl Check<'_> {
                 None => Ok(Some(resolved)),
             }
         };
-        let texture = file_at("texture", raw.texture)?.map(Texture::File);
-        let mut normal_map = file_at("normal_map", raw.normal_map)?;
-        if raw.normal_map_green.is_some() && normal_map.is_none() {
+        let mut maps = MaterialMaps::default();
+        for (kind, given) in raw.map_files() {
+            maps.set(
+                kind,
+                file_at(kind.info().field, given)?.map(MapSource::file),
+            );
+        }
+        self.normal_map_source(&field, &file_at, &mut maps, &raw)?;
+        Ok(Material {
+            name: raw.name,
+            ka,
+            kd,
+            ks,
+            shininess,
+            maps,
+            opacity,
+            shading: raw.shading,
+            two_sided: raw.two_sided,
+        })
+    }
+
+    /// The normal map's source properties: the green axis of a normal map,
+    /// or a height map with its scale in the normal map's place; `file_at`
+    /// resolves a file field.
+    fn normal_map_source(
+        &self,
+        field: &dyn Fn(&str) -> String,
+        file_at: &FileField<'_>,
+        maps: &mut MaterialMaps,
+        raw: &MaterialFile,
+    ) -> Result<()> {
+        let normal_map = maps.get(MapKind::Normal).is_some();
+        if raw.normal_map_green.is_some() && !normal_map {
             return Err(self.invalid(field("normal_map_green"), "given without a normal_map"));
         }
-        let height_map = file_at("height_map", raw.height_map)?;
+        let height_map = file_at("height_map", raw.height_map.clone())?;
         let height_scale = match (&height_map, raw.height_scale) {
-            (Some(_), _) if normal_map.is_some() => {
+            (Some(_), _) if normal_map => {
                 return Err(self.invalid(
                     field("height_map"),
                     "give a normal_map or a height_map, not both",
@@ -696,23 +733,22 @@ impl Check<'_> {
             }
             (None, None) => None,
         };
-        if height_map.is_some() {
-            normal_map = height_map;
+        if let Some(path) = height_map {
+            maps.set(
+                MapKind::Normal,
+                Some(MapSource {
+                    height_scale,
+                    ..MapSource::file(path)
+                }),
+            );
+        } else if let Some(source) = maps.get(MapKind::Normal) {
+            let source = MapSource {
+                green_down: raw.normal_map_green == Some(GreenFile::Down),
+                ..source.clone()
+            };
+            maps.set(MapKind::Normal, Some(source));
         }
-        Ok(Material {
-            name: raw.name,
-            ka,
-            kd,
-            ks,
-            shininess,
-            texture,
-            opacity,
-            normal_map,
-            normal_map_green_down: raw.normal_map_green == Some(GreenFile::Down),
-            height_scale,
-            shading: raw.shading,
-            two_sided: raw.two_sided,
-        })
+        Ok(())
     }
 
     fn object(

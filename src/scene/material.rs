@@ -3,6 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
+use super::material_maps::{MapKind, MapSource, MaterialMaps};
+
 use glam::Vec3;
 use serde::Deserialize;
 
@@ -32,24 +34,14 @@ pub struct Material {
     /// Blinn-Phong exponent, > 0 (0 is rejected because `pow(0, 0)` is
     /// undefined in GLSL).
     pub shininess: f32,
-    /// Base-colour texture: a file resolved relative to the scene file's
-    /// folder (which existed when the scene was loaded), or the placeholder
-    /// drawn for a model's texture that is missing or unreadable.
-    pub texture: Option<Texture>,
+    /// Its maps (base colour, normal map, ...; see
+    /// [`super::material_maps`]), each a file resolved relative to the
+    /// scene file's folder (which existed when the scene was loaded), or,
+    /// for a model's base colour that is missing or unreadable, the
+    /// placeholder.
+    pub maps: MaterialMaps,
     /// Opacity in `[0, 1]`; 1 is opaque.
     pub opacity: f32,
-    /// Tangent-space normal map (read as linear, not sRGB), resolved like
-    /// `texture`. T follows increasing u, B increasing v, N outward; a texel
-    /// stores `0.5 + 0.5 * c`.
-    pub normal_map: Option<PathBuf>,
-    /// True when the map's green channel points down the image (`-v`,
-    /// DirectX style, `normal_map_green = "down"`).
-    pub normal_map_green_down: bool,
-    /// When set, `normal_map` is a height map (`height_map`) turned into a
-    /// normal map when the scene is rendered, with this `height_scale`
-    /// (texel widths spanned by the full height range; see
-    /// `crate::mesh::height`).
-    pub height_scale: Option<f32>,
     /// Shading model.
     pub shading: ShadingModel,
     /// Both sides of every face are drawn (back faces are not culled) and
@@ -58,7 +50,7 @@ pub struct Material {
     pub two_sided: bool,
 }
 
-/// Where a base-colour texture comes from.
+/// The image of a map: a file, or the placeholder.
 #[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Texture {
     /// An image file (PNG or JPEG, recognised by content).
@@ -102,5 +94,10 @@ impl Material {
     /// True when the material needs blending (opacity below 1).
     pub fn is_transparent(&self) -> bool {
         self.opacity < 1.0
+    }
+
+    /// Its map of `kind`, if it has one.
+    pub fn map(&self, kind: MapKind) -> Option<&MapSource> {
+        self.maps.get(kind)
     }
 }

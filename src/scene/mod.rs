@@ -10,6 +10,7 @@ mod file;
 mod knobs;
 mod lights;
 mod material;
+pub mod material_maps;
 mod model_scene;
 mod models;
 mod object;
@@ -308,6 +309,7 @@ impl Scene {
     /// shading = "phong"                    # ["phong"] | "gouraud" | "toon"
     /// normal_map = "bumps.png"             # optional tangent-space normal map, relative to the scene file
     /// normal_map_green = "up"              # ["up"] | "down"
+    /// specular_map = "shine.png"           # optional, multiplies ks; sRGB, relative to the scene file
     /// two_sided = false                    # [false]; both sides of the faces drawn
     /// [[objects]]
     /// name = "ball"                        # required, not empty
@@ -385,43 +387,48 @@ impl Scene {
         }
     }
 
-    /// Warns (once per material) about each normal or height map that a
-    /// drawn material lit per vertex cannot use: Gouraud lights the
-    /// vertices, and a map varies within a triangle, so the frame plan
+    /// Warns (once per material and map) about each map that a drawn
+    /// material lit per vertex cannot use (a kind that is
+    /// `per_pixel_only`, such as a normal or height map): Gouraud lights
+    /// the vertices, and a map varies within a triangle, so the frame plan
     /// leaves the map out (never loaded, no shader reads it). `file` names
     /// where the setting came from (the scene file, or the knob that set
     /// the shading).
     pub fn warn_unused_maps(&mut self, file: &str) {
         for (i, m) in self.materials.iter().enumerate() {
-            let Some(map) = &m.normal_map else { continue };
             let drawn = self.objects.iter().any(|o| o.material == i);
             if m.shading != ShadingModel::Gouraud || !drawn {
                 continue;
             }
-            let kind = if m.height_scale.is_some() {
-                "height_map"
-            } else {
-                "normal_map"
-            };
-            let field = format!("materials[{i}].{kind}");
-            let problem = format!(
-                "{file}: {field}: material \"{}\" has shading = \"gouraud\", which lights \
-                 per vertex and cannot use a per-pixel map ({})",
-                m.name,
-                map.display()
-            );
-            if self.warnings.iter().any(|w| w.warning.problem == problem) {
-                continue;
+            for (kind, source) in m.maps.iter() {
+                let Some(path) = source.path().filter(|_| kind.info().per_pixel_only) else {
+                    continue;
+                };
+                let name = if source.height_scale.is_some() {
+                    "height_map"
+                } else {
+                    kind.info().field
+                };
+                let field = format!("materials[{i}].{name}");
+                let problem = format!(
+                    "{file}: {field}: material \"{}\" has shading = \"gouraud\", which lights \
+                     per vertex and cannot use a per-pixel map ({})",
+                    m.name,
+                    path.display()
+                );
+                if self.warnings.iter().any(|w| w.warning.problem == problem) {
+                    continue;
+                }
+                self.warnings.push(SceneWarning {
+                    file: file.to_string(),
+                    field,
+                    warning: AssetWarning {
+                        problem,
+                        fallback: "the map is not used (shading = \"phong\" or \"toon\" shows it)"
+                            .to_string(),
+                    },
+                });
             }
-            self.warnings.push(SceneWarning {
-                file: file.to_string(),
-                field,
-                warning: AssetWarning {
-                    problem,
-                    fallback: "the map is not used (shading = \"phong\" or \"toon\" shows it)"
-                        .to_string(),
-                },
-            });
         }
     }
 

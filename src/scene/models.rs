@@ -13,11 +13,14 @@ use glam::Vec3;
 use super::file::{
     Description, MaterialRef, ModelObject, ObjectDescription, PendingMaterial, DEFAULT_TESSELLATION,
 };
+use super::material_maps::{MapKind, MapSource, MaterialMaps, MAP_KINDS};
 use super::value_checks::{Check, Result, MAX_COLOUR};
 use super::{
-    AssetWarning, Material, Object, Scene, SceneError, SceneWarning, ShadingModel, Shape, Texture,
+    AssetWarning, Material, Object, Scene, SceneError, SceneWarning, ShadingModel, Shape, Transform,
 };
 use crate::mesh::obj;
+use crate::mesh::tangents::TangentStats;
+use crate::mesh::Mesh;
 
 impl Check<'_> {
     /// The scene a parsed file describes: every OBJ model it names is
@@ -59,9 +62,7 @@ impl Check<'_> {
         scene.warnings = warnings;
 
         for m in &scene.materials {
-            let texture = m.texture.as_ref().and_then(|t| t.file());
-            files.extend(texture.map(Path::to_path_buf));
-            files.extend(m.normal_map.iter().cloned());
+            files.extend(m.maps.files().map(Path::to_path_buf));
         }
         let mut seen = std::collections::HashSet::new();
         files.retain(|f| seen.insert(f.clone()));
@@ -85,6 +86,92 @@ impl Check<'_> {
         warnings: &mut Vec<SceneWarning>,
         files: &mut Vec<PathBuf>,
     ) -> Result<Vec<Object>> {
+        let field = |name: &str| format!("{}.{name}", model.field);
+        let resolved = &model.path;
+        let (loaded, meshes) = self.read_model(&model, files)?;
+        let over = match &model.material {
+            None => None,
+            Some(MaterialRef::Index(i)) => Some(*i),
+            Some(MaterialRef::Pending(p)) => Some(self.pending_material(p, materials, by_name)?),
+        };
+        let mut warn = |warning: AssetWarning| {
+            warnings.push(SceneWarning {
+                file: self.file.to_owned(),
+                field: field("shape.path"),
+                warning,
+            })
+        };
+        if over.is_none() {
+            loaded.warnings.iter().cloned().for_each(&mut warn);
+        }
+        let transform = placed_transform(model.transform, loaded.origin);
+        // The model's own materials, added on first use as `name/material`.
+        let mut own: HashMap<Option<usize>, usize> = HashMap::new();
+        let mut objects = Vec::with_capacity(meshes.len());
+        for (i, (part, (mesh, _))) in loaded.parts.iter().zip(meshes).enumerate() {
+            // A group whose faces all collapsed draws nothing; an empty
+            // vertex buffer is not a valid draw.
+            if mesh.indices.is_empty() {
+                continue;
+            }
+            let material = match over {
+                Some(m) => m,
+                None => match own.get(&part.material) {
+                    Some(&m) => m,
+                    None => {
+                        let m = self.mtl_material(
+                            &field("shape.path"),
+                            &model.name,
+                            part.material.map(|m| &loaded.materials[m]),
+                            &resolved.display().to_string(),
+                            materials,
+                            by_name,
+                            &mut warn,
+                        )?;
+                        own.insert(part.material, m);
+                        m
+                    }
+                },
+            };
+            let part_name = if part.name.is_empty() {
+                format!("{i}")
+            } else {
+                part.name.clone()
+            };
+            if part.uvs.is_none() {
+                self.check_no_tangent_map(&model, &part_name, &materials[material])?;
+            }
+            objects.push(Object {
+                name: format!("{}/{part_name}", model.name),
+                shape: Shape::Mesh {
+                    mesh: Arc::new(mesh),
+                },
+                // Unused for a mesh; kept only because every object has one.
+                tessellation: (DEFAULT_TESSELLATION[0], DEFAULT_TESSELLATION[1]),
+                material,
+                transform,
+                two_sided: model.two_sided,
+            });
+        }
+        if objects.is_empty() {
+            return Err(self.invalid(
+                field("shape.path"),
+                format!(
+                    "{}: every triangle is collapsed to a line or a point",
+                    resolved.display()
+                ),
+            ));
+        }
+        Ok(objects)
+    }
+
+    /// Reads `model`'s file (adding the files read to `files`) and makes
+    /// its meshes: smoothed, with tangent frames.
+    fn read_model(
+        &self,
+        model: &ModelObject,
+        files: &mut Vec<PathBuf>,
+    ) -> Result<(obj::ObjModel, Vec<(Mesh, TangentStats)>)> {
         let field = |name: &str| format!("{}.{name}", model.field);
         let resolved = &model.path;
         // A bad budget setting is the setting's fault, not the model's: its
@@ -123,97 +210,35 @@ impl Check<'_> {
                     e => model_error(e),
                 }
             })?;
-        let over = match &model.material {
-            None => None,
-            Some(MaterialRef::Index(i)) => Some(*i),
-            Some(MaterialRef::Pending(pending)) => {
-                Some(self.pending_material(pending, materials, by_name)?)
-            }
+        Ok((loaded, meshes))
+    }
+
+    /// Refuses `material` on `model`'s part `part_name`, which has faces
+    /// without texture coordinates, when it has a map that needs tangents:
+    /// without UVs there is no tangent space to read the map in.
+    fn check_no_tangent_map(
+        &self,
+        model: &ModelObject,
+        part_name: &str,
+        material: &Material,
+    ) -> Result<()> {
+        let Some((kind, _)) = material
+            .maps
+            .iter()
+            .find(|(kind, _)| kind.info().needs_tangents)
+        else {
+            return Ok(());
         };
-        let mut warn = |warning: AssetWarning| {
-            warnings.push(SceneWarning {
-                file: self.file.to_owned(),
-                field: field("shape.path"),
-                warning,
-            })
-        };
-        if over.is_none() {
-            loaded.warnings.iter().cloned().for_each(&mut warn);
-        }
-        // A far-off model's positions are measured from its centre
-        // (`ObjModel::origin`): the centre goes into the translation, in
-        // f64, where the renderer keeps world positions exact.
-        let mut transform = model.transform;
-        if loaded.origin != glam::DVec3::ZERO {
-            transform.translate = model.transform.matrix_f64().transform_point3(loaded.origin);
-        }
-        // The model's own materials, added on first use as `name/material`.
-        let mut own: HashMap<Option<usize>, usize> = HashMap::new();
-        let mut objects = Vec::with_capacity(meshes.len());
-        for (i, (part, (mesh, _))) in loaded.parts.iter().zip(meshes).enumerate() {
-            // A group whose faces all collapsed draws nothing; an empty
-            // vertex buffer is not a valid draw.
-            if mesh.indices.is_empty() {
-                continue;
-            }
-            let material = match over {
-                Some(m) => m,
-                None => match own.get(&part.material) {
-                    Some(&m) => m,
-                    None => {
-                        let m = self.mtl_material(
-                            &field("shape.path"),
-                            &model.name,
-                            part.material.map(|m| &loaded.materials[m]),
-                            &resolved.display().to_string(),
-                            materials,
-                            by_name,
-                            &mut warn,
-                        )?;
-                        own.insert(part.material, m);
-                        m
-                    }
-                },
-            };
-            let part_name = if part.name.is_empty() {
-                format!("{i}")
-            } else {
-                part.name.clone()
-            };
-            // Without UVs there is no tangent space to read a map in.
-            if materials[material].normal_map.is_some() && part.uvs.is_none() {
-                return Err(self.invalid(
-                    field("shape.path"),
-                    format!(
-                        "{}: object \"{part_name}\" has faces without texture coordinates, \
-                         but its material \"{}\" has a normal map",
-                        resolved.display(),
-                        materials[material].name
-                    ),
-                ));
-            }
-            objects.push(Object {
-                name: format!("{}/{part_name}", model.name),
-                shape: Shape::Mesh {
-                    mesh: Arc::new(mesh),
-                },
-                // Unused for a mesh; kept only because every object has one.
-                tessellation: (DEFAULT_TESSELLATION[0], DEFAULT_TESSELLATION[1]),
-                material,
-                transform,
-                two_sided: model.two_sided,
-            });
-        }
-        if objects.is_empty() {
-            return Err(self.invalid(
-                field("shape.path"),
-                format!(
-                    "{}: every triangle is collapsed to a line or a point",
-                    resolved.display()
-                ),
-            ));
-        }
-        Ok(objects)
+        Err(self.invalid(
+            format!("{}.shape.path", model.field),
+            format!(
+                "{}: object \"{part_name}\" has faces without texture coordinates, \
+                 but its material \"{}\" has a {}",
+                model.path.display(),
+                material.name,
+                kind.info().mtl_name
+            ),
+        ))
     }
 
     /// The index of a material named after a model, among the materials
@@ -251,8 +276,7 @@ impl Check<'_> {
             ks: Vec3::ZERO,
             shininess: 32.0,
             opacity: 1.0,
-            texture: None,
-            normal_map: None,
+            maps: Vec::new(),
         };
         let mtl = mtl.unwrap_or(&default);
         let name = format!("{object}/{}", mtl.name);
@@ -263,51 +287,68 @@ impl Check<'_> {
             ));
         }
         let values = checked_mtl_values(mtl, warn);
-        let mut usable = |path: &Option<std::path::PathBuf>, what: &str, fallback: &str| {
-            let path = path.as_ref()?;
-            let problem = if let Some(problem) = crate::safe_files::input_file_problem(path) {
-                problem
-            } else {
-                match crate::image_io::inspect_texture(path) {
-                    Ok(_) => return Some(Ok(path.clone())),
-                    Err(e) => format!("is not usable: {e}"),
-                }
-            };
-            warn(AssetWarning {
-                problem: format!("{model}: material \"{}\": {what} {problem}", mtl.name),
-                fallback: fallback.to_owned(),
-            });
-            Some(Err(()))
-        };
-        let texture = usable(
-            &mtl.texture,
-            "map_Kd",
-            "drawn with a magenta/black checker instead",
-        )
-        .map(|t| t.map_or(Texture::Placeholder, Texture::File));
-        let normal_map = usable(
-            &mtl.normal_map,
-            "normal map",
-            "drawn with the flat normal (0, 0, 1) instead (the surface's own normals)",
-        )
-        .and_then(|usable| usable.ok());
+        let mut maps = MaterialMaps::default();
+        for info in MAP_KINDS {
+            if let Some(path) = info.mtl.iter().find_map(|statement| mtl.map(statement)) {
+                maps.set(
+                    info.kind,
+                    usable_map(info.kind, path, model, &mtl.name, warn),
+                );
+            }
+        }
         materials.push(Material {
             name: name.clone(),
             ka: values.ka,
             kd: values.kd,
             ks: values.ks,
             shininess: values.shininess,
-            texture,
+            maps,
             opacity: values.opacity,
-            normal_map,
-            normal_map_green_down: false,
-            height_scale: None,
             shading: ShadingModel::Phong,
             two_sided: false,
         });
         by_name.insert(name, materials.len() - 1);
         Ok(materials.len() - 1)
     }
+}
+
+/// The transform of a model whose positions are measured from `origin`
+/// (`ObjModel::origin`): a far-off model's centre goes into the
+/// translation, in f64, where the renderer keeps world positions exact.
+fn placed_transform(transform: Transform, origin: glam::DVec3) -> Transform {
+    let mut placed = transform;
+    if origin != glam::DVec3::ZERO {
+        placed.translate = transform.matrix_f64().transform_point3(origin);
+    }
+    placed
+}
+
+/// A model's map of `kind` at `path` (of `material` in `model`), or, when
+/// the file is missing or not a readable PNG or JPEG (by its header), a
+/// warning and the kind's placeholder or nothing.
+fn usable_map(
+    kind: MapKind,
+    path: &Path,
+    model: &str,
+    material: &str,
+    warn: &mut dyn FnMut(AssetWarning),
+) -> Option<MapSource> {
+    let problem = match crate::safe_files::input_file_problem(path) {
+        Some(problem) => problem,
+        None => match crate::image_io::inspect_texture(path) {
+            Ok(_) => return Some(MapSource::file(path.to_path_buf())),
+            Err(e) => format!("is not usable: {e}"),
+        },
+    };
+    let info = kind.info();
+    warn(AssetWarning {
+        problem: format!(
+            "{model}: material \"{material}\": {} {problem}",
+            info.mtl_name
+        ),
+        fallback: info.missing_fallback.to_owned(),
+    });
+    info.placeholder_when_missing.then(MapSource::placeholder)
 }
 
 /// An MTL material's colours, exponent and opacity after the checks.

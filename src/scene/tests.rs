@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{DVec3, DVec4, Mat3, Mat4, Quat, Vec3, Vec4};
 
+use super::material_maps::MapKind;
 use super::*;
 
 /// The smallest valid scene, with room to append tables.
@@ -213,8 +214,8 @@ fn every_example_scene_loads() {
                 path.display()
             );
             for material in &scene.materials {
-                if let Some(texture) = &material.texture {
-                    let file = texture.file().expect("a file, not the placeholder");
+                for (_, map) in material.maps.iter() {
+                    let file = map.path().expect("a file, not the placeholder");
                     assert!(file.is_file(), "{}", file.display());
                 }
             }
@@ -269,7 +270,10 @@ fn example_scenes_show_their_features() {
         .objects
         .iter()
         .any(|o| matches!(o.shape, Shape::Flag { .. })));
-    assert!(flag.materials.iter().any(|m| m.texture.is_some()));
+    assert!(flag
+        .materials
+        .iter()
+        .any(|m| m.map(MapKind::BaseColor).is_some()));
 
     let glass = load("transparency.toml");
     let see_through = glass
@@ -441,7 +445,9 @@ fn textures_resolve_relative_to_the_scene_folder() {
     let base = assets().join("scenes");
     let scene = Scene::from_toml(&text, "t.toml", &base).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
-        scene.materials[0].texture.as_ref().and_then(|t| t.file()),
+        scene.materials[0]
+            .map(MapKind::BaseColor)
+            .and_then(|t| t.path()),
         Some(base.join("../textures/checker.png").as_path())
     );
     // The same text from another folder points at a file that is not there.

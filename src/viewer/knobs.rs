@@ -18,9 +18,7 @@ fn has_objects(s: &Scene) -> bool {
 }
 
 fn has_textures(s: &Scene) -> bool {
-    s.materials
-        .iter()
-        .any(|m| m.texture.is_some() || m.normal_map.is_some())
+    s.materials.iter().any(|m| !m.maps.is_empty())
 }
 
 fn has_sky(s: &Scene) -> bool {

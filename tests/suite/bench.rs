@@ -9,6 +9,7 @@ use crate::common;
 use aerial::bench::{self, BenchReport};
 use aerial::render::empty_pass::{CONSTANT_RGBA8, PASS_NAME};
 use aerial::render_run::{self, RenderSettings};
+use aerial::scene::material_maps::MapKind;
 use aerial::scene::{Light, Scene, KNOBS};
 use std::path::{Path, PathBuf};
 use std::process::Output;
@@ -658,10 +659,10 @@ fn bench_scenes_have_the_intended_load_and_render_cleanly() {
     assert_eq!(triangles(&many), 58_112);
     assert_eq!(many.lights.len(), 6);
     assert!(many.lights.iter().all(|l| matches!(l, Light::Point { .. })));
-    assert!(many
-        .objects
-        .iter()
-        .all(|o| many.materials[o.material].texture.is_some()));
+    assert!(many.objects.iter().all(|o| many.materials[o.material]
+        .maps
+        .get(MapKind::BaseColor)
+        .is_some()));
     // No light culled: every object gets all six.
     for i in 0..many.objects.len() {
         assert_eq!(many.lights_reaching(i).len(), 6);
@@ -684,7 +685,7 @@ fn bench_scenes_have_the_intended_load_and_render_cleanly() {
     assert_eq!(plane.objects.len(), 1);
     assert_eq!(triangles(&plane), 32);
     assert_eq!(plane.lights, many.lights);
-    assert!(plane.materials[0].texture.is_none() && plane.materials[0].normal_map.is_none());
+    assert!(plane.materials[0].maps.is_empty());
     let mut small = plane.clone();
     small.set_output_size(Some(160), Some(90)).unwrap();
     let covered = common::render(&small, true).hdr.unwrap();

@@ -6,6 +6,7 @@
 
 use crate::common;
 
+use aerial::scene::material_maps::MapKind;
 use aerial::scene::{ModelSceneOptions, Scene, Texture};
 use glam::Vec3;
 use std::path::Path;
@@ -51,7 +52,7 @@ fn a_missing_mtl_library_is_a_warning_naming_it_and_groups_get_the_default_mater
     assert!(warning.contains("default material"), "{warning}");
     let material = &scene.materials[scene.objects[0].material];
     assert_eq!(material.kd, Vec3::splat(0.8));
-    assert!(material.texture.is_none());
+    assert!(material.map(MapKind::BaseColor).is_none());
     // --strict: the warning is the error.
     let error = scene.strict().unwrap_err().to_string();
     assert!(
@@ -111,8 +112,11 @@ fn a_missing_texture_becomes_a_magenta_checker_and_a_missing_normal_map_the_flat
         text[1]
     );
     let material = &scene.materials[scene.objects[0].material];
-    assert_eq!(material.texture, Some(Texture::Placeholder));
-    assert_eq!(material.normal_map, None);
+    assert_eq!(
+        material.map(MapKind::BaseColor).map(|m| &m.texture),
+        Some(&Texture::Placeholder)
+    );
+    assert_eq!(material.map(MapKind::Normal), None);
 
     // The checker is in the image: magenta and black texels, nothing else
     // (full ambient light, kd 1, no tone curve).
@@ -148,8 +152,10 @@ fn a_missing_texture_becomes_a_magenta_checker_and_a_missing_normal_map_the_flat
         "{text}"
     );
     assert_eq!(
-        scene.materials[scene.objects[0].material].texture,
-        Some(Texture::Placeholder)
+        scene.materials[scene.objects[0].material]
+            .map(MapKind::BaseColor)
+            .map(|m| &m.texture),
+        Some(&Texture::Placeholder)
     );
 }
 

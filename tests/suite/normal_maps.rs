@@ -10,6 +10,7 @@ use crate::common;
 
 use std::path::Path;
 
+use aerial::scene::material_maps::MapKind;
 use aerial::scene::Scene;
 
 const TILT_DEGREES: f32 = 30.0;
@@ -190,11 +191,19 @@ fn plan_uses_the_normal_map_variant_only_where_needed() {
     let scene = Scene::from_toml(toml, "t.toml", d).unwrap();
     let geometry = aerial::render::geometry::SceneGeometry::new(&scene).unwrap();
     let plan = aerial::render::FramePlan::new(&scene, &geometry, false);
-    assert_eq!(plan.normal_maps.len(), 1);
+    assert_eq!(plan.maps.len(), 1);
     for draw in plan.draws() {
         let mapped = scene.objects[draw.object].material != 2;
-        assert_eq!(draw.pipeline.normal_mapped, mapped, "{draw:?}");
-        assert_eq!(draw.normal_map.is_some(), mapped, "{draw:?}");
+        assert_eq!(
+            draw.pipeline.maps.contains(MapKind::Normal),
+            mapped,
+            "{draw:?}"
+        );
+        assert_eq!(
+            draw.maps[MapKind::Normal as usize].is_some(),
+            mapped,
+            "{draw:?}"
+        );
     }
 }
 
@@ -369,7 +378,11 @@ fn gouraud_leaves_maps_out_with_a_warning() {
                     let g = aerial::render::geometry::SceneGeometry::new(s).unwrap();
                     aerial::render::FramePlan::new(s, &g, false)
                 };
-                assert!(plan_of(&with).normal_maps.is_empty(), "{what}");
+                let plan = plan_of(&with);
+                assert!(
+                    plan.maps.iter().all(|(kind, _)| *kind != MapKind::Normal),
+                    "{what}"
+                );
                 let a = common::render(&with, false).output;
                 let b = common::render(&without, false).output;
                 common::assert_not_blank(&a, 0.1);

@@ -17,13 +17,13 @@
 
 use super::{fullscreen_pipeline, InputAttachments, PassResources, PassSetup, RecordPass};
 use crate::atmosphere::TableMapping;
-use crate::render::shader_ids::{
-    SPEC_OZONE_EXACT, SPEC_SKY_VIEW_HARDWARE_FILTER, SPEC_TABLE_FILTER, SPEC_TABLE_MAPPING,
-    SPEC_TRANSPARENT_OVER_SKY,
-};
 use crate::render::sky_resources::SkyResources;
 use crate::render::RenderError;
 use crate::scene::{OzoneDepth, TableFilter};
+use crate::shader_ids::{
+    SPEC_OZONE_EXACT, SPEC_SKY_VIEW_HARDWARE_FILTER, SPEC_TABLE_FILTER, SPEC_TABLE_MAPPING,
+    SPEC_TRANSPARENT_OVER_SKY,
+};
 use crate::shaders::{self, AtmosphereFragFeatures};
 use crate::vk::CompareOp;
 use crate::vk::{CommandBuffer, GraphicsPipeline, PipelineLayout};

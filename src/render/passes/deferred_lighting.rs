@@ -14,9 +14,9 @@
 use super::{InputAttachments, PassResources, PassSetup, RecordPass};
 use crate::render::gpu_types::GpuLight;
 use crate::render::scene_resources::{gpu_light, pack_blocks, SceneResources};
-use crate::render::shader_ids::{SPEC_LIGHT_ARRAY_LENGTH, SPEC_LIGHT_COUNT};
 use crate::render::static_lights;
 use crate::render::RenderError;
+use crate::shader_ids::{SPEC_LIGHT_ARRAY_LENGTH, SPEC_LIGHT_COUNT};
 use crate::shaders;
 use crate::vk::CompareOp;
 use crate::vk::{

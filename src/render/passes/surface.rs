@@ -15,10 +15,11 @@
 use super::{PassResources, PassSetup, RecordPass};
 use crate::mesh::Vertex;
 use crate::render::plan::{attachment, AirLight, Draw, FramePlan, PassIo, PipelineKey, ShadingKey};
-use crate::render::shader_ids::*;
 use crate::render::static_lights;
 use crate::render::RenderError;
+use crate::scene::material_maps::MapMask;
 use crate::scene::Scene;
+use crate::shader_ids::*;
 use crate::shaders::{self, ObjectFragFeatures, ObjectVertFeatures};
 use crate::vk::CompareOp;
 use crate::vk::{
@@ -133,35 +134,17 @@ impl SurfacePass {
                     }
                 };
                 let (vert, frag) = (&*vert, &*frag);
-                let attributes = vertex_attributes(key.textured, key.normal_mapped, key.debug != 0);
-                let mut specialization = vec![
-                    (SPEC_SHADING_MODEL, key.shading as u32),
-                    (SPEC_LIGHT_COUNT, key.lights),
-                    (SPEC_LIGHT_ARRAY_LENGTH, key.lights.max(1)),
-                    (SPEC_DEBUG_ATTRIBUTE, key.debug),
-                    (SPEC_SHININESS_EXPONENT, key.shininess_exponent),
-                ];
-                // Only two-sided pipelines carry the constant: one-sided
-                // ones keep its default (false) and their cull mode.
-                if key.two_sided {
-                    specialization.push((SPEC_TWO_SIDED, 1));
-                }
-                if encode_srgb {
-                    specialization.push((SPEC_ENCODE_SRGB, 1));
-                }
-                specialization.extend(static_lights::constants(
-                    setup.scene,
-                    resources.light_anchor,
-                    lights.as_deref(),
-                ));
-                if key.air != AirLight::None {
-                    if air_constants.is_empty() {
-                        return Err(RenderError::Frame(
-                            "objects lit by the atmosphere, but the frame has no atmosphere".into(),
-                        ));
-                    }
-                    specialization.extend(&air_constants);
-                }
+                let attributes = vertex_attributes(key.maps, key.debug != 0);
+                let specialization = specialization(
+                    &key,
+                    encode_srgb,
+                    static_lights::constants(
+                        setup.scene,
+                        resources.light_anchor,
+                        lights.as_deref(),
+                    ),
+                    &air_constants,
+                )?;
                 let pipeline = GraphicsPipeline::new(
                     setup.ctx,
                     &resources.layout,
@@ -228,7 +211,7 @@ impl RecordPass for SurfacePass {
                 &resources.object_set,
                 &[resources.block_offsets[d.object]],
             );
-            if let Some(set) = resources.material_set(d.texture, d.normal_map) {
+            if let Some(set) = resources.material_set(&d.maps) {
                 cmd.bind_descriptor_set(layout, MATERIAL_SET, set, &[]);
             }
             cmd.bind_geometry(&resources.geometry, range.vertex_offset, range.index_offset);
@@ -261,21 +244,59 @@ impl RecordPass for SurfacePass {
     }
 }
 
+/// The specialization constants of `key`'s pipeline: its own, then the
+/// static lights' (`light_constants`) and, for objects the atmosphere
+/// lights, the atmosphere's (`air_constants`, empty without one).
+fn specialization(
+    key: &PipelineKey,
+    encode_srgb: bool,
+    light_constants: Vec<(u32, u32)>,
+    air_constants: &[(u32, u32)],
+) -> Result<Vec<(u32, u32)>, RenderError> {
+    let mut specialization = vec![
+        (SPEC_SHADING_MODEL, key.shading as u32),
+        (SPEC_LIGHT_COUNT, key.lights),
+        (SPEC_LIGHT_ARRAY_LENGTH, key.lights.max(1)),
+        (SPEC_DEBUG_ATTRIBUTE, key.debug),
+        (SPEC_SHININESS_EXPONENT, key.shininess_exponent),
+    ];
+    // Only two-sided pipelines carry the constant: one-sided ones keep its
+    // default (false) and their cull mode.
+    if key.two_sided {
+        specialization.push((SPEC_TWO_SIDED, 1));
+    }
+    // Likewise the maps selected by a constant: a pipeline without them is
+    // created as if the constant did not exist.
+    if key.maps.constant() != 0 {
+        specialization.push((SPEC_MATERIAL_MAPS, key.maps.constant()));
+    }
+    if encode_srgb {
+        specialization.push((SPEC_ENCODE_SRGB, 1));
+    }
+    specialization.extend(light_constants);
+    if key.air != AirLight::None {
+        if air_constants.is_empty() {
+            return Err(RenderError::Frame(
+                "objects lit by the atmosphere, but the frame has no atmosphere".into(),
+            ));
+        }
+        specialization.extend(air_constants);
+    }
+    Ok(specialization)
+}
+
 /// The object shaders' features for a pipeline of `key` in `form`: the
 /// vertex stage's and the fragment stage's (which alone has `GBUFFER`).
 fn shader_features(key: &PipelineKey, form: Form) -> (ObjectVertFeatures, ObjectFragFeatures) {
     let debug = key.debug != 0;
     let gouraud = !debug && key.shading == ShadingKey::Gouraud;
-    let vert = ObjectVertFeatures::NONE
-        .with(ObjectVertFeatures::BASE_COLOR_TEXTURE, key.textured)
-        .with(ObjectVertFeatures::NORMAL_MAP, key.normal_mapped)
+    let (maps_vert, maps_frag) = key.maps.shader_features();
+    let vert = maps_vert
         .with(ObjectVertFeatures::DEBUG_VIEW, debug)
         .with(ObjectVertFeatures::GOURAUD, gouraud)
         .with(ObjectVertFeatures::SUN_LIGHT, key.air.sun())
         .with(ObjectVertFeatures::SKY_LIGHT, key.air.sky());
-    let frag = ObjectFragFeatures::NONE
-        .with(ObjectFragFeatures::BASE_COLOR_TEXTURE, key.textured)
-        .with(ObjectFragFeatures::NORMAL_MAP, key.normal_mapped)
+    let frag = maps_frag
         .with(ObjectFragFeatures::GBUFFER, form == Form::GBuffer)
         .with(ObjectFragFeatures::DEBUG_VIEW, debug)
         .with(ObjectFragFeatures::GOURAUD, gouraud)
@@ -285,10 +306,10 @@ fn shader_features(key: &PipelineKey, form: Form) -> (ObjectVertFeatures, Object
 }
 
 /// The vertex attributes a pipeline consumes: position and normal always,
-/// UVs for textured or normal-mapped materials, tangents only for
-/// normal-mapped ones (shaders that do not read them are not fed them);
-/// a debug view reads both.
-fn vertex_attributes(textured: bool, normal_mapped: bool, debug: bool) -> Vec<VertexAttribute> {
+/// UVs for materials with maps, tangents only for those with a map that
+/// needs them (shaders that do not read them are not fed them); a debug
+/// view reads both.
+fn vertex_attributes(maps: MapMask, debug: bool) -> Vec<VertexAttribute> {
     let offset = |f: usize| f as u32;
     let mut attributes = vec![
         VertexAttribute {
@@ -302,14 +323,14 @@ fn vertex_attributes(textured: bool, normal_mapped: bool, debug: bool) -> Vec<Ve
             offset: offset(std::mem::offset_of!(Vertex, normal)),
         },
     ];
-    if normal_mapped || debug {
+    if maps.needs_tangents() || debug {
         attributes.push(VertexAttribute {
             location: 2,
             format: Format::R32G32B32A32_SFLOAT,
             offset: offset(std::mem::offset_of!(Vertex, tangent)),
         });
     }
-    if textured || normal_mapped || debug {
+    if maps.needs_uvs() || debug {
         attributes.push(VertexAttribute {
             location: 3,
             format: Format::R32G32_SFLOAT,
@@ -322,6 +343,7 @@ fn vertex_attributes(textured: bool, normal_mapped: bool, debug: bool) -> Vec<Ve
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::material_maps::{MapKind, MAP_KIND_COUNT};
 
     /// Every variant the pass can ask for is compiled: the build script leaves out
     /// the combinations the object shaders' rules exclude (the
@@ -338,11 +360,13 @@ mod tests {
                         if debug != 0 && air != AirLight::None {
                             continue;
                         }
-                        for bits in 0..4u32 {
+                        for bits in 0..1u32 << MAP_KIND_COUNT {
+                            let maps = MapKind::all()
+                                .filter(|&kind| bits & 1 << kind as u32 != 0)
+                                .fold(MapMask::default(), MapMask::with);
                             let key = PipelineKey {
                                 shading,
-                                textured: bits & 1 != 0,
-                                normal_mapped: bits & 2 != 0,
+                                maps,
                                 blended: false,
                                 lights: 0,
                                 debug,
@@ -359,7 +383,7 @@ mod tests {
                 }
             }
         }
-        assert_eq!(asked, 3 * 3 * 4 * 4);
+        assert_eq!(asked, 3 * 3 * 4 * (1 << MAP_KIND_COUNT));
         // And a left-out combination has no SPIR-V.
         assert!(!shaders::OBJECT_FRAG.is_compiled(ObjectFragFeatures::SKY_LIGHT));
     }

@@ -5,9 +5,9 @@
 //! specialization constants.
 
 use super::{fullscreen_pipeline, InputAttachments, PassResources, PassSetup, RecordPass};
-use crate::render::shader_ids::{SPEC_TONEMAP_EXPOSURE, SPEC_TONEMAP_OPERATOR};
 use crate::render::RenderError;
 use crate::scene::ToneMapOperator;
+use crate::shader_ids::{SPEC_TONEMAP_EXPOSURE, SPEC_TONEMAP_OPERATOR};
 use crate::shaders;
 use crate::vk::{CommandBuffer, GraphicsPipeline, PipelineLayout};
 

@@ -1,14 +1,11 @@
 //! Descriptor set and binding numbers and specialization-constant ids the
 //! shaders declare, generated from `glsl/interface.toml` (the GLSL side's
 //! `constants.glsl` is generated from the same description, so the two
-//! cannot disagree), and the compile-time checks that each uniform block's
-//! Rust struct has the std140 layout the shaders were compiled with.
+//! cannot disagree). Plain numbers that import nothing, so the scene's
+//! material-map table and the renderer can both name them; the uniform
+//! blocks' layout checks live with the structs (`render::gpu_types`).
 
 include!(concat!(env!("OUT_DIR"), "/shader_interface.rs"));
-
-// A field moved, renamed or resized on either side fails here, at compile
-// time, naming the block, the member and the shader.
-include!(concat!(env!("OUT_DIR"), "/layout_checks.rs"));
 
 /// The specialization entries of consecutive float constants from id
 /// `first` on (the shaders' `SPEC_VEC4_CONSTANTS`).
