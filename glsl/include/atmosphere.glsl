@@ -67,8 +67,9 @@ layout(std140, set = SKY_BLOCK_SET, binding = 0) uniform Sky {
 // The block's fields the frame never changes (the atmosphere, the tables'
 // sizes, the viewport) are read from specialization constants instead, 4
 // per field from SPEC_SKY_STATIC on, in the order glsl/interface.toml
-// gives (read as STATIC_RADII and so on): lavapipe reads a uniform block once per pixel and
-// per march sample, where constants cost nothing (static_lights.glsl).
+// gives (read as STATIC_RADII and so on): lavapipe reads a uniform block
+// once per pixel and per march sample, where constants cost nothing
+// (static_lights.glsl).
 // The camera, the sun and the table frame stay in the block.
 DECLARE_SKY_STATIC(SKY_SPEC_OFFSET)
 

@@ -9,9 +9,9 @@
 //! The loaders, the draw list, the scene resources, the preflight memory
 //! estimate, the surface pass, the CPU reference and the viewer's knobs
 //! iterate over the table. To add a kind: a [`MapKind`] variant and its
-//! row, its field in [`material_file_with_maps`], its binding in
-//! `shader_ids` and `glsl/include/constants.glsl`, and its sampling
-//! in `glsl/object.frag` (`docs/scenes.md` has the steps).
+//! row, its field in [`material_file_with_maps`], its binding (and bit)
+//! in `glsl/interface.toml`, and its sampling in `glsl/object.frag`
+//! (`docs/scenes.md` has the steps).
 
 use std::path::{Path, PathBuf};
 
