@@ -760,29 +760,28 @@ pub fn written() -> Vec<PathBuf> {
     WRITTEN.lock().unwrap_or_else(|e| e.into_inner()).clone()
 }
 
+/// Removes a temporary file that was never committed, and takes it off
+/// the list an interrupt cleans up.
+fn discard_pending(tmp: Option<tempfile::NamedTempFile>) {
+    if let Some(tmp) = tmp {
+        let mut guard = pending();
+        if let Some(set) = guard.as_mut() {
+            set.remove(tmp.path());
+        }
+        // NamedTempFile's own drop removes the file.
+        drop(tmp);
+    }
+}
+
 impl Drop for Ready {
     fn drop(&mut self) {
-        if let Some(tmp) = self.tmp.take() {
-            let mut guard = pending();
-            if let Some(set) = guard.as_mut() {
-                set.remove(tmp.path());
-            }
-            // NamedTempFile's own drop removes the file.
-            drop(tmp);
-        }
+        discard_pending(self.tmp.take());
     }
 }
 
 impl Drop for PendingFile {
     fn drop(&mut self) {
-        if let Some(tmp) = self.tmp.take() {
-            let mut guard = pending();
-            if let Some(set) = guard.as_mut() {
-                set.remove(tmp.path());
-            }
-            // NamedTempFile's own drop removes the file.
-            drop(tmp);
-        }
+        discard_pending(self.tmp.take());
         let _ = &self.dest;
     }
 }
