@@ -1,6 +1,9 @@
 //! The scene's meshes and world-space bounds, built once per render and
 //! shared by the plan (light culling, draw order) and the renderer (vertex
-//! upload), so no object is tessellated or loaded twice.
+//! upload), so no object is tessellated or loaded twice, and objects of the
+//! same shape share one mesh (`Scene::mesh_sources`).
+
+use std::sync::Arc;
 
 use super::RenderError;
 use crate::mesh::Mesh;
@@ -9,8 +12,9 @@ use crate::scene::Scene;
 /// Every object's mesh (object space) and bounding sphere (world space).
 #[derive(Clone, Debug, Default)]
 pub struct SceneGeometry {
-    /// `meshes[i]` is object i.
-    pub meshes: Vec<Mesh>,
+    /// `meshes[i]` is object i's: one allocation per distinct mesh, shared
+    /// by every object with the same shape (`Arc::ptr_eq` tells them).
+    pub meshes: Vec<Arc<Mesh>>,
     /// `bounds[i]` is object i's world-space bounding sphere `(centre, radius)`.
     pub bounds: Vec<(glam::DVec3, f32)>,
 }
@@ -20,11 +24,15 @@ impl SceneGeometry {
     /// tessellates to no triangle or to non-finite vertices, which would
     /// otherwise draw nothing or garbage without a word.
     pub fn new(scene: &Scene) -> Result<SceneGeometry, RenderError> {
-        let mut meshes = Vec::with_capacity(scene.objects.len());
+        let mut meshes: Vec<Arc<Mesh>> = Vec::with_capacity(scene.objects.len());
         let mut bounds = Vec::with_capacity(scene.objects.len());
-        for (i, object) in scene.objects.iter().enumerate() {
+        for (i, (object, source)) in scene.objects.iter().zip(scene.mesh_sources()).enumerate() {
             let name = || format!("objects[{i}] \"{}\"", object.name);
-            let mesh = scene.object_mesh(i);
+            let mesh = if source < i {
+                Arc::clone(&meshes[source])
+            } else {
+                Arc::new(scene.object_mesh(i))
+            };
             if mesh.indices.is_empty() {
                 return Err(RenderError::Object {
                     object: name(),
@@ -50,5 +58,49 @@ impl SceneGeometry {
             bounds.push((centre, radius));
         }
         Ok(SceneGeometry { meshes, bounds })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    /// Objects of the same shape and tessellation share one mesh (one
+    /// allocation, so one upload); a different size or tessellation gets
+    /// its own; each keeps its own world-space bounds.
+    #[test]
+    fn objects_of_the_same_shape_share_one_mesh() {
+        let mut text = String::from(
+            "[camera]\neye = [0.0, 0.0, 10.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+             [[materials]]\nname = \"m\"\nkd = [0.8, 0.8, 0.8]\n",
+        );
+        // (radius, tessellation, x): objects 0, 1 and 3 are one shape.
+        for (radius, tessellation, x) in [
+            (1.0, [16, 8], -3.0),
+            (1.0, [16, 8], 0.0),
+            (2.0, [16, 8], 3.0),
+            (1.0, [16, 8], 6.0),
+            (1.0, [32, 16], 9.0),
+        ] {
+            text += &format!(
+                "[[objects]]\nname = \"s{x}\"\nmaterial = \"m\"\n\
+                 shape = {{ type = \"sphere\", radius = {radius:?} }}\n\
+                 tessellation = {tessellation:?}\ntranslate = [{x:?}, 0.0, 0.0]\n"
+            );
+        }
+        let scene = Scene::from_toml(&text, "spheres.toml", Path::new(".")).unwrap();
+        assert_eq!(scene.mesh_sources(), [0, 0, 2, 0, 4]);
+        let geometry = SceneGeometry::new(&scene).unwrap();
+        let shared = |a: usize, b: usize| Arc::ptr_eq(&geometry.meshes[a], &geometry.meshes[b]);
+        assert!(shared(0, 1) && shared(0, 3));
+        assert!(!shared(0, 2) && !shared(0, 4) && !shared(2, 4));
+        // Each is the mesh the object would have on its own.
+        for i in 0..5 {
+            assert_eq!(*geometry.meshes[i], scene.object_mesh(i), "object {i}");
+        }
+        // Bounds follow each object's own transform.
+        let x = |i: usize| geometry.bounds[i].0.x;
+        assert!((x(0) + 3.0).abs() < 1e-6 && x(1).abs() < 1e-6 && (x(3) - 6.0).abs() < 1e-6);
     }
 }

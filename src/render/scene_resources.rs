@@ -11,6 +11,7 @@ use super::plan::{AirLight, Draw, FramePlan, MapSlots};
 use super::sky_resources::SkyResources;
 use super::RenderError;
 use crate::mesh::height::{encode_normal_map, GreenAxis, HeightEdge, HeightFilter, HeightMap};
+use crate::mesh::Mesh;
 use crate::scene::material_maps::{MapKind, MapKindInfo, MapSource, MAP_KINDS, MAP_KIND_COUNT};
 use crate::scene::{placeholder_texels, Light, Scene, Texture, TextureFilter, PLACEHOLDER_TEXTURE};
 use crate::shader_ids::{MATERIAL_SET, SKY_SET};
@@ -19,9 +20,12 @@ use crate::vk::{
     DescriptorSet, DescriptorSetLayout, DescriptorType, Format, Image, ImageAspectFlags, ImageDesc,
     ImageUsageFlags, PipelineLayout, Sampler, SamplerFilter, ShaderStageFlags,
 };
+use std::collections::hash_map::Entry;
+use std::collections::HashMap;
 use std::sync::Arc;
 
 /// One object's range inside the shared geometry buffer.
+#[derive(Clone, Copy, Debug)]
 pub struct GeometryRange {
     pub vertex_offset: u64,
     pub index_offset: u64,
@@ -386,23 +390,36 @@ fn upload_geometry(
     ctx: &Arc<Context>,
     geometry: &SceneGeometry,
 ) -> Result<(Buffer, Vec<GeometryRange>), RenderError> {
+    // Each distinct mesh once (objects of the same shape share one, see
+    // `SceneGeometry::meshes`), known by its allocation: vertices first,
+    // then indices.
+    let mut distinct: Vec<&Arc<Mesh>> = Vec::new();
+    let mut vertex_offsets: HashMap<*const Mesh, u64> = HashMap::new();
     let mut bytes: Vec<u8> = Vec::new();
-    let mut vertex_offsets = Vec::new();
     for m in &geometry.meshes {
-        vertex_offsets.push(bytes.len() as u64);
-        bytes.extend_from_slice(bytemuck::cast_slice(&m.vertices));
+        if let Entry::Vacant(slot) = vertex_offsets.entry(Arc::as_ptr(m)) {
+            slot.insert(bytes.len() as u64);
+            distinct.push(m);
+            bytes.extend_from_slice(bytemuck::cast_slice(&m.vertices));
+        }
     }
-    let mut ranges = Vec::new();
-    for (m, vertex_offset) in geometry.meshes.iter().zip(vertex_offsets) {
+    let mut shared: HashMap<*const Mesh, GeometryRange> = HashMap::new();
+    for m in distinct {
         // Index data must be 4-byte aligned for UINT32 indices.
         bytes.resize(bytes.len().next_multiple_of(4), 0);
-        ranges.push(GeometryRange {
-            vertex_offset,
+        let range = GeometryRange {
+            vertex_offset: vertex_offsets[&Arc::as_ptr(m)],
             index_offset: bytes.len() as u64,
             index_count: m.indices.len() as u32,
-        });
+        };
+        shared.insert(Arc::as_ptr(m), range);
         bytes.extend_from_slice(bytemuck::cast_slice(&m.indices));
     }
+    let ranges = geometry
+        .meshes
+        .iter()
+        .map(|m| shared[&Arc::as_ptr(m)])
+        .collect();
     // A buffer cannot be empty; a scene without objects still gets one.
     if bytes.is_empty() {
         bytes.resize(4, 0);

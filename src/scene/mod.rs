@@ -497,6 +497,33 @@ impl Scene {
         }
     }
 
+    /// For every object, the first object whose mesh is the same: the same
+    /// parametric shape and tessellation, or the same loaded mesh. The
+    /// renderer builds and uploads each distinct mesh once and draws every
+    /// object that shares it from that copy.
+    pub fn mesh_sources(&self) -> Vec<usize> {
+        let same = |a: &Object, b: &Object| match (&a.shape, &b.shape) {
+            // The same loaded model (its one copy), not a deep comparison.
+            (Shape::Mesh { mesh: x }, Shape::Mesh { mesh: y }) => std::sync::Arc::ptr_eq(x, y),
+            (Shape::Mesh { .. }, _) | (_, Shape::Mesh { .. }) => false,
+            (x, y) => x == y && a.tessellation == b.tessellation,
+        };
+        let mut distinct: Vec<usize> = Vec::new();
+        self.objects
+            .iter()
+            .enumerate()
+            .map(
+                |(i, object)| match distinct.iter().find(|&&d| same(&self.objects[d], object)) {
+                    Some(&d) => d,
+                    None => {
+                        distinct.push(i);
+                        i
+                    }
+                },
+            )
+            .collect()
+    }
+
     /// World-space bounding sphere `(centre, radius)` of object `index`: its
     /// mesh's bounding sphere moved by the object transform, the radius
     /// scaled by the largest scale component. `None` if out of range.
