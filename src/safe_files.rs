@@ -920,9 +920,16 @@ pub fn input_file_problem(path: &Path) -> Option<String> {
 /// is longer (an endless device such as `/dev/zero` included). The file is
 /// an input from then on (see [`note_inputs`]).
 pub fn read_limited(path: &Path, limit: u64) -> Result<Vec<u8>, Option<std::io::Error>> {
-    use std::io::Read as _;
     let file = File::open(path).map_err(Some)?;
     note_inputs([path]);
+    read_at_most(file, limit)
+}
+
+/// Reads at most `limit` bytes of an open `file`: its contents, or
+/// `Err(None)` when it is longer. Unlike [`read_limited`] the file does not
+/// become an input (a cache the run writes back reads through this).
+pub fn read_at_most(file: File, limit: u64) -> Result<Vec<u8>, Option<std::io::Error>> {
+    use std::io::Read as _;
     let mut bytes = Vec::new();
     file.take(limit.saturating_add(1))
         .read_to_end(&mut bytes)

@@ -250,7 +250,6 @@ fn file_bytes(data: &[u8]) -> Vec<u8> {
 /// crate's input readers: the run writes this file back, so it must not
 /// be recorded as one of the inputs no output may replace.
 fn read_file(path: &Path, identity: &CacheIdentity) -> Option<Vec<u8>> {
-    use std::io::Read as _;
     let warn = |reason: String| {
         warn_once(format!(
             "pipeline cache {} ignored: {reason}; pipelines are compiled afresh",
@@ -269,18 +268,20 @@ fn read_file(path: &Path, identity: &CacheIdentity) -> Option<Vec<u8>> {
             return None;
         }
     };
-    let mut bytes = Vec::new();
-    if let Err(e) = file.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes) {
-        warn(e.to_string());
-        return None;
-    }
-    if bytes.len() as u64 > MAX_FILE_BYTES {
-        warn(format!(
-            "longer than {}",
-            crate::budget::Bytes(MAX_FILE_BYTES)
-        ));
-        return None;
-    }
+    let bytes = match crate::safe_files::read_at_most(file, MAX_FILE_BYTES) {
+        Ok(bytes) => bytes,
+        Err(Some(e)) => {
+            warn(e.to_string());
+            return None;
+        }
+        Err(None) => {
+            warn(format!(
+                "longer than {}",
+                crate::budget::Bytes(MAX_FILE_BYTES)
+            ));
+            return None;
+        }
+    };
     match parse_file(&bytes, identity) {
         Ok(data) => Some(data),
         Err(reason) => {
