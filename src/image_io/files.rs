@@ -156,20 +156,17 @@ pub fn exr_size(path: &Path) -> Result<(u32, u32), ImageError> {
         reason,
     };
     crate::safe_files::note_inputs([path]);
-    let meta = exr::meta::MetaData::read_from_file(path, false)
+    let sizes = super::exr_layer_sizes(path)
         .map_err(|e| err(format!("not a readable OpenEXR file: {e}")))?;
     let max = super::MAX_IMAGE_SIDE as usize;
     let mut size = None;
-    for header in &meta.headers {
-        let s = header.layer_size;
-        if s.width() == 0 || s.height() == 0 || s.width() > max || s.height() > max {
+    for (width, height) in sizes {
+        if width == 0 || height == 0 || width > max || height > max {
             return Err(err(format!(
-                "the image is {}x{}; each side must be in 1..={max}",
-                s.width(),
-                s.height()
+                "the image is {width}x{height}; each side must be in 1..={max}"
             )));
         }
-        size.get_or_insert((s.width() as u32, s.height() as u32));
+        size.get_or_insert((width as u32, height as u32));
     }
     size.ok_or_else(|| err("the file has no image layer".into()))
 }
