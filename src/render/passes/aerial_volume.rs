@@ -10,11 +10,11 @@
 //! reach the farthest object in view (`plan::aerial_volume_reach`), and the
 //! pass exists only in frames with surfaces under an atmosphere.
 
-use super::atmosphere::table_constants;
+use super::atmosphere::march_pipeline;
 use super::{PassResources, PassSetup, RecordPass};
 use crate::render::RenderError;
 use crate::shaders::{self, AerialVolumeCompFeatures};
-use crate::vk::{CommandBuffer, ComputePipeline, ImageUse, PipelineLayout, ShaderModule};
+use crate::vk::{CommandBuffer, ComputePipeline, ImageUse, PipelineLayout};
 
 /// Invocations per workgroup side (`local_size` in the shader).
 const GROUP: u32 = 8;
@@ -39,16 +39,16 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
             ))
         }
     };
-    let layout = PipelineLayout::new(setup.ctx, &[&resources.layout])?;
-    let shader = ShaderModule::new(
-        setup.ctx,
-        shaders::AERIAL_VOLUME_COMP.spirv(AerialVolumeCompFeatures::NONE.with(
-            AerialVolumeCompFeatures::MULTIPLE_SCATTERING,
-            resources.multiple_scattering(),
-        )),
+    let features = AerialVolumeCompFeatures::NONE.with(
+        AerialVolumeCompFeatures::MULTIPLE_SCATTERING,
+        resources.multiple_scattering(),
+    );
+    let (layout, pipeline) = march_pipeline(
+        setup,
+        resources,
+        sky,
+        shaders::AERIAL_VOLUME_COMP.spirv(features),
     )?;
-    let constants = [&table_constants(sky)[..], &resources.static_constants()].concat();
-    let pipeline = ComputePipeline::new(setup.ctx, &layout, &shader, &constants)?;
     Ok(Box::new(AerialVolumePass {
         pipeline,
         layout,

@@ -26,7 +26,7 @@ use crate::shader_ids::{
 };
 use crate::shaders::{self, AtmosphereFragFeatures};
 use crate::vk::CompareOp;
-use crate::vk::{CommandBuffer, GraphicsPipeline, PipelineLayout};
+use crate::vk::{CommandBuffer, ComputePipeline, GraphicsPipeline, PipelineLayout, ShaderModule};
 
 /// Fields drop in order: the pipelines before their layout and the sets.
 pub struct AtmospherePass {
@@ -34,6 +34,23 @@ pub struct AtmospherePass {
     pipelines: Vec<GraphicsPipeline>,
     layout: PipelineLayout,
     inputs: InputAttachments,
+}
+
+/// A compute pipeline over the atmosphere's set that marches it (the
+/// sky-view table's and the aerial-perspective volume's passes): `spirv`
+/// with the atmosphere shaders' constants, the table's and the sky
+/// block's unchanging fields. The layout is returned to outlive it.
+pub(crate) fn march_pipeline(
+    setup: &PassSetup<'_>,
+    resources: &SkyResources,
+    sky: &crate::scene::Sky,
+    spirv: &[u8],
+) -> Result<(PipelineLayout, ComputePipeline), RenderError> {
+    let layout = PipelineLayout::new(setup.ctx, &[&resources.layout])?;
+    let shader = ShaderModule::new(setup.ctx, spirv)?;
+    let constants = [&table_constants(sky)[..], &resources.static_constants()].concat();
+    let pipeline = ComputePipeline::new(setup.ctx, &layout, &shader, &constants)?;
+    Ok((layout, pipeline))
 }
 
 /// The specialization constants the atmosphere shaders share: the

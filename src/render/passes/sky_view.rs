@@ -10,11 +10,11 @@
 //! phase-free Rayleigh and Mie sums and the transmittance, and splits the
 //! ground and the sky at the horizon so no filter mixes them.
 
-use super::atmosphere::table_constants;
+use super::atmosphere::march_pipeline;
 use super::{PassResources, PassSetup, RecordPass};
 use crate::render::RenderError;
 use crate::shaders::{self, SkyViewCompFeatures};
-use crate::vk::{CommandBuffer, ComputePipeline, ImageUse, PipelineLayout, ShaderModule};
+use crate::vk::{CommandBuffer, ComputePipeline, ImageUse, PipelineLayout};
 
 /// Invocations per workgroup side (`local_size` in the shader).
 const GROUP: u32 = 8;
@@ -36,16 +36,16 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
             ))
         }
     };
-    let layout = PipelineLayout::new(setup.ctx, &[&resources.layout])?;
-    let shader = ShaderModule::new(
-        setup.ctx,
-        shaders::SKY_VIEW_COMP.spirv(SkyViewCompFeatures::NONE.with(
-            SkyViewCompFeatures::MULTIPLE_SCATTERING,
-            resources.multiple_scattering(),
-        )),
+    let features = SkyViewCompFeatures::NONE.with(
+        SkyViewCompFeatures::MULTIPLE_SCATTERING,
+        resources.multiple_scattering(),
+    );
+    let (layout, pipeline) = march_pipeline(
+        setup,
+        resources,
+        sky,
+        shaders::SKY_VIEW_COMP.spirv(features),
     )?;
-    let constants = [&table_constants(sky)[..], &resources.static_constants()].concat();
-    let pipeline = ComputePipeline::new(setup.ctx, &layout, &shader, &constants)?;
     Ok(Box::new(SkyViewPass {
         pipeline,
         layout,
