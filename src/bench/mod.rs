@@ -350,9 +350,7 @@ fn bench_scene(
         file: label,
         sha256: s.sha256.clone(),
         resolution: s.resolution(),
-        triangles: (0..s.scene.objects.len())
-            .map(|i| s.scene.object_mesh(i).triangle_count() as u64)
-            .sum(),
+        triangles: s.scene.triangle_count(),
         knobs: knob_settings(&s.scene)
             .into_iter()
             .map(|(k, v)| (k.to_string(), v))

@@ -524,6 +524,21 @@ impl Scene {
             .collect()
     }
 
+    /// The triangles the scene draws, every object's, each distinct mesh
+    /// built once ([`Scene::mesh_sources`]).
+    pub fn triangle_count(&self) -> u64 {
+        let mut per_object: Vec<u64> = Vec::with_capacity(self.objects.len());
+        for (i, source) in self.mesh_sources().into_iter().enumerate() {
+            let triangles = if source < i {
+                per_object[source]
+            } else {
+                self.object_mesh(i).triangle_count() as u64
+            };
+            per_object.push(triangles);
+        }
+        per_object.iter().sum()
+    }
+
     /// World-space bounding sphere `(centre, radius)` of object `index`: its
     /// mesh's bounding sphere moved by the object transform, the radius
     /// scaled by the largest scale component. `None` if out of range.
