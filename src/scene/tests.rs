@@ -460,6 +460,26 @@ fn textures_resolve_relative_to_the_scene_folder() {
     assert!(message.contains("checker.png"), "{message}");
 }
 
+/// Every map kind's scene-file field that names a missing file is an
+/// error naming the material, the field and the file (the loader walks the
+/// map table, so a new kind is covered without a test of its own).
+#[test]
+fn every_map_field_naming_a_missing_file_is_an_error_naming_it() {
+    for info in crate::scene::material_maps::MAP_KINDS {
+        let text = format!(
+            "{MINIMAL}[[materials]]\nname = \"m\"\nkd = [1, 1, 1]\n{} = \"no_such_map.png\"\n",
+            info.field
+        );
+        let err = Scene::from_toml(&text, "t.toml", &assets()).expect_err(info.field);
+        let message = err.to_string();
+        assert!(
+            message.contains(&format!("materials[0].{}: file not found", info.field)),
+            "{message}"
+        );
+        assert!(message.contains("no_such_map.png"), "{message}");
+    }
+}
+
 /// A scene with one unit sphere, stretched to radius 2 along Y and moved to
 /// x = 10, lit by the given lights.
 fn culling_scene(lights: Vec<Light>, cutoff: f32) -> Scene {
