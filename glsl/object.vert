@@ -7,6 +7,7 @@
 // feature: GOURAUD
 // feature: SUN_LIGHT
 // feature: SKY_LIGHT
+// feature: INSTANCED
 // requires: SKY_LIGHT SUN_LIGHT
 // excludes: SUN_LIGHT DEBUG_VIEW
 #include "variant_rules.glsl"
@@ -24,6 +25,12 @@ layout(location = 2) in vec4 in_tangent;
 #endif
 #if defined(BASE_COLOR_TEXTURE) || defined(NORMAL_MAP) || defined(DEBUG_VIEW)
 layout(location = 3) in vec2 in_uv;
+#endif
+#ifdef INSTANCED
+// A batch of objects drawn as instances: each instance's transforms come
+// from the instance buffer; the block holds what they share.
+layout(location = INSTANCE_MODEL_LOCATION) in mat4 in_model;
+layout(location = INSTANCE_NORMAL_LOCATION) in mat3 in_normal_matrix;
 #endif
 
 // Outputs exist only in the variants whose fragment stage reads them.
@@ -49,8 +56,15 @@ layout(constant_id = SPEC_TWO_SIDED) const bool TWO_SIDED = false;
 #endif
 
 void main() {
-    vec4 world = object.model * vec4(in_position, 1.0);
-    vec3 n = normalize(mat3(object.normal_matrix) * in_normal);
+#ifdef INSTANCED
+    mat4 model = in_model;
+    mat3 normal_matrix = in_normal_matrix;
+#else
+    mat4 model = object.model;
+    mat3 normal_matrix = mat3(object.normal_matrix);
+#endif
+    vec4 world = model * vec4(in_position, 1.0);
+    vec3 n = normalize(normal_matrix * in_normal);
 #if !defined(GOURAUD) && !defined(DEBUG_VIEW)
     out_world_position = world.xyz;
 #endif
@@ -63,7 +77,7 @@ void main() {
 #if defined(NORMAL_MAP) || defined(DEBUG_VIEW)
     // A tangent lies in the surface, so it moves with the model matrix
     // (not the normal matrix); positive scales keep the handedness.
-    out_tangent = vec4(normalize(mat3(object.model) * in_tangent.xyz), in_tangent.w);
+    out_tangent = vec4(normalize(mat3(model) * in_tangent.xyz), in_tangent.w);
 #endif
 #ifdef GOURAUD
     vec3 v = normalize(frame.camera_position.xyz - world.xyz);

@@ -1,6 +1,11 @@
-//! The draw list of a frame: one draw per object, with its pipeline
-//! variant, textures and lights, grouped to save binds and ordered for the
+//! The draw list of a frame: one draw per object, or one instanced draw
+//! per batch of opaque objects that differ only in their transform, with
+//! its pipeline variant, textures and lights; objects wholly outside the
+//! view are left out; draws are grouped to save binds and ordered for the
 //! depth test (opaque front to back, transparent back to front).
+
+use std::collections::HashMap;
+use std::sync::Arc;
 
 use super::geometry::SceneGeometry;
 use crate::scene::material_maps::{MapKind, MapMask, MapSource, MAP_KIND_COUNT};
@@ -39,6 +44,9 @@ pub struct PipelineKey {
     /// (shader features `SUN_LIGHT` and `SKY_LIGHT`, and the atmosphere's
     /// descriptor set).
     pub air: AirLight,
+    /// Drawn as instances: the transforms come from the instance buffer
+    /// (shader feature `INSTANCED`), not the object's block.
+    pub instanced: bool,
 }
 
 /// How an atmosphere lights objects: per shaded point (per pixel; per
@@ -113,9 +121,11 @@ impl From<ShadingModel> for ShadingKey {
     }
 }
 
-/// One object draw.
+/// One draw: an object, or a batch of objects drawn as instances.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Draw {
+    /// The object whose mesh and block (material, lights) the draw uses:
+    /// for a batch, its first member in scene order.
     pub object: usize,
     pub pipeline: PipelineKey,
     /// Its maps, by kind (in table order): indices into `FramePlan::maps`.
@@ -125,6 +135,43 @@ pub struct Draw {
     /// atmosphere's sun and sky are not among them: see
     /// [`PipelineKey::air`].
     pub lights: Vec<usize>,
+    /// The batch an instanced draw draws (`pipeline.instanced`).
+    pub instances: Option<Instances>,
+}
+
+impl Draw {
+    /// The draw with what the view decides (the batch members in view)
+    /// left out: two plans whose draws agree on this need the same
+    /// pipelines, blocks and buffers.
+    pub fn without_view(&self) -> Draw {
+        let mut draw = self.clone();
+        if let Some(instances) = &mut draw.instances {
+            instances.visible.clear();
+        }
+        draw
+    }
+
+    /// The objects the draw covers, in view or not.
+    pub fn objects(&self) -> &[usize] {
+        match &self.instances {
+            Some(instances) => &instances.members,
+            None => std::slice::from_ref(&self.object),
+        }
+    }
+}
+
+/// A batch of opaque objects with the same mesh, material, lights and
+/// pipeline: one draw whose per-instance transforms come from the frame's
+/// instance buffer.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instances {
+    /// The batch's first slot in the instance buffer; it owns one slot per
+    /// member, in view or not, so the layout does not follow the view.
+    pub first: u32,
+    /// Every member, in scene order.
+    pub members: Vec<usize>,
+    /// The members in view, front to back: what is drawn, from `first` on.
+    pub visible: Vec<usize>,
 }
 
 /// A draw's maps: for each kind (in table order), an index into the
@@ -139,9 +186,20 @@ pub struct DrawList {
     pub opaque: Vec<Draw>,
     /// Transparent draws, back to front from the camera.
     pub transparent: Vec<Draw>,
+    /// Draws wholly outside the view: not recorded, but their pipelines
+    /// and blocks are made, so a view that brings them in keeps the
+    /// frame's resources.
+    pub hidden: Vec<Draw>,
+    /// Slots in the instance buffer (every batch's members); 0 when no
+    /// objects are drawn as instances, and the frame has no such buffer.
+    pub instance_slots: u32,
     /// Distinct map images, each of one kind.
     pub maps: Vec<(MapKind, MapSource)>,
 }
+
+/// The fewest objects drawn as one instanced draw: a single object keeps
+/// its plain draw, so a scene of unique objects has no instance buffer.
+const MIN_INSTANCES: usize = 2;
 
 impl DrawList {
     /// The draws of `scene`, whose meshes and bounds are `geometry`;
@@ -149,67 +207,54 @@ impl DrawList {
     /// (they then carry no lights of their own).
     pub fn new(scene: &Scene, geometry: &SceneGeometry, deferred: bool) -> DrawList {
         let mut maps: Vec<(MapKind, MapSource)> = Vec::new();
-        let mut opaque = Vec::new();
-        let mut transparent = Vec::new();
-        // A debug view draws attributes, not light: every surface opaque,
-        // no lights.
-        let debug = scene.output.debug_view.map_or(0, |v| v as u32);
-        let air = AirLight::of(scene);
-        for (i, object) in scene.objects.iter().enumerate() {
-            let material = &scene.materials[object.material];
-            let slots = map_slots(material, debug, &mut maps);
-            let mask = slots
-                .iter()
-                .zip(MapKind::all())
-                .filter(|(slot, _)| slot.is_some())
-                .fold(MapMask::default(), |mask, (_, kind)| mask.with(kind));
-            let blended = material.opacity < 1.0 && debug == 0;
-            let lit_later = deferred && !blended && material.shading == ShadingModel::Phong;
-            let lights = if lit_later || debug != 0 {
-                Vec::new()
-            } else {
-                let (centre, radius) = geometry.bounds[i];
-                scene.lights_reaching_sphere(centre, radius)
-            };
-            let draw = Draw {
-                object: i,
-                pipeline: PipelineKey {
-                    shading: material.shading.into(),
-                    maps: mask,
-                    blended,
-                    lights: lights.len() as u32,
-                    debug,
-                    // The G-buffer form leaves lighting to the lighting
-                    // pass; only the forward shaders use it.
-                    shininess_exponent: if lit_later {
-                        0
-                    } else {
-                        shininess_exponent(material.shininess)
-                    },
-                    two_sided: object.is_two_sided(material),
-                    // The sun and sky light every surface of the scene, lit
-                    // later or not: per point, they gain nothing from the
-                    // lighting pass's tiles.
-                    air,
-                },
-                maps: slots,
-                lights,
-            };
-            if blended {
-                transparent.push(draw);
-            } else {
-                opaque.push(draw);
-            }
-        }
+        let draws: Vec<Draw> = (0..scene.objects.len())
+            .map(|i| object_draw(scene, geometry, i, deferred, &mut maps))
+            .collect();
+        let (opaque, transparent): (Vec<Draw>, Vec<Draw>) =
+            draws.into_iter().partition(|d| !d.pipeline.blended);
+        let (opaque, instance_slots) = batch(scene, geometry, opaque);
+
+        let frustum = Frustum::of(scene);
         let eye = scene.camera.eye;
-        let distance = |d: &Draw| geometry.bounds[d.object].0.distance(eye);
+        let distance = |object: usize| geometry.bounds[object].0.distance(eye);
+        let in_view = |object: usize| {
+            let (centre, radius) = geometry.bounds[object];
+            frustum.may_see(scene.camera.relative(centre), f64::from(radius))
+        };
+        let mut hidden = Vec::new();
+        // Each draw with the distance of its nearest object in view.
+        let mut keyed = |draws: Vec<Draw>| -> Vec<(f64, Draw)> {
+            let mut kept = Vec::with_capacity(draws.len());
+            for mut d in draws {
+                let nearest = match &mut d.instances {
+                    Some(instances) => {
+                        let mut visible: Vec<(f64, usize)> = instances
+                            .members
+                            .iter()
+                            .filter(|&&o| in_view(o))
+                            .map(|&o| (distance(o), o))
+                            .collect();
+                        visible.sort_by(|a, b| a.0.total_cmp(&b.0));
+                        instances.visible = visible.iter().map(|&(_, o)| o).collect();
+                        visible.first().map(|&(d, _)| d)
+                    }
+                    None => in_view(d.object).then(|| distance(d.object)),
+                };
+                match nearest {
+                    Some(nearest) => kept.push((nearest, d)),
+                    None => hidden.push(d),
+                }
+            }
+            kept
+        };
+        let mut opaque = keyed(opaque);
+        let mut transparent = keyed(transparent);
         // Opaque: grouped by pipeline and texture (fewer binds), front to
         // back within a group, so the depth test rejects hidden fragments
-        // before they are shaded.
-        let mut keyed: Vec<(f64, Draw)> = opaque.into_iter().map(|d| (distance(&d), d)).collect();
-        // The shininess exponent is left out of the grouping: it only
-        // changes the specular arithmetic, and materials differing in it
-        // alone are better drawn front to back than a bind apart.
+        // before they are shaded. The shininess exponent is left out of the
+        // grouping: it only changes the specular arithmetic, and materials
+        // differing in it alone are better drawn front to back than a bind
+        // apart.
         let group = |d: &Draw| {
             let pipeline = PipelineKey {
                 shininess_exponent: 0,
@@ -217,19 +262,163 @@ impl DrawList {
             };
             (pipeline, d.maps)
         };
-        keyed.sort_by(|a, b| group(&a.1).cmp(&group(&b.1)).then(a.0.total_cmp(&b.0)));
-        let opaque: Vec<Draw> = keyed.into_iter().map(|(_, d)| d).collect();
+        opaque.sort_by(|a, b| group(&a.1).cmp(&group(&b.1)).then(a.0.total_cmp(&b.0)));
         // Transparent: back to front; ties keep scene order.
-        let mut keyed: Vec<(f64, Draw)> =
-            transparent.into_iter().map(|d| (distance(&d), d)).collect();
-        keyed.sort_by(|a, b| b.0.total_cmp(&a.0));
-        let transparent: Vec<Draw> = keyed.into_iter().map(|(_, d)| d).collect();
-
+        transparent.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let unkey = |keyed: Vec<(f64, Draw)>| keyed.into_iter().map(|(_, d)| d).collect();
         DrawList {
-            opaque,
-            transparent,
+            opaque: unkey(opaque),
+            transparent: unkey(transparent),
+            hidden,
             maps,
+            instance_slots,
         }
+    }
+}
+
+/// Object `i`'s own draw (its maps added to `maps`).
+fn object_draw(
+    scene: &Scene,
+    geometry: &SceneGeometry,
+    i: usize,
+    deferred: bool,
+    maps: &mut Vec<(MapKind, MapSource)>,
+) -> Draw {
+    let object = &scene.objects[i];
+    // A debug view draws attributes, not light: every surface opaque, no
+    // lights.
+    let debug = scene.output.debug_view.map_or(0, |v| v as u32);
+    let material = &scene.materials[object.material];
+    let slots = map_slots(material, debug, maps);
+    let mask = slots
+        .iter()
+        .zip(MapKind::all())
+        .filter(|(slot, _)| slot.is_some())
+        .fold(MapMask::default(), |mask, (_, kind)| mask.with(kind));
+    let blended = material.opacity < 1.0 && debug == 0;
+    let lit_later = deferred && !blended && material.shading == ShadingModel::Phong;
+    let lights = if lit_later || debug != 0 {
+        Vec::new()
+    } else {
+        let (centre, radius) = geometry.bounds[i];
+        scene.lights_reaching_sphere(centre, radius)
+    };
+    Draw {
+        object: i,
+        pipeline: PipelineKey {
+            shading: material.shading.into(),
+            maps: mask,
+            blended,
+            lights: lights.len() as u32,
+            debug,
+            // The G-buffer form leaves lighting to the lighting pass; only
+            // the forward shaders use it.
+            shininess_exponent: if lit_later {
+                0
+            } else {
+                shininess_exponent(material.shininess)
+            },
+            two_sided: object.is_two_sided(material),
+            // The sun and sky light every surface of the scene, lit later
+            // or not: per point, they gain nothing from the lighting
+            // pass's tiles.
+            air: AirLight::of(scene),
+            instanced: false,
+        },
+        maps: slots,
+        lights,
+        instances: None,
+    }
+}
+
+/// The opaque `draws` with every set of at least [`MIN_INSTANCES`] that
+/// differ only in their transform (same mesh, material, maps, lights and
+/// pipeline) made one instanced draw, in the order of their first members;
+/// and the instance slots the batches take. The batches follow the scene
+/// alone, not the view.
+fn batch(scene: &Scene, geometry: &SceneGeometry, draws: Vec<Draw>) -> (Vec<Draw>, u32) {
+    type BatchKey = (
+        PipelineKey,
+        MapSlots,
+        Vec<usize>,
+        usize,
+        *const crate::mesh::Mesh,
+    );
+    let key = |d: &Draw| -> BatchKey {
+        (
+            d.pipeline,
+            d.maps,
+            d.lights.clone(),
+            scene.objects[d.object].material,
+            Arc::as_ptr(&geometry.meshes[d.object]),
+        )
+    };
+    let mut groups: Vec<Vec<Draw>> = Vec::new();
+    let mut index: HashMap<BatchKey, usize> = HashMap::new();
+    for d in draws {
+        let slot = *index.entry(key(&d)).or_insert_with(|| {
+            groups.push(Vec::new());
+            groups.len() - 1
+        });
+        groups[slot].push(d);
+    }
+    let mut slots = 0u32;
+    let mut out = Vec::new();
+    for group in groups {
+        if group.len() < MIN_INSTANCES {
+            out.extend(group);
+            continue;
+        }
+        let members: Vec<usize> = group.iter().map(|d| d.object).collect();
+        let mut first = group.into_iter().next().expect("a batch has members");
+        first.pipeline.instanced = true;
+        first.instances = Some(Instances {
+            first: slots,
+            visible: Vec::new(),
+            members,
+        });
+        slots += first.objects().len() as u32;
+        out.push(first);
+    }
+    (out, slots)
+}
+
+/// The view's frustum as planes in camera-relative space, for culling
+/// objects by their bounding spheres.
+struct Frustum {
+    /// Unit normals pointing inwards, and offsets: a point p is inside
+    /// plane (n, d) when n·p + d >= 0.
+    planes: Vec<(glam::DVec3, f64)>,
+}
+
+impl Frustum {
+    /// The frustum of `scene`'s camera at its output's aspect, from the
+    /// clip-space bounds of Vulkan (-w <= x, y <= w, 0 <= z <= w) applied
+    /// to the camera-relative view-projection (the rows' sums and
+    /// differences). A bound with no direction (the far plane at infinity)
+    /// culls nothing and is left out.
+    fn of(scene: &Scene) -> Frustum {
+        let aspect = scene.output.width as f32 / scene.output.height as f32;
+        let m = scene.camera.view_projection_f64(aspect);
+        let row = |r: usize| glam::DVec4::new(m.x_axis[r], m.y_axis[r], m.z_axis[r], m.w_axis[r]);
+        let (x, y, z, w) = (row(0), row(1), row(2), row(3));
+        let planes = [w + x, w - x, w + y, w - y, z, w - z]
+            .into_iter()
+            .filter_map(|p| {
+                let length = p.truncate().length();
+                (length > 1e-12 * p.w.abs().max(1.0) && length.is_finite())
+                    .then(|| (p.truncate() / length, p.w / length))
+            })
+            .collect();
+        Frustum { planes }
+    }
+
+    /// Whether a sphere at `centre` (camera-relative) of `radius` may be
+    /// seen: false only when it lies wholly outside one plane.
+    fn may_see(&self, centre: glam::DVec3, radius: f64) -> bool {
+        self.planes
+            .iter()
+            .all(|(n, d)| n.dot(centre) + d >= -radius)
     }
 }
 

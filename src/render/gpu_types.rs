@@ -90,3 +90,14 @@ pub struct ObjectHeader {
     /// x: number of lights that follow.
     pub counts: [u32; 4],
 }
+
+/// One instance of an instanced draw as the vertex shader reads it
+/// (per-instance vertex attributes from `INSTANCE_MODEL_LOCATION` and
+/// `INSTANCE_NORMAL_LOCATION`): the camera-relative model matrix and the
+/// normal matrix, by columns, tightly packed.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct InstanceTransform {
+    pub model: [[f32; 4]; 4],
+    pub normal_matrix: [[f32; 3]; 3],
+}

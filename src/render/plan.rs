@@ -10,7 +10,7 @@
 //! tone-map subpass when the scene asks for LDR output.
 
 pub use super::draw_list::{
-    shininess_exponent, AirLight, Draw, DrawList, MapSlots, PipelineKey, ShadingKey,
+    shininess_exponent, AirLight, Draw, DrawList, Instances, MapSlots, PipelineKey, ShadingKey,
     MAX_SHININESS_EXPONENT,
 };
 use super::geometry::SceneGeometry;
@@ -223,6 +223,12 @@ pub struct FramePlan {
     pub opaque: Vec<Draw>,
     /// Transparent draws, back to front from the camera.
     pub transparent: Vec<Draw>,
+    /// Draws wholly outside the view (`DrawList::hidden`): not recorded,
+    /// but given their pipelines and blocks.
+    pub hidden: Vec<Draw>,
+    /// Slots of the instance buffer (`DrawList::instance_slots`), 0 for
+    /// none.
+    pub instance_slots: u32,
     /// Distinct map images (base colour, normal map, ...), each of one
     /// kind, each loaded once.
     pub maps: Vec<(MapKind, MapSource)>,
@@ -258,6 +264,8 @@ impl FramePlan {
             lighting: graph.lighting,
             opaque: draws.opaque,
             transparent: draws.transparent,
+            hidden: draws.hidden,
+            instance_slots: draws.instance_slots,
             maps: draws.maps,
             tile_groups,
             aerial_volume_reach: graph
@@ -282,6 +290,8 @@ impl FramePlan {
             lighting: graph.lighting,
             opaque: Vec::new(),
             transparent: Vec::new(),
+            hidden: Vec::new(),
+            instance_slots: 0,
             maps: Vec::new(),
             tile_groups: Vec::new(),
             attachments: graph.attachments,
@@ -310,8 +320,13 @@ impl FramePlan {
         self.attachments.iter().find(|a| a.name == name)
     }
 
+    /// Every draw, in view or not: what the frame's pipelines, blocks and
+    /// buffers are made for.
     pub fn draws(&self) -> impl Iterator<Item = &Draw> {
-        self.opaque.iter().chain(&self.transparent)
+        self.opaque
+            .iter()
+            .chain(&self.transparent)
+            .chain(&self.hidden)
     }
 }
 

@@ -481,8 +481,9 @@ fn frame_resources<'a>(
 /// any order: the order of opaque and transparent draws follows the
 /// camera) and the same deferred light tiles. The uniforms may differ.
 fn same_resources(a: &FramePlan, b: &FramePlan) -> bool {
-    let by_object = |draws: &[super::plan::Draw]| {
-        let mut d = draws.to_vec();
+    // Every draw, in view or not, without what the view decides.
+    let by_object = |plan: &FramePlan| {
+        let mut d: Vec<_> = plan.draws().map(super::plan::Draw::without_view).collect();
         d.sort_by_key(|d| d.object);
         d
     };
@@ -490,8 +491,8 @@ fn same_resources(a: &FramePlan, b: &FramePlan) -> bool {
         && a.height == b.height
         && a.attachments == b.attachments
         && a.pass_names() == b.pass_names()
-        && by_object(&a.opaque) == by_object(&b.opaque)
-        && by_object(&a.transparent) == by_object(&b.transparent)
+        && a.instance_slots == b.instance_slots
+        && by_object(a) == by_object(b)
         && a.tile_groups == b.tile_groups
 }
 

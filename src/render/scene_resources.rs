@@ -6,7 +6,7 @@
 //! when its sun and sky light the objects).
 
 use super::geometry::SceneGeometry;
-use super::gpu_types::{GpuLight, ObjectHeader, ViewUniforms};
+use super::gpu_types::{GpuLight, InstanceTransform, ObjectHeader, ViewUniforms};
 use super::plan::{AirLight, Draw, FramePlan, MapSlots};
 use super::sky_resources::SkyResources;
 use super::RenderError;
@@ -63,6 +63,9 @@ pub struct SceneResources {
     /// The world position static lights are placed from: the camera when
     /// these resources were made (`render::static_lights`).
     pub light_anchor: glam::DVec3,
+    /// The instanced draws' transforms (`Instances`), when the frame has
+    /// any.
+    pub instances: Option<Buffer>,
     frame_buffer: Buffer,
     object_buffer: Buffer,
 }
@@ -89,6 +92,15 @@ impl SceneResources {
         )?;
 
         let (object_buffer, block_offsets, block_range) = object_blocks(ctx, scene, plan)?;
+        let instances = match plan.instance_slots {
+            0 => None,
+            slots => {
+                let size = u64::from(slots) * std::mem::size_of::<InstanceTransform>() as u64;
+                let mut buffer = Buffer::new(ctx, "instances", size, BufferUsage::Instances)?;
+                write_instances(&mut buffer, scene, plan);
+                Some(buffer)
+            }
+        };
         let maps = MaterialImages::new(ctx, scene, plan)?;
 
         let frame_layout = uniform_layout(ctx, DescriptorType::UNIFORM_BUFFER)?;
@@ -140,6 +152,7 @@ impl SceneResources {
             ranges,
             block_offsets,
             light_anchor,
+            instances,
             frame_buffer,
             object_buffer,
         })
@@ -154,9 +167,13 @@ impl SceneResources {
     pub fn set_view(&mut self, scene: &Scene, plan: &FramePlan) {
         let frame = ViewUniforms::new(scene, plan.width, plan.height, self.light_anchor);
         self.frame_buffer.write(0, bytemuck::bytes_of(&frame));
+        let draws = draw_of_object(scene, plan);
         for (i, &offset) in self.block_offsets.iter().enumerate() {
-            let block = object_block(scene, i, plan.draws().find(|d| d.object == i));
+            let block = object_block(scene, i, draws[i]);
             self.object_buffer.write(offset as usize, &block);
+        }
+        if let Some(buffer) = &mut self.instances {
+            write_instances(buffer, scene, plan);
         }
     }
 
@@ -194,8 +211,9 @@ fn object_blocks(
     scene: &Scene,
     plan: &FramePlan,
 ) -> Result<(Buffer, Vec<u32>, u64), RenderError> {
+    let draws = draw_of_object(scene, plan);
     let blocks: Vec<Vec<u8>> = (0..scene.objects.len())
-        .map(|i| object_block(scene, i, plan.draws().find(|d| d.object == i)))
+        .map(|i| object_block(scene, i, draws[i]))
         .collect();
     let (object_bytes, block_offsets, block_range) =
         pack_blocks(ctx, &blocks, std::mem::size_of::<ObjectHeader>(), |i| {
@@ -426,6 +444,46 @@ fn upload_geometry(
     }
     let buffer = Buffer::with_data(ctx, "geometry", &bytes, BufferUsage::Geometry)?;
     Ok((buffer, ranges))
+}
+
+/// The draw covering each object (alone or as an instance), by object.
+fn draw_of_object<'a>(scene: &Scene, plan: &'a FramePlan) -> Vec<Option<&'a Draw>> {
+    let mut draws = vec![None; scene.objects.len()];
+    for d in plan.draws() {
+        for &object in d.objects() {
+            draws[object] = Some(d);
+        }
+    }
+    draws
+}
+
+/// Writes each instanced draw's members in view, in its order, from its
+/// first slot: their camera-relative model matrices (composed in f64, as
+/// the blocks') and normal matrices.
+fn write_instances(buffer: &mut Buffer, scene: &Scene, plan: &FramePlan) {
+    let size = std::mem::size_of::<InstanceTransform>();
+    for d in plan.draws() {
+        let Some(instances) = &d.instances else {
+            continue;
+        };
+        let transforms: Vec<InstanceTransform> = instances
+            .visible
+            .iter()
+            .map(|&i| {
+                let transform = &scene.objects[i].transform;
+                InstanceTransform {
+                    model: transform
+                        .matrix_relative_to(scene.camera.eye)
+                        .to_cols_array_2d(),
+                    normal_matrix: transform.normal_matrix().to_cols_array_2d(),
+                }
+            })
+            .collect();
+        buffer.write(
+            instances.first as usize * size,
+            bytemuck::cast_slice(&transforms),
+        );
+    }
 }
 
 /// The per-object block: header, then exactly the lights its draw

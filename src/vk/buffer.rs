@@ -13,6 +13,9 @@ pub enum BufferUsage {
     Geometry,
     /// Uniform data written from the CPU.
     Uniform,
+    /// Per-instance vertex data, written from the CPU when the view
+    /// changes.
+    Instances,
     /// Staging for uploads to images.
     Upload,
     /// Destination of image copies, read back on the CPU.
@@ -26,6 +29,7 @@ impl BufferUsage {
                 vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::INDEX_BUFFER
             }
             BufferUsage::Uniform => vk::BufferUsageFlags::UNIFORM_BUFFER,
+            BufferUsage::Instances => vk::BufferUsageFlags::VERTEX_BUFFER,
             BufferUsage::Upload => vk::BufferUsageFlags::TRANSFER_SRC,
             BufferUsage::Readback => vk::BufferUsageFlags::TRANSFER_DST,
         }

@@ -640,6 +640,43 @@ impl CommandBuffer {
         };
     }
 
+    /// Binds `buffer` from `offset` as the per-instance vertex data
+    /// ([`INSTANCE_BINDING`](super::pipeline::INSTANCE_BINDING)).
+    pub fn bind_instances(&self, buffer: &Buffer, offset: u64) {
+        // SAFETY: recording; the buffer holds per-instance vertex data from
+        // `offset`.
+        unsafe {
+            self.ctx.device.cmd_bind_vertex_buffers(
+                self.handle,
+                super::pipeline::INSTANCE_BINDING,
+                &[buffer.handle],
+                &[offset],
+            )
+        };
+    }
+
+    /// `instance_count` instances of the bound indexed geometry, reading
+    /// per-instance data from slot `first_instance` on.
+    pub fn draw_indexed_instances(
+        &self,
+        index_count: u32,
+        instance_count: u32,
+        first_instance: u32,
+    ) {
+        // SAFETY: recording inside a render pass with pipeline, geometry
+        // and instance data bound; the instance buffer holds the slots.
+        unsafe {
+            self.ctx.device.cmd_draw_indexed(
+                self.handle,
+                index_count,
+                instance_count,
+                0,
+                0,
+                first_instance,
+            )
+        };
+    }
+
     pub fn draw_indexed(&self, index_count: u32) {
         // SAFETY: recording inside a render pass with pipeline and geometry bound.
         unsafe {

@@ -67,6 +67,10 @@ pub struct VertexAttribute {
     pub offset: u32,
 }
 
+/// The vertex binding per-instance attributes are read from
+/// ([`CommandBuffer::bind_instances`](super::CommandBuffer::bind_instances)).
+pub const INSTANCE_BINDING: u32 = 1;
+
 /// Everything that varies between the renderer's pipelines.
 pub struct GraphicsPipelineDesc<'a> {
     pub vertex_shader: &'a ShaderModule,
@@ -77,6 +81,10 @@ pub struct GraphicsPipelineDesc<'a> {
     /// (full-screen triangle generated from the vertex index).
     pub vertex_stride: u32,
     pub vertex_attributes: &'a [VertexAttribute],
+    /// Per-instance stride and attributes, from vertex binding 1; stride 0
+    /// means none.
+    pub instance_stride: u32,
+    pub instance_attributes: &'a [VertexAttribute],
     pub cull_mode: vk::CullModeFlags,
     /// The depth test's comparison, `None` for no test.
     pub depth_test: Option<vk::CompareOp>,
@@ -125,20 +133,35 @@ impl GraphicsPipeline {
                 .name(c"main")
                 .specialization_info(&spec),
         ];
-        let bindings = [vk::VertexInputBindingDescription {
+        let mut bindings = vec![vk::VertexInputBindingDescription {
             binding: 0,
             stride: desc.vertex_stride,
             input_rate: vk::VertexInputRate::VERTEX,
         }];
+        if desc.instance_stride != 0 {
+            bindings.push(vk::VertexInputBindingDescription {
+                binding: INSTANCE_BINDING,
+                stride: desc.instance_stride,
+                input_rate: vk::VertexInputRate::INSTANCE,
+            });
+        }
+        let attribute = |binding: u32| {
+            move |a: &VertexAttribute| vk::VertexInputAttributeDescription {
+                location: a.location,
+                binding,
+                format: a.format,
+                offset: a.offset,
+            }
+        };
         let attributes: Vec<_> = desc
             .vertex_attributes
             .iter()
-            .map(|a| vk::VertexInputAttributeDescription {
-                location: a.location,
-                binding: 0,
-                format: a.format,
-                offset: a.offset,
-            })
+            .map(attribute(0))
+            .chain(
+                desc.instance_attributes
+                    .iter()
+                    .map(attribute(INSTANCE_BINDING)),
+            )
             .collect();
         let vertex_input = if desc.vertex_stride == 0 {
             vk::PipelineVertexInputStateCreateInfo::default()

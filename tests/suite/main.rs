@@ -36,6 +36,7 @@ mod height_maps;
 mod hostile;
 mod hostile_bench;
 mod hostile_io;
+mod instancing;
 mod interrupt;
 mod limits;
 mod local_defects;

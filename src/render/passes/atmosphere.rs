@@ -92,7 +92,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
             ),
             (
                 SPEC_TRANSPARENT_OVER_SKY,
-                u32::from(!setup.plan.transparent.is_empty()),
+                u32::from(setup.plan.draws().any(|d| d.pipeline.blended)),
             ),
         ],
         &resources.static_constants(),

@@ -215,6 +215,8 @@ fn create_pipelines(
                 specialization: &specialization,
                 vertex_stride: std::mem::size_of::<[f32; 2]>() as u32,
                 vertex_attributes: &attributes,
+                instance_stride: 0,
+                instance_attributes: &[],
                 cull_mode: CullModeFlags::NONE,
                 // Tiles at depth 0 (the far plane): only pixels whose stored
                 // depth is nearer, i.e. that hold a surface, pass.

@@ -204,6 +204,8 @@ pub(crate) fn fullscreen_pipeline(
             specialization,
             vertex_stride: 0,
             vertex_attributes: &[],
+            instance_stride: 0,
+            instance_attributes: &[],
             cull_mode: CullModeFlags::NONE,
             depth_test,
             depth_write: false,

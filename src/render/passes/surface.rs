@@ -14,6 +14,7 @@
 
 use super::{PassResources, PassSetup, RecordPass};
 use crate::mesh::Vertex;
+use crate::render::gpu_types::InstanceTransform;
 use crate::render::plan::{attachment, AirLight, Draw, FramePlan, PassIo, PipelineKey, ShadingKey};
 use crate::render::static_lights;
 use crate::render::RenderError;
@@ -86,6 +87,15 @@ impl SurfacePass {
             Form::Transparent => setup.plan.transparent.clone(),
             Form::Opaque | Form::GBuffer => setup.plan.opaque.clone(),
         };
+        // Pipelines for the draws out of view too, so a view that brings
+        // them in keeps the pass.
+        let hidden: Vec<Draw> = setup
+            .plan
+            .hidden
+            .iter()
+            .filter(|d| d.pipeline.blended == (form == Form::Transparent))
+            .cloned()
+            .collect();
         let mut pipelines = BTreeMap::new();
         let distinct = |keys: &[SurfaceKey]| {
             let mut keys = keys.to_vec();
@@ -94,19 +104,18 @@ impl SurfacePass {
             keys
         };
         // Past the limit, every draw reads its lights from its block.
-        let mut draw_keys = surface_keys(&draws, true);
-        let static_lights = static_lights::enabled(setup.scene, distinct(&draw_keys).len());
-        if !static_lights {
-            draw_keys = surface_keys(&draws, false);
-        }
-        let keys = distinct(&draw_keys);
+        let every_key =
+            |lights: bool| [surface_keys(&draws, lights), surface_keys(&hidden, lights)].concat();
+        let static_lights = static_lights::enabled(setup.scene, distinct(&every_key(true)).len());
+        let draw_keys = surface_keys(&draws, static_lights);
+        let keys = distinct(&every_key(static_lights));
         // Drawn straight into the 8-bit output (UNORM), the shader encodes
         // sRGB itself, as the tone map does.
         let encode_srgb = matches!(
             &setup.decl.io,
             PassIo::Subpass { colour, .. } if colour.first() == Some(&attachment::OUTPUT)
         );
-        if !draws.is_empty() {
+        if !keys.is_empty() {
             let resources = setup.scene_resources()?;
             // The atmosphere's constants, for pipelines it lights.
             let air_constants = match (&setup.scene.sky, setup.frame.sky) {
@@ -135,6 +144,11 @@ impl SurfacePass {
                 };
                 let (vert, frag) = (&*vert, &*frag);
                 let attributes = vertex_attributes(key.maps, key.debug != 0);
+                let instance_attributes = if key.instanced {
+                    instance_attributes()
+                } else {
+                    Vec::new()
+                };
                 let specialization = specialization(
                     &key,
                     encode_srgb,
@@ -155,6 +169,12 @@ impl SurfacePass {
                         specialization: &specialization,
                         vertex_stride: std::mem::size_of::<Vertex>() as u32,
                         vertex_attributes: &attributes,
+                        instance_stride: if key.instanced {
+                            std::mem::size_of::<InstanceTransform>() as u32
+                        } else {
+                            0
+                        },
+                        instance_attributes: &instance_attributes,
                         cull_mode: if key.two_sided {
                             CullModeFlags::NONE
                         } else {
@@ -215,7 +235,20 @@ impl RecordPass for SurfacePass {
                 cmd.bind_descriptor_set(layout, MATERIAL_SET, set, &[]);
             }
             cmd.bind_geometry(&resources.geometry, range.vertex_offset, range.index_offset);
-            cmd.draw_indexed(range.index_count);
+            match &d.instances {
+                Some(instances) => {
+                    let buffer = resources.instances.as_ref().ok_or_else(|| {
+                        RenderError::Frame("an instanced draw, but no instance buffer".into())
+                    })?;
+                    cmd.bind_instances(buffer, 0);
+                    cmd.draw_indexed_instances(
+                        range.index_count,
+                        instances.visible.len() as u32,
+                        instances.first,
+                    );
+                }
+                None => cmd.draw_indexed(range.index_count),
+            }
         }
         Ok(())
     }
@@ -295,7 +328,8 @@ fn shader_features(key: &PipelineKey, form: Form) -> (ObjectVertFeatures, Object
         .with(ObjectVertFeatures::DEBUG_VIEW, debug)
         .with(ObjectVertFeatures::GOURAUD, gouraud)
         .with(ObjectVertFeatures::SUN_LIGHT, key.air.sun())
-        .with(ObjectVertFeatures::SKY_LIGHT, key.air.sky());
+        .with(ObjectVertFeatures::SKY_LIGHT, key.air.sky())
+        .with(ObjectVertFeatures::INSTANCED, key.instanced);
     let frag = maps_frag
         .with(ObjectFragFeatures::GBUFFER, form == Form::GBuffer)
         .with(ObjectFragFeatures::DEBUG_VIEW, debug)
@@ -303,6 +337,25 @@ fn shader_features(key: &PipelineKey, form: Form) -> (ObjectVertFeatures, Object
         .with(ObjectFragFeatures::SUN_LIGHT, key.air.sun())
         .with(ObjectFragFeatures::SKY_LIGHT, key.air.sky());
     (vert, frag)
+}
+
+/// The per-instance attributes of an instanced pipeline: the model
+/// matrix's four columns and the normal matrix's three
+/// (`InstanceTransform`).
+fn instance_attributes() -> Vec<VertexAttribute> {
+    let model = std::mem::offset_of!(InstanceTransform, model) as u32;
+    let normal = std::mem::offset_of!(InstanceTransform, normal_matrix) as u32;
+    let columns = (0..4u32).map(|c| VertexAttribute {
+        location: INSTANCE_MODEL_LOCATION + c,
+        format: Format::R32G32B32A32_SFLOAT,
+        offset: model + 16 * c,
+    });
+    let normal_columns = (0..3u32).map(|c| VertexAttribute {
+        location: INSTANCE_NORMAL_LOCATION + c,
+        format: Format::R32G32B32_SFLOAT,
+        offset: normal + 12 * c,
+    });
+    columns.chain(normal_columns).collect()
 }
 
 /// The vertex attributes a pipeline consumes: position and normal always,
@@ -360,7 +413,9 @@ mod tests {
                         if debug != 0 && air != AirLight::None {
                             continue;
                         }
-                        for bits in 0..1u32 << MAP_KIND_COUNT {
+                        for (bits, instanced) in (0..1u32 << MAP_KIND_COUNT)
+                            .flat_map(|bits| [(bits, false), (bits, true)])
+                        {
                             let maps = MapKind::all()
                                 .filter(|&kind| bits & 1 << kind as u32 != 0)
                                 .fold(MapMask::default(), MapMask::with);
@@ -373,6 +428,7 @@ mod tests {
                                 shininess_exponent: 0,
                                 two_sided: false,
                                 air,
+                                instanced,
                             };
                             let (vert, frag) = shader_features(&key, form);
                             assert!(shaders::OBJECT_VERT.is_compiled(vert), "{key:?}");
@@ -383,7 +439,7 @@ mod tests {
                 }
             }
         }
-        assert_eq!(asked, 3 * 3 * 4 * (1 << MAP_KIND_COUNT));
+        assert_eq!(asked, 3 * 3 * 4 * (1 << MAP_KIND_COUNT) * 2);
         // And a left-out combination has no SPIR-V.
         assert!(!shaders::OBJECT_FRAG.is_compiled(ObjectFragFeatures::SKY_LIGHT));
     }
