@@ -151,5 +151,8 @@ fn print_timings(run: &render_run::RenderRun) {
     if let Some(s) = Summary::of(&cpu) {
         row(CPU_FRAME, &s);
     }
+    for (name, value) in &run.setup {
+        println!("{name:<12} {value:>10.3}");
+    }
     println!("note: {}", aerial::render::subpass_timing_note());
 }

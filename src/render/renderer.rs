@@ -51,6 +51,8 @@ pub enum ViewChange {
 /// attachments, and the context (inside each wrapper) last.
 pub struct Renderer {
     frame: TimedCommands,
+    /// The CPU time recording `frame` took, in seconds.
+    record_seconds: f64,
     /// The frame's prefixes, recorded on first use by
     /// `PrefixFrames::render_prefix`: element k records the first k passes.
     prefixes: Vec<TimedCommands>,
@@ -192,6 +194,7 @@ impl Renderer {
             }
         }
 
+        let recording = std::time::Instant::now();
         let frame = record(
             ctx,
             &plan,
@@ -200,10 +203,12 @@ impl Renderer {
             &frame_resources,
             usize::MAX,
         )?;
+        let record_seconds = recording.elapsed().as_secs_f64();
         drop(frame_resources);
 
         Ok(Renderer {
             frame,
+            record_seconds,
             prefixes: Vec::new(),
             passes,
             scene_resources,
@@ -264,6 +269,7 @@ impl Renderer {
                     self.scene_resources.as_ref(),
                     self.sky_resources.as_ref(),
                 );
+                let recording = std::time::Instant::now();
                 let frame = record(
                     &self.ctx,
                     &plan,
@@ -272,6 +278,7 @@ impl Renderer {
                     &frame_resources,
                     usize::MAX,
                 )?;
+                self.record_seconds = recording.elapsed().as_secs_f64();
                 drop(frame_resources);
                 self.prefixes.clear();
                 // The old command buffer is not pending: render_frame
@@ -301,16 +308,17 @@ impl Renderer {
     }
 
     /// What building this frame cost beyond its passes, as named values
-    /// for the reports: the optical-depth table's size (`od_table_kib`) and
-    /// bake time (`od_table_bake_ms`) when the scene has an atmosphere.
+    /// for the reports: the CPU time recording its command buffer took
+    /// (`record_ms`; the frame is recorded once and submitted as is), and
+    /// the optical-depth table's size (`od_table_kib`) and bake time
+    /// (`od_table_bake_ms`) when the scene has an atmosphere.
     pub fn setup_measures(&self) -> Vec<(&'static str, f64)> {
-        match &self.sky_resources {
-            Some(sky) => vec![
-                ("od_table_kib", sky.table_bytes as f64 / 1024.0),
-                ("od_table_bake_ms", sky.table_bake_seconds * 1e3),
-            ],
-            None => Vec::new(),
+        let mut measures = vec![("record_ms", self.record_seconds * 1e3)];
+        if let Some(sky) = &self.sky_resources {
+            measures.push(("od_table_kib", sky.table_bytes as f64 / 1024.0));
+            measures.push(("od_table_bake_ms", sky.table_bake_seconds * 1e3));
         }
+        measures
     }
 
     pub fn plan(&self) -> &FramePlan {

@@ -46,9 +46,10 @@
 //!   image ([`max_relative_error`]).
 //! - `flip_mean` and `flip_p99`: FLIP of the tone-mapped 8-bit sRGB outputs
 //!   (what a viewer sees), mean and 99th percentile over the pixels.
-//! - Setup measures the renderer reports beyond its passes, by name: with
-//!   an atmosphere, the optical-depth table's size (`od_table_kib`) and bake
-//!   time (`od_table_bake_ms`, wall clock).
+//! - Setup measures the renderer reports beyond its passes, by name: the
+//!   CPU time recording the frame's command buffer took (`record_ms`, wall
+//!   clock, once per build); with an atmosphere, the optical-depth table's
+//!   size (`od_table_kib`) and bake time (`od_table_bake_ms`, wall clock).
 //!
 //! See [`crate::report::image_diff`] for the exact metric definitions.
 //!
