@@ -309,11 +309,19 @@ impl Renderer {
 
     /// What building this frame cost beyond its passes, as named values
     /// for the reports: the CPU time recording its command buffer took
-    /// (`record_ms`; the frame is recorded once and submitted as is), and
-    /// the optical-depth table's size (`od_table_kib`) and bake time
+    /// (`record_ms`; the frame is recorded once and submitted as is), the
+    /// sizes of the buffers holding the meshes (`geometry_kib`, each
+    /// distinct mesh once) and the instanced draws' transforms
+    /// (`instances_kib`) when it draws objects, and the optical-depth table's size (`od_table_kib`) and bake time
     /// (`od_table_bake_ms`) when the scene has an atmosphere.
     pub fn setup_measures(&self) -> Vec<(&'static str, f64)> {
         let mut measures = vec![("record_ms", self.record_seconds * 1e3)];
+        if let Some(resources) = &self.scene_resources {
+            let kib = |bytes: u64| bytes as f64 / 1024.0;
+            measures.push(("geometry_kib", kib(resources.geometry.size())));
+            let instances = resources.instances.as_ref().map_or(0, |b| b.size());
+            measures.push(("instances_kib", kib(instances)));
+        }
         if let Some(sky) = &self.sky_resources {
             measures.push(("od_table_kib", sky.table_bytes as f64 / 1024.0));
             measures.push(("od_table_bake_ms", sky.table_bake_seconds * 1e3));

@@ -48,8 +48,10 @@
 //!   (what a viewer sees), mean and 99th percentile over the pixels.
 //! - Setup measures the renderer reports beyond its passes, by name: the
 //!   CPU time recording the frame's command buffer took (`record_ms`, wall
-//!   clock, once per build); with an atmosphere, the optical-depth table's
-//!   size (`od_table_kib`) and bake time (`od_table_bake_ms`, wall clock).
+//!   clock, once per build); with objects, the geometry and instance
+//!   buffers' sizes (`geometry_kib`, `instances_kib`); with an atmosphere,
+//!   the optical-depth table's size (`od_table_kib`) and bake time
+//!   (`od_table_bake_ms`, wall clock).
 //!
 //! See [`crate::report::image_diff`] for the exact metric definitions.
 //!

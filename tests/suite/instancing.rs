@@ -106,6 +106,30 @@ fn an_instanced_batch_draws_what_separate_draws_draw() {
     let (ha, hb) = (a.hdr.as_ref().unwrap(), b.hdr.as_ref().unwrap());
     assert!(same_bits(&ha.data, &hb.data), "the HDR images differ");
     assert_eq!(a.frames[0].work, b.frames[0].work);
+    // The geometry holds each distinct mesh once (sphere, torus, cylinder)
+    // whether batched or not; the instance buffer holds the 18 batched
+    // objects' transforms (100 bytes each) only when there is a batch of
+    // spheres (the posts are a batch in both).
+    let measure = |run: &render_run::RenderRun, name: &str| {
+        run.setup.iter().find(|(n, _)| *n == name).unwrap().1 * 1024.0
+    };
+    let geometry = SceneGeometry::new(&batched).unwrap();
+    let distinct_bytes: f64 = [0, 16, 17]
+        .iter()
+        .map(|&i| {
+            let m = &geometry.meshes[i];
+            (m.vertices.len() * std::mem::size_of_val(&m.vertices[0]) + m.indices.len() * 4) as f64
+        })
+        .sum();
+    for run in [&a, &b] {
+        let bytes = measure(run, "geometry_kib");
+        assert!(
+            bytes >= distinct_bytes && bytes <= distinct_bytes + 16.0,
+            "{bytes} {distinct_bytes}"
+        );
+    }
+    assert_eq!(measure(&a, "instances_kib"), 18.0 * 100.0);
+    assert_eq!(measure(&b, "instances_kib"), 2.0 * 100.0);
 }
 
 /// Half the grid behind the camera: the plan keeps those spheres out of
