@@ -9,11 +9,12 @@ use crate::common;
 
 use aerial::render::{FramePlan, Renderer, SceneGeometry, ViewChange};
 use aerial::render_run::{self, RenderSettings};
-use aerial::scene::Scene;
+use aerial::scene::{Knob, Scene};
 
 /// A scene of a 4x4 grid of spheres on the xz plane, each turned and
 /// squashed differently (so the normal matrix matters), plus a torus of
-/// the same material and two Gouraud cylinders; `own_materials` gives each
+/// the same material, two Gouraud cylinders and two textured, normal-mapped
+/// ones (tangents move with the instance's model matrix); `own_materials` gives each
 /// sphere its own (identical) material, which keeps them from batching.
 fn grid(own_materials: bool, eye: [f64; 3], look_at: [f64; 3]) -> Scene {
     let mut text = format!(
@@ -22,7 +23,9 @@ fn grid(own_materials: bool, eye: [f64; 3], look_at: [f64; 3]) -> Scene {
          [[lights]]\ntype = \"directional\"\ndirection = [-0.3, -1.0, -0.5]\ncolor = [1.0, 1.0, 1.0]\n\
          [[lights]]\ntype = \"point\"\nposition = [0.0, 3.0, 0.0]\ncolor = [2.0, 2.0, 2.0]\n\
          [[materials]]\nname = \"clay\"\nkd = [0.7, 0.3, 0.2]\nks = [0.5, 0.5, 0.5]\nshininess = 24\n\
-         [[materials]]\nname = \"chalk\"\nkd = [0.3, 0.6, 0.8]\nshading = \"gouraud\"\n"
+         [[materials]]\nname = \"chalk\"\nkd = [0.3, 0.6, 0.8]\nshading = \"gouraud\"\n\
+         [[materials]]\nname = \"bumpy\"\nkd = [0.8, 0.8, 0.8]\ntexture = \"assets/textures/checker.png\"\n\
+         normal_map = \"assets/models/bumps.png\"\n"
     );
     for i in 0..16 {
         let material = if own_materials {
@@ -47,11 +50,17 @@ fn grid(own_materials: bool, eye: [f64; 3], look_at: [f64; 3]) -> Scene {
     text += "[[objects]]\nname = \"ring\"\nmaterial = \"clay\"\n\
              shape = { type = \"torus\", major_radius = 0.6, minor_radius = 0.2 }\n\
              translate = [0.0, 1.2, 0.0]\n";
-    for x in [-3.5, 3.5] {
+    for (x, material) in [
+        (-3.5, "chalk"),
+        (3.5, "chalk"),
+        (-3.0, "bumpy"),
+        (3.0, "bumpy"),
+    ] {
         text += &format!(
-            "[[objects]]\nname = \"post{x}\"\nmaterial = \"chalk\"\n\
+            "[[objects]]\nname = \"post{x}\"\nmaterial = \"{material}\"\n\
              shape = {{ type = \"cylinder\", radius = 0.3, height = 1.5 }}\n\
-             translate = [{x:?}, 0.0, 0.0]\n"
+             translate = [{x:?}, 0.0, -2.5]\nrotate = {{ axis = [0.0, 1.0, 0.0], degrees = {:?} }}\n",
+            x * 20.0
         );
     }
     common::scene(&text)
@@ -90,30 +99,47 @@ fn same_bits(a: &[f32], b: &[f32]) -> bool {
 }
 
 /// The 16 spheres of one material are one instanced draw, the Gouraud
-/// posts another, the torus stays a plain draw; with a material each, no
-/// sphere batches. Both draw the same HDR image, bit for bit, with the
-/// same vertex and fragment work.
+/// posts another, the textured posts a third, the torus stays a plain
+/// draw; with a material each, no sphere batches. Both draw the same HDR
+/// image, bit for bit, with the same vertex and fragment work, lit
+/// forward and deferred.
 #[test]
 fn an_instanced_batch_draws_what_separate_draws_draw() {
     let eye = [0.0, 3.5, 4.5];
-    let batched = grid(false, eye, [0.0, 0.0, 0.0]);
-    let separate = grid(true, eye, [0.0, 0.0, 0.0]);
-    assert_eq!(batches(&plan(&batched)), [16, 2]);
-    assert_eq!(batches(&plan(&separate)), [2]);
-    let a = render_counted(&batched);
-    let b = render_counted(&separate);
-    common::assert_not_blank(&a.output, 0.25);
-    let (ha, hb) = (a.hdr.as_ref().unwrap(), b.hdr.as_ref().unwrap());
-    assert!(same_bits(&ha.data, &hb.data), "the HDR images differ");
-    assert_eq!(a.frames[0].work, b.frames[0].work);
-    // The geometry holds each distinct mesh once (sphere, torus, cylinder)
-    // whether batched or not; the instance buffer holds the 18 batched
-    // objects' transforms (100 bytes each) only when there is a batch of
-    // spheres (the posts are a batch in both).
+    for lighting in ["forward", "deferred"] {
+        let knob = |mut scene: Scene| {
+            Knob::find("lighting")
+                .unwrap()
+                .set(&mut scene, lighting)
+                .unwrap();
+            scene
+        };
+        let batched = knob(grid(false, eye, [0.0, 0.0, 0.0]));
+        let separate = knob(grid(true, eye, [0.0, 0.0, 0.0]));
+        assert_eq!(batches(&plan(&batched)), [16, 2, 2], "{lighting}");
+        assert_eq!(batches(&plan(&separate)), [2, 2], "{lighting}");
+        let a = render_counted(&batched);
+        let b = render_counted(&separate);
+        common::assert_not_blank(&a.output, 0.25);
+        let (ha, hb) = (a.hdr.as_ref().unwrap(), b.hdr.as_ref().unwrap());
+        assert!(
+            same_bits(&ha.data, &hb.data),
+            "{lighting}: the HDR images differ"
+        );
+        assert_eq!(a.frames[0].work, b.frames[0].work, "{lighting}");
+        assert_buffers(&batched, &a, &b);
+    }
+}
+
+/// The geometry holds each distinct mesh once (sphere, torus, cylinder)
+/// whether batched or not; the instance buffer holds the batched objects'
+/// transforms (100 bytes each): 20 with the spheres' batch (`a`), 4
+/// without (`b`, the posts are batches in both).
+fn assert_buffers(scene: &Scene, a: &render_run::RenderRun, b: &render_run::RenderRun) {
     let measure = |run: &render_run::RenderRun, name: &str| {
         run.setup.iter().find(|(n, _)| *n == name).unwrap().1 * 1024.0
     };
-    let geometry = SceneGeometry::new(&batched).unwrap();
+    let geometry = SceneGeometry::new(scene).unwrap();
     let distinct_bytes: f64 = [0, 16, 17]
         .iter()
         .map(|&i| {
@@ -121,15 +147,15 @@ fn an_instanced_batch_draws_what_separate_draws_draw() {
             (m.vertices.len() * std::mem::size_of_val(&m.vertices[0]) + m.indices.len() * 4) as f64
         })
         .sum();
-    for run in [&a, &b] {
+    for run in [a, b] {
         let bytes = measure(run, "geometry_kib");
         assert!(
             bytes >= distinct_bytes && bytes <= distinct_bytes + 16.0,
             "{bytes} {distinct_bytes}"
         );
     }
-    assert_eq!(measure(&a, "instances_kib"), 18.0 * 100.0);
-    assert_eq!(measure(&b, "instances_kib"), 2.0 * 100.0);
+    assert_eq!(measure(a, "instances_kib"), 20.0 * 100.0);
+    assert_eq!(measure(b, "instances_kib"), 4.0 * 100.0);
 }
 
 /// Half the grid behind the camera: the plan keeps those spheres out of
