@@ -7,7 +7,6 @@ use crate::common;
 
 use aerial::render_run::{self, Misuse, RenderSettings, RunSource};
 use aerial::vk::validation::{self, Validation, ValidationMessage, ALLOWED_MESSAGES};
-use aerial::vk::{Context, ContextOptions};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
@@ -73,13 +72,7 @@ fn an_object_leaked_at_teardown_is_counted() {
 
 #[test]
 fn a_leaked_object_is_counted_on_a_context_dropped_by_hand() {
-    let ctx = Context::new(&ContextOptions {
-        validate: Validation::All,
-        device: None,
-        display: None,
-        ..Default::default()
-    })
-    .expect("a Vulkan device with the validation layer");
+    let ctx = common::validated_context();
     let log = ctx.validation_log().expect("validation enabled");
     ctx.leak_object_for_validation_check().unwrap();
     assert!(log.messages().is_empty(), "{}", show(&log.messages()));

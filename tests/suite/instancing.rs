@@ -215,14 +215,7 @@ fn objects_outside_the_view_cost_no_vertex_work() {
 /// recorded again) and draws what a new renderer for that view draws.
 #[test]
 fn turning_towards_culled_objects_draws_what_a_new_renderer_draws() {
-    use aerial::vk::{validation::Validation, Context, ContextOptions};
-    let ctx = Context::new(&ContextOptions {
-        validate: Validation::All,
-        device: None,
-        display: None,
-        ..Default::default()
-    })
-    .expect("a Vulkan device with the validation layer");
+    let ctx = common::validated_context();
     let log = ctx.validation_log().expect("validation on");
     let away = grid(false, [0.0, 0.6, 3.5], [0.0, 0.6, 10.0]);
     let towards = grid(false, [0.0, 5.0, 7.0], [0.0, 0.0, 0.0]);

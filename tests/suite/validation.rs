@@ -1,21 +1,11 @@
 //! The validation messenger is live: a deliberate misuse is counted, and
 //! a clean context reports nothing.
 
-use aerial::vk::{Context, ContextOptions};
-
-fn validated() -> std::sync::Arc<Context> {
-    Context::new(&ContextOptions {
-        validate: aerial::vk::validation::Validation::All,
-        device: None,
-        display: None,
-        ..Default::default()
-    })
-    .expect("a Vulkan device with the validation layer")
-}
+use crate::common;
 
 #[test]
 fn a_deliberate_misuse_is_counted() {
-    let ctx = validated();
+    let ctx = common::validated_context();
     let log = ctx.validation_log().expect("validation enabled");
     ctx.misuse_api_for_validation_check().unwrap();
     drop(ctx);
@@ -30,7 +20,7 @@ fn a_deliberate_misuse_is_counted() {
 
 #[test]
 fn a_clean_context_reports_nothing() {
-    let ctx = validated();
+    let ctx = common::validated_context();
     let log = ctx.validation_log().unwrap();
     drop(ctx);
     assert!(log.messages().is_empty(), "{:?}", log.messages());

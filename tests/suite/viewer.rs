@@ -450,15 +450,8 @@ fn a_bad_script_is_refused_with_file_line_and_reason() {
 fn moving_the_view_draws_what_a_new_renderer_draws() {
     use aerial::render::{Renderer, ViewChange};
     use aerial::scene::Knob;
-    use aerial::vk::{validation::Validation, Context, ContextOptions};
 
-    let ctx = Context::new(&ContextOptions {
-        validate: Validation::All,
-        device: None,
-        display: None,
-        ..Default::default()
-    })
-    .expect("a Vulkan device with the validation layer");
+    let ctx = common::validated_context();
     let log = ctx.validation_log().expect("validation on");
     let mut changes = Vec::new();
     for (file, knob) in [

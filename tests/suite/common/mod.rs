@@ -278,6 +278,18 @@ pub fn read_csv(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
         .collect()
 }
 
+/// A Vulkan context with the validation layer's every check on, for tests
+/// that drive a `Renderer` (or the context) by hand and read its log.
+pub fn validated_context() -> std::sync::Arc<aerial::vk::Context> {
+    aerial::vk::Context::new(&aerial::vk::ContextOptions {
+        validate: aerial::vk::validation::Validation::All,
+        device: None,
+        display: None,
+        ..Default::default()
+    })
+    .expect("a Vulkan device with the validation layer")
+}
+
 /// One frame, no warm-up, under validation with every check on: the
 /// settings of the suite's renders.
 pub fn validated_settings() -> RenderSettings {
