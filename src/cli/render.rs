@@ -83,6 +83,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         };
         anyhow::Error::new(e).context(flag)
     })?;
+    // The grids tessellation = "auto" chose, which nothing else shows.
+    if let Some(summary) = scene.tessellation_summary() {
+        eprintln!("{summary}");
+    }
     let scene_name = match &args.scene {
         Some(path) => path.display().to_string(),
         None => "the default scene".to_string(),
