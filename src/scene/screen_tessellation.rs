@@ -124,9 +124,10 @@ pub fn surface_bounds(surface: &dyn ParametricSurface) -> SurfaceBounds {
 /// The smallest count of the ladder `3, 4, 6, 8, 12, 16, 24, ...` (`3 * 2^k`
 /// and `4 * 2^k`) that is at least `n`, within `MIN_SEGMENTS..=MAX_SEGMENTS`.
 pub fn ladder_up(n: f64) -> u32 {
+    // NaN asks for the maximum, the safe side.
+    let n = if n.is_nan() { f64::INFINITY } else { n };
     let mut step = MIN_SEGMENTS;
-    // NaN compares false and so ends at the maximum, the safe side.
-    while step < MAX_SEGMENTS && !(f64::from(step) >= n) {
+    while step < MAX_SEGMENTS && f64::from(step) < n {
         // 3 -> 4 -> 6 -> 8 -> 12: alternately times 4/3 and 3/2.
         step = if step.is_power_of_two() {
             step / 2 * 3
