@@ -3,7 +3,9 @@
 //! sees the whole grid. For measuring how the renderer's cost follows the
 //! object count (`docs/performance.md`, "Many objects").
 //!
-//! Run with `cargo run --example sphere_grid -- N OUT.toml`.
+//! Run with `cargo run --example sphere_grid -- N OUT.toml [auto]`; with
+//! `auto` every sphere has `tessellation = "auto"` (its grid chosen by
+//! screen-space error, `docs/performance.md`).
 
 use std::fmt::Write as _;
 
@@ -13,8 +15,16 @@ fn main() {
         args.first().and_then(|n| n.parse::<usize>().ok()),
         args.get(1),
     ) else {
-        eprintln!("usage: sphere_grid N OUT.toml (N spheres on a square grid)");
+        eprintln!("usage: sphere_grid N OUT.toml [auto] (N spheres on a square grid)");
         std::process::exit(2);
+    };
+    let tessellation = match args.get(2).map(String::as_str) {
+        None => "",
+        Some("auto") => "tessellation = \"auto\"\n",
+        Some(other) => {
+            eprintln!("sphere_grid: third argument must be auto, got '{other}'");
+            std::process::exit(2);
+        }
     };
     let side = (n as f64).sqrt().ceil().max(1.0) as usize;
     let half = side as f64 / 2.0;
@@ -33,7 +43,8 @@ fn main() {
         write!(
             text,
             "\n[[objects]]\nname = \"sphere{k}\"\nmaterial = \"clay\"\n\
-             shape = {{ type = \"sphere\", radius = 0.4 }}\ntranslate = [{x:.1}, 0.0, {z:.1}]\n"
+             shape = {{ type = \"sphere\", radius = 0.4 }}\ntranslate = [{x:.1}, 0.0, {z:.1}]\n\
+             {tessellation}"
         )
         .expect("string write");
     }

@@ -106,6 +106,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         run.device.name, run.device.driver_name, run.device.driver_info, run.device.api_version
     );
     validation::check(&run.validation).context("no output written")?;
+    // The grids tessellation = "auto" chose, which nothing else shows;
+    // after the render, whose memory check has passed for those meshes
+    // (the count builds each distinct mesh again).
+    if let Some(summary) = scene.tessellation_summary() {
+        eprintln!("{summary}");
+    }
     // Both files are encoded before either is renamed into place, so a
     // failure leaves neither.
     let mut outputs = vec![image_io::png_file(

@@ -113,12 +113,14 @@ fn geometry_bytes(
     let mut total = 0u64;
     let mut largest_transient = 0u64;
     let mut largest: Option<(String, u64)> = None;
+    // The grids as built: an auto object's is chosen from the camera.
+    let grids = scene.tessellations();
     for (i, (object, source)) in scene.objects.iter().zip(scene.mesh_sources()).enumerate() {
         // An object drawn from another's mesh (the same shape) adds none.
         if source < i {
             continue;
         }
-        let (u, v) = (object.tessellation.0 as u64, object.tessellation.1 as u64);
+        let (u, v) = (grids[i].0 as u64, grids[i].1 as u64);
         let mut vertices = (u + 1) * (v + 1);
         let mut geometry = vertices * VERTEX_BYTES + u * v * 6 * INDEX_BYTES;
         // A loaded model's size is known exactly; its tessellation is unused.

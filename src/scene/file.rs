@@ -87,6 +87,7 @@ struct OutputFile {
     lighting: Lighting,
     debug_view: Option<DebugView>,
     static_lights: bool,
+    max_pixel_error: f64,
 }
 
 /// The defaults are [`Output`]'s, so they are written once.
@@ -101,6 +102,7 @@ impl Default for OutputFile {
             lighting: output.lighting,
             debug_view: output.debug_view,
             static_lights: output.static_lights,
+            max_pixel_error: f64::from(output.max_pixel_error),
         }
     }
 }
@@ -196,8 +198,10 @@ struct ObjectFile {
     weld_tolerance: Option<f64>,
     tangents: Option<TangentsFile>,
     // Parametric shapes only (default `DEFAULT_TESSELLATION`); an OBJ
-    // model brings its own triangles, so giving it one is an error.
-    tessellation: Option<[u32; 2]>,
+    // model brings its own triangles, so giving it one is an error. `[u, v]`
+    // or "auto", read as any TOML value so that a wrong one is reported
+    // here with the field's name rather than as a failed untagged enum.
+    tessellation: Option<toml::Value>,
     #[serde(default)]
     translate: [f64; 3],
     rotate: Option<RotateFile>,
@@ -480,6 +484,7 @@ impl Check<'_> {
             lighting: raw.lighting,
             debug_view: raw.debug_view,
             static_lights: raw.static_lights,
+            max_pixel_error: self.positive("output.max_pixel_error", raw.max_pixel_error)?,
         })
     }
 
@@ -773,23 +778,14 @@ impl Check<'_> {
         }
         let material = self.material_ref(&field("material"), raw.material.as_deref(), materials)?;
         let shape = self.shape(&field("shape"), &raw.shape)?;
-        let tessellation = raw.tessellation.unwrap_or(DEFAULT_TESSELLATION);
-        for (direction, segments) in ["u", "v"].into_iter().zip(tessellation) {
-            if !(MIN_SEGMENTS..=MAX_SEGMENTS).contains(&segments) {
-                return Err(self.invalid(
-                    field("tessellation"),
-                    format!(
-                        "{direction} segments must be between {MIN_SEGMENTS} and \
-                         {MAX_SEGMENTS}, got {segments}"
-                    ),
-                ));
-            }
-        }
+        let (tessellation, auto_tessellation) =
+            self.tessellation(&field("tessellation"), raw.tessellation.as_ref())?;
         let transform = self.transform(path, &raw)?;
         let mut object = Object {
             name: raw.name,
             shape,
-            tessellation: (tessellation[0], tessellation[1]),
+            tessellation,
+            auto_tessellation,
             // Replaced when a pending name is resolved.
             material: usize::MAX,
             transform,
@@ -802,6 +798,45 @@ impl Check<'_> {
             }
             MaterialRef::Pending(name) => ObjectDescription::ShapeWithModelMaterial(object, name),
         })
+    }
+
+    /// An object's `tessellation`: `[u, v]` (each in
+    /// `MIN_SEGMENTS..=MAX_SEGMENTS`) or `"auto"`, as `(grid, auto)`; an
+    /// auto object keeps the default grid for a numeric `tessellation` knob.
+    fn tessellation(&self, field: &str, raw: Option<&toml::Value>) -> Result<((u32, u32), bool)> {
+        let default = (DEFAULT_TESSELLATION[0], DEFAULT_TESSELLATION[1]);
+        let expected = "expected [u, v] (two integers) or \"auto\"";
+        let items = match raw {
+            None => return Ok((default, false)),
+            Some(toml::Value::String(word)) if word == "auto" => return Ok((default, true)),
+            Some(toml::Value::String(word)) => {
+                return Err(self.invalid(field, format!("{expected}, got \"{word}\"")))
+            }
+            Some(toml::Value::Array(items)) if items.len() == 2 => items,
+            Some(other) => return Err(self.invalid(field, format!("{expected}, got {other}"))),
+        };
+        let mut grid = [0u32; 2];
+        for ((direction, item), count) in ["u", "v"].into_iter().zip(items).zip(&mut grid) {
+            let segments = item.as_integer().ok_or_else(|| {
+                self.invalid(
+                    field,
+                    format!("{direction} segments: {expected}, got {item}"),
+                )
+            })?;
+            *count = u32::try_from(segments)
+                .ok()
+                .filter(|s| (MIN_SEGMENTS..=MAX_SEGMENTS).contains(s))
+                .ok_or_else(|| {
+                    self.invalid(
+                        field,
+                        format!(
+                            "{direction} segments must be between {MIN_SEGMENTS} and \
+                             {MAX_SEGMENTS}, got {segments}"
+                        ),
+                    )
+                })?;
+        }
+        Ok(((grid[0], grid[1]), false))
     }
 
     /// An `obj` object: every field is checked here, and the model is

@@ -8,7 +8,7 @@
 //! in `viewer::knobs`.
 
 use super::{
-    AerialPerspective, HdrFormat, Lighting, OzoneDepth, Scene, ShadingModel, TableFilter,
+    AerialPerspective, HdrFormat, Lighting, OzoneDepth, Scene, ShadingModel, Shape, TableFilter,
     TableMapping, TextureFilter, ToneMapOperator,
 };
 
@@ -98,45 +98,46 @@ pub const KNOBS: &[Knob] = &[
     Knob {
         name: "tessellation",
         best: Best::LastListed,
-        values: "F: multiply every object's tessellation by F (e.g. 0.25, 1, 2)",
+        values: "F: multiply every object's tessellation by F (e.g. 0.25, 1, 2) | auto: every parametric object's grid chosen by screen-space error (max_pixel_error)",
         apply: |s, v| {
-            let f: f64 = v.parse().map_err(|e| format!("{e}"))?;
-            if !(f.is_finite() && f > 0.0) {
-                return Err("must be a positive factor".into());
-            }
-            // Above the maximum is refused rather than clamped: a clamped
-            // row would keep a label that does not describe what it drew.
-            // Below the minimum still rounds up to it, so coarse factors
-            // apply to every scene.
-            let max = crate::mesh::MAX_SEGMENTS;
-            for (i, o) in s.objects.iter().enumerate() {
-                let most = o.tessellation.0.max(o.tessellation.1);
-                let scaled = (most as f64 * f).round();
-                if scaled > max as f64 {
-                    return Err(format!(
-                        "objects[{i}] \"{}\" would get {scaled:e} segments (tessellation \
-                         {}x{} times {f}); at most {max} are allowed",
-                        o.name, o.tessellation.0, o.tessellation.1
-                    ));
+            if v == "auto" {
+                for o in &mut s.objects {
+                    o.auto_tessellation = !matches!(o.shape, Shape::Mesh { .. });
                 }
+                return Ok(());
             }
-            for o in &mut s.objects {
-                let scale =
-                    |n: u32| ((n as f64 * f).round() as u32).clamp(super::MIN_SEGMENTS, max);
-                o.tessellation = (scale(o.tessellation.0), scale(o.tessellation.1));
-            }
-            Ok(())
+            let f: f64 = v
+                .parse()
+                .map_err(|e| format!("{e} (expected a factor or auto)"))?;
+            scale_tessellation(s, f)
         },
         read: |s| {
             let tris: u64 = s
-                .objects
+                .tessellations()
                 .iter()
-                .map(|o| 2 * o.tessellation.0 as u64 * o.tessellation.1 as u64)
+                .map(|&(u, v)| 2 * u as u64 * v as u64)
                 .sum();
             // Two per grid cell, the cells that collapse at a sphere's
             // poles included: more than the frame draws.
-            format!("{tris} grid triangles")
+            match s.objects.iter().any(|o| o.auto_tessellation) {
+                true => format!("auto, {tris} grid triangles"),
+                false => format!("{tris} grid triangles"),
+            }
         },
+    },
+    Knob {
+        name: "max_pixel_error",
+        best: Best::LastListed,
+        values: "P: pixels a tessellation = \"auto\" object's triangles may stray from its surface (list largest first, e.g. 2,1,0.5)",
+        apply: |s, v| {
+            let p: f32 = v.parse().map_err(|e| format!("{e}"))?;
+            if !(p.is_finite() && p > 0.0) {
+                return Err("must be a finite number of pixels > 0".into());
+            }
+            s.output.max_pixel_error = p;
+            Ok(())
+        },
+        read: |s| s.output.max_pixel_error.to_string(),
     },
     Knob {
         name: "light_cutoff",
@@ -385,6 +386,36 @@ pub const KNOBS: &[Knob] = &[
         },
     },
 ];
+
+/// The numeric `tessellation` knob: every object's fixed grid times `f`,
+/// an auto object's default grid included (it stops being auto, so that
+/// the row draws what its label says).
+fn scale_tessellation(s: &mut Scene, f: f64) -> Result<(), String> {
+    if !(f.is_finite() && f > 0.0) {
+        return Err("must be a positive factor".into());
+    }
+    // Above the maximum is refused rather than clamped: a clamped row would
+    // keep a label that does not describe what it drew. Below the minimum
+    // still rounds up to it, so coarse factors apply to every scene.
+    let max = crate::mesh::MAX_SEGMENTS;
+    for (i, o) in s.objects.iter().enumerate() {
+        let most = o.tessellation.0.max(o.tessellation.1);
+        let scaled = (most as f64 * f).round();
+        if scaled > max as f64 {
+            return Err(format!(
+                "objects[{i}] \"{}\" would get {scaled:e} segments (tessellation \
+                 {}x{} times {f}); at most {max} are allowed",
+                o.name, o.tessellation.0, o.tessellation.1
+            ));
+        }
+    }
+    for o in &mut s.objects {
+        let scale = |n: u32| ((n as f64 * f).round() as u32).clamp(super::MIN_SEGMENTS, max);
+        o.tessellation = (scale(o.tessellation.0), scale(o.tessellation.1));
+        o.auto_tessellation = false;
+    }
+    Ok(())
+}
 
 /// "on" or "off".
 fn on_off(on: bool) -> &'static str {

@@ -14,6 +14,7 @@ pub mod material_maps;
 mod model_scene;
 mod models;
 mod object;
+mod screen_tessellation;
 mod sky;
 mod value_checks;
 
@@ -41,6 +42,10 @@ pub use model_scene::{
     MODEL_VIEW_ELEVATION,
 };
 pub use object::{Object, Shape, Transform};
+pub use screen_tessellation::{
+    ladder_up, required_segments, segments_for_error, surface_bounds, SurfaceBounds,
+    DEFAULT_MAX_PIXEL_ERROR,
+};
 
 use crate::mesh::{tessellate, Mesh};
 
@@ -110,7 +115,7 @@ impl SceneWarning {
 }
 
 /// Render target description.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Output {
     /// Width in pixels, `1..=16384`.
     pub width: u32,
@@ -128,6 +133,9 @@ pub struct Output {
     /// than uniform reads (`render::static_lights`); off only to measure
     /// what that saves.
     pub static_lights: bool,
+    /// Pixels a `tessellation = "auto"` object's triangles may stray from
+    /// its exact surface; finite and > 0.
+    pub max_pixel_error: f32,
 }
 
 /// A surface attribute drawn instead of the lit image (`[output]
@@ -184,6 +192,7 @@ impl Default for Output {
             lighting: Lighting::Forward,
             debug_view: None,
             static_lights: true,
+            max_pixel_error: DEFAULT_MAX_PIXEL_ERROR,
         }
     }
 }
@@ -277,6 +286,7 @@ impl Scene {
     /// height = 360                         # [360]; 1..=16384
     /// hdr_format = "rgba16f"               # ["rgba16f"] | "rgba32f"
     /// texture_filter = "trilinear"         # ["trilinear"] | "bilinear" | "nearest"
+    /// max_pixel_error = 0.5                # [0.5]; > 0, pixels, for tessellation = "auto"
     /// [camera]                             # required
     /// eye = [0.0, 2.0, 6.0]                # required
     /// look_at = [0.0, 0.0, 0.0]            # required, != eye
@@ -315,7 +325,7 @@ impl Scene {
     /// name = "ball"                        # required, not empty
     /// material = "red"                     # required, a material name
     /// shape = { type = "sphere", radius = 1.0 }   # see below
-    /// tessellation = [64, 32]              # [64, 32]; u and v segments, each 3..=4096
+    /// tessellation = [64, 32]              # [64, 32]; u and v segments, each 3..=4096, or "auto"
     /// translate = [0.0, 1.0, 0.0]          # [0, 0, 0]
     /// rotate = { axis = [0.0, 1.0, 0.0], degrees = 30.0 }  # optional; axis not zero
     /// scale = [1.0, 1.0, 1.0]              # [1, 1, 1]; every component > 0
@@ -488,39 +498,36 @@ impl Scene {
             return mesh.as_ref().clone();
         }
         match object.shape.surface() {
-            Some(surface) => tessellate(
-                surface.as_ref(),
-                object.tessellation.0,
-                object.tessellation.1,
-            ),
+            Some(surface) => {
+                let (u, v) = self.object_tessellation(index);
+                tessellate(surface.as_ref(), u, v)
+            }
             None => Mesh::default(),
         }
     }
 
     /// For every object, the first object whose mesh is the same: the same
-    /// parametric shape and tessellation, or the same loaded mesh. The
+    /// parametric shape and tessellation (as built: an auto object's chosen
+    /// grid, [`Scene::tessellations`]), or the same loaded mesh. The
     /// renderer builds and uploads each distinct mesh once and draws every
     /// object that shares it from that copy.
     pub fn mesh_sources(&self) -> Vec<usize> {
-        let same = |a: &Object, b: &Object| match (&a.shape, &b.shape) {
+        let grids = self.tessellations();
+        let same = |a: usize, b: usize| match (&self.objects[a].shape, &self.objects[b].shape) {
             // The same loaded model (its one copy), not a deep comparison.
             (Shape::Mesh { mesh: x }, Shape::Mesh { mesh: y }) => std::sync::Arc::ptr_eq(x, y),
             (Shape::Mesh { .. }, _) | (_, Shape::Mesh { .. }) => false,
-            (x, y) => x == y && a.tessellation == b.tessellation,
+            (x, y) => x == y && grids[a] == grids[b],
         };
         let mut distinct: Vec<usize> = Vec::new();
-        self.objects
-            .iter()
-            .enumerate()
-            .map(
-                |(i, object)| match distinct.iter().find(|&&d| same(&self.objects[d], object)) {
-                    Some(&d) => d,
-                    None => {
-                        distinct.push(i);
-                        i
-                    }
-                },
-            )
+        (0..self.objects.len())
+            .map(|i| match distinct.iter().find(|&&d| same(d, i)) {
+                Some(&d) => d,
+                None => {
+                    distinct.push(i);
+                    i
+                }
+            })
             .collect()
     }
 

@@ -148,6 +148,7 @@ impl Check<'_> {
                 },
                 // Unused for a mesh; kept only because every object has one.
                 tessellation: (DEFAULT_TESSELLATION[0], DEFAULT_TESSELLATION[1]),
+                auto_tessellation: false,
                 material,
                 transform,
                 two_sided: model.two_sided,

@@ -17,8 +17,13 @@ pub struct Object {
     pub name: String,
     /// The surface.
     pub shape: Shape,
-    /// `(u_segments, v_segments)`, each in `3..=4096`.
+    /// `(u_segments, v_segments)`, each in `3..=4096`; for an auto object
+    /// the grid a numeric `tessellation` knob scales instead.
     pub tessellation: (u32, u32),
+    /// `tessellation = "auto"`: the grid is chosen by screen-space error
+    /// when the mesh is built (`Scene::object_tessellation`), not
+    /// `tessellation`. Only for parametric shapes.
+    pub auto_tessellation: bool,
     /// Index into `Scene::materials`.
     pub material: usize,
     /// Object-to-world transform.

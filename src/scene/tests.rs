@@ -302,6 +302,7 @@ fn minimal_scene_gets_the_documented_defaults() {
             lighting: crate::scene::Lighting::Forward,
             debug_view: None,
             static_lights: true,
+            max_pixel_error: 0.5,
         }
     );
     assert_eq!(scene.camera.up, Vec3::Y);

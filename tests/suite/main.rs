@@ -56,6 +56,7 @@ mod pixel_oracle;
 mod real_models;
 mod regression;
 mod scene_errors;
+mod screen_tessellation;
 mod shading;
 mod sweep;
 mod sweep_shards;
