@@ -4,8 +4,13 @@
 //!
 //! The rule. Linear interpolation of `r(u, v)` over a parameter cell of
 //! `du x dv` is at most `(1/8)(M_uu du^2 + 2 M_uv du dv + M_vv dv^2)` away
-//! from the surface, where `M_xy` bound the magnitudes of the second
-//! derivatives. With `2 du dv <= du^2 + dv^2` that is at most `e` when
+//! from the surface (to second order, the largest gap being at the
+//! midpoint of the cell's diagonal), where `M_xy` bound the second
+//! derivatives' components along the surface normal: the coefficients
+//! `L`, `M`, `N` of the second fundamental form, that is the normal
+//! curvatures times the squared parameter speeds. The tangential
+//! components only slide a point within the surface and leave the
+//! silhouette and depth alone. With `2 du dv <= du^2 + dv^2` that is at most `e` when
 //! `du = sqrt(4e / (M_uu + M_uv))` and `dv = sqrt(4e / (M_vv + M_uv))`.
 //! `e` is the world-space length that projects to `max_pixel_error` pixels
 //! at the nearest point of the object's bounding sphere (never nearer than
@@ -17,7 +22,8 @@
 //!
 //! The bounds `M_xy` are estimated once per distinct shape from the
 //! surface's own analytic first derivatives, differenced on a fine sample
-//! grid, with a safety margin for maxima between samples: one mechanism for
+//! grid and projected on its normal there, with a safety margin for maxima
+//! between samples: one mechanism for
 //! every [`ParametricSurface`], no per-shape formula. A plane's are zero, so
 //! it gets the minimum grid.
 //!
@@ -53,11 +59,11 @@ const MARGIN: f64 = 1.25;
 /// space.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfaceBounds {
-    /// Bound on `|d2r/du2|`.
+    /// Bound on `|d2r/du2 . n|` (`L`).
     pub m_uu: f64,
-    /// Bound on `|d2r/du dv|`.
+    /// Bound on `|d2r/du dv . n|` (`M`).
     pub m_uv: f64,
-    /// Bound on `|d2r/dv2|`.
+    /// Bound on `|d2r/dv2 . n|` (`N`).
     pub m_vv: f64,
     /// Centre of a sphere enclosing the surface.
     pub centre: DVec3,
@@ -82,19 +88,19 @@ pub fn surface_bounds(surface: &dyn ParametricSurface) -> SurfaceBounds {
         let v = f64::from(j) / f64::from(SAMPLES);
         for i in 0..=SAMPLES {
             let u = f64::from(i) / f64::from(SAMPLES);
-            let uu = difference(|x| surface.du(x, v), u);
-            let vv = difference(|y| surface.dv(u, y), v);
+            // Only the second derivatives' components along the normal
+            // (the second fundamental form) move a flat triangle off the
+            // surface; the tangential ones only slide points within it.
+            let n = surface.normal(u, v);
+            let normal_part = |d: DVec3| d.dot(n).abs();
+            let uu = normal_part(difference(|x| surface.du(x, v), u));
+            let vv = normal_part(difference(|y| surface.dv(u, y), v));
             // The mixed derivative two ways: equal for a smooth surface,
             // but each difference has its own round-off.
-            let uv = difference(|y| surface.du(u, y), v)
-                .length()
-                .max(difference(|x| surface.dv(x, v), u).length());
+            let uv = normal_part(difference(|y| surface.du(u, y), v))
+                .max(normal_part(difference(|x| surface.dv(x, v), u)));
             // `max` would drop a NaN; a non-finite surface must not look flat.
-            for (m, x) in [
-                (&mut m_uu, uu.length()),
-                (&mut m_uv, uv),
-                (&mut m_vv, vv.length()),
-            ] {
+            for (m, x) in [(&mut m_uu, uu), (&mut m_uv, uv), (&mut m_vv, vv)] {
                 *m = if x.is_nan() { f64::INFINITY } else { m.max(x) };
             }
             let p = surface.position(u, v);
