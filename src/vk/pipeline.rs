@@ -86,6 +86,19 @@ pub struct GraphicsPipelineDesc<'a> {
     pub subpass: u32,
 }
 
+/// A depth-only pipeline ([`GraphicsPipeline::depth_only`]): tested with
+/// `depth_test` and written, no fragment stage, no colour target.
+pub struct DepthOnlyPipelineDesc<'a> {
+    pub vertex_shader: &'a ShaderModule,
+    /// Specialization constants (id, value) of the vertex stage.
+    pub specialization: &'a [(u32, u32)],
+    pub vertex_stride: u32,
+    pub vertex_attributes: &'a [VertexAttribute],
+    pub cull_mode: vk::CullModeFlags,
+    pub depth_test: vk::CompareOp,
+    pub subpass: u32,
+}
+
 /// How a pipeline writes one colour target.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Blend {
@@ -109,22 +122,59 @@ impl GraphicsPipeline {
         pass: &RenderPass,
         desc: &GraphicsPipelineDesc<'_>,
     ) -> Result<GraphicsPipeline, VkError> {
+        Self::create(ctx, layout, pass, desc, Some(desc.fragment_shader))
+    }
+
+    /// A pipeline without a fragment stage for a subpass without colour
+    /// targets: it writes depth only (a depth pre-pass), so nothing is
+    /// shaded per fragment. `desc` gives no blend state and its fragment
+    /// shader is not used.
+    pub fn depth_only(
+        ctx: &Arc<Context>,
+        layout: &PipelineLayout,
+        pass: &RenderPass,
+        desc: &DepthOnlyPipelineDesc<'_>,
+    ) -> Result<GraphicsPipeline, VkError> {
+        let full = GraphicsPipelineDesc {
+            vertex_shader: desc.vertex_shader,
+            // Not read: `create` is given no fragment stage.
+            fragment_shader: desc.vertex_shader,
+            specialization: desc.specialization,
+            vertex_stride: desc.vertex_stride,
+            vertex_attributes: desc.vertex_attributes,
+            cull_mode: desc.cull_mode,
+            depth_test: Some(desc.depth_test),
+            depth_write: true,
+            blend: &[],
+            subpass: desc.subpass,
+        };
+        Self::create(ctx, layout, pass, &full, None)
+    }
+
+    /// The pipeline `desc` describes, with `fragment` as its fragment stage
+    /// (`desc.fragment_shader` is ignored) or none.
+    fn create(
+        ctx: &Arc<Context>,
+        layout: &PipelineLayout,
+        pass: &RenderPass,
+        desc: &GraphicsPipelineDesc<'_>,
+        fragment: Option<&ShaderModule>,
+    ) -> Result<GraphicsPipeline, VkError> {
         let (entries, data) = specialization_data(desc.specialization);
         let spec = vk::SpecializationInfo::default()
             .map_entries(&entries)
             .data(&data);
-        let stages = [
+        let stage = |flags, module: &ShaderModule| {
             vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::VERTEX)
-                .module(desc.vertex_shader.handle)
+                .stage(flags)
+                .module(module.handle)
                 .name(c"main")
-                .specialization_info(&spec),
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::FRAGMENT)
-                .module(desc.fragment_shader.handle)
-                .name(c"main")
-                .specialization_info(&spec),
-        ];
+                .specialization_info(&spec)
+        };
+        let mut stages = vec![stage(vk::ShaderStageFlags::VERTEX, desc.vertex_shader)];
+        if let Some(fragment) = fragment {
+            stages.push(stage(vk::ShaderStageFlags::FRAGMENT, fragment));
+        }
         let bindings = [vk::VertexInputBindingDescription {
             binding: 0,
             stride: desc.vertex_stride,
