@@ -275,8 +275,9 @@ impl PartialInstance {
             .queue_priorities(&priorities)];
         // Features to enable must be chosen from what the device reports
         // (best-practices validation warns when vkCreateDevice comes
-        // without this query). The only optional feature used is
-        // pipeline-statistics queries, and only when asked for (`bench
+        // without this query). The only optional features used are
+        // pipeline-statistics queries and, beside them, exact occlusion
+        // counts where the device has them, only when asked for (`bench
         // --metric work`).
         // SAFETY: valid physical device of this instance.
         let supported = unsafe { instance.get_physical_device_features(physical_device) };
@@ -286,8 +287,6 @@ impl PartialInstance {
                 c_chars(&props.device_name)
             )));
         }
-        // The samples each pass lets through the depth test are counted
-        // beside its statistics: exactly, where the device can.
         let occlusion_precise =
             options.pipeline_statistics && supported.occlusion_query_precise == vk::TRUE;
         let features = vk::PhysicalDeviceFeatures::default()
