@@ -275,10 +275,8 @@ impl PartialInstance {
             .queue_priorities(&priorities)];
         // Features to enable must be chosen from what the device reports
         // (best-practices validation warns when vkCreateDevice comes
-        // without this query). The only optional features used are
-        // pipeline-statistics queries and, beside them, exact occlusion
-        // counts where the device has them, only when asked for (`bench
-        // --metric work`).
+        // without this query). Optional features: pipeline statistics and
+        // with them exact occlusion counts where supported (`--metric work`).
         // SAFETY: valid physical device of this instance.
         let supported = unsafe { instance.get_physical_device_features(physical_device) };
         if options.pipeline_statistics && supported.pipeline_statistics_query == vk::FALSE {
