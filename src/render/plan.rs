@@ -779,6 +779,13 @@ mod tests {
             true,
         ));
         plans.push(FramePlan::for_hdr_image(8, 8, true));
+        let (mut scene, _) = load("default.toml");
+        scene.output.depth_prepass = DepthPrepass::On;
+        plans.push(FramePlan::new(
+            &scene,
+            &SceneGeometry::new(&scene).unwrap(),
+            false,
+        ));
         let (mut scene, _) = load("earth_objects.toml");
         scene.sky.as_mut().unwrap().aerial_perspective = AerialPerspective::Volume;
         plans.push(FramePlan::new(
