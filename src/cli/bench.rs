@@ -625,18 +625,19 @@ fn print_rows<'a>(rows: impl Iterator<Item = &'a PassReport>) {
     }
     if rows.iter().any(|r| r.work.is_some()) {
         println!(
-            "{:<12} {:>12} {:>12} {:>12} {:>14} {:>12}",
-            "pass", "primitives", "vertices", "clipped", "fragments", "compute"
+            "{:<12} {:>12} {:>12} {:>12} {:>14} {:>14} {:>12}",
+            "pass", "primitives", "vertices", "clipped", "fragments", "depth passed", "compute"
         );
         for r in &rows {
             let Some(w) = &r.work else { continue };
             println!(
-                "{:<12} {:>12} {:>12} {:>12} {:>14} {:>12}",
+                "{:<12} {:>12} {:>12} {:>12} {:>14} {:>14} {:>12}",
                 r.name,
                 w.input_primitives,
                 w.vertex_invocations,
                 w.clipped_primitives,
                 w.fragment_invocations,
+                w.depth_passed,
                 w.compute_invocations
             );
         }

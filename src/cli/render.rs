@@ -34,6 +34,11 @@ pub struct RenderArgs {
     /// background 0), the PNG shows 0.5 + 0.5 v.
     #[arg(long, value_enum)]
     debug_view: Option<aerial::scene::DebugView>,
+    /// Set a knob on the scene, NAME=VALUE (repeatable; applied after
+    /// --width/--height), e.g. depth_prepass=on. An unknown NAME lists the
+    /// knobs.
+    #[arg(long = "knob", value_name = "NAME=VALUE")]
+    knobs: Vec<String>,
     #[command(flatten)]
     model: super::ModelArgs,
     #[command(flatten)]
@@ -54,6 +59,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     )?;
     if args.debug_view.is_some() {
         scene.output.debug_view = args.debug_view;
+    }
+    for k in &args.knobs {
+        let (name, value) = k
+            .split_once('=')
+            .with_context(|| format!("--knob '{k}': expected NAME=VALUE"))?;
+        aerial::scene::Knob::find(name.trim())?.set(&mut scene, value.trim())?;
     }
     if args.frames == 0 {
         bail!("--frames: must be at least 1");

@@ -158,6 +158,15 @@ impl Draw {
             None => std::slice::from_ref(&self.object),
         }
     }
+
+    /// The objects this draw puts on screen, in drawing order: an instance
+    /// batch's members in view, or its one object.
+    pub fn visible(&self) -> &[usize] {
+        match &self.instances {
+            Some(instances) => &instances.visible,
+            None => std::slice::from_ref(&self.object),
+        }
+    }
 }
 
 /// A batch of opaque objects with the same mesh, material, lights and

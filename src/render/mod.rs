@@ -17,6 +17,7 @@ pub mod octahedral;
 pub mod passes;
 pub mod plan;
 pub mod preflight;
+pub mod prepass_rule;
 mod renderer;
 mod scene_resources;
 pub mod sky_resources;

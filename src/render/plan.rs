@@ -14,9 +14,12 @@ pub use super::draw_list::{
     MAX_SHININESS_EXPONENT,
 };
 use super::geometry::SceneGeometry;
+pub use super::prepass_rule::DepthPrepassRule;
 use super::tiles::{self, TileGroup};
 use crate::scene::material_maps::{MapKind, MapSource};
-use crate::scene::{AerialPerspective, HdrFormat, Lighting, Scene, ShadingModel, ToneMapOperator};
+use crate::scene::{
+    AerialPerspective, DepthPrepass, HdrFormat, Lighting, Scene, ShadingModel, ToneMapOperator,
+};
 use crate::vk::{DepthUse, Format};
 
 /// The attachment names passes refer to.
@@ -83,6 +86,9 @@ pub enum PassKind {
     /// The air in front of surfaces, marched once per froxel column of the
     /// camera's frustum (compute; `aerial_perspective = "volume"`).
     AerialVolume,
+    /// Opaque surfaces drawn depth-only, so the surface pass after it
+    /// shades only the nearest fragment of each pixel (`depth_prepass`).
+    DepthPrepass,
     /// Deferred: surfaces into the G-buffer.
     GBuffer,
     /// Deferred: the G-buffer lit per screen tile.
@@ -103,10 +109,11 @@ pub enum PassKind {
 
 impl PassKind {
     /// Every kind, in the order a frame runs them.
-    pub const ALL: [PassKind; 10] = [
+    pub const ALL: [PassKind; 11] = [
         PassKind::HdrUpload,
         PassKind::SkyView,
         PassKind::AerialVolume,
+        PassKind::DepthPrepass,
         PassKind::GBuffer,
         PassKind::Lighting,
         PassKind::Opaque,
@@ -130,6 +137,7 @@ impl PassKind {
         match self {
             PassKind::SkyView => "sky view",
             PassKind::AerialVolume => "aerial volume",
+            PassKind::DepthPrepass => "depth prepass",
             PassKind::GBuffer => "gbuffer",
             PassKind::Lighting => "lighting",
             PassKind::Opaque => "opaque",
@@ -250,8 +258,14 @@ impl FramePlan {
     /// `keep_hdr` reads the linear HDR image back too: its draw list and
     /// its frame graph.
     pub fn new(scene: &Scene, geometry: &SceneGeometry, keep_hdr: bool) -> FramePlan {
-        let graph = FrameGraph::new(scene, keep_hdr);
-        let draws = DrawList::new(scene, geometry, graph.lighting == Lighting::Deferred);
+        let deferred = uses_deferred_lighting(scene);
+        let draws = DrawList::new(scene, geometry, deferred);
+        let prepass = match scene.output.depth_prepass {
+            DepthPrepass::On => true,
+            DepthPrepass::Off => false,
+            DepthPrepass::Auto => DepthPrepassRule::of(scene, geometry, &draws.opaque).pays(),
+        };
+        let graph = FrameGraph::with_prepass(scene, keep_hdr, prepass);
         let tile_groups = if graph.lighting == Lighting::Deferred {
             tiles::group_lights(scene, scene.output.width, scene.output.height)
         } else {
@@ -352,13 +366,26 @@ struct FrameShape {
     direct: bool,
     /// The attachment the objects are drawn into.
     target: &'static str,
+    /// Opaque surfaces are drawn depth-only first ([`DepthPrepassRule`]).
+    prepass: bool,
 }
 
 impl FrameGraph {
     /// The graph for `scene`; `keep_hdr` reads the linear HDR image back too.
+    /// `depth_prepass = "auto"` counts as off here, for want of the meshes
+    /// its rule weighs ([`FramePlan::new`] decides it): the pre-pass adds
+    /// no attachment, so what `preflight` sizes from this graph is the same.
     pub fn new(scene: &Scene, keep_hdr: bool) -> FrameGraph {
+        let prepass = scene.output.depth_prepass == DepthPrepass::On;
+        FrameGraph::with_prepass(scene, keep_hdr, prepass)
+    }
+
+    /// [`FrameGraph::new`] with the depth pre-pass decided by the caller
+    /// (`prepass`; it has no effect on a frame without opaque draws).
+    pub fn with_prepass(scene: &Scene, keep_hdr: bool, prepass: bool) -> FrameGraph {
         use attachment::*;
-        let shape = FrameShape::of(scene, keep_hdr);
+        let mut shape = FrameShape::of(scene, keep_hdr);
+        shape.prepass = prepass && has_opaque_draws(scene);
         let lighting = if shape.deferred {
             Lighting::Deferred
         } else {
@@ -430,6 +457,7 @@ impl FrameShape {
             sky,
             direct,
             target,
+            prepass: false,
         }
     }
 }
@@ -522,11 +550,24 @@ fn render_passes(shape: &FrameShape) -> Vec<PassDecl> {
     use attachment::*;
     let target = shape.target;
     let mut passes = Vec::new();
+    // After a depth pre-pass the surfaces only test depth (EQUAL): it
+    // already holds the nearest.
+    let surface_depth = if shape.prepass {
+        passes.push(PassDecl::subpass(
+            PassKind::DepthPrepass,
+            vec![],
+            Some((DEPTH, DepthUse::Write)),
+            vec![],
+        ));
+        DepthUse::Test
+    } else {
+        DepthUse::Write
+    };
     if shape.deferred {
         passes.push(PassDecl::subpass(
             PassKind::GBuffer,
             vec![target, ALBEDO, NORMAL, MATERIAL],
-            Some((DEPTH, DepthUse::Write)),
+            Some((DEPTH, surface_depth)),
             vec![],
         ));
         passes.push(PassDecl::subpass(
@@ -539,7 +580,7 @@ fn render_passes(shape: &FrameShape) -> Vec<PassDecl> {
         passes.push(PassDecl::subpass(
             PassKind::Opaque,
             vec![target],
-            Some((DEPTH, DepthUse::Write)),
+            Some((DEPTH, surface_depth)),
             vec![],
         ));
     }
@@ -637,6 +678,16 @@ pub fn aerial_volume_reach(scene: &Scene, bounds: &[(glam::DVec3, f32)]) -> f64 
         .far
         .map_or(f64::INFINITY, |far| f64::from(far) * corner.length());
     farthest.min(far_plane).max(1e-3)
+}
+
+/// Whether `scene` draws opaque surfaces: a debug view draws every object
+/// opaque, otherwise those whose material is (see `DrawList`).
+fn has_opaque_draws(scene: &Scene) -> bool {
+    let debug = scene.output.debug_view.is_some();
+    scene
+        .objects
+        .iter()
+        .any(|o| debug || scene.materials[o.material].opacity >= 1.0)
 }
 
 /// Whether `scene` is lit in a deferred lighting pass: asked for, outside
@@ -743,6 +794,13 @@ mod tests {
             true,
         ));
         plans.push(FramePlan::for_hdr_image(8, 8, true));
+        let (mut scene, _) = load("default.toml");
+        scene.output.depth_prepass = DepthPrepass::On;
+        plans.push(FramePlan::new(
+            &scene,
+            &SceneGeometry::new(&scene).unwrap(),
+            false,
+        ));
         let (mut scene, _) = load("earth_objects.toml");
         scene.sky.as_mut().unwrap().aerial_perspective = AerialPerspective::Volume;
         plans.push(FramePlan::new(

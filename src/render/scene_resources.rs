@@ -185,6 +185,29 @@ impl SceneResources {
             .find(|(slots, _)| slots == maps)
             .map(|(_, set)| set)
     }
+
+    /// Records `draw`'s geometry: its range of the shared buffer, drawn
+    /// once or, for an instance batch, once per visible member from the
+    /// instance buffer. The pipeline and sets are bound by the caller.
+    pub fn draw(&self, cmd: &CommandBuffer, draw: &Draw) -> Result<(), RenderError> {
+        let range = &self.ranges[draw.object];
+        cmd.bind_geometry(&self.geometry, range.vertex_offset, range.index_offset);
+        match &draw.instances {
+            Some(instances) => {
+                let buffer = self.instances.as_ref().ok_or_else(|| {
+                    RenderError::Frame("an instanced draw, but no instance buffer".into())
+                })?;
+                cmd.bind_instances(buffer, 0);
+                cmd.draw_indexed_instances(
+                    range.index_count,
+                    instances.visible.len() as u32,
+                    instances.first,
+                );
+            }
+            None => cmd.draw_indexed(range.index_count),
+        }
+        Ok(())
+    }
 }
 
 /// A set layout of one uniform buffer of `kind` at binding 0, read by

@@ -28,8 +28,8 @@ use super::material_maps::{
 };
 use super::value_checks::{Check, Result, MAX_COLOUR, MAX_LENGTH, MIN_LENGTH};
 use super::{
-    Camera, DebugView, HdrFormat, Light, Lighting, Material, Object, Output, Scene, SceneError,
-    ShadingModel, Shape, TextureFilter, ToneMap, ToneMapOperator, Transform,
+    Camera, DebugView, DepthPrepass, HdrFormat, Light, Lighting, Material, Object, Output, Scene,
+    SceneError, ShadingModel, Shape, TextureFilter, ToneMap, ToneMapOperator, Transform,
 };
 
 use crate::mesh::obj;
@@ -85,6 +85,7 @@ struct OutputFile {
     hdr_format: HdrFormat,
     texture_filter: TextureFilter,
     lighting: Lighting,
+    depth_prepass: DepthPrepass,
     debug_view: Option<DebugView>,
     static_lights: bool,
     max_pixel_error: f64,
@@ -100,6 +101,7 @@ impl Default for OutputFile {
             hdr_format: output.hdr_format,
             texture_filter: output.texture_filter,
             lighting: output.lighting,
+            depth_prepass: output.depth_prepass,
             debug_view: output.debug_view,
             static_lights: output.static_lights,
             max_pixel_error: f64::from(output.max_pixel_error),
@@ -482,6 +484,7 @@ impl Check<'_> {
             hdr_format: raw.hdr_format,
             texture_filter: raw.texture_filter,
             lighting: raw.lighting,
+            depth_prepass: raw.depth_prepass,
             debug_view: raw.debug_view,
             static_lights: raw.static_lights,
             max_pixel_error: self.positive("output.max_pixel_error", raw.max_pixel_error)?,

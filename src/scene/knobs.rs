@@ -8,8 +8,8 @@
 //! in `viewer::knobs`.
 
 use super::{
-    AerialPerspective, HdrFormat, Lighting, OzoneDepth, Scene, ShadingModel, Shape, TableFilter,
-    TableMapping, TextureFilter, ToneMapOperator,
+    AerialPerspective, DepthPrepass, HdrFormat, Lighting, OzoneDepth, Scene, ShadingModel, Shape,
+    TableFilter, TableMapping, TextureFilter, ToneMapOperator,
 };
 
 /// One named setting.
@@ -206,6 +206,18 @@ pub const KNOBS: &[Knob] = &[
             Ok(())
         },
         read: |s| s.output.lighting.name().into(),
+    },
+    Knob {
+        name: "depth_prepass",
+        // The same image either way (up to surfaces at exactly equal
+        // depth); only the cost changes.
+        best: Best::Unchanged,
+        values: "off | on | auto: draw opaque surfaces depth-only first so each visible pixel is shaded once (auto: where the plan estimates it pays)",
+        apply: |s, v| {
+            s.output.depth_prepass = DepthPrepass::parse(v)?;
+            Ok(())
+        },
+        read: |s| s.output.depth_prepass.name().into(),
     },
     Knob {
         name: "atmosphere_samples",
@@ -497,6 +509,7 @@ named! {
     TextureFilter { "nearest" => Nearest, "bilinear" => Bilinear, "trilinear" => Trilinear }
     ToneMapOperator { "reinhard" => Reinhard, "aces" => Aces, "none" => None }
     Lighting { "forward" => Forward, "deferred" => Deferred }
+    DepthPrepass { "off" => Off, "on" => On, "auto" => Auto }
     TableMapping { "horizon" => Horizon, "linear" => Linear }
     TableFilter { "manual" => Manual, "nearest" => Nearest, "hardware" => Hardware }
     OzoneDepth { "exact" => Exact, "table" => Table }
@@ -568,6 +581,7 @@ mod tests {
         names_match_the_scene_file::<TextureFilter>();
         names_match_the_scene_file::<ToneMapOperator>();
         names_match_the_scene_file::<Lighting>();
+        names_match_the_scene_file::<DepthPrepass>();
         names_match_the_scene_file::<TableMapping>();
         names_match_the_scene_file::<TableFilter>();
         names_match_the_scene_file::<OzoneDepth>();
@@ -593,6 +607,9 @@ mod tests {
             ("hdr_format", "rgba32f"),
             ("texture_filter", "nearest"),
             ("static_lights", "off"),
+            ("depth_prepass", "on"),
+            ("depth_prepass", "off"),
+            ("depth_prepass", "auto"),
         ] {
             let knob = Knob::find(name).unwrap();
             knob.set(&mut scene, value).unwrap();
@@ -609,6 +626,7 @@ mod tests {
             ("lights", "999"),
             ("tessellation", "-1"),
             ("static_lights", "maybe"),
+            ("depth_prepass", "yes"),
         ] {
             let e = Knob::find(name)
                 .unwrap()

@@ -127,6 +127,9 @@ pub struct Output {
     pub texture_filter: TextureFilter,
     /// Forward or deferred lighting.
     pub lighting: Lighting,
+    /// Whether opaque surfaces are first drawn depth-only, so the colour
+    /// pass shades each visible pixel once (`render::plan::depth_prepass`).
+    pub depth_prepass: DepthPrepass,
     /// Draw one surface attribute instead of the lit image.
     pub debug_view: Option<DebugView>,
     /// Lights the frame never changes as specialization constants rather
@@ -169,6 +172,21 @@ pub enum Lighting {
     Deferred,
 }
 
+/// The depth pre-pass setting (`[output] depth_prepass`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DepthPrepass {
+    /// Opaque surfaces are shaded as they are drawn, hidden ones included
+    /// (`"off"`).
+    Off,
+    /// Opaque surfaces are drawn depth-only first, then shaded where their
+    /// depth equals the nearest (`"on"`).
+    On,
+    /// On where the plan estimates that the shading it saves outweighs the
+    /// second drawing of the geometry (`"auto"`, the default).
+    Auto,
+}
+
 /// Texture filtering (`[output] texture_filter`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -190,6 +208,7 @@ impl Default for Output {
             hdr_format: HdrFormat::Rgba16F,
             texture_filter: TextureFilter::Trilinear,
             lighting: Lighting::Forward,
+            depth_prepass: DepthPrepass::Auto,
             debug_view: None,
             static_lights: true,
             max_pixel_error: DEFAULT_MAX_PIXEL_ERROR,

@@ -300,6 +300,7 @@ fn minimal_scene_gets_the_documented_defaults() {
             hdr_format: HdrFormat::Rgba16F,
             texture_filter: crate::scene::TextureFilter::Trilinear,
             lighting: crate::scene::Lighting::Forward,
+            depth_prepass: crate::scene::DepthPrepass::Auto,
             debug_view: None,
             static_lights: true,
             max_pixel_error: 0.5,

@@ -112,6 +112,12 @@ const CYCLES: &[Cycle] = &[
         values: &["exact", "table"],
         applies: has_sky,
     },
+    // Last, so the keys of the knobs above keep their numbers.
+    Cycle {
+        name: "depth_prepass",
+        values: &["auto", "off", "on"],
+        applies: has_objects,
+    },
 ];
 
 /// The knobs that apply to `scene`; key N cycles entry N-1 (key 0 the

@@ -730,9 +730,11 @@ impl CommandBuffer {
     pub fn reset_stats_queries(&self, queries: &PipelineStatsQueries) {
         // SAFETY: recording outside a render pass.
         unsafe {
-            self.ctx
-                .device
-                .cmd_reset_query_pool(self.handle, queries.pool, 0, queries.capacity)
+            for pool in [queries.pool, queries.occlusion] {
+                self.ctx
+                    .device
+                    .cmd_reset_query_pool(self.handle, pool, 0, queries.capacity)
+            }
         };
     }
 
@@ -746,7 +748,17 @@ impl CommandBuffer {
                 queries.pool,
                 index,
                 vk::QueryControlFlags::empty(),
-            )
+            );
+            self.ctx.device.cmd_begin_query(
+                self.handle,
+                queries.occlusion,
+                index,
+                if self.ctx.occlusion_precise() {
+                    vk::QueryControlFlags::PRECISE
+                } else {
+                    vk::QueryControlFlags::empty()
+                },
+            );
         };
     }
 
@@ -757,7 +769,10 @@ impl CommandBuffer {
         unsafe {
             self.ctx
                 .device
-                .cmd_end_query(self.handle, queries.pool, index)
+                .cmd_end_query(self.handle, queries.occlusion, index);
+            self.ctx
+                .device
+                .cmd_end_query(self.handle, queries.pool, index);
         };
     }
 

@@ -73,6 +73,9 @@ pub struct Context {
     info: DeviceInfo,
     /// Created with [`ContextOptions::pipeline_statistics`].
     pipeline_statistics: bool,
+    /// Occlusion queries count exactly (`occlusionQueryPrecise`, enabled
+    /// with pipeline statistics where the device has it).
+    occlusion_precise: bool,
     validation_log: Option<Arc<ValidationLog>>,
     // Released after Drop::drop destroyed the device and the instance.
     _layer_hold: Option<validation::LayerHold>,
@@ -202,6 +205,12 @@ impl Context {
         self.pipeline_statistics
     }
 
+    /// Whether occlusion queries count exactly rather than only zero or
+    /// not (enabled together with pipeline statistics, where supported).
+    pub fn occlusion_precise(&self) -> bool {
+        self.occlusion_precise
+    }
+
     /// The validation messages counted so far; `None` without `--validate`.
     pub fn validation_log(&self) -> Option<Arc<ValidationLog>> {
         self.validation_log.clone()
@@ -266,9 +275,8 @@ impl PartialInstance {
             .queue_priorities(&priorities)];
         // Features to enable must be chosen from what the device reports
         // (best-practices validation warns when vkCreateDevice comes
-        // without this query). The only optional feature used is
-        // pipeline-statistics queries, and only when asked for (`bench
-        // --metric work`).
+        // without this query). Optional features: pipeline statistics and
+        // with them exact occlusion counts where supported (`--metric work`).
         // SAFETY: valid physical device of this instance.
         let supported = unsafe { instance.get_physical_device_features(physical_device) };
         if options.pipeline_statistics && supported.pipeline_statistics_query == vk::FALSE {
@@ -277,8 +285,11 @@ impl PartialInstance {
                 c_chars(&props.device_name)
             )));
         }
+        let occlusion_precise =
+            options.pipeline_statistics && supported.occlusion_query_precise == vk::TRUE;
         let features = vk::PhysicalDeviceFeatures::default()
-            .pipeline_statistics_query(options.pipeline_statistics);
+            .pipeline_statistics_query(options.pipeline_statistics)
+            .occlusion_query_precise(occlusion_precise);
         let device_extensions: Vec<*const c_char> = if options.display.is_some() {
             vec![ash::khr::swapchain::NAME.as_ptr()]
         } else {
@@ -366,6 +377,7 @@ impl PartialInstance {
             limits: props.limits,
             info,
             pipeline_statistics: options.pipeline_statistics,
+            occlusion_precise,
             validation_log: self.validation_log.clone(),
             _layer_hold: self.layer_hold.take(),
             _busy: self.busy.take().expect("set in new"),

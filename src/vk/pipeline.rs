@@ -94,6 +94,22 @@ pub struct GraphicsPipelineDesc<'a> {
     pub subpass: u32,
 }
 
+/// A depth-only pipeline ([`GraphicsPipeline::depth_only`]): tested with
+/// `depth_test` and written, no fragment stage, no colour target.
+pub struct DepthOnlyPipelineDesc<'a> {
+    pub vertex_shader: &'a ShaderModule,
+    /// Specialization constants (id, value) of the vertex stage.
+    pub specialization: &'a [(u32, u32)],
+    pub vertex_stride: u32,
+    pub vertex_attributes: &'a [VertexAttribute],
+    /// Per-instance stride and attributes, as in [`GraphicsPipelineDesc`].
+    pub instance_stride: u32,
+    pub instance_attributes: &'a [VertexAttribute],
+    pub cull_mode: vk::CullModeFlags,
+    pub depth_test: vk::CompareOp,
+    pub subpass: u32,
+}
+
 /// How a pipeline writes one colour target.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Blend {
@@ -117,22 +133,61 @@ impl GraphicsPipeline {
         pass: &RenderPass,
         desc: &GraphicsPipelineDesc<'_>,
     ) -> Result<GraphicsPipeline, VkError> {
+        Self::create(ctx, layout, pass, desc, Some(desc.fragment_shader))
+    }
+
+    /// A pipeline without a fragment stage for a subpass without colour
+    /// targets: it writes depth only (a depth pre-pass), so nothing is
+    /// shaded per fragment. `desc` gives no blend state and its fragment
+    /// shader is not used.
+    pub fn depth_only(
+        ctx: &Arc<Context>,
+        layout: &PipelineLayout,
+        pass: &RenderPass,
+        desc: &DepthOnlyPipelineDesc<'_>,
+    ) -> Result<GraphicsPipeline, VkError> {
+        let full = GraphicsPipelineDesc {
+            vertex_shader: desc.vertex_shader,
+            // Not read: `create` is given no fragment stage.
+            fragment_shader: desc.vertex_shader,
+            specialization: desc.specialization,
+            vertex_stride: desc.vertex_stride,
+            vertex_attributes: desc.vertex_attributes,
+            instance_stride: desc.instance_stride,
+            instance_attributes: desc.instance_attributes,
+            cull_mode: desc.cull_mode,
+            depth_test: Some(desc.depth_test),
+            depth_write: true,
+            blend: &[],
+            subpass: desc.subpass,
+        };
+        Self::create(ctx, layout, pass, &full, None)
+    }
+
+    /// The pipeline `desc` describes, with `fragment` as its fragment stage
+    /// (`desc.fragment_shader` is ignored) or none.
+    fn create(
+        ctx: &Arc<Context>,
+        layout: &PipelineLayout,
+        pass: &RenderPass,
+        desc: &GraphicsPipelineDesc<'_>,
+        fragment: Option<&ShaderModule>,
+    ) -> Result<GraphicsPipeline, VkError> {
         let (entries, data) = specialization_data(desc.specialization);
         let spec = vk::SpecializationInfo::default()
             .map_entries(&entries)
             .data(&data);
-        let stages = [
+        let stage = |flags, module: &ShaderModule| {
             vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::VERTEX)
-                .module(desc.vertex_shader.handle)
+                .stage(flags)
+                .module(module.handle)
                 .name(c"main")
-                .specialization_info(&spec),
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::FRAGMENT)
-                .module(desc.fragment_shader.handle)
-                .name(c"main")
-                .specialization_info(&spec),
-        ];
+                .specialization_info(&spec)
+        };
+        let mut stages = vec![stage(vk::ShaderStageFlags::VERTEX, desc.vertex_shader)];
+        if let Some(fragment) = fragment {
+            stages.push(stage(vk::ShaderStageFlags::FRAGMENT, fragment));
+        }
         let mut bindings = vec![vk::VertexInputBindingDescription {
             binding: 0,
             stride: desc.vertex_stride,
@@ -188,33 +243,7 @@ impl GraphicsPipeline {
             .depth_test_enable(desc.depth_test.is_some())
             .depth_write_enable(desc.depth_write)
             .depth_compare_op(desc.depth_test.unwrap_or(vk::CompareOp::ALWAYS));
-        let blend_attachments: Vec<vk::PipelineColorBlendAttachmentState> = desc
-            .blend
-            .iter()
-            .map(|b| {
-                let state = vk::PipelineColorBlendAttachmentState::default()
-                    .color_write_mask(vk::ColorComponentFlags::RGBA);
-                match b {
-                    Blend::Replace => state,
-                    Blend::Alpha => state
-                        .blend_enable(true)
-                        .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
-                        .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
-                        .color_blend_op(vk::BlendOp::ADD)
-                        .src_alpha_blend_factor(vk::BlendFactor::ONE)
-                        .dst_alpha_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
-                        .alpha_blend_op(vk::BlendOp::ADD),
-                    Blend::Add => state
-                        .blend_enable(true)
-                        .src_color_blend_factor(vk::BlendFactor::ONE)
-                        .dst_color_blend_factor(vk::BlendFactor::ONE)
-                        .color_blend_op(vk::BlendOp::ADD)
-                        .src_alpha_blend_factor(vk::BlendFactor::ZERO)
-                        .dst_alpha_blend_factor(vk::BlendFactor::ONE)
-                        .alpha_blend_op(vk::BlendOp::ADD),
-                }
-            })
-            .collect();
+        let blend_attachments: Vec<_> = desc.blend.iter().map(blend_state).collect();
         let blend =
             vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
@@ -244,6 +273,31 @@ impl GraphicsPipeline {
             ctx: ctx.clone(),
             handle,
         })
+    }
+}
+
+/// The colour-blend state of one target written as `blend` says.
+fn blend_state(blend: &Blend) -> vk::PipelineColorBlendAttachmentState {
+    let state = vk::PipelineColorBlendAttachmentState::default()
+        .color_write_mask(vk::ColorComponentFlags::RGBA);
+    match blend {
+        Blend::Replace => state,
+        Blend::Alpha => state
+            .blend_enable(true)
+            .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
+            .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+            .color_blend_op(vk::BlendOp::ADD)
+            .src_alpha_blend_factor(vk::BlendFactor::ONE)
+            .dst_alpha_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+            .alpha_blend_op(vk::BlendOp::ADD),
+        Blend::Add => state
+            .blend_enable(true)
+            .src_color_blend_factor(vk::BlendFactor::ONE)
+            .dst_color_blend_factor(vk::BlendFactor::ONE)
+            .color_blend_op(vk::BlendOp::ADD)
+            .src_alpha_blend_factor(vk::BlendFactor::ZERO)
+            .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+            .alpha_blend_op(vk::BlendOp::ADD),
     }
 }
 

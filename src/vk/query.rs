@@ -91,6 +91,13 @@ pub struct PipelineStats {
     pub clipped_primitives: u64,
     pub fragment_invocations: u64,
     pub compute_invocations: u64,
+    /// Samples that passed the depth test (an occlusion query): the
+    /// fragments actually shaded and written. A driver may count fragment
+    /// invocations before early depth testing (lavapipe counts 16 for each
+    /// 4×4 block a triangle touches), so only this count shows what a depth
+    /// pre-pass saves. Exact where the device has `occlusionQueryPrecise`.
+    #[serde(default)]
+    pub depth_passed: u64,
 }
 
 /// The counters asked for, in the order Vulkan writes them (ascending bit
@@ -108,6 +115,8 @@ const STATISTICS: [vk::QueryPipelineStatisticFlags; 5] = [
 pub struct PipelineStatsQueries {
     ctx: Arc<Context>,
     pub(crate) pool: vk::QueryPool,
+    /// An occlusion query beside each statistics query.
+    pub(crate) occlusion: vk::QueryPool,
     pub(crate) capacity: u32,
 }
 
@@ -123,9 +132,22 @@ impl PipelineStatsQueries {
         // SAFETY: valid device; the feature was enabled at device creation
         // (ContextOptions::pipeline_statistics), or creation fails cleanly.
         let pool = unsafe { ctx.device.create_query_pool(&info, None) }?;
+        let info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::OCCLUSION)
+            .query_count(capacity);
+        // SAFETY: valid device; occlusion queries need no feature.
+        let occlusion = match unsafe { ctx.device.create_query_pool(&info, None) } {
+            Ok(occlusion) => occlusion,
+            Err(e) => {
+                // SAFETY: created above, used by nothing yet.
+                unsafe { ctx.device.destroy_query_pool(pool, None) };
+                return Err(e.into());
+            }
+        };
         Ok(PipelineStatsQueries {
             ctx: ctx.clone(),
             pool,
+            occlusion,
             capacity,
         })
     }
@@ -143,14 +165,26 @@ impl PipelineStatsQueries {
                 vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
             )
         }?;
+        let mut passed = vec![0u64; self.capacity as usize];
+        // SAFETY: as above; one counter per query.
+        unsafe {
+            self.ctx.device.get_query_pool_results(
+                self.occlusion,
+                0,
+                &mut passed,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }?;
         Ok(raw
             .iter()
-            .map(|r| PipelineStats {
+            .zip(passed)
+            .map(|(r, depth_passed)| PipelineStats {
                 input_primitives: r[0],
                 vertex_invocations: r[1],
                 clipped_primitives: r[2],
                 fragment_invocations: r[3],
                 compute_invocations: r[4],
+                depth_passed,
             })
             .collect())
     }
@@ -158,8 +192,11 @@ impl PipelineStatsQueries {
 
 impl Drop for PipelineStatsQueries {
     fn drop(&mut self) {
-        // SAFETY: no pending submission uses the pool.
-        unsafe { self.ctx.device.destroy_query_pool(self.pool, None) };
+        // SAFETY: no pending submission uses the pools.
+        unsafe {
+            self.ctx.device.destroy_query_pool(self.pool, None);
+            self.ctx.device.destroy_query_pool(self.occlusion, None);
+        }
     }
 }
 

@@ -26,6 +26,7 @@ mod cli;
 mod cli_compare;
 mod cpu_renderer;
 mod debug_view;
+mod depth_prepass;
 mod docs_links;
 mod examples;
 mod frame_graph;

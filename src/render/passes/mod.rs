@@ -14,6 +14,7 @@
 pub mod aerial_volume;
 pub mod atmosphere;
 pub mod deferred_lighting;
+pub mod depth_prepass;
 pub mod sky_view;
 pub mod surface;
 pub mod tonemap;
@@ -37,6 +38,7 @@ pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>
     match setup.decl.kind {
         PassKind::SkyView => sky_view::create(setup),
         PassKind::AerialVolume => aerial_volume::create(setup),
+        PassKind::DepthPrepass => depth_prepass::create(setup),
         PassKind::GBuffer => surface::create_gbuffer(setup),
         PassKind::Lighting => deferred_lighting::create(setup),
         PassKind::Opaque => surface::create_opaque(setup),

@@ -15,18 +15,20 @@
 use super::{PassResources, PassSetup, RecordPass};
 use crate::mesh::Vertex;
 use crate::render::gpu_types::InstanceTransform;
-use crate::render::plan::{attachment, AirLight, Draw, FramePlan, PassIo, PipelineKey, ShadingKey};
+use crate::render::plan::{
+    attachment, AirLight, Draw, FramePlan, PassIo, PassKind, PipelineKey, ShadingKey,
+};
 use crate::render::static_lights;
 use crate::render::RenderError;
 use crate::scene::material_maps::MapMask;
 use crate::scene::Scene;
 use crate::shader_ids::*;
 use crate::shaders::{self, ObjectFragFeatures, ObjectVertFeatures};
-use crate::vk::CompareOp;
 use crate::vk::{
     Blend, CommandBuffer, CullModeFlags, Format, GraphicsPipeline, GraphicsPipelineDesc,
     ShaderModule, VertexAttribute,
 };
+use crate::vk::{CompareOp, DepthUse};
 use std::collections::btree_map::Entry;
 use std::collections::BTreeMap;
 
@@ -180,11 +182,11 @@ impl SurfacePass {
                         } else {
                             CullModeFlags::BACK
                         },
-                        // Reversed-Z: nearer surfaces have larger depth.
-                        depth_test: Some(CompareOp::GREATER),
+                        depth_test: Some(depth_compare(setup, form)),
                         // Transparent surfaces test against opaque depth but
                         // do not hide each other; they are sorted instead.
-                        depth_write: form != Form::Transparent,
+                        // After a depth pre-pass, depth is final already.
+                        depth_write: form != Form::Transparent && !after_prepass(setup),
                         blend: &blend,
                         subpass: setup.subpass,
                     },
@@ -234,21 +236,7 @@ impl RecordPass for SurfacePass {
             if let Some(set) = resources.material_set(&d.maps) {
                 cmd.bind_descriptor_set(layout, MATERIAL_SET, set, &[]);
             }
-            cmd.bind_geometry(&resources.geometry, range.vertex_offset, range.index_offset);
-            match &d.instances {
-                Some(instances) => {
-                    let buffer = resources.instances.as_ref().ok_or_else(|| {
-                        RenderError::Frame("an instanced draw, but no instance buffer".into())
-                    })?;
-                    cmd.bind_instances(buffer, 0);
-                    cmd.draw_indexed_instances(
-                        range.index_count,
-                        instances.visible.len() as u32,
-                        instances.first,
-                    );
-                }
-                None => cmd.draw_indexed(range.index_count),
-            }
+            resources.draw(cmd, d)?;
         }
         Ok(())
     }
@@ -274,6 +262,31 @@ impl RecordPass for SurfacePass {
         self.draws = draws.clone();
         self.draw_keys = keys;
         Ok(())
+    }
+}
+
+/// Whether opaque surfaces were drawn depth-only before this pass: its
+/// declared depth use is then a test, not a write.
+fn after_prepass(setup: &PassSetup<'_>) -> bool {
+    setup.plan.has(PassKind::DepthPrepass)
+        && matches!(
+            &setup.decl.io,
+            PassIo::Subpass {
+                depth: Some((_, DepthUse::Test)),
+                ..
+            }
+        )
+}
+
+/// The depth comparison of the pass's pipelines. Reversed-Z: nearer
+/// surfaces have larger depth, so GREATER keeps the nearest. After the
+/// depth pre-pass, which drew the same positions (see `depth_prepass`),
+/// EQUAL shades only the fragment it kept.
+fn depth_compare(setup: &PassSetup<'_>, form: Form) -> CompareOp {
+    if form != Form::Transparent && after_prepass(setup) {
+        CompareOp::EQUAL
+    } else {
+        CompareOp::GREATER
     }
 }
 
@@ -342,7 +355,7 @@ fn shader_features(key: &PipelineKey, form: Form) -> (ObjectVertFeatures, Object
 /// The per-instance attributes of an instanced pipeline: the model
 /// matrix's four columns and the normal matrix's three
 /// (`InstanceTransform`).
-fn instance_attributes() -> Vec<VertexAttribute> {
+pub(super) fn instance_attributes() -> Vec<VertexAttribute> {
     let model = std::mem::offset_of!(InstanceTransform, model) as u32;
     let normal = std::mem::offset_of!(InstanceTransform, normal_matrix) as u32;
     let columns = (0..4u32).map(|c| VertexAttribute {

@@ -1,0 +1,161 @@
+//! The depth pre-pass: the opaque draws, depth only, before the surface
+//! pass that shades them (`depth_prepass`, `PassKind::DepthPrepass`).
+//!
+//! Its pipelines have no fragment stage and its subpass no colour target,
+//! so a fragment costs a depth test and write. The surface pass after it
+//! tests EQUAL without writing, so each pixel's nearest opaque surface is
+//! shaded once. That needs the two passes' depths equal bit for bit: the
+//! pre-pass uses `object.vert`'s plainest variant (no maps, no per-vertex
+//! lighting; its other outputs nothing reads), and every variant computes
+//! `gl_Position` by the same expression from the same inputs, so the
+//! compiled arithmetic is the same. `invariant gl_Position` would promise
+//! it, but glslang puts the decoration on a `gl_PerVertex` member, which
+//! lavapipe (Mesa 22.3) reports as a warning and ignores; the test suite
+//! checks instead that images with and without the pre-pass are equal and
+//! that each covered pixel is shaded once (`tests/suite/depth_prepass.rs`).
+
+use super::surface::instance_attributes;
+use super::{PassResources, PassSetup, RecordPass};
+use crate::mesh::Vertex;
+use crate::render::gpu_types::InstanceTransform;
+use crate::render::plan::{Draw, FramePlan};
+use crate::render::RenderError;
+use crate::scene::Scene;
+use crate::shader_ids::{FRAME_SET, OBJECT_SET};
+use crate::shaders::{self, ObjectVertFeatures};
+use crate::vk::{
+    CommandBuffer, CompareOp, CullModeFlags, DepthOnlyPipelineDesc, Format, GraphicsPipeline,
+    ShaderModule, VertexAttribute,
+};
+
+pub struct DepthPrepass {
+    /// The opaque draws, in the plan's order (front to back within
+    /// pipeline groups).
+    draws: Vec<Draw>,
+    /// Indexed by [`slot`]: back faces culled or both sides drawn, as the
+    /// surface pass draws them, and one draw per object or per instance
+    /// batch.
+    pipelines: [Option<GraphicsPipeline>; 4],
+}
+
+/// The pipeline slot of a draw: whether it is two-sided and instanced.
+fn slot(d: &Draw) -> usize {
+    d.pipeline.two_sided as usize + 2 * d.pipeline.instanced as usize
+}
+
+pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+    let draws = setup.plan.opaque.clone();
+    // Pipelines for the opaque draws out of view too, so a view that
+    // brings them in keeps the pass.
+    let every: Vec<&Draw> = draws
+        .iter()
+        .chain(setup.plan.hidden.iter().filter(|d| !d.pipeline.blended))
+        .collect();
+    let mut pipelines = [None, None, None, None];
+    if !every.is_empty() {
+        let resources = setup.scene_resources()?;
+        let render_pass = setup.render_pass()?;
+        // The plainest variant reads the position and the normal.
+        let attributes = [
+            VertexAttribute {
+                location: 0,
+                format: Format::R32G32B32_SFLOAT,
+                offset: std::mem::offset_of!(Vertex, position) as u32,
+            },
+            VertexAttribute {
+                location: 1,
+                format: Format::R32G32B32_SFLOAT,
+                offset: std::mem::offset_of!(Vertex, normal) as u32,
+            },
+        ];
+        let instance = instance_attributes();
+        for (i, pipeline) in pipelines.iter_mut().enumerate() {
+            let Some(d) = every.iter().find(|d| slot(d) == i) else {
+                continue;
+            };
+            let (two_sided, instanced) = (d.pipeline.two_sided, d.pipeline.instanced);
+            // The instanced variant reads its model matrix per instance;
+            // `gl_Position` is the same expression of the same values.
+            let features =
+                ObjectVertFeatures::default().with(ObjectVertFeatures::INSTANCED, instanced);
+            let vertex = ShaderModule::new(setup.ctx, shaders::OBJECT_VERT.spirv(features))?;
+            *pipeline = Some(GraphicsPipeline::depth_only(
+                setup.ctx,
+                &resources.layout,
+                &render_pass.render_pass,
+                &DepthOnlyPipelineDesc {
+                    vertex_shader: &vertex,
+                    specialization: &[],
+                    vertex_stride: std::mem::size_of::<Vertex>() as u32,
+                    vertex_attributes: &attributes,
+                    instance_stride: if instanced {
+                        std::mem::size_of::<InstanceTransform>() as u32
+                    } else {
+                        0
+                    },
+                    instance_attributes: if instanced { &instance } else { &[] },
+                    cull_mode: if two_sided {
+                        CullModeFlags::NONE
+                    } else {
+                        CullModeFlags::BACK
+                    },
+                    // Reversed-Z: nearer surfaces have larger depth.
+                    depth_test: CompareOp::GREATER,
+                    subpass: setup.subpass,
+                },
+            )?);
+        }
+    }
+    Ok(Box::new(DepthPrepass { draws, pipelines }))
+}
+
+impl RecordPass for DepthPrepass {
+    fn record(&self, cmd: &CommandBuffer, frame: &PassResources<'_>) -> Result<(), RenderError> {
+        let Some(resources) = frame.scene else {
+            return Ok(());
+        };
+        let layout = &resources.layout;
+        let mut bound: Option<usize> = None;
+        for d in &self.draws {
+            // Draws without triangles are skipped, as the surface pass does.
+            if resources.ranges[d.object].index_count == 0 {
+                continue;
+            }
+            let slot = slot(d);
+            if bound != Some(slot) {
+                let pipeline = self.pipelines[slot].as_ref().ok_or_else(|| {
+                    RenderError::Frame("the depth pre-pass has no pipeline for a draw".into())
+                })?;
+                cmd.bind_pipeline(pipeline);
+                if bound.is_none() {
+                    cmd.bind_descriptor_set(layout, FRAME_SET, &resources.frame_set, &[]);
+                }
+                bound = Some(slot);
+            }
+            cmd.bind_descriptor_set(
+                layout,
+                OBJECT_SET,
+                &resources.object_set,
+                &[resources.block_offsets[d.object]],
+            );
+            resources.draw(cmd, d)?;
+        }
+        Ok(())
+    }
+
+    /// Takes the new view's draw order (the same draws, sorted from the
+    /// new camera).
+    fn set_view(&mut self, _scene: &Scene, plan: &FramePlan) -> Result<(), RenderError> {
+        if plan
+            .opaque
+            .iter()
+            .any(|d| self.pipelines[slot(d)].is_none())
+        {
+            return Err(RenderError::Frame(
+                "an opaque draw needs a depth pre-pass pipeline that was not created".into(),
+            ));
+        }
+        self.draws = plan.opaque.clone();
+        Ok(())
+    }
+}
