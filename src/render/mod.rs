@@ -32,7 +32,8 @@ pub use crate::image_io::Pixels;
 pub use cpu_renderer::{render_on_cpu, render_on_cpu_with, CpuRenderError, Transport};
 pub use empty_pass::EmptyPass;
 pub use geometry::SceneGeometry;
-pub use plan::{subpass_timing_note, FramePlan, PassKind};
+pub use passes::{PassType, PASSES};
+pub use plan::{subpass_timing_note, FramePlan};
 pub use renderer::{FrameTiming, Renderer, ViewChange};
 pub use timed_submit::PrefixFrames;
 

@@ -14,12 +14,11 @@ pub use super::draw_list::{
     MAX_SHININESS_EXPONENT,
 };
 use super::geometry::SceneGeometry;
+use super::passes::{aerial_volume, PassType, PASSES};
 pub use super::prepass_rule::DepthPrepassRule;
 use super::tiles::{self, TileGroup};
 use crate::scene::material_maps::{MapKind, MapSource};
-use crate::scene::{
-    AerialPerspective, DepthPrepass, HdrFormat, Lighting, Scene, ShadingModel, ToneMapOperator,
-};
+use crate::scene::{DepthPrepass, HdrFormat, Lighting, Scene, ShadingModel, ToneMapOperator};
 use crate::vk::{DepthUse, Format};
 
 /// The attachment names passes refer to.
@@ -76,114 +75,55 @@ pub enum PassIo {
     },
 }
 
-/// Which pass: each kind is one file in `render/passes`, which creates its
-/// GPU objects from the declaration (`passes::create`). The plan names
-/// passes by kind, never by string, so it needs nothing from the pass files.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum PassKind {
-    /// The atmosphere marched for a grid of view directions (compute).
-    SkyView,
-    /// The air in front of surfaces, marched once per froxel column of the
-    /// camera's frustum (compute; `aerial_perspective = "volume"`).
-    AerialVolume,
-    /// Opaque surfaces drawn depth-only, so the surface pass after it
-    /// shades only the nearest fragment of each pixel (`depth_prepass`).
-    DepthPrepass,
-    /// Deferred: surfaces into the G-buffer.
-    GBuffer,
-    /// Deferred: the G-buffer lit per screen tile.
-    Lighting,
-    /// Forward: opaque surfaces lit as drawn.
-    Opaque,
-    /// Blended surfaces, back to front.
-    Transparent,
-    /// Sky, aerial perspective and the planet, over the surfaces.
-    Atmosphere,
-    /// HDR to the display output.
-    ToneMap,
-    /// An HDR image copied in (`aerial tonemap`).
-    HdrUpload,
-    /// Attachments copied out.
-    Readback,
-}
-
-impl PassKind {
-    /// Every kind, in the order a frame runs them.
-    pub const ALL: [PassKind; 11] = [
-        PassKind::HdrUpload,
-        PassKind::SkyView,
-        PassKind::AerialVolume,
-        PassKind::DepthPrepass,
-        PassKind::GBuffer,
-        PassKind::Lighting,
-        PassKind::Opaque,
-        PassKind::Transparent,
-        PassKind::Atmosphere,
-        PassKind::ToneMap,
-        PassKind::Readback,
-    ];
-
-    /// Whether passes of this kind are subpasses of the frame's render
-    /// pass (the others are compute or copies outside it).
-    pub fn is_subpass(self) -> bool {
-        !matches!(
-            self,
-            PassKind::SkyView | PassKind::AerialVolume | PassKind::HdrUpload | PassKind::Readback
-        )
-    }
-
-    /// The pass's name in timing tables, reports and the viewer.
-    pub fn name(self) -> &'static str {
-        match self {
-            PassKind::SkyView => "sky view",
-            PassKind::AerialVolume => "aerial volume",
-            PassKind::DepthPrepass => "depth prepass",
-            PassKind::GBuffer => "gbuffer",
-            PassKind::Lighting => "lighting",
-            PassKind::Opaque => "opaque",
-            PassKind::Transparent => "transparent",
-            PassKind::Atmosphere => "atmosphere",
-            PassKind::ToneMap => "tonemap",
-            PassKind::HdrUpload => "hdr upload",
-            PassKind::Readback => "readback",
-        }
-    }
-}
-
-/// One pass of the frame: which pass, and what it reads and writes.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PassDecl {
-    pub kind: PassKind,
-    pub io: PassIo,
-}
-
-impl PassDecl {
-    fn subpass(
-        kind: PassKind,
+impl PassIo {
+    /// A subpass writing `colour` (in location order), using `depth` and
+    /// reading `inputs` (in `input_attachment_index` order).
+    pub fn subpass(
         colour: Vec<&'static str>,
         depth: Option<(&'static str, DepthUse)>,
         inputs: Vec<&'static str>,
-    ) -> PassDecl {
-        PassDecl {
-            kind,
-            io: PassIo::Subpass {
-                colour,
-                depth,
-                inputs,
-            },
+    ) -> PassIo {
+        PassIo::Subpass {
+            colour,
+            depth,
+            inputs,
         }
     }
+}
 
-    fn transfer(kind: PassKind, reads: Vec<&'static str>, writes: Vec<&'static str>) -> PassDecl {
-        PassDecl {
-            kind,
-            io: PassIo::Transfer { reads, writes },
-        }
+/// One pass of the frame: which pass (an entry of [`PASSES`]), and what it
+/// reads and writes.
+#[derive(Clone)]
+pub struct PassDecl {
+    pub pass: &'static dyn PassType,
+    pub io: PassIo,
+}
+
+impl std::fmt::Debug for PassDecl {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PassDecl")
+            .field("pass", &self.name())
+            .field("io", &self.io)
+            .finish()
     }
+}
 
+/// Passes are told apart by name ([`PassType::name`] is unique).
+impl PartialEq for PassDecl {
+    fn eq(&self, other: &PassDecl) -> bool {
+        self.name() == other.name() && self.io == other.io
+    }
+}
+
+impl PassDecl {
     /// The pass's name in timing tables.
     pub fn name(&self) -> &'static str {
-        self.kind.name()
+        self.pass.name()
+    }
+
+    /// Whether this is `pass` (compared by name).
+    pub fn is(&self, pass: &dyn PassType) -> bool {
+        self.name() == pass.name()
     }
 
     pub fn is_subpass(&self) -> bool {
@@ -200,15 +140,15 @@ impl PassDecl {
     }
 }
 
-/// Why the split between subpasses is approximate, naming the subpass
-/// kinds: printed under timing tables.
+/// Why the split between subpasses is approximate, naming the subpasses:
+/// printed under timing tables.
 pub fn subpass_timing_note() -> String {
-    let names: Vec<&str> = PassKind::ALL
+    let names: Vec<&str> = PASSES
         .iter()
-        .filter(|k| k.is_subpass())
-        .map(|k| k.name())
+        .filter(|p| p.is_subpass())
+        .map(|p| p.name())
         .collect();
-    let (last, rest) = names.split_last().expect("there are subpass kinds");
+    let (last, rest) = names.split_last().expect("there are subpasses");
     format!(
         "the {} and {last} passes are subpasses of one render pass: a binning rasterizer \
          (lavapipe, tile-based GPUs) may do a draw's work after a later timestamp, so their time \
@@ -283,9 +223,7 @@ impl FramePlan {
             maps: draws.maps,
             tile_groups,
             aerial_volume_reach: graph
-                .passes
-                .iter()
-                .any(|p| p.kind == PassKind::AerialVolume)
+                .has(aerial_volume::PASS)
                 .then(|| aerial_volume_reach(scene, &geometry.bounds)),
             attachments: graph.attachments,
             passes: graph.passes,
@@ -319,9 +257,9 @@ impl FramePlan {
         self.passes.iter().map(PassDecl::name).collect()
     }
 
-    /// Whether a pass of this kind is in the frame.
-    pub fn has(&self, kind: PassKind) -> bool {
-        self.passes.iter().any(|p| p.kind == kind)
+    /// Whether `pass` (an entry of [`PASSES`]) is in the frame.
+    pub fn has(&self, pass: &dyn PassType) -> bool {
+        self.passes.iter().any(|p| p.is(pass))
     }
 
     /// Whether an attachment of this name exists.
@@ -354,20 +292,51 @@ pub struct FrameGraph {
     pub passes: Vec<PassDecl>,
 }
 
-/// What decides a frame's attachments and passes.
-struct FrameShape {
+/// What decides a frame's attachments and passes: the scene and the
+/// decisions several passes share, made once per frame. Each pass's
+/// [`PassType::declare`] reads it and decides the rest.
+pub struct FrameShape<'a> {
+    /// The scene drawn; `None` for a frame that only tone-maps an HDR
+    /// image copied in (`aerial tonemap`).
+    pub scene: Option<&'a Scene>,
+    /// The linear HDR image is read back too.
+    pub keep_hdr: bool,
     /// Lit in a G-buffer and a lighting pass rather than while drawing.
-    deferred: bool,
+    pub deferred: bool,
     /// Some object is drawn in the transparent pass.
-    any_transparent: bool,
+    pub any_transparent: bool,
     /// An atmosphere pass draws the sky over the surfaces.
-    sky: bool,
+    pub sky: bool,
     /// Drawn straight into the sRGB output, without an HDR target.
-    direct: bool,
+    pub direct: bool,
     /// The attachment the objects are drawn into.
-    target: &'static str,
+    pub target: &'static str,
     /// Opaque surfaces are drawn depth-only first ([`DepthPrepassRule`]).
-    prepass: bool,
+    pub prepass: bool,
+}
+
+impl FrameShape<'_> {
+    /// How the opaque surfaces use depth: after a depth pre-pass they only
+    /// test it (EQUAL), as it already holds the nearest.
+    pub fn surface_depth(&self) -> DepthUse {
+        if self.prepass {
+            DepthUse::Test
+        } else {
+            DepthUse::Write
+        }
+    }
+
+    /// The passes of [`PASSES`] this frame holds, in order, each with its
+    /// declaration.
+    fn passes(&self) -> Vec<PassDecl> {
+        PASSES
+            .iter()
+            .filter_map(|&pass| {
+                let io = pass.declare(self)?;
+                Some(PassDecl { pass, io })
+            })
+            .collect()
+    }
 }
 
 impl FrameGraph {
@@ -383,7 +352,6 @@ impl FrameGraph {
     /// [`FrameGraph::new`] with the depth pre-pass decided by the caller
     /// (`prepass`; it has no effect on a frame without opaque draws).
     pub fn with_prepass(scene: &Scene, keep_hdr: bool, prepass: bool) -> FrameGraph {
-        use attachment::*;
         let mut shape = FrameShape::of(scene, keep_hdr);
         shape.prepass = prepass && has_opaque_draws(scene);
         let lighting = if shape.deferred {
@@ -392,16 +360,10 @@ impl FrameGraph {
             Lighting::Forward
         };
         let mut attachments = frame_attachments(scene, &shape);
-        let mut passes = compute_passes(scene, &shape);
-        passes.extend(render_passes(&shape));
+        let passes = shape.passes();
         // Cleared attachments first, so the render pass needs no clear
         // value for an attachment it does not clear.
         attachments.sort_by_key(|a| a.clear.is_none());
-        let mut reads = vec![OUTPUT];
-        if keep_hdr {
-            reads.push(HDR);
-        }
-        passes.push(PassDecl::transfer(PassKind::Readback, reads, vec![]));
         FrameGraph {
             lighting,
             attachments,
@@ -410,8 +372,8 @@ impl FrameGraph {
     }
 }
 
-impl FrameShape {
-    fn of(scene: &Scene, keep_hdr: bool) -> FrameShape {
+impl FrameShape<'_> {
+    fn of(scene: &Scene, keep_hdr: bool) -> FrameShape<'_> {
         use attachment::*;
         let debug = scene.output.debug_view.map_or(0, |v| v as u32);
         let deferred = uses_deferred_lighting(scene);
@@ -452,6 +414,8 @@ impl FrameShape {
             HDR
         };
         FrameShape {
+            scene: Some(scene),
+            keep_hdr,
             deferred,
             any_transparent,
             sky,
@@ -513,114 +477,22 @@ fn frame_attachments(scene: &Scene, shape: &FrameShape) -> Vec<AttachmentDecl> {
     attachments
 }
 
-/// The compute passes before the render pass: the sky-view table and the
-/// aerial-perspective volume, where the frame has them.
-fn compute_passes(scene: &Scene, shape: &FrameShape) -> Vec<PassDecl> {
-    let sky = shape.sky;
-    let mut passes = Vec::new();
-    if sky && scene.sky.as_ref().is_some_and(|s| s.sky_view.is_some()) {
-        // Marched for a grid of directions before the render pass;
-        // the atmosphere subpass reads it for pixels without a surface.
-        passes.push(PassDecl {
-            kind: PassKind::SkyView,
-            io: PassIo::Compute,
-        });
-    }
-    // The aerial-perspective volume only serves pixels with a surface:
-    // a frame without objects has none to read it.
-    if sky
-        && !scene.objects.is_empty()
-        && scene
-            .sky
-            .as_ref()
-            .is_some_and(|s| s.aerial_perspective == AerialPerspective::Volume)
-    {
-        passes.push(PassDecl {
-            kind: PassKind::AerialVolume,
-            io: PassIo::Compute,
-        });
-    }
-    passes
-}
-
-/// The subpasses of the render pass: the objects (deferred or forward),
-/// the transparent ones, the atmosphere and the tone map, where the frame
-/// has them.
-fn render_passes(shape: &FrameShape) -> Vec<PassDecl> {
-    use attachment::*;
-    let target = shape.target;
-    let mut passes = Vec::new();
-    // After a depth pre-pass the surfaces only test depth (EQUAL): it
-    // already holds the nearest.
-    let surface_depth = if shape.prepass {
-        passes.push(PassDecl::subpass(
-            PassKind::DepthPrepass,
-            vec![],
-            Some((DEPTH, DepthUse::Write)),
-            vec![],
-        ));
-        DepthUse::Test
-    } else {
-        DepthUse::Write
-    };
-    if shape.deferred {
-        passes.push(PassDecl::subpass(
-            PassKind::GBuffer,
-            vec![target, ALBEDO, NORMAL, MATERIAL],
-            Some((DEPTH, surface_depth)),
-            vec![],
-        ));
-        passes.push(PassDecl::subpass(
-            PassKind::Lighting,
-            vec![target],
-            Some((DEPTH, DepthUse::Test)),
-            vec![ALBEDO, NORMAL, MATERIAL, DEPTH],
-        ));
-    } else {
-        passes.push(PassDecl::subpass(
-            PassKind::Opaque,
-            vec![target],
-            Some((DEPTH, surface_depth)),
-            vec![],
-        ));
-    }
-    if shape.any_transparent {
-        passes.push(PassDecl::subpass(
-            PassKind::Transparent,
-            vec![target],
-            Some((DEPTH, DepthUse::Test)),
-            vec![],
-        ));
-    }
-    if shape.sky {
-        passes.push(PassDecl::subpass(
-            PassKind::Atmosphere,
-            vec![HDR],
-            Some((DEPTH, DepthUse::Test)),
-            vec![SURFACE, DEPTH],
-        ));
-    }
-    if !shape.direct {
-        passes.push(PassDecl::subpass(
-            PassKind::ToneMap,
-            vec![OUTPUT],
-            None,
-            vec![HDR],
-        ));
-    }
-    passes
-}
-
 impl FrameGraph {
     /// The graph that only tone-maps an HDR image: the image copied into a
     /// 32-bit float HDR attachment, tone-mapped, read back (`keep_hdr`: the
     /// HDR attachment too).
     pub fn for_hdr_image(keep_hdr: bool) -> FrameGraph {
         use attachment::*;
-        let mut reads = vec![OUTPUT];
-        if keep_hdr {
-            reads.push(HDR);
-        }
+        let shape = FrameShape {
+            scene: None,
+            keep_hdr,
+            deferred: false,
+            any_transparent: false,
+            sky: false,
+            direct: false,
+            target: HDR,
+            prepass: false,
+        };
         FrameGraph {
             lighting: Lighting::Forward,
             attachments: vec![
@@ -635,12 +507,13 @@ impl FrameGraph {
                     clear: None,
                 },
             ],
-            passes: vec![
-                PassDecl::transfer(PassKind::HdrUpload, vec![], vec![HDR]),
-                PassDecl::subpass(PassKind::ToneMap, vec![OUTPUT], None, vec![HDR]),
-                PassDecl::transfer(PassKind::Readback, reads, vec![]),
-            ],
+            passes: shape.passes(),
         }
+    }
+
+    /// Whether `pass` (an entry of [`PASSES`]) is in the frame.
+    pub fn has(&self, pass: &dyn PassType) -> bool {
+        self.passes.iter().any(|p| p.is(pass))
     }
 }
 
@@ -766,6 +639,7 @@ pub fn hdr_format(format: HdrFormat) -> Format {
 mod tests {
 
     use super::*;
+    use crate::scene::AerialPerspective;
     use std::path::Path;
 
     fn load(file: &str) -> (Scene, FramePlan) {
@@ -777,11 +651,11 @@ mod tests {
         (scene, plan)
     }
 
-    /// A kind's subpass-ness matches how every plan declares it, every
-    /// kind appears in `ALL` once, and the timing note names exactly the
-    /// subpass kinds.
+    /// A pass's subpass-ness matches how every plan declares it, every
+    /// pass of `PASSES` is declared by some plan under its own name, and
+    /// the timing note names exactly the subpasses.
     #[test]
-    fn pass_kinds_agree_with_their_declarations_and_the_note() {
+    fn passes_agree_with_their_declarations_and_the_note() {
         let mut plans: Vec<FramePlan> = ["default.toml", "earth_noon.toml", "transparency.toml"]
             .iter()
             .map(|f| load(f).1)
@@ -810,17 +684,15 @@ mod tests {
         ));
         let mut seen = std::collections::HashSet::new();
         for decl in plans.iter().flat_map(|p| &p.passes) {
-            assert_eq!(decl.kind.is_subpass(), decl.is_subpass(), "{decl:?}");
-            seen.insert(decl.kind);
+            assert_eq!(decl.pass.is_subpass(), decl.is_subpass(), "{decl:?}");
+            seen.insert(decl.name());
         }
-        assert_eq!(
-            seen.len(),
-            PassKind::ALL.len(),
-            "a kind no plan declares: {seen:?}"
-        );
+        let names: std::collections::HashSet<_> = PASSES.iter().map(|p| p.name()).collect();
+        assert_eq!(names.len(), PASSES.len(), "two passes share a name");
+        assert_eq!(seen, names, "a pass no plan declares");
         let note = subpass_timing_note();
-        for kind in PassKind::ALL {
-            assert_eq!(note.contains(kind.name()), kind.is_subpass(), "{note}");
+        for pass in PASSES {
+            assert_eq!(note.contains(pass.name()), pass.is_subpass(), "{note}");
         }
     }
 
@@ -1047,7 +919,7 @@ mod tests {
         let plan_of =
             |scene: &Scene| FramePlan::new(scene, &SceneGeometry::new(scene).unwrap(), false);
         let (mut scene, plan) = load("earth_objects.toml");
-        assert!(!plan.has(PassKind::AerialVolume));
+        assert!(!plan.has(aerial_volume::PASS));
         assert_eq!(plan.aerial_volume_reach, None);
         scene.sky.as_mut().unwrap().aerial_perspective = AerialPerspective::Volume;
         let plan = plan_of(&scene);
@@ -1083,12 +955,12 @@ mod tests {
         // A debug view draws no atmosphere, so no volume.
         let mut debug = scene.clone();
         debug.output.debug_view = Some(crate::scene::DebugView::Normals);
-        assert!(!plan_of(&debug).has(PassKind::AerialVolume));
+        assert!(!plan_of(&debug).has(aerial_volume::PASS));
         // No objects: nothing reads the volume.
         let (mut sky_only, _) = load("earth_noon.toml");
         sky_only.sky.as_mut().unwrap().aerial_perspective = AerialPerspective::Volume;
         let plan = plan_of(&sky_only);
-        assert!(!plan.has(PassKind::AerialVolume), "{:?}", plan.pass_names());
+        assert!(!plan.has(aerial_volume::PASS), "{:?}", plan.pass_names());
         assert_eq!(plan.aerial_volume_reach, None);
     }
 

@@ -11,7 +11,8 @@
 //!   once (`SceneGeometry::new`), and the lights each object's uniform
 //!   block must hold where the blocks are laid out (`scene_resources`).
 
-use super::plan::{attachment, FrameGraph, PassIo, PassKind};
+use super::passes::aerial_volume;
+use super::plan::{attachment, FrameGraph, PassIo};
 use super::RenderError;
 use crate::budget::{Bytes, MemoryBudget};
 use crate::image_io::{inspect_texture, TextureInfo};
@@ -213,11 +214,7 @@ fn sky_bytes(scene: &Scene, graph: &FrameGraph, budget: &MemoryBudget) -> Result
     }
     // The aerial-perspective volume: two RGBA32F panels, in frames
     // that have it.
-    if graph
-        .passes
-        .iter()
-        .any(|p| p.kind == PassKind::AerialVolume)
-    {
+    if graph.has(aerial_volume::PASS) {
         let (w, h, d) = sky.aerial_volume;
         let need = crate::render::sky_resources::AerialVolume::bytes(sky.aerial_volume);
         budget.check(format!("aerial-perspective volume {w}x{h}x{d}"), need)?;

@@ -238,7 +238,8 @@ fn footprint(scene: &Scene, centre: glam::DVec3, radius: f64, fragment_cost: f64
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::plan::{FramePlan, PassKind};
+    use crate::render::passes::depth_prepass;
+    use crate::render::plan::FramePlan;
     use crate::scene::DepthPrepass;
     use std::path::Path;
 
@@ -348,12 +349,12 @@ mod tests {
         ] {
             let (rule, plan) = plan(&example(file));
             assert!(!rule.pays(), "{file}: {rule:?}");
-            assert!(!plan.has(PassKind::DepthPrepass), "{file}");
+            assert!(!plan.has(depth_prepass::PASS), "{file}");
         }
         let (rule, plan) = plan(&layered(16, 32));
         assert!(rule.pays(), "{rule:?}");
         assert!(rule.overdrawn > 0.3, "{rule:?}");
-        assert!(plan.has(PassKind::DepthPrepass));
+        assert!(plan.has(depth_prepass::PASS));
         // Eight constant lights: near break-even at 320x180 (measured 3 %
         // dearer with the pre-pass), so off.
         assert!(!plan_rule(&layered(8, 48)).pays());
@@ -387,7 +388,7 @@ mod tests {
         );
         let mut scene = layered(16, 32);
         scene.output.depth_prepass = DepthPrepass::Off;
-        assert!(!plan(&scene).1.has(PassKind::DepthPrepass));
+        assert!(!plan(&scene).1.has(depth_prepass::PASS));
     }
 
     /// A frame without opaque draws has no pre-pass even when asked for.
@@ -395,6 +396,6 @@ mod tests {
     fn no_opaque_draws_no_prepass() {
         let mut scene = example("assets/scenes/earth_noon.toml");
         scene.output.depth_prepass = DepthPrepass::On;
-        assert!(!plan(&scene).1.has(PassKind::DepthPrepass));
+        assert!(!plan(&scene).1.has(depth_prepass::PASS));
     }
 }

@@ -7,8 +7,8 @@
 //! back.
 
 use super::geometry::SceneGeometry;
-use super::passes::{Attachments, PassResources, PassSetup, RecordPass};
-use super::plan::{attachment, FramePlan, PassIo, PassKind};
+use super::passes::{atmosphere, Attachments, PassResources, PassSetup, RecordPass};
+use super::plan::{attachment, FramePlan, PassIo};
 use super::scene_resources::SceneResources;
 use super::sky_resources::SkyResources;
 use super::timed_submit::TimedCommands;
@@ -146,7 +146,7 @@ impl Renderer {
         // The sky's resources first: objects lit by the atmosphere bind
         // its set.
         let sky_resources = match &scene.sky {
-            Some(sky) if plan.has(PassKind::Atmosphere) => {
+            Some(sky) if plan.has(atmosphere::PASS) => {
                 Some(SkyResources::new(ctx, sky, &scene.camera, &plan)?)
             }
             _ => None,
@@ -188,7 +188,7 @@ impl Renderer {
                 frame: &frame_resources,
                 hdr_input,
             };
-            passes.push(super::passes::create(&setup)?);
+            passes.push(decl.pass.create(&setup)?);
             if decl.is_subpass() {
                 subpass += 1;
             }

@@ -13,7 +13,8 @@
 //! Everything planet-scale is computed here in f64 and given to the
 //! shaders camera-relative.
 
-use super::plan::{FramePlan, PassKind};
+use super::passes::aerial_volume;
+use super::plan::FramePlan;
 use super::sun_tables::{self, SunTables};
 use super::RenderError;
 use crate::atmosphere::OpticalDepthTable;
@@ -372,7 +373,7 @@ impl SkyResources {
             Some(_) if linear_filter => Some(Sampler::clamped(ctx, SamplerFilter::Bilinear)?),
             _ => None,
         };
-        let aerial_volume = if plan.has(PassKind::AerialVolume) {
+        let aerial_volume = if plan.has(aerial_volume::PASS) {
             Some(AerialVolume::new(ctx, sky, linear_filter)?)
         } else {
             None

@@ -11,8 +11,10 @@
 //! pass exists only in frames with surfaces under an atmosphere.
 
 use super::atmosphere::march_pipeline;
-use super::{PassResources, PassSetup, RecordPass};
+use super::{PassResources, PassSetup, PassType, RecordPass};
+use crate::render::plan::{FrameShape, PassIo};
 use crate::render::RenderError;
+use crate::scene::AerialPerspective;
 use crate::shaders::{self, AerialVolumeCompFeatures};
 use crate::vk::{CommandBuffer, ComputePipeline, ImageUse, PipelineLayout};
 
@@ -27,7 +29,38 @@ pub struct AerialVolumePass {
     columns: (u32, u32),
 }
 
-pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+/// The pass in the frame's list ([`super::PASSES`]).
+pub const PASS: &dyn PassType = &Pass;
+
+struct Pass;
+
+impl PassType for Pass {
+    fn name(&self) -> &'static str {
+        "aerial volume"
+    }
+
+    /// In frames with an atmosphere pass and `aerial_perspective =
+    /// "volume"`; the volume only serves pixels with a surface, so a frame
+    /// without objects has none to read it.
+    fn declare(&self, shape: &FrameShape<'_>) -> Option<PassIo> {
+        let scene = shape.scene?;
+        let volume = scene
+            .sky
+            .as_ref()
+            .is_some_and(|s| s.aerial_perspective == AerialPerspective::Volume);
+        (shape.sky && volume && !scene.objects.is_empty()).then_some(PassIo::Compute)
+    }
+
+    fn create(&self, setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+        create(setup)
+    }
+
+    fn is_subpass(&self) -> bool {
+        false
+    }
+}
+
+fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     let resources = setup.sky_resources()?;
     let (sky, volume) = match (&setup.scene.sky, &resources.aerial_volume) {
         (Some(sky), Some(volume)) => (sky, volume),

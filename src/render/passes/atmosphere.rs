@@ -15,8 +15,11 @@
 //! sky view or march (EQUAL). The uniforms and tables are the frame's
 //! [`SkyResources`].
 
-use super::{fullscreen_pipeline, InputAttachments, PassResources, PassSetup, RecordPass};
+use super::{
+    fullscreen_pipeline, InputAttachments, PassResources, PassSetup, PassType, RecordPass,
+};
 use crate::atmosphere::TableMapping;
+use crate::render::plan::{attachment, FrameShape, PassIo};
 use crate::render::sky_resources::SkyResources;
 use crate::render::RenderError;
 use crate::scene::{OzoneDepth, TableFilter};
@@ -25,8 +28,8 @@ use crate::shader_ids::{
     SPEC_TRANSPARENT_OVER_SKY,
 };
 use crate::shaders::{self, AtmosphereFragFeatures};
-use crate::vk::CompareOp;
 use crate::vk::{CommandBuffer, ComputePipeline, GraphicsPipeline, PipelineLayout, ShaderModule};
+use crate::vk::{CompareOp, DepthUse};
 
 /// Fields drop in order: the pipelines before their layout and the sets.
 pub struct AtmospherePass {
@@ -74,7 +77,35 @@ pub(crate) fn table_constants(sky: &crate::scene::Sky) -> [(u32, u32); 3] {
     ]
 }
 
-pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+/// The pass in the frame's list ([`super::PASSES`]).
+pub const PASS: &dyn PassType = &Pass;
+
+struct Pass;
+
+impl PassType for Pass {
+    fn name(&self) -> &'static str {
+        "atmosphere"
+    }
+
+    /// Over the surfaces, in frames with an atmosphere: reads the
+    /// surfaces' colour and depth, writes HDR.
+    fn declare(&self, shape: &FrameShape<'_>) -> Option<PassIo> {
+        use attachment::*;
+        shape.sky.then(|| {
+            PassIo::subpass(
+                vec![HDR],
+                Some((DEPTH, DepthUse::Test)),
+                vec![SURFACE, DEPTH],
+            )
+        })
+    }
+
+    fn create(&self, setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+        create(setup)
+    }
+}
+
+fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     let resources = setup.sky_resources()?;
     let sky = setup.scene.sky.as_ref().ok_or_else(|| {
         RenderError::Frame("the atmosphere pass needs a scene with [atmosphere]".into())

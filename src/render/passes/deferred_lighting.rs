@@ -11,19 +11,20 @@
 //! The tiles are drawn at the far plane with a LESS test against the
 //! stored (reversed-Z) depth, so pixels without a surface are never shaded.
 
-use super::{InputAttachments, PassResources, PassSetup, RecordPass};
+use super::{InputAttachments, PassResources, PassSetup, PassType, RecordPass};
 use crate::render::gpu_types::GpuLight;
+use crate::render::plan::{attachment, FrameShape, PassIo};
 use crate::render::scene_resources::{gpu_light, pack_blocks, SceneResources};
 use crate::render::static_lights;
 use crate::render::RenderError;
 use crate::shader_ids::{SPEC_LIGHT_ARRAY_LENGTH, SPEC_LIGHT_COUNT};
 use crate::shaders;
-use crate::vk::CompareOp;
 use crate::vk::{
     Blend, Buffer, BufferUsage, CommandBuffer, CullModeFlags, DescriptorBinding, DescriptorPool,
     DescriptorSet, DescriptorSetLayout, DescriptorType, Format, GraphicsPipeline,
     GraphicsPipelineDesc, PipelineLayout, ShaderModule, ShaderStageFlags, VertexAttribute,
 };
+use crate::vk::{CompareOp, DepthUse};
 use std::collections::BTreeMap;
 
 /// One draw: a tile group's vertices and lights.
@@ -62,7 +63,34 @@ fn group_block(scene: &crate::scene::Scene, lights: &[usize]) -> Vec<u8> {
     bytemuck::cast_slice(&lights).to_vec()
 }
 
-pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+/// The pass in the frame's list ([`super::PASSES`]).
+pub const PASS: &dyn PassType = &Pass;
+
+struct Pass;
+
+impl PassType for Pass {
+    fn name(&self) -> &'static str {
+        "lighting"
+    }
+
+    /// With deferred lighting: the G-buffer and depth lit into the target.
+    fn declare(&self, shape: &FrameShape<'_>) -> Option<PassIo> {
+        use attachment::*;
+        shape.deferred.then(|| {
+            PassIo::subpass(
+                vec![shape.target],
+                Some((DEPTH, DepthUse::Test)),
+                vec![ALBEDO, NORMAL, MATERIAL, DEPTH],
+            )
+        })
+    }
+
+    fn create(&self, setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+        create(setup)
+    }
+}
+
+fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     let ctx = setup.ctx;
     let resources = setup.scene_resources()?;
     let TileGroups {

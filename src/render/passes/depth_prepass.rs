@@ -1,5 +1,5 @@
 //! The depth pre-pass: the opaque draws, depth only, before the surface
-//! pass that shades them (`depth_prepass`, `PassKind::DepthPrepass`).
+//! pass that shades them (`depth_prepass`, [`PASS`]).
 //!
 //! Its pipelines have no fragment stage and its subpass no colour target,
 //! so a fragment costs a depth test and write. The surface pass after it
@@ -15,17 +15,17 @@
 //! that each covered pixel is shaded once (`tests/suite/depth_prepass.rs`).
 
 use super::surface::instance_attributes;
-use super::{PassResources, PassSetup, RecordPass};
+use super::{PassResources, PassSetup, PassType, RecordPass};
 use crate::mesh::Vertex;
 use crate::render::gpu_types::InstanceTransform;
-use crate::render::plan::{Draw, FramePlan};
+use crate::render::plan::{attachment, Draw, FramePlan, FrameShape, PassIo};
 use crate::render::RenderError;
 use crate::scene::Scene;
 use crate::shader_ids::{FRAME_SET, OBJECT_SET};
 use crate::shaders::{self, ObjectVertFeatures};
 use crate::vk::{
-    CommandBuffer, CompareOp, CullModeFlags, DepthOnlyPipelineDesc, Format, GraphicsPipeline,
-    ShaderModule, VertexAttribute,
+    CommandBuffer, CompareOp, CullModeFlags, DepthOnlyPipelineDesc, DepthUse, Format,
+    GraphicsPipeline, ShaderModule, VertexAttribute,
 };
 
 pub struct DepthPrepass {
@@ -43,7 +43,30 @@ fn slot(d: &Draw) -> usize {
     d.pipeline.two_sided as usize + 2 * d.pipeline.instanced as usize
 }
 
-pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+/// The pass in the frame's list ([`super::PASSES`]).
+pub const PASS: &dyn PassType = &Pass;
+
+struct Pass;
+
+impl PassType for Pass {
+    fn name(&self) -> &'static str {
+        "depth prepass"
+    }
+
+    /// When the plan decided for it ([`FrameShape::prepass`]): writes depth
+    /// only.
+    fn declare(&self, shape: &FrameShape<'_>) -> Option<PassIo> {
+        shape
+            .prepass
+            .then(|| PassIo::subpass(vec![], Some((attachment::DEPTH, DepthUse::Write)), vec![]))
+    }
+
+    fn create(&self, setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+        create(setup)
+    }
+}
+
+fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     let draws = setup.plan.opaque.clone();
     // Pipelines for the opaque draws out of view too, so a view that
     // brings them in keeps the pass.

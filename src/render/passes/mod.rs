@@ -1,15 +1,18 @@
-//! The passes a frame is made of, one small type per file, each with a
-//! `create` (its pipelines, descriptor sets and own resources, from what the
-//! plan declared) and a `record` (its commands, recorded once).
+//! The passes a frame is made of, one small type per file. Each file
+//! declares its pass with a [`PassType`] (its name, whether a frame holds
+//! it and what it reads and writes there, and how it is created) and
+//! defines what it creates: a [`RecordPass`] holding its pipelines,
+//! descriptor sets and own resources, which records its commands once.
 //!
-//! The plan declares each pass by its [`PassKind`] and what it reads and
-//! writes ([`PassDecl`]); [`create`] picks the pass's file from the kind,
-//! and each pass takes its attachments (input attachments in their
-//! declared order) from its declaration. The renderer begins the render
-//! pass before the first subpass, moves to the next subpass between
-//! subpasses and ends it after the last, so no pass knows its subpass
-//! index or its neighbours. Adding a pass is a new file here, a
-//! [`PassKind`] and one entry in `FramePlan::new`.
+//! [`PASSES`] lists every pass in the order a frame runs them; the plan
+//! asks each one for its declaration ([`PassDecl`]) and keeps those a
+//! frame holds. Each pass takes its attachments (input attachments in
+//! their declared order) from its declaration and everything else from
+//! the plan ([`PassSetup`]). The renderer begins the render pass before
+//! the first subpass, moves to the next subpass between subpasses and ends
+//! it after the last, so no pass knows its subpass index or its
+//! neighbours. Adding a pass is a new file here (with its `PassType`), its
+//! shaders in `glsl/`, and one line in [`PASSES`].
 
 pub mod aerial_volume;
 pub mod atmosphere;
@@ -20,7 +23,7 @@ pub mod surface;
 pub mod tonemap;
 pub mod transfer;
 
-use super::plan::{FramePlan, PassDecl, PassKind};
+use super::plan::{FramePlan, FrameShape, PassDecl, PassIo};
 use super::scene_resources::SceneResources;
 use super::sky_resources::SkyResources;
 use super::{Pixels, RenderError};
@@ -33,19 +36,43 @@ use crate::vk::{
 };
 use std::sync::Arc;
 
-/// Creates the GPU objects of the pass `setup.decl` declares.
-pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
-    match setup.decl.kind {
-        PassKind::SkyView => sky_view::create(setup),
-        PassKind::AerialVolume => aerial_volume::create(setup),
-        PassKind::DepthPrepass => depth_prepass::create(setup),
-        PassKind::GBuffer => surface::create_gbuffer(setup),
-        PassKind::Lighting => deferred_lighting::create(setup),
-        PassKind::Opaque => surface::create_opaque(setup),
-        PassKind::Transparent => surface::create_transparent(setup),
-        PassKind::Atmosphere => atmosphere::create(setup),
-        PassKind::ToneMap => tonemap::create(setup),
-        PassKind::HdrUpload | PassKind::Readback => transfer::create(setup),
+/// Every pass, in the order a frame runs them: a frame holds those whose
+/// [`PassType::declare`] says so.
+pub const PASSES: &[&dyn PassType] = &[
+    transfer::HDR_UPLOAD,
+    sky_view::PASS,
+    aerial_volume::PASS,
+    depth_prepass::PASS,
+    surface::GBUFFER,
+    deferred_lighting::PASS,
+    surface::OPAQUE,
+    surface::TRANSPARENT,
+    atmosphere::PASS,
+    tonemap::PASS,
+    transfer::READBACK,
+];
+
+/// A pass as the frame's list holds it: each file under `render/passes`
+/// exports one (or a few) as a constant. Plans and queries name a pass by
+/// that constant (`plan.has(aerial_volume::PASS)`), never by a string.
+pub trait PassType: Sync {
+    /// The pass's name in timing tables, reports and the viewer; unique
+    /// among [`PASSES`].
+    fn name(&self) -> &'static str;
+
+    /// What the pass reads and writes in the frame `shape` describes, or
+    /// `None` when that frame does without it.
+    fn declare(&self, shape: &FrameShape<'_>) -> Option<PassIo>;
+
+    /// Creates the pass's GPU objects from its declaration (`setup.decl`)
+    /// and the plan.
+    fn create(&self, setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>;
+
+    /// Whether the pass is a subpass of the frame's render pass (most
+    /// are), rather than compute or copies outside it: what `declare`
+    /// returns is then always a [`PassIo::Subpass`].
+    fn is_subpass(&self) -> bool {
+        true
     }
 }
 

@@ -11,7 +11,8 @@
 //! ground and the sky at the horizon so no filter mixes them.
 
 use super::atmosphere::march_pipeline;
-use super::{PassResources, PassSetup, RecordPass};
+use super::{PassResources, PassSetup, PassType, RecordPass};
+use crate::render::plan::{FrameShape, PassIo};
 use crate::render::RenderError;
 use crate::shaders::{self, SkyViewCompFeatures};
 use crate::vk::{CommandBuffer, ComputePipeline, ImageUse, PipelineLayout};
@@ -26,7 +27,33 @@ pub struct SkyViewPass {
     size: (u32, u32),
 }
 
-pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+/// The pass in the frame's list ([`super::PASSES`]).
+pub const PASS: &dyn PassType = &Pass;
+
+struct Pass;
+
+impl PassType for Pass {
+    fn name(&self) -> &'static str {
+        "sky view"
+    }
+
+    /// Marched for a grid of directions before the render pass, in frames
+    /// with an atmosphere pass and a sky-view table.
+    fn declare(&self, shape: &FrameShape<'_>) -> Option<PassIo> {
+        let sky = shape.scene?.sky.as_ref()?;
+        (shape.sky && sky.sky_view.is_some()).then_some(PassIo::Compute)
+    }
+
+    fn create(&self, setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+        create(setup)
+    }
+
+    fn is_subpass(&self) -> bool {
+        false
+    }
+}
+
+fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     let resources = setup.sky_resources()?;
     let (sky, size) = match (&setup.scene.sky, resources.sky_view) {
         (Some(sky), Some(size)) => (sky, size),

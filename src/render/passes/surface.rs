@@ -12,11 +12,11 @@
 //! the sun and sky at each shaded point (`AirLight`, shader features
 //! `SUN_LIGHT` and `SKY_LIGHT`), reading the atmosphere's set.
 
-use super::{PassResources, PassSetup, RecordPass};
+use super::{PassResources, PassSetup, PassType, RecordPass};
 use crate::mesh::Vertex;
 use crate::render::gpu_types::InstanceTransform;
 use crate::render::plan::{
-    attachment, AirLight, Draw, FramePlan, PassIo, PassKind, PipelineKey, ShadingKey,
+    attachment, AirLight, Draw, FramePlan, FrameShape, PassIo, PipelineKey, ShadingKey,
 };
 use crate::render::static_lights;
 use crate::render::RenderError;
@@ -71,16 +71,47 @@ fn surface_keys(draws: &[Draw], static_lights: bool) -> Vec<SurfaceKey> {
         .collect()
 }
 
-pub fn create_opaque(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
-    SurfacePass::create(setup, Form::Opaque)
-}
+/// The forms in the frame's list ([`super::PASSES`]).
+pub const OPAQUE: &dyn PassType = &Form::Opaque;
+pub const TRANSPARENT: &dyn PassType = &Form::Transparent;
+pub const GBUFFER: &dyn PassType = &Form::GBuffer;
 
-pub fn create_transparent(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
-    SurfacePass::create(setup, Form::Transparent)
-}
+impl PassType for Form {
+    fn name(&self) -> &'static str {
+        match self {
+            Form::Opaque => "opaque",
+            Form::Transparent => "transparent",
+            Form::GBuffer => "gbuffer",
+        }
+    }
 
-pub fn create_gbuffer(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
-    SurfacePass::create(setup, Form::GBuffer)
+    /// Opaque surfaces in one of the forward and the G-buffer forms (in
+    /// every frame that draws a scene, with objects or not); transparent
+    /// ones where the scene has some.
+    fn declare(&self, shape: &FrameShape<'_>) -> Option<PassIo> {
+        use attachment::*;
+        shape.scene?;
+        let target = shape.target;
+        let io = match self {
+            Form::Opaque if !shape.deferred => {
+                PassIo::subpass(vec![target], Some((DEPTH, shape.surface_depth())), vec![])
+            }
+            Form::GBuffer if shape.deferred => PassIo::subpass(
+                vec![target, ALBEDO, NORMAL, MATERIAL],
+                Some((DEPTH, shape.surface_depth())),
+                vec![],
+            ),
+            Form::Transparent if shape.any_transparent => {
+                PassIo::subpass(vec![target], Some((DEPTH, DepthUse::Test)), vec![])
+            }
+            _ => return None,
+        };
+        Some(io)
+    }
+
+    fn create(&self, setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+        SurfacePass::create(setup, *self)
+    }
 }
 
 impl SurfacePass {
@@ -268,7 +299,7 @@ impl RecordPass for SurfacePass {
 /// Whether opaque surfaces were drawn depth-only before this pass: its
 /// declared depth use is then a test, not a write.
 fn after_prepass(setup: &PassSetup<'_>) -> bool {
-    setup.plan.has(PassKind::DepthPrepass)
+    setup.plan.has(super::depth_prepass::PASS)
         && matches!(
             &setup.decl.io,
             PassIo::Subpass {

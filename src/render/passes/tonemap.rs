@@ -4,7 +4,10 @@
 //! LDR scenes read back with `--hdr`). Operator and exposure are
 //! specialization constants.
 
-use super::{fullscreen_pipeline, InputAttachments, PassResources, PassSetup, RecordPass};
+use super::{
+    fullscreen_pipeline, InputAttachments, PassResources, PassSetup, PassType, RecordPass,
+};
+use crate::render::plan::{attachment, FrameShape, PassIo};
 use crate::render::RenderError;
 use crate::scene::ToneMapOperator;
 use crate::shader_ids::{SPEC_TONEMAP_EXPOSURE, SPEC_TONEMAP_OPERATOR};
@@ -18,7 +21,28 @@ pub struct ToneMapPass {
     input: InputAttachments,
 }
 
-pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+/// The pass in the frame's list ([`super::PASSES`]).
+pub const PASS: &dyn PassType = &Pass;
+
+struct Pass;
+
+impl PassType for Pass {
+    fn name(&self) -> &'static str {
+        "tonemap"
+    }
+
+    /// HDR to the output, unless the frame draws straight into it.
+    fn declare(&self, shape: &FrameShape<'_>) -> Option<PassIo> {
+        (!shape.direct)
+            .then(|| PassIo::subpass(vec![attachment::OUTPUT], None, vec![attachment::HDR]))
+    }
+
+    fn create(&self, setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+        create(setup)
+    }
+}
+
+fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     let input = InputAttachments::declared(setup)?;
     let layout = PipelineLayout::new(setup.ctx, &[&input.layout])?;
     let tone_map = setup.scene.tone_map;

@@ -3,8 +3,8 @@
 //! it (tone-mapping an existing image), a readback copies attachments out
 //! after it. What to copy comes from the pass's declaration.
 
-use super::{PassResources, PassSetup, RecordPass};
-use crate::render::plan::{attachment, PassIo};
+use super::{PassResources, PassSetup, PassType, RecordPass};
+use crate::render::plan::{attachment, FrameShape, PassIo};
 use crate::render::RenderError;
 use crate::vk::{Buffer, BufferUsage, CommandBuffer};
 
@@ -15,7 +15,56 @@ pub struct TransferPass {
     readbacks: Vec<(&'static str, Buffer)>,
 }
 
-pub fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+/// The upload in the frame's list ([`super::PASSES`]): in the frame that
+/// tone-maps an HDR image, the image copied into the HDR attachment.
+pub const HDR_UPLOAD: &dyn PassType = &Direction::Upload;
+/// The readback in the frame's list: the output, and the HDR image when
+/// the frame keeps it, copied out.
+pub const READBACK: &dyn PassType = &Direction::Readback;
+
+enum Direction {
+    Upload,
+    Readback,
+}
+
+impl PassType for Direction {
+    fn name(&self) -> &'static str {
+        match self {
+            Direction::Upload => "hdr upload",
+            Direction::Readback => "readback",
+        }
+    }
+
+    fn declare(&self, shape: &FrameShape<'_>) -> Option<PassIo> {
+        use attachment::*;
+        match self {
+            Direction::Upload => shape.scene.is_none().then(|| PassIo::Transfer {
+                reads: vec![],
+                writes: vec![HDR],
+            }),
+            Direction::Readback => {
+                let mut reads = vec![OUTPUT];
+                if shape.keep_hdr {
+                    reads.push(HDR);
+                }
+                Some(PassIo::Transfer {
+                    reads,
+                    writes: vec![],
+                })
+            }
+        }
+    }
+
+    fn create(&self, setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+        create(setup)
+    }
+
+    fn is_subpass(&self) -> bool {
+        false
+    }
+}
+
+fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     let PassIo::Transfer { reads, writes } = &setup.decl.io else {
         return Err(RenderError::Frame(format!(
             "pass '{}' is not a transfer",
