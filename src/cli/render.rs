@@ -94,6 +94,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         };
         anyhow::Error::new(e).context(flag)
     })?;
+    if let Some(warning) = scene.tessellation_ceiling() {
+        eprintln!("warning: {warning}");
+    }
     let scene_name = match &args.scene {
         Some(path) => path.display().to_string(),
         None => "the default scene".to_string(),

@@ -172,10 +172,38 @@ impl Scene {
         f64::from(self.output.height) * 0.5 / half_fov.tan()
     }
 
-    /// The grid an auto object with surface `bounds` gets: its allowed
-    /// world error is `max_pixel_error` pixels at the nearest point of its
-    /// bounding sphere (no nearer than the near plane).
-    fn auto_segments(&self, object: &Object, bounds: &SurfaceBounds) -> (u32, u32) {
+    /// A warning when some auto objects need a finer grid than the largest
+    /// (`MAX_SEGMENTS` per direction): they get the largest, and their
+    /// chord error is above `max_pixel_error`. `None` when every auto
+    /// object's bound is met.
+    pub fn tessellation_ceiling(&self) -> Option<String> {
+        let max = f64::from(MAX_SEGMENTS);
+        let short = self
+            .objects
+            .iter()
+            .zip(self.auto_bounds())
+            .filter_map(|(object, bounds)| {
+                let bounds = bounds?;
+                let (u, v) = required_segments(&bounds, self.allowed_error(object, &bounds));
+                // NaN (unusable numbers) also falls back to the largest.
+                (!(u <= max && v <= max)).then_some(())
+            })
+            .count();
+        (short > 0).then(|| {
+            format!(
+                "tessellation auto: {short} object(s) need more than {MAX_SEGMENTS} segments \
+                 for max_pixel_error {}; they get {MAX_SEGMENTS}, and their error is larger",
+                self.output.max_pixel_error
+            )
+        })
+    }
+
+    /// The object-space chord error an auto object with surface `bounds`
+    /// is allowed: `max_pixel_error` pixels at the nearest point of its
+    /// bounding sphere (no nearer than the near plane), in world length,
+    /// over the transform's largest scale (which stretches object-space
+    /// errors at most that much).
+    fn allowed_error(&self, object: &Object, bounds: &SurfaceBounds) -> f64 {
         let transform = &object.transform;
         let scale = f64::from(transform.max_scale());
         let centre = transform.matrix_f64().transform_point3(bounds.centre);
@@ -183,8 +211,12 @@ impl Scene {
         let distance = surface_distance.max(f64::from(self.camera.near));
         let world = f64::from(self.output.max_pixel_error) * distance
             / self.pixels_per_unit_at_distance_one();
-        // The transform stretches object-space errors by at most `scale`.
-        segments_for_error(bounds, world / scale)
+        world / scale
+    }
+
+    /// The grid an auto object with surface `bounds` gets.
+    fn auto_segments(&self, object: &Object, bounds: &SurfaceBounds) -> (u32, u32) {
+        segments_for_error(bounds, self.allowed_error(object, bounds))
     }
 
     /// Object `index`'s grid `(u, v)`: its own `tessellation`, or for an
@@ -203,25 +235,33 @@ impl Scene {
     /// [`Scene::object_tessellation`] of every object, estimating each
     /// distinct shape's bounds once.
     pub fn tessellations(&self) -> Vec<(u32, u32)> {
+        self.objects
+            .iter()
+            .zip(self.auto_bounds())
+            .map(|(object, bounds)| match bounds {
+                Some(bounds) => self.auto_segments(object, &bounds),
+                None => object.tessellation,
+            })
+            .collect()
+    }
+
+    /// Each object's surface bounds when its grid is chosen by screen-space
+    /// error (an auto parametric object), `None` otherwise; each distinct
+    /// shape's are estimated once.
+    fn auto_bounds(&self) -> Vec<Option<SurfaceBounds>> {
         let mut known: Vec<(&Shape, SurfaceBounds)> = Vec::new();
         self.objects
             .iter()
             .map(|object| {
                 if !object.auto_tessellation {
-                    return object.tessellation;
+                    return None;
                 }
-                let bounds = match known.iter().find(|(shape, _)| **shape == object.shape) {
-                    Some((_, bounds)) => *bounds,
-                    None => match object.shape.surface() {
-                        Some(surface) => {
-                            let bounds = surface_bounds(surface.as_ref());
-                            known.push((&object.shape, bounds));
-                            bounds
-                        }
-                        None => return object.tessellation,
-                    },
-                };
-                self.auto_segments(object, &bounds)
+                if let Some((_, bounds)) = known.iter().find(|(shape, _)| **shape == object.shape) {
+                    return Some(*bounds);
+                }
+                let bounds = surface_bounds(object.shape.surface()?.as_ref());
+                known.push((&object.shape, bounds));
+                Some(bounds)
             })
             .collect()
     }

@@ -407,3 +407,17 @@ fn the_size_knob_changes_the_choice() {
         "{before:?} {after:?}"
     );
 }
+
+#[test]
+fn a_budget_beyond_the_largest_grid_is_warned_about() {
+    let (shape, _, _) = curved_shapes()[0];
+    let scene = |mpe: &str| load(&scene_with(6.0, &[(shape, [0.0; 3], "")], mpe));
+    assert_eq!(scene("max_pixel_error = 0.5").tessellation_ceiling(), None);
+    let tiny = scene("max_pixel_error = 1e-7");
+    assert_eq!(tiny.object_tessellation(0).0, MAX_SEGMENTS);
+    let warning = tiny.tessellation_ceiling().expect("a warning");
+    assert!(
+        warning.contains("1 object") && warning.contains(&MAX_SEGMENTS.to_string()),
+        "{warning}"
+    );
+}
