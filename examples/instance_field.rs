@@ -30,23 +30,14 @@ impl Sequence {
     }
 }
 
+mod common;
+
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let (Some(n), Some(out)) = (
-        args.first().and_then(|n| n.parse::<usize>().ok()),
-        args.get(1),
-    ) else {
-        eprintln!("usage: instance_field N OUT.toml [auto]  (N rocks on a field)");
-        std::process::exit(2);
-    };
-    let tessellation = match args.get(2).map(String::as_str) {
-        None => "",
-        Some("auto") => "tessellation = \"auto\"\n",
-        Some(other) => {
-            eprintln!("instance_field: the third argument is 'auto' or nothing, not '{other}'");
-            std::process::exit(2);
-        }
-    };
+    let common::ScaleArgs {
+        count: n,
+        out,
+        tessellation,
+    } = common::scale_args("instance_field", "N rocks on a field");
     // About two rocks per 10 square metres.
     let half = ((n as f64) * 5.0).sqrt().max(2.0) / 2.0;
     let mut text = format!(
@@ -88,7 +79,7 @@ fn main() {
         )
         .expect("string write");
     }
-    if let Err(e) = std::fs::write(out, text) {
+    if let Err(e) = std::fs::write(&out, text) {
         eprintln!("cannot write {out}: {e}");
         std::process::exit(1);
     }

@@ -9,23 +9,14 @@
 
 use std::fmt::Write as _;
 
+mod common;
+
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let (Some(n), Some(out)) = (
-        args.first().and_then(|n| n.parse::<usize>().ok()),
-        args.get(1),
-    ) else {
-        eprintln!("usage: sphere_grid N OUT.toml [auto] (N spheres on a square grid)");
-        std::process::exit(2);
-    };
-    let tessellation = match args.get(2).map(String::as_str) {
-        None => "",
-        Some("auto") => "tessellation = \"auto\"\n",
-        Some(other) => {
-            eprintln!("sphere_grid: third argument must be auto, got '{other}'");
-            std::process::exit(2);
-        }
-    };
+    let common::ScaleArgs {
+        count: n,
+        out,
+        tessellation,
+    } = common::scale_args("sphere_grid", "N spheres on a square grid");
     let side = (n as f64).sqrt().ceil().max(1.0) as usize;
     let half = side as f64 / 2.0;
     let mut text = format!(
@@ -48,7 +39,7 @@ fn main() {
         )
         .expect("string write");
     }
-    if let Err(e) = std::fs::write(out, text) {
+    if let Err(e) = std::fs::write(&out, text) {
         eprintln!("cannot write {out}: {e}");
         std::process::exit(1);
     }

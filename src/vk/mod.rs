@@ -29,8 +29,8 @@ pub use context::{Context, ContextOptions, DeviceInfo};
 pub use descriptors::{DescriptorBinding, DescriptorPool, DescriptorSet, DescriptorSetLayout};
 pub use image::{bytes_per_texel, Image, ImageDesc, Sampler, SamplerFilter};
 pub use pipeline::{
-    Blend, ComputePipeline, DepthOnlyPipelineDesc, GraphicsPipeline, GraphicsPipelineDesc,
-    PipelineLayout, ShaderModule, VertexAttribute,
+    Blend, ComputePipeline, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, ShaderModule,
+    VertexAttribute,
 };
 pub use pipeline_cache::{PipelineCacheStore, PIPELINE_CACHE_ENV};
 pub use query::{PipelineStats, PipelineStatsQueries, TimestampQueries};

@@ -74,7 +74,9 @@ pub const INSTANCE_BINDING: u32 = 1;
 /// Everything that varies between the renderer's pipelines.
 pub struct GraphicsPipelineDesc<'a> {
     pub vertex_shader: &'a ShaderModule,
-    pub fragment_shader: &'a ShaderModule,
+    /// `None` for a depth-only pipeline (a depth pre-pass): a subpass
+    /// without colour targets, nothing shaded per fragment, `blend` empty.
+    pub fragment_shader: Option<&'a ShaderModule>,
     /// Specialization constants (id, value), given to both stages.
     pub specialization: &'a [(u32, u32)],
     /// Per-vertex stride and attributes; stride 0 means no vertex input
@@ -91,22 +93,6 @@ pub struct GraphicsPipelineDesc<'a> {
     pub depth_write: bool,
     /// One blend state per colour target of the subpass, in order.
     pub blend: &'a [Blend],
-    pub subpass: u32,
-}
-
-/// A depth-only pipeline ([`GraphicsPipeline::depth_only`]): tested with
-/// `depth_test` and written, no fragment stage, no colour target.
-pub struct DepthOnlyPipelineDesc<'a> {
-    pub vertex_shader: &'a ShaderModule,
-    /// Specialization constants (id, value) of the vertex stage.
-    pub specialization: &'a [(u32, u32)],
-    pub vertex_stride: u32,
-    pub vertex_attributes: &'a [VertexAttribute],
-    /// Per-instance stride and attributes, as in [`GraphicsPipelineDesc`].
-    pub instance_stride: u32,
-    pub instance_attributes: &'a [VertexAttribute],
-    pub cull_mode: vk::CullModeFlags,
-    pub depth_test: vk::CompareOp,
     pub subpass: u32,
 }
 
@@ -133,46 +119,6 @@ impl GraphicsPipeline {
         pass: &RenderPass,
         desc: &GraphicsPipelineDesc<'_>,
     ) -> Result<GraphicsPipeline, VkError> {
-        Self::create(ctx, layout, pass, desc, Some(desc.fragment_shader))
-    }
-
-    /// A pipeline without a fragment stage for a subpass without colour
-    /// targets: it writes depth only (a depth pre-pass), so nothing is
-    /// shaded per fragment. `desc` gives no blend state and its fragment
-    /// shader is not used.
-    pub fn depth_only(
-        ctx: &Arc<Context>,
-        layout: &PipelineLayout,
-        pass: &RenderPass,
-        desc: &DepthOnlyPipelineDesc<'_>,
-    ) -> Result<GraphicsPipeline, VkError> {
-        let full = GraphicsPipelineDesc {
-            vertex_shader: desc.vertex_shader,
-            // Not read: `create` is given no fragment stage.
-            fragment_shader: desc.vertex_shader,
-            specialization: desc.specialization,
-            vertex_stride: desc.vertex_stride,
-            vertex_attributes: desc.vertex_attributes,
-            instance_stride: desc.instance_stride,
-            instance_attributes: desc.instance_attributes,
-            cull_mode: desc.cull_mode,
-            depth_test: Some(desc.depth_test),
-            depth_write: true,
-            blend: &[],
-            subpass: desc.subpass,
-        };
-        Self::create(ctx, layout, pass, &full, None)
-    }
-
-    /// The pipeline `desc` describes, with `fragment` as its fragment stage
-    /// (`desc.fragment_shader` is ignored) or none.
-    fn create(
-        ctx: &Arc<Context>,
-        layout: &PipelineLayout,
-        pass: &RenderPass,
-        desc: &GraphicsPipelineDesc<'_>,
-        fragment: Option<&ShaderModule>,
-    ) -> Result<GraphicsPipeline, VkError> {
         let (entries, data) = specialization_data(desc.specialization);
         let spec = vk::SpecializationInfo::default()
             .map_entries(&entries)
@@ -185,7 +131,7 @@ impl GraphicsPipeline {
                 .specialization_info(&spec)
         };
         let mut stages = vec![stage(vk::ShaderStageFlags::VERTEX, desc.vertex_shader)];
-        if let Some(fragment) = fragment {
+        if let Some(fragment) = desc.fragment_shader {
             stages.push(stage(vk::ShaderStageFlags::FRAGMENT, fragment));
         }
         let mut bindings = vec![vk::VertexInputBindingDescription {

@@ -239,7 +239,7 @@ fn create_pipelines(
             &setup.render_pass()?.render_pass,
             &GraphicsPipelineDesc {
                 vertex_shader: &vert,
-                fragment_shader: &frag,
+                fragment_shader: Some(&frag),
                 specialization: &specialization,
                 vertex_stride: std::mem::size_of::<[f32; 2]>() as u32,
                 vertex_attributes: &attributes,

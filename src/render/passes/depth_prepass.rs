@@ -24,8 +24,8 @@ use crate::scene::Scene;
 use crate::shader_ids::{FRAME_SET, OBJECT_SET};
 use crate::shaders::{self, ObjectVertFeatures};
 use crate::vk::{
-    CommandBuffer, CompareOp, CullModeFlags, DepthOnlyPipelineDesc, DepthUse, Format,
-    GraphicsPipeline, ShaderModule, VertexAttribute,
+    CommandBuffer, CompareOp, CullModeFlags, DepthUse, Format, GraphicsPipeline,
+    GraphicsPipelineDesc, ShaderModule, VertexAttribute,
 };
 
 pub struct DepthPrepass {
@@ -102,12 +102,13 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
             let features =
                 ObjectVertFeatures::default().with(ObjectVertFeatures::INSTANCED, instanced);
             let vertex = ShaderModule::new(setup.ctx, shaders::OBJECT_VERT.spirv(features))?;
-            *pipeline = Some(GraphicsPipeline::depth_only(
+            *pipeline = Some(GraphicsPipeline::new(
                 setup.ctx,
                 &resources.layout,
                 &render_pass.render_pass,
-                &DepthOnlyPipelineDesc {
+                &GraphicsPipelineDesc {
                     vertex_shader: &vertex,
+                    fragment_shader: None,
                     specialization: &[],
                     vertex_stride: std::mem::size_of::<Vertex>() as u32,
                     vertex_attributes: &attributes,
@@ -123,7 +124,9 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
                         CullModeFlags::BACK
                     },
                     // Reversed-Z: nearer surfaces have larger depth.
-                    depth_test: CompareOp::GREATER,
+                    depth_test: Some(CompareOp::GREATER),
+                    depth_write: true,
+                    blend: &[],
                     subpass: setup.subpass,
                 },
             )?);

@@ -229,7 +229,7 @@ pub(crate) fn fullscreen_pipeline(
         render_pass,
         &GraphicsPipelineDesc {
             vertex_shader: &vertex,
-            fragment_shader: &fragment,
+            fragment_shader: Some(&fragment),
             specialization,
             vertex_stride: 0,
             vertex_attributes: &[],

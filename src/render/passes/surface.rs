@@ -198,7 +198,7 @@ impl SurfacePass {
                     &render_pass.render_pass,
                     &GraphicsPipelineDesc {
                         vertex_shader: vert,
-                        fragment_shader: frag,
+                        fragment_shader: Some(frag),
                         specialization: &specialization,
                         vertex_stride: std::mem::size_of::<Vertex>() as u32,
                         vertex_attributes: &attributes,
