@@ -6,9 +6,11 @@
 //! tests EQUAL without writing, so each pixel's nearest opaque surface is
 //! shaded once. That needs the two passes' depths equal bit for bit: the
 //! pre-pass uses `object.vert`'s plainest variant (no maps, no per-vertex
-//! lighting; its other outputs nothing reads), and every variant computes
-//! `gl_Position` by the same expression from the same inputs, so the
-//! compiled arithmetic is the same. `invariant gl_Position` would promise
+//! lighting; its other outputs nothing reads), instanced for instance
+//! batches, and every variant computes `gl_Position` by the same
+//! expression from the same inputs (the model matrix from the object's
+//! block or, in a batch, from the instance buffer, which holds the same
+//! values), so the compiled arithmetic is the same. `invariant gl_Position` would promise
 //! it, but glslang puts the decoration on a `gl_PerVertex` member, which
 //! lavapipe (Mesa 22.3) reports as a warning and ignores; the test suite
 //! checks instead that images with and without the pre-pass are equal and
