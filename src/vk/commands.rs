@@ -534,11 +534,22 @@ impl CommandBuffer {
                     pending_writes: vk::AccessFlags::empty(),
                 }
             } else {
+                // The writes a later barrier must wait for: those the
+                // attachment's last layout allows (naming others trips the
+                // best-practices check on that barrier).
+                let pending_writes = match *layout {
+                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL => {
+                        vk::AccessFlags::COLOR_ATTACHMENT_WRITE
+                    }
+                    vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL => {
+                        vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE
+                    }
+                    _ => vk::AccessFlags::empty(),
+                };
                 ImageState {
                     layout: *layout,
                     stage: IMAGE_STAGES,
-                    pending_writes: vk::AccessFlags::COLOR_ATTACHMENT_WRITE
-                        | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE,
+                    pending_writes,
                 }
             };
             image.state.set(state);
