@@ -512,6 +512,33 @@ fn clear_values(attachments: &[AttachmentSpec]) -> Vec<vk::ClearValue> {
         .collect()
 }
 
+/// The stages and accesses of all of `list`'s uses together.
+fn combined(list: &[Access]) -> (vk::PipelineStageFlags, vk::AccessFlags) {
+    list.iter().fold(
+        (vk::PipelineStageFlags::empty(), vk::AccessFlags::empty()),
+        |(s, a), u| {
+            let (us, ua) = u.stage_access();
+            (s | us, a | ua)
+        },
+    )
+}
+
+/// What the previous submission may still be doing with any attachment:
+/// writing it in a subpass, reading it in a shader, copying out of it or
+/// into it.
+const PREVIOUS_STAGES: vk::PipelineStageFlags = vk::PipelineStageFlags::from_raw(
+    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT.as_raw()
+        | vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS.as_raw()
+        | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS.as_raw()
+        | vk::PipelineStageFlags::FRAGMENT_SHADER.as_raw()
+        | vk::PipelineStageFlags::TRANSFER.as_raw(),
+);
+const PREVIOUS_WRITES: vk::AccessFlags = vk::AccessFlags::from_raw(
+    vk::AccessFlags::COLOR_ATTACHMENT_WRITE.as_raw()
+        | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE.as_raw()
+        | vk::AccessFlags::TRANSFER_WRITE.as_raw(),
+);
+
 /// The dependencies the uses imply:
 /// - from outside into the first subpass using each attachment: the
 ///   previous submission of the same frame (or a copy into a loaded
@@ -561,26 +588,8 @@ fn dependencies(
             );
         }
     };
-    let combined = |list: &[Access]| {
-        list.iter().fold(
-            (vk::PipelineStageFlags::empty(), vk::AccessFlags::empty()),
-            |(s, a), u| {
-                let (us, ua) = u.stage_access();
-                (s | us, a | ua)
-            },
-        )
-    };
-    // What the previous submission may still be doing with any attachment:
-    // writing it in a subpass, reading it in a shader, copying out of it or
-    // into it.
-    let previous_stages = vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
-        | vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS
-        | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS
-        | vk::PipelineStageFlags::FRAGMENT_SHADER
-        | vk::PipelineStageFlags::TRANSFER;
-    let previous_writes = vk::AccessFlags::COLOR_ATTACHMENT_WRITE
-        | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE
-        | vk::AccessFlags::TRANSFER_WRITE;
+    let previous_stages = PREVIOUS_STAGES;
+    let previous_writes = PREVIOUS_WRITES;
     for (a, spec) in attachments.iter().enumerate() {
         let users: Vec<usize> = (0..uses.len())
             .filter(|&s| !uses[s][a].is_empty())
