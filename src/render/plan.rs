@@ -157,7 +157,8 @@ pub fn subpass_timing_note() -> String {
         .collect();
     let (last, rest) = names.split_last().expect("there are subpasses");
     format!(
-        "the {} and {last} passes are subpasses of one render pass: a binning rasterizer \
+        "the {} and {last} passes are subpasses of the frame's render passes (one, or two \
+         around a compute pass that samples the first one's output): a binning rasterizer \
          (lavapipe, tile-based GPUs) may do a draw's work after a later timestamp, so their time \
          split is approximate; the sum over the render pass is exact, and so is each pass's \
          instruction count (--metric instructions counts frame prefixes)",
@@ -718,6 +719,7 @@ mod tests {
         ));
         let (mut scene, _) = load("earth_objects.toml");
         scene.sky.as_mut().unwrap().aerial_perspective = AerialPerspective::Volume;
+        scene.tone_map.exposure = Exposure::Auto;
         plans.push(FramePlan::new(
             &scene,
             &SceneGeometry::new(&scene).unwrap(),
