@@ -1,4 +1,5 @@
 #version 450
+// feature: AUTO_EXPOSURE
 #include "constants.glsl"
 // Tone-map subpass: reads the HDR colour of this pixel as an input
 // attachment and writes display colour, sRGB-encoded here into the UNORM
@@ -17,7 +18,15 @@ const int TONEMAP_NONE = 2;
 // written as it is (no sRGB encode).
 const int TONEMAP_DEBUG = 3;
 layout(constant_id = SPEC_TONEMAP_OPERATOR) const int OPERATOR = TONEMAP_REINHARD;
+#ifdef AUTO_EXPOSURE
+// Measured from this frame's HDR image by the exposure pass.
+layout(set = EXPOSURE_SET, binding = 0, std430) readonly buffer Exposure {
+    float exposure;
+};
+#define EXPOSURE exposure
+#else
 layout(constant_id = SPEC_TONEMAP_EXPOSURE) const float EXPOSURE = 1.0;
+#endif
 
 void main() {
     if (OPERATOR == TONEMAP_DEBUG) {

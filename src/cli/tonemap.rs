@@ -6,7 +6,7 @@ use aerial::budget::MemoryBudget;
 use aerial::image_io;
 use aerial::render_run::{self, RenderSettings, RunSource};
 use aerial::safe_files;
-use aerial::scene::{ToneMap, ToneMapOperator};
+use aerial::scene::{Exposure, ToneMap, ToneMapOperator};
 use aerial::vk::validation;
 use anyhow::{bail, Context as _};
 use std::path::PathBuf;
@@ -57,7 +57,7 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
             Operator::Reinhard => ToneMapOperator::Reinhard,
             Operator::Aces => ToneMapOperator::Aces,
         },
-        exposure: args.exposure,
+        exposure: Exposure::Fixed(args.exposure),
     };
     let run = render_run::run(
         RunSource::HdrImage(&image, tone_map),

@@ -15,8 +15,8 @@ use super::timed_submit::TimedCommands;
 use super::{FrameTiming, Pixels, RenderError};
 use crate::shaders;
 use crate::vk::{
-    AttachmentSpec, AttachmentStart, Buffer, BufferUsage, Context, Format, GraphicsPipeline,
-    PipelineLayout, RenderTargets, SubpassSpec,
+    AttachmentSpec, AttachmentStart, Buffer, BufferUsage, Context, Format, FrameTargets,
+    GraphicsPipeline, PipelineLayout, SubpassSpec,
 };
 use std::sync::Arc;
 
@@ -40,7 +40,7 @@ pub struct EmptyPass {
     readback: Buffer,
     pipeline: GraphicsPipeline,
     _layout: PipelineLayout,
-    render_pass: RenderTargets,
+    render_pass: FrameTargets,
     width: u32,
     height: u32,
     ctx: Arc<Context>,
@@ -58,7 +58,7 @@ impl EmptyPass {
         // One attachment, written at every pixel (nothing loaded) and read
         // back after the pass; built by the same render-graph builder as
         // scene frames.
-        let render_pass = RenderTargets::new(
+        let render_pass = FrameTargets::single(
             ctx,
             width,
             height,
@@ -67,6 +67,8 @@ impl EmptyPass {
                 format: FORMAT,
                 start: AttachmentStart::Undefined,
                 read_after: true,
+                kept_after: false,
+                compute: false,
             }],
             &[SubpassSpec {
                 name: PASS_NAME,
@@ -78,7 +80,7 @@ impl EmptyPass {
         let pipeline = super::passes::fullscreen_pipeline(
             ctx,
             &layout,
-            &render_pass.render_pass,
+            &render_pass.runs[0].render_pass,
             0,
             shaders::CONSTANT_FRAG.base(),
             &[],
@@ -160,21 +162,21 @@ impl Drop for EmptyPass {
 /// without `draw`, none), timed, then copied out.
 fn record(
     ctx: &Arc<Context>,
-    render_pass: &RenderTargets,
+    render_pass: &FrameTargets,
     pipeline: &GraphicsPipeline,
     readback: &Buffer,
     draw: bool,
 ) -> Result<TimedCommands, RenderError> {
     let frame = TimedCommands::begin(ctx, 1)?;
     let cmd = frame.cmd();
-    cmd.begin_render_pass(render_pass);
+    cmd.begin_render_pass(&render_pass.runs[0], &render_pass.images);
     frame.begin_pass();
     if draw {
         cmd.bind_pipeline(pipeline);
         cmd.draw(3);
     }
     frame.end_pass();
-    cmd.end_render_pass(render_pass);
+    cmd.end_render_pass(&render_pass.runs[0], &render_pass.images);
     frame.stamp();
     cmd.copy_image_to_buffer(&render_pass.images[0], readback);
     frame.finish()

@@ -63,6 +63,18 @@ impl ViewUniforms {
     }
 }
 
+/// The exposure buffer's contents (`Exposure` in `exposure.comp` and the
+/// tone map's AUTO_EXPOSURE variant): written by the exposure pass, read
+/// by the tone map; the CPU only sizes the buffer from it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ExposureBlock {
+    /// The linear scale the tone map applies: 0.18 / Lavg.
+    pub exposure: f32,
+    /// Blocks are checked at their std140 size, a multiple of 16 bytes.
+    pub _pad: [f32; 3],
+}
+
 /// One light as the shader reads it (std140: three vec4s).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]

@@ -18,7 +18,9 @@ use super::passes::{aerial_volume, PassType, PASSES};
 pub use super::prepass_rule::DepthPrepassRule;
 use super::tiles::{self, TileGroup};
 use crate::scene::material_maps::{MapKind, MapSource};
-use crate::scene::{DepthPrepass, HdrFormat, Lighting, Scene, ShadingModel, ToneMapOperator};
+use crate::scene::{
+    DepthPrepass, Exposure, HdrFormat, Lighting, Scene, ShadingModel, ToneMapOperator,
+};
 use crate::vk::{DepthUse, Format};
 
 /// The attachment names passes refer to.
@@ -62,10 +64,15 @@ pub enum PassIo {
         /// Input attachments, in `input_attachment_index` order.
         inputs: Vec<&'static str>,
     },
-    /// A compute dispatch outside the render pass, before it; it touches
-    /// no attachment (what it writes, later passes read from buffers it
-    /// shares with them).
-    Compute,
+    /// A compute dispatch outside the render passes. Most run before the
+    /// first and touch no attachment (what they write, later passes read
+    /// from buffers they share with them); one that `samples` attachments
+    /// written by earlier subpasses ends the render pass they formed, and
+    /// the subpasses after it form the next one.
+    Compute {
+        /// Attachments the dispatch samples.
+        samples: Vec<&'static str>,
+    },
     /// Copies outside the render pass.
     Transfer {
         /// Attachments copied out after the render pass.
@@ -150,7 +157,8 @@ pub fn subpass_timing_note() -> String {
         .collect();
     let (last, rest) = names.split_last().expect("there are subpasses");
     format!(
-        "the {} and {last} passes are subpasses of one render pass: a binning rasterizer \
+        "the {} and {last} passes are subpasses of the frame's render passes (one, or two \
+         around a compute pass that samples the first one's output): a binning rasterizer \
          (lavapipe, tile-based GPUs) may do a draw's work after a later timestamp, so their time \
          split is approximate; the sum over the render pass is exact, and so is each pass's \
          instruction count (--metric instructions counts frame prefixes)",
@@ -253,6 +261,40 @@ impl FramePlan {
     }
 
     /// The pass names, in order.
+    /// Where each pass records, in `passes` order: for a subpass, its
+    /// render pass (counted from 0 in frame order) and its subpass index
+    /// there; `None` for other passes. Consecutive subpasses form one
+    /// render pass; any other pass between subpasses (a compute pass
+    /// sampling what they wrote) ends it, and the next subpass begins
+    /// another.
+    pub fn subpass_slots(&self) -> Vec<Option<(usize, u32)>> {
+        let mut slots = Vec::with_capacity(self.passes.len());
+        let (mut run, mut subpass) = (0, 0);
+        for decl in &self.passes {
+            if decl.is_subpass() {
+                slots.push(Some((run, subpass)));
+                subpass += 1;
+            } else {
+                if subpass > 0 {
+                    run += 1;
+                    subpass = 0;
+                }
+                slots.push(None);
+            }
+        }
+        slots
+    }
+
+    /// How many render passes the frame records.
+    pub fn render_pass_count(&self) -> usize {
+        self.subpass_slots()
+            .iter()
+            .flatten()
+            .map(|&(run, _)| run + 1)
+            .max()
+            .unwrap_or(0)
+    }
+
     pub fn pass_names(&self) -> Vec<&'static str> {
         self.passes.iter().map(PassDecl::name).collect()
     }
@@ -400,7 +442,7 @@ impl FrameShape<'_> {
         let sky = scene.sky.is_some() && debug == 0;
         let direct = debug == 0
             && scene.tone_map.operator == ToneMapOperator::None
-            && scene.tone_map.exposure == 1.0
+            && scene.tone_map.exposure == Exposure::Fixed(1.0)
             && scene.output.hdr_format == HdrFormat::Rgba32F
             && !any_transparent
             && !keep_hdr
@@ -677,6 +719,7 @@ mod tests {
         ));
         let (mut scene, _) = load("earth_objects.toml");
         scene.sky.as_mut().unwrap().aerial_perspective = AerialPerspective::Volume;
+        scene.tone_map.exposure = Exposure::Auto;
         plans.push(FramePlan::new(
             &scene,
             &SceneGeometry::new(&scene).unwrap(),
@@ -848,7 +891,7 @@ mod tests {
         assert_eq!(plan.pass_names(), vec!["opaque", "tonemap", "readback"]);
         assert!(plan.has_attachment(attachment::HDR));
         // So does an exposure, which the tone map applies.
-        scene.tone_map.exposure = 2.0;
+        scene.tone_map.exposure = crate::scene::Exposure::Fixed(2.0);
         let plan = FramePlan::new(&scene, &geometry, false);
         assert_eq!(plan.pass_names(), vec!["opaque", "tonemap", "readback"]);
     }

@@ -7,15 +7,18 @@
 //! back.
 
 use super::geometry::SceneGeometry;
-use super::passes::{atmosphere, Attachments, PassResources, PassSetup, RecordPass};
-use super::plan::{attachment, FramePlan, PassIo};
+use super::passes::{atmosphere, exposure, Attachments, PassResources, PassSetup, RecordPass};
+use super::plan::{attachment, FramePlan, PassDecl, PassIo};
 use super::scene_resources::SceneResources;
 use super::sky_resources::SkyResources;
 use super::timed_submit::TimedCommands;
 use super::RenderError;
 use crate::image_io::Pixels;
 use crate::scene::{HdrFormat, Scene, ToneMap};
-use crate::vk::{AttachmentSpec, AttachmentStart, Context, Image, RenderTargets, SubpassSpec};
+use crate::vk::{
+    AttachmentSpec, AttachmentStart, Buffer, BufferUsage, Context, FrameTargets, Image,
+    ImageUsageFlags, RunSpec, SubpassSpec,
+};
 use std::sync::Arc;
 
 /// Timing of one submitted frame.
@@ -59,7 +62,10 @@ pub struct Renderer {
     passes: Vec<Box<dyn RecordPass>>,
     scene_resources: Option<SceneResources>,
     sky_resources: Option<SkyResources>,
-    render_pass: Option<RenderTargets>,
+    /// The exposure the exposure pass measures and the tone map applies,
+    /// when the scene asks for automatic exposure.
+    exposure: Option<Buffer>,
+    targets: Option<FrameTargets>,
     plan: FramePlan,
     /// The scene's meshes, kept so that a new view can be planned (and,
     /// when the plan changes, built) without tessellating again; `None`
@@ -141,7 +147,14 @@ impl Renderer {
         // Safe points between the long phases (uploads, the sky's table,
         // pipeline creation), so an interrupt does not wait for all of them.
         crate::interrupt::check()?;
-        let render_pass = build_render_pass(ctx, &plan)?;
+        let targets = build_targets(ctx, &plan)?;
+        // One float, written by the exposure pass each frame.
+        let exposure = if plan.has(exposure::PASS) {
+            let size = std::mem::size_of::<super::gpu_types::ExposureBlock>() as u64;
+            Some(Buffer::new(ctx, "exposure", size, BufferUsage::Storage)?)
+        } else {
+            None
+        };
         crate::interrupt::check()?;
         // The sky's resources first: objects lit by the atmosphere bind
         // its set.
@@ -168,30 +181,28 @@ impl Renderer {
         crate::interrupt::check()?;
         let frame_resources = frame_resources(
             &plan,
-            render_pass.as_ref(),
+            targets.as_ref(),
             scene_resources.as_ref(),
             sky_resources.as_ref(),
+            exposure.as_ref(),
         );
 
-        // Create every pass, numbering the subpasses in plan order.
+        // Create every pass, each subpass with its render pass and its
+        // index there.
         let mut passes = Vec::with_capacity(plan.passes.len());
-        let mut subpass = 0;
-        for decl in &plan.passes {
+        for (decl, slot) in plan.passes.iter().zip(plan.subpass_slots()) {
             crate::interrupt::check()?;
             let setup = PassSetup {
                 ctx,
                 scene,
                 plan: &plan,
                 decl,
-                render_pass: render_pass.as_ref(),
-                subpass,
+                render_pass: slot.and_then(|(run, _)| targets.as_ref()?.runs.get(run)),
+                subpass: slot.map_or(0, |(_, subpass)| subpass),
                 frame: &frame_resources,
                 hdr_input,
             };
             passes.push(decl.pass.create(&setup)?);
-            if decl.is_subpass() {
-                subpass += 1;
-            }
         }
 
         let recording = std::time::Instant::now();
@@ -199,7 +210,7 @@ impl Renderer {
             ctx,
             &plan,
             &passes,
-            render_pass.as_ref(),
+            targets.as_ref(),
             &frame_resources,
             usize::MAX,
         )?;
@@ -213,7 +224,8 @@ impl Renderer {
             passes,
             scene_resources,
             sky_resources,
-            render_pass,
+            exposure,
+            targets,
             plan,
             geometry,
             keep_hdr,
@@ -265,16 +277,17 @@ impl Renderer {
                 // the same pipelines, buffers and attachments.
                 let frame_resources = frame_resources(
                     &plan,
-                    self.render_pass.as_ref(),
+                    self.targets.as_ref(),
                     self.scene_resources.as_ref(),
                     self.sky_resources.as_ref(),
+                    self.exposure.as_ref(),
                 );
                 let recording = std::time::Instant::now();
                 let frame = record(
                     &self.ctx,
                     &plan,
                     &self.passes,
-                    self.render_pass.as_ref(),
+                    self.targets.as_ref(),
                     &frame_resources,
                     usize::MAX,
                 )?;
@@ -304,7 +317,7 @@ impl Renderer {
             .attachments
             .iter()
             .position(|a| a.name == attachment::OUTPUT)?;
-        self.render_pass.as_ref()?.images.get(index)
+        self.targets.as_ref()?.images.get(index)
     }
 
     /// What building this frame cost beyond its passes, as named values
@@ -400,9 +413,10 @@ impl super::PrefixFrames for Renderer {
         if self.prefixes.is_empty() {
             let frame_resources = frame_resources(
                 &self.plan,
-                self.render_pass.as_ref(),
+                self.targets.as_ref(),
                 self.scene_resources.as_ref(),
                 self.sky_resources.as_ref(),
+                self.exposure.as_ref(),
             );
             let prefixes = (0..self.pass_count())
                 .map(|k| {
@@ -410,7 +424,7 @@ impl super::PrefixFrames for Renderer {
                         &self.ctx,
                         &self.plan,
                         &self.passes,
-                        self.render_pass.as_ref(),
+                        self.targets.as_ref(),
                         &frame_resources,
                         k,
                     )
@@ -431,8 +445,8 @@ impl Drop for Renderer {
     }
 }
 
-/// Records the frame once; every submission replays it. The render pass
-/// begins before the first subpass and ends right after the last, before
+/// Records the frame once; every submission replays it. Each render pass
+/// begins before its first subpass and ends right after its last, before
 /// that pass's closing timestamp.
 ///
 /// Only the first `recorded` passes record their commands; the later ones
@@ -444,20 +458,22 @@ fn record(
     ctx: &Arc<Context>,
     plan: &FramePlan,
     passes: &[Box<dyn RecordPass>],
-    render_pass: Option<&RenderTargets>,
+    targets: Option<&FrameTargets>,
     frame_resources: &PassResources<'_>,
     recorded: usize,
 ) -> Result<TimedCommands, RenderError> {
     let frame = TimedCommands::begin(ctx, plan.passes.len() as u32)?;
     let cmd = frame.cmd();
-    let mut in_render_pass = false;
-    for (i, (decl, pass)) in plan.passes.iter().zip(passes).enumerate() {
-        if let (true, Some(rp)) = (decl.is_subpass(), render_pass) {
-            if in_render_pass {
+    let slots = plan.subpass_slots();
+    // The render pass begun and not yet ended.
+    let mut open: Option<usize> = None;
+    for (i, (pass, slot)) in passes.iter().zip(&slots).enumerate() {
+        if let (Some((run, _)), Some(t)) = (*slot, targets) {
+            if open == Some(run) {
                 cmd.next_subpass();
             } else {
-                cmd.begin_render_pass(rp);
-                in_render_pass = true;
+                cmd.begin_render_pass(&t.runs[run], &t.images);
+                open = Some(run);
             }
         }
         frame.begin_pass();
@@ -465,10 +481,12 @@ fn record(
             pass.record(cmd, frame_resources)?;
         }
         frame.end_pass();
-        let next_is_subpass = plan.passes.get(i + 1).is_some_and(|d| d.is_subpass());
-        if let (true, false, Some(rp)) = (in_render_pass, next_is_subpass, render_pass) {
-            cmd.end_render_pass(rp);
-            in_render_pass = false;
+        let next_run = slots.get(i + 1).copied().flatten().map(|(run, _)| run);
+        if let (Some(run), Some(t)) = (open, targets) {
+            if next_run != Some(run) {
+                cmd.end_render_pass(&t.runs[run], &t.images);
+                open = None;
+            }
         }
         frame.stamp();
     }
@@ -478,17 +496,19 @@ fn record(
 /// What the passes record against, from the renderer's parts.
 fn frame_resources<'a>(
     plan: &FramePlan,
-    render_pass: Option<&'a RenderTargets>,
+    targets: Option<&'a FrameTargets>,
     scene: Option<&'a SceneResources>,
     sky: Option<&'a SkyResources>,
+    exposure: Option<&'a Buffer>,
 ) -> PassResources<'a> {
     PassResources {
         attachments: Attachments {
             names: plan.attachments.iter().map(|a| a.name).collect(),
-            images: render_pass.map_or(&[], |p| p.images.as_slice()),
+            images: targets.map_or(&[], |t| t.images.as_slice()),
         },
         scene,
         sky,
+        exposure,
     }
 }
 
@@ -518,17 +538,150 @@ fn same_frame(a: &FramePlan, b: &FramePlan) -> bool {
     same_resources(a, b) && a.opaque == b.opaque && a.transparent == b.transparent
 }
 
-/// The render pass the plan's subpasses form, with its attachments: what
-/// each attachment starts with and whether it is kept are derived from the
-/// transfer passes around the render pass (an upload before it loads the
-/// attachment; a readback after it stores it). `None` when the plan has no
-/// subpass.
-fn build_render_pass(
+/// The attachments and render passes the plan's subpasses form (see
+/// [`FramePlan::subpass_slots`]): what each attachment starts with and
+/// whether it is kept are derived from the passes around each render pass
+/// (an upload before the first loads the attachment; an earlier render
+/// pass using it makes a later one load it; a later render pass or a
+/// compute pass sampling it stores it; a readback after the last stores
+/// it). `None` when the plan has no subpass. A frame of one render pass is
+/// built exactly as it always was.
+fn build_targets(
     ctx: &Arc<Context>,
     plan: &FramePlan,
-) -> Result<Option<RenderTargets>, RenderError> {
-    let index = |name: &str| {
-        plan.attachments
+) -> Result<Option<FrameTargets>, RenderError> {
+    let slots = plan.subpass_slots();
+    let runs = plan.render_pass_count();
+    if runs == 0 {
+        return Ok(None);
+    }
+    let io = FrameIo::of(plan, &slots)?;
+    let mut subpasses: Vec<Vec<SubpassSpec>> = vec![Vec::new(); runs];
+    for (decl, slot) in plan.passes.iter().zip(&slots) {
+        if let (PassIo::Subpass { .. }, Some((run, _))) = (&decl.io, slot) {
+            subpasses[*run].push(io.subpass(decl)?);
+        }
+    }
+    let used = |run: usize, a: usize| {
+        subpasses[run].iter().any(|s| {
+            s.colour.contains(&a) || s.inputs.contains(&a) || s.depth.is_some_and(|(d, _)| d == a)
+        })
+    };
+    let run_specs: Vec<RunSpec> = (0..runs)
+        .map(|run| {
+            let attachments: Vec<usize> = (0..plan.attachments.len())
+                .filter(|&a| used(run, a))
+                .collect();
+            let specs = attachments
+                .iter()
+                .map(|&a| {
+                    let decl = &plan.attachments[a];
+                    let earlier = (0..run).any(|r| used(r, a));
+                    let later = (run + 1..runs).any(|r| used(r, a));
+                    let sampled_after = io.sampled.iter().any(|&(s, r)| s == a && r >= run);
+                    AttachmentSpec {
+                        name: decl.name,
+                        format: decl.format,
+                        start: if earlier {
+                            AttachmentStart::Kept
+                        } else if io.loaded.contains(&decl.name) {
+                            AttachmentStart::Loaded
+                        } else if let Some(v) = decl.clear {
+                            AttachmentStart::Clear(v)
+                        } else {
+                            AttachmentStart::Undefined
+                        },
+                        read_after: io.read_after.contains(&decl.name) && !later,
+                        kept_after: later || sampled_after,
+                        compute: io.sampled.iter().any(|&(s, _)| s == a),
+                    }
+                })
+                .collect();
+            let local = |a: usize| attachments.iter().position(|&x| x == a).unwrap_or(a);
+            let subpasses = subpasses[run]
+                .iter()
+                .map(|s| SubpassSpec {
+                    name: s.name,
+                    colour: s.colour.iter().map(|&a| local(a)).collect(),
+                    depth: s.depth.map(|(a, how)| (local(a), how)),
+                    inputs: s.inputs.iter().map(|&a| local(a)).collect(),
+                })
+                .collect();
+            RunSpec {
+                attachments,
+                specs,
+                subpasses,
+            }
+        })
+        .collect();
+    let extra_usage: Vec<ImageUsageFlags> = (0..plan.attachments.len())
+        .map(|a| {
+            if io.sampled.iter().any(|&(s, _)| s == a) {
+                ImageUsageFlags::SAMPLED
+            } else {
+                ImageUsageFlags::empty()
+            }
+        })
+        .collect();
+    Ok(Some(FrameTargets::new(
+        ctx,
+        plan.width,
+        plan.height,
+        &extra_usage,
+        &run_specs,
+    )?))
+}
+
+/// What the passes outside the render passes do with attachments.
+struct FrameIo<'a> {
+    plan: &'a FramePlan,
+    /// Copied in before the first render pass.
+    loaded: Vec<&'static str>,
+    /// Copied out after the first render pass began (the readback).
+    read_after: Vec<&'static str>,
+    /// (attachment, the render pass before the compute pass sampling it).
+    sampled: Vec<(usize, usize)>,
+}
+
+impl<'a> FrameIo<'a> {
+    fn of(plan: &'a FramePlan, slots: &[Option<(usize, u32)>]) -> Result<FrameIo<'a>, RenderError> {
+        let first_subpass = slots.iter().position(Option::is_some).unwrap_or(0);
+        let mut io = FrameIo {
+            plan,
+            loaded: Vec::new(),
+            read_after: Vec::new(),
+            sampled: Vec::new(),
+        };
+        for (i, decl) in plan.passes.iter().enumerate() {
+            match &decl.io {
+                PassIo::Transfer { reads, writes } => {
+                    if i < first_subpass {
+                        io.loaded.extend(writes);
+                    } else {
+                        io.read_after.extend(reads);
+                    }
+                }
+                PassIo::Compute { samples } => {
+                    let before = slots[..i].iter().flatten().last();
+                    for name in samples {
+                        let Some(&(run, _)) = before else {
+                            return Err(RenderError::Frame(format!(
+                                "pass '{}' samples attachment '{name}' before any subpass wrote it",
+                                decl.name()
+                            )));
+                        };
+                        io.sampled.push((io.index(name)?, run));
+                    }
+                }
+                PassIo::Subpass { .. } => {}
+            }
+        }
+        Ok(io)
+    }
+
+    fn index(&self, name: &str) -> Result<usize, RenderError> {
+        self.plan
+            .attachments
             .iter()
             .position(|a| a.name == name)
             .ok_or_else(|| {
@@ -536,65 +689,34 @@ fn build_render_pass(
                     "a pass uses attachment '{name}', which the plan does not declare"
                 ))
             })
-    };
-    let Some(first_subpass) = plan.passes.iter().position(|p| p.is_subpass()) else {
-        return Ok(None);
-    };
-    let mut subpasses = Vec::new();
-    for decl in &plan.passes {
-        if let PassIo::Subpass {
+    }
+
+    /// A subpass's declaration with the frame's attachment indices.
+    fn subpass(&self, decl: &PassDecl) -> Result<SubpassSpec, RenderError> {
+        let PassIo::Subpass {
             colour,
             depth,
             inputs,
         } = &decl.io
-        {
-            subpasses.push(SubpassSpec {
-                name: decl.name(),
-                colour: colour.iter().map(|n| index(n)).collect::<Result<_, _>>()?,
-                depth: depth
-                    .map(|(n, how)| index(n).map(|i| (i, how)))
-                    .transpose()?,
-                inputs: inputs.iter().map(|n| index(n)).collect::<Result<_, _>>()?,
-            });
-        }
-    }
-    let transfers = |before: bool, pick: fn(&PassIo) -> &[&'static str]| -> Vec<&'static str> {
-        plan.passes
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| (*i < first_subpass) == before)
-            .flat_map(|(_, p)| pick(&p.io).to_vec())
-            .collect()
-    };
-    let loaded = transfers(true, |io| match io {
-        PassIo::Transfer { writes, .. } => writes,
-        PassIo::Subpass { .. } | PassIo::Compute => &[],
-    });
-    let read_after = transfers(false, |io| match io {
-        PassIo::Transfer { reads, .. } => reads,
-        PassIo::Subpass { .. } | PassIo::Compute => &[],
-    });
-    let specs: Vec<AttachmentSpec> = plan
-        .attachments
-        .iter()
-        .map(|a| AttachmentSpec {
-            name: a.name,
-            format: a.format,
-            start: if loaded.contains(&a.name) {
-                AttachmentStart::Loaded
-            } else if let Some(v) = a.clear {
-                AttachmentStart::Clear(v)
-            } else {
-                AttachmentStart::Undefined
-            },
-            read_after: read_after.contains(&a.name),
+        else {
+            return Err(RenderError::Frame(format!(
+                "pass '{}' is not a subpass",
+                decl.name()
+            )));
+        };
+        Ok(SubpassSpec {
+            name: decl.name(),
+            colour: colour
+                .iter()
+                .map(|n| self.index(n))
+                .collect::<Result<_, _>>()?,
+            depth: depth
+                .map(|(n, how)| self.index(n).map(|i| (i, how)))
+                .transpose()?,
+            inputs: inputs
+                .iter()
+                .map(|n| self.index(n))
+                .collect::<Result<_, _>>()?,
         })
-        .collect();
-    Ok(Some(RenderTargets::new(
-        ctx,
-        plan.width,
-        plan.height,
-        &specs,
-        &subpasses,
-    )?))
+    }
 }

@@ -28,8 +28,9 @@ use super::material_maps::{
 };
 use super::value_checks::{Check, Result, MAX_COLOUR, MAX_LENGTH, MIN_LENGTH};
 use super::{
-    Camera, DebugView, DepthPrepass, HdrFormat, Light, Lighting, Material, Object, Output, Scene,
-    SceneError, ShadingModel, Shape, TextureFilter, ToneMap, ToneMapOperator, Transform,
+    Camera, DebugView, DepthPrepass, Exposure, HdrFormat, Light, Lighting, Material, Object,
+    Output, Scene, SceneError, ShadingModel, Shape, TextureFilter, ToneMap, ToneMapOperator,
+    Transform,
 };
 
 use crate::mesh::obj;
@@ -127,14 +128,22 @@ struct CameraFile {
 #[serde(deny_unknown_fields, default)]
 struct ToneMapFile {
     operator: ToneMapOperator,
-    exposure: f64,
+    exposure: ExposureFile,
+}
+
+/// `exposure = 1.5` or `exposure = "auto"`.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum ExposureFile {
+    Number(f64),
+    Text(String),
 }
 
 impl Default for ToneMapFile {
     fn default() -> Self {
         ToneMapFile {
             operator: ToneMapOperator::Reinhard,
-            exposure: 1.0,
+            exposure: ExposureFile::Number(1.0),
         }
     }
 }
@@ -398,6 +407,20 @@ impl Check<'_> {
         self.scene(raw)
     }
 
+    /// A number keeps the checks every positive field has; a string must
+    /// be `auto`.
+    fn exposure(&self, raw: ExposureFile) -> Result<Exposure> {
+        const FIELD: &str = "tone_map.exposure";
+        match raw {
+            ExposureFile::Number(x) => Ok(Exposure::Fixed(self.positive(FIELD, x)?)),
+            ExposureFile::Text(t) if t == "auto" => Ok(Exposure::Auto),
+            ExposureFile::Text(t) => Err(self.invalid(
+                FIELD,
+                format!("expected \"auto\" or a number greater than 0, got \"{t}\""),
+            )),
+        }
+    }
+
     fn scene(&self, raw: SceneFile) -> Result<Description> {
         let ambient = self.colour("ambient", raw.ambient)?;
         let light_cutoff = self.non_negative("light_cutoff", raw.light_cutoff)?;
@@ -405,7 +428,7 @@ impl Check<'_> {
         let camera = self.camera(raw.camera)?;
         let tone_map = ToneMap {
             operator: raw.tone_map.operator,
-            exposure: self.positive("tone_map.exposure", raw.tone_map.exposure)?,
+            exposure: self.exposure(raw.tone_map.exposure)?,
         };
         let lights = raw
             .lights

@@ -8,8 +8,8 @@
 //! in `viewer::knobs`.
 
 use super::{
-    AerialPerspective, DepthPrepass, HdrFormat, Lighting, OzoneDepth, Scene, ShadingModel, Shape,
-    TableFilter, TableMapping, TextureFilter, ToneMapOperator,
+    AerialPerspective, DepthPrepass, Exposure, HdrFormat, Lighting, OzoneDepth, Scene,
+    ShadingModel, Shape, TableFilter, TableMapping, TextureFilter, ToneMapOperator,
 };
 
 /// One named setting.
@@ -194,6 +194,17 @@ pub const KNOBS: &[Knob] = &[
             Ok(())
         },
         read: |s| s.tone_map.operator.name().into(),
+    },
+    Knob {
+        name: "exposure",
+        // Like the operator, the exposure changes what the output shows.
+        best: Best::Unchanged,
+        values: "auto | a number > 0 (auto: measured from each frame's HDR image)",
+        apply: |s, v| {
+            s.tone_map.exposure = Exposure::parse(v)?;
+            Ok(())
+        },
+        read: |s| s.tone_map.exposure.name(),
     },
     Knob {
         name: "lighting",

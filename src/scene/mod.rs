@@ -238,8 +238,57 @@ pub enum HdrFormat {
 pub struct ToneMap {
     /// The curve.
     pub operator: ToneMapOperator,
-    /// Linear scale applied before the curve, finite and > 0.
-    pub exposure: f32,
+    /// Linear scale applied before the curve.
+    pub exposure: Exposure,
+}
+
+/// The linear scale the tone map applies before its curve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Exposure {
+    /// This factor, finite and > 0.
+    Fixed(f32),
+    /// Measured from each frame's HDR image by the exposure pass: 0.18
+    /// (middle grey) over the log-average luminance.
+    Auto,
+}
+
+impl Exposure {
+    /// The fixed factor, or `None` for [`Exposure::Auto`].
+    pub fn fixed(self) -> Option<f32> {
+        match self {
+            Exposure::Fixed(x) => Some(x),
+            Exposure::Auto => None,
+        }
+    }
+
+    /// Parses `auto` or a finite number > 0 (the scene field and the knob
+    /// share it); the error is the reason.
+    pub fn parse(value: &str) -> Result<Exposure, String> {
+        if value == "auto" {
+            return Ok(Exposure::Auto);
+        }
+        let x: f64 = value
+            .parse()
+            .map_err(|_| format!("expected \"auto\" or a number > 0, got '{value}'"))?;
+        Exposure::from_number(x)
+    }
+
+    /// A fixed exposure from a number: finite, > 0 and within f32's range.
+    pub fn from_number(x: f64) -> Result<Exposure, String> {
+        let narrow = x as f32;
+        if !x.is_finite() || x <= 0.0 || narrow == 0.0 || !narrow.is_finite() {
+            return Err(format!("must be greater than 0 and finite, got {x}"));
+        }
+        Ok(Exposure::Fixed(narrow))
+    }
+
+    /// The scene-file syntax: `auto` or the number.
+    pub fn name(self) -> String {
+        match self {
+            Exposure::Fixed(x) => x.to_string(),
+            Exposure::Auto => "auto".into(),
+        }
+    }
 }
 
 /// Tone-mapping curve.

@@ -319,7 +319,7 @@ fn minimal_scene_gets_the_documented_defaults() {
         scene.tone_map,
         ToneMap {
             operator: ToneMapOperator::Reinhard,
-            exposure: 1.0
+            exposure: Exposure::Fixed(1.0)
         }
     );
     assert_eq!(scene.ambient, Vec3::ZERO);

@@ -20,6 +20,8 @@ pub enum BufferUsage {
     Upload,
     /// Destination of image copies, read back on the CPU.
     Readback,
+    /// Written and read by shaders (a value one pass computes for another).
+    Storage,
 }
 
 impl BufferUsage {
@@ -32,6 +34,7 @@ impl BufferUsage {
             BufferUsage::Instances => vk::BufferUsageFlags::VERTEX_BUFFER,
             BufferUsage::Upload => vk::BufferUsageFlags::TRANSFER_SRC,
             BufferUsage::Readback => vk::BufferUsageFlags::TRANSFER_DST,
+            BufferUsage::Storage => vk::BufferUsageFlags::STORAGE_BUFFER,
         }
     }
 

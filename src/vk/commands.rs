@@ -80,6 +80,9 @@ pub enum ImageUse {
     ShaderSampled,
     /// Written as a storage image by compute shaders.
     ComputeWrite,
+    /// Sampled by compute shaders only (an attachment a compute pass
+    /// between render passes reads).
+    ComputeSampled,
     /// Written as a colour attachment (e.g. loaded by a render pass).
     ColourAttachment,
     /// Read as an input attachment (loaded by a render pass whose first
@@ -108,6 +111,11 @@ impl ImageUse {
             ImageUse::ShaderSampled => (
                 vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                 vk::PipelineStageFlags::FRAGMENT_SHADER | vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::AccessFlags::SHADER_READ,
+            ),
+            ImageUse::ComputeSampled => (
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                vk::PipelineStageFlags::COMPUTE_SHADER,
                 vk::AccessFlags::SHADER_READ,
             ),
             ImageUse::ComputeWrite => (
@@ -451,8 +459,11 @@ impl CommandBuffer {
     /// Begins `pass` (with a viewport and scissor over the whole
     /// framebuffer). A loaded attachment is first moved to the layout its
     /// first subpass uses, after whatever wrote it.
-    pub fn begin_render_pass(&self, pass: &RenderTargets) {
-        for (image, initial) in pass.images.iter().zip(&pass.initial_layouts) {
+    /// `images` are the frame's attachments, which `pass.attachments`
+    /// index.
+    pub fn begin_render_pass(&self, pass: &RenderTargets, images: &[Image]) {
+        for (&a, initial) in pass.attachments.iter().zip(&pass.initial_layouts) {
+            let image = &images[a];
             match *initial {
                 vk::ImageLayout::UNDEFINED => {}
                 vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL => {
@@ -511,10 +522,11 @@ impl CommandBuffer {
     /// Ends `pass`; its attachments are then in their final layouts. A
     /// stored attachment's writes were made visible to transfer reads by
     /// the pass's own outgoing dependency.
-    pub fn end_render_pass(&self, pass: &RenderTargets) {
+    pub fn end_render_pass(&self, pass: &RenderTargets, images: &[Image]) {
         // SAFETY: inside the last subpass of this render pass.
         unsafe { self.ctx.device.cmd_end_render_pass(self.handle) };
-        for (image, layout) in pass.images.iter().zip(&pass.final_layouts) {
+        for (&a, layout) in pass.attachments.iter().zip(&pass.final_layouts) {
+            let image = &images[a];
             let state = if *layout == vk::ImageLayout::TRANSFER_SRC_OPTIMAL {
                 ImageState {
                     layout: *layout,
@@ -522,11 +534,22 @@ impl CommandBuffer {
                     pending_writes: vk::AccessFlags::empty(),
                 }
             } else {
+                // The writes a later barrier must wait for: those the
+                // attachment's last layout allows (naming others trips the
+                // best-practices check on that barrier).
+                let pending_writes = match *layout {
+                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL => {
+                        vk::AccessFlags::COLOR_ATTACHMENT_WRITE
+                    }
+                    vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL => {
+                        vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE
+                    }
+                    _ => vk::AccessFlags::empty(),
+                };
                 ImageState {
                     layout: *layout,
                     stage: IMAGE_STAGES,
-                    pending_writes: vk::AccessFlags::COLOR_ATTACHMENT_WRITE
-                        | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE,
+                    pending_writes,
                 }
             };
             image.state.set(state);
@@ -689,6 +712,42 @@ impl CommandBuffer {
     pub fn draw(&self, vertex_count: u32) {
         // SAFETY: recording inside a render pass with a pipeline bound.
         unsafe { self.ctx.device.cmd_draw(self.handle, vertex_count, 1, 0, 0) };
+    }
+
+    /// A dependency on the whole of `buffer`: the accesses `src_access` in
+    /// `src_stage` (e.g. a compute shader's write) happen before, and are
+    /// visible to, `dst_access` in `dst_stage` (e.g. fragment shader
+    /// reads). With empty accesses it only orders execution (a write after
+    /// the previous submission's reads).
+    pub fn buffer_barrier(
+        &self,
+        buffer: &Buffer,
+        src_stage: vk::PipelineStageFlags,
+        src_access: vk::AccessFlags,
+        dst_stage: vk::PipelineStageFlags,
+        dst_access: vk::AccessFlags,
+    ) {
+        let barrier = vk::BufferMemoryBarrier::default()
+            .src_access_mask(src_access)
+            .dst_access_mask(dst_access)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .buffer(buffer.handle)
+            .offset(0)
+            .size(vk::WHOLE_SIZE);
+        // SAFETY: recording outside a render pass; the buffer is alive
+        // until the submission ends, and the range is all of it.
+        unsafe {
+            self.ctx.device.cmd_pipeline_barrier(
+                self.handle,
+                src_stage,
+                dst_stage,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[barrier],
+                &[],
+            )
+        };
     }
 
     /// A global memory dependency (for buffers read back by the host and

@@ -35,7 +35,8 @@ pub use pipeline::{
 pub use pipeline_cache::{PipelineCacheStore, PIPELINE_CACHE_ENV};
 pub use query::{PipelineStats, PipelineStatsQueries, TimestampQueries};
 pub use render_graph::{
-    AttachmentSpec, AttachmentStart, DepthUse, Framebuffer, RenderPass, RenderTargets, SubpassSpec,
+    AttachmentSpec, AttachmentStart, DepthUse, FrameTargets, Framebuffer, RenderPass,
+    RenderTargets, RunSpec, SubpassSpec,
 };
 pub use swapchain::{PresentMode, Presented, Surface, Swapchain, WindowHandles};
 

@@ -20,6 +20,12 @@ pub enum AttachmentStart {
     /// Copied in before the render pass (by a transfer the frame records),
     /// left in the layout of its first use.
     Loaded,
+    /// Written by an earlier render pass of the frame (and perhaps sampled
+    /// by a compute pass since): loaded, in the layout of its first use
+    /// here; `CommandBuffer::begin_render_pass` moves it there from its
+    /// tracked state. Unlike [`AttachmentStart::Loaded`] it needs no
+    /// transfer usage.
+    Kept,
     /// Every pixel is written before anything reads it: nothing to load.
     Undefined,
 }
@@ -33,6 +39,14 @@ pub struct AttachmentSpec {
     /// Copied out (read back) after the render pass: stored, and left in
     /// TRANSFER_SRC_OPTIMAL.
     pub read_after: bool,
+    /// Used by a later render pass or compute pass of the frame: stored,
+    /// and left in the layout of its last use here.
+    pub kept_after: bool,
+    /// Sampled by a compute pass somewhere in the frame: the dependencies
+    /// from and to outside the render pass include the compute shader
+    /// stage (the previous submission's compute reads must finish before
+    /// the attachment is written again).
+    pub compute: bool,
 }
 
 /// How a subpass uses the depth attachment.
@@ -120,13 +134,14 @@ fn layout_for(depth: bool, uses: &[Access]) -> vk::ImageLayout {
     }
 }
 
-/// A built render pass with its attachments (created here, sized for the
-/// frame) and framebuffer.
+/// A built render pass and its framebuffer over some of the frame's
+/// attachments (the images live in [`FrameTargets`]).
 pub struct RenderTargets {
     pub render_pass: RenderPass,
     pub framebuffer: Framebuffer,
-    /// One image per [`AttachmentSpec`], in the same order.
-    pub images: Vec<Image>,
+    /// The frame's attachment (index into [`FrameTargets::images`]) behind
+    /// each of this pass's attachments, in the pass's order.
+    pub attachments: Vec<usize>,
     /// One clear value per attachment (ignored unless cleared).
     pub clears: Vec<vk::ClearValue>,
     /// The layout each attachment is left in.
@@ -135,30 +150,106 @@ pub struct RenderTargets {
     pub initial_layouts: Vec<vk::ImageLayout>,
 }
 
-impl RenderTargets {
-    /// Derives and creates the render pass, the `width`×`height`
-    /// attachments and the framebuffer for `subpasses` in order.
-    pub fn new(
+/// One render pass of a frame: the frame attachments it uses and its
+/// subpasses.
+#[derive(Clone, Debug)]
+pub struct RunSpec {
+    /// The frame's attachment (index into the frame's images) behind each
+    /// of this pass's attachments.
+    pub attachments: Vec<usize>,
+    /// This pass's attachments, in the same order: how each starts and
+    /// ends here.
+    pub specs: Vec<AttachmentSpec>,
+    /// Indices into `specs`.
+    pub subpasses: Vec<SubpassSpec>,
+}
+
+/// A frame's attachment images (created once, sized for the frame) and
+/// the render passes ("runs") over them, in frame order.
+pub struct FrameTargets {
+    /// One image per frame attachment.
+    pub images: Vec<Image>,
+    pub runs: Vec<RenderTargets>,
+}
+
+impl FrameTargets {
+    /// One render pass over every attachment in `attachments`, in order.
+    pub fn single(
         ctx: &Arc<Context>,
         width: u32,
         height: u32,
         attachments: &[AttachmentSpec],
         subpasses: &[SubpassSpec],
-    ) -> Result<RenderTargets, VkError> {
-        let uses = attachment_uses(attachments, subpasses)?;
-        let described = describe_attachments(attachments, &uses)?;
-        let render_pass =
-            create_render_pass(ctx, attachments, subpasses, &uses, &described.descriptions)?;
-        let images = create_attachment_images(ctx, width, height, attachments, &described.usages)?;
-        let refs: Vec<&Image> = images.iter().collect();
-        let framebuffer = Framebuffer::new(ctx, &render_pass, &refs)?;
-        Ok(RenderTargets {
-            render_pass,
-            framebuffer,
+    ) -> Result<FrameTargets, VkError> {
+        let run = RunSpec {
+            attachments: (0..attachments.len()).collect(),
+            specs: attachments.to_vec(),
+            subpasses: subpasses.to_vec(),
+        };
+        let usage = vec![vk::ImageUsageFlags::empty(); attachments.len()];
+        FrameTargets::new(ctx, width, height, &usage, &[run])
+    }
+
+    /// Derives the render passes of `runs` and creates them, the
+    /// `width`×`height` attachments (usage: the union over every run, plus
+    /// `extra_usage[a]`, e.g. SAMPLED for one a compute pass samples) and
+    /// one framebuffer per run. Every frame attachment must be used by
+    /// some run; its name and format come from its first run's spec.
+    pub fn new(
+        ctx: &Arc<Context>,
+        width: u32,
+        height: u32,
+        extra_usage: &[vk::ImageUsageFlags],
+        runs: &[RunSpec],
+    ) -> Result<FrameTargets, VkError> {
+        let mut usages = extra_usage.to_vec();
+        let mut specs: Vec<Option<&AttachmentSpec>> = vec![None; extra_usage.len()];
+        let mut derived = Vec::with_capacity(runs.len());
+        for run in runs {
+            let uses = attachment_uses(&run.specs, &run.subpasses)?;
+            let described = describe_attachments(&run.specs, &uses)?;
+            for (local, &a) in run.attachments.iter().enumerate() {
+                let slot = usages.get_mut(a).ok_or_else(|| {
+                    VkError::Graph(format!("a render pass uses undeclared attachment {a}"))
+                })?;
+                *slot |= described.usages[local];
+                specs[a].get_or_insert(&run.specs[local]);
+            }
+            derived.push((uses, described));
+        }
+        let specs: Vec<AttachmentSpec> = specs
+            .into_iter()
+            .enumerate()
+            .map(|(a, spec)| {
+                spec.cloned().ok_or_else(|| {
+                    VkError::Graph(format!("attachment {a} is used by no render pass"))
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        let images = create_attachment_images(ctx, width, height, &specs, &usages)?;
+        let mut built = Vec::with_capacity(runs.len());
+        for (run, (uses, described)) in runs.iter().zip(derived) {
+            let render_pass = create_render_pass(
+                ctx,
+                &run.specs,
+                &run.subpasses,
+                &uses,
+                &described.descriptions,
+            )?;
+            let refs: Vec<&Image> = run.attachments.iter().map(|&a| &images[a]).collect();
+            let framebuffer = Framebuffer::new(ctx, &render_pass, &refs)?;
+            built.push(RenderTargets {
+                render_pass,
+                framebuffer,
+                attachments: run.attachments.clone(),
+                clears: clear_values(&run.specs),
+                final_layouts: described.final_layouts,
+                initial_layouts: described.initial_layouts,
+            });
+        }
+        Ok(FrameTargets {
             images,
-            clears: clear_values(attachments),
-            final_layouts: described.final_layouts,
-            initial_layouts: described.initial_layouts,
+            runs: built,
         })
     }
 }
@@ -241,12 +332,16 @@ fn describe_attachments(
             AttachmentStart::Undefined => {
                 (vk::AttachmentLoadOp::DONT_CARE, vk::ImageLayout::UNDEFINED)
             }
-            AttachmentStart::Loaded if depth => {
+            AttachmentStart::Loaded | AttachmentStart::Kept if depth => {
                 return Err(VkError::Graph(format!(
                     "attachment '{}': loading a depth attachment is not supported",
                     spec.name
                 )));
             }
+            AttachmentStart::Kept => (
+                vk::AttachmentLoadOp::LOAD,
+                layout_for(depth, &uses[first][a]),
+            ),
             AttachmentStart::Loaded => {
                 usage |= vk::ImageUsageFlags::TRANSFER_DST;
                 (
@@ -261,6 +356,11 @@ fn describe_attachments(
             (
                 vk::AttachmentStoreOp::STORE,
                 vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            )
+        } else if spec.kept_after {
+            (
+                vk::AttachmentStoreOp::STORE,
+                layout_for(depth, &uses[last][a]),
             )
         } else {
             (
@@ -412,6 +512,33 @@ fn clear_values(attachments: &[AttachmentSpec]) -> Vec<vk::ClearValue> {
         .collect()
 }
 
+/// The stages and accesses of all of `list`'s uses together.
+fn combined(list: &[Access]) -> (vk::PipelineStageFlags, vk::AccessFlags) {
+    list.iter().fold(
+        (vk::PipelineStageFlags::empty(), vk::AccessFlags::empty()),
+        |(s, a), u| {
+            let (us, ua) = u.stage_access();
+            (s | us, a | ua)
+        },
+    )
+}
+
+/// What the previous submission may still be doing with any attachment:
+/// writing it in a subpass, reading it in a shader, copying out of it or
+/// into it.
+const PREVIOUS_STAGES: vk::PipelineStageFlags = vk::PipelineStageFlags::from_raw(
+    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT.as_raw()
+        | vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS.as_raw()
+        | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS.as_raw()
+        | vk::PipelineStageFlags::FRAGMENT_SHADER.as_raw()
+        | vk::PipelineStageFlags::TRANSFER.as_raw(),
+);
+const PREVIOUS_WRITES: vk::AccessFlags = vk::AccessFlags::from_raw(
+    vk::AccessFlags::COLOR_ATTACHMENT_WRITE.as_raw()
+        | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE.as_raw()
+        | vk::AccessFlags::TRANSFER_WRITE.as_raw(),
+);
+
 /// The dependencies the uses imply:
 /// - from outside into the first subpass using each attachment: the
 ///   previous submission of the same frame (or a copy into a loaded
@@ -461,26 +588,8 @@ fn dependencies(
             );
         }
     };
-    let combined = |list: &[Access]| {
-        list.iter().fold(
-            (vk::PipelineStageFlags::empty(), vk::AccessFlags::empty()),
-            |(s, a), u| {
-                let (us, ua) = u.stage_access();
-                (s | us, a | ua)
-            },
-        )
-    };
-    // What the previous submission may still be doing with any attachment:
-    // writing it in a subpass, reading it in a shader, copying out of it or
-    // into it.
-    let previous_stages = vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
-        | vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS
-        | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS
-        | vk::PipelineStageFlags::FRAGMENT_SHADER
-        | vk::PipelineStageFlags::TRANSFER;
-    let previous_writes = vk::AccessFlags::COLOR_ATTACHMENT_WRITE
-        | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE
-        | vk::AccessFlags::TRANSFER_WRITE;
+    let previous_stages = PREVIOUS_STAGES;
+    let previous_writes = PREVIOUS_WRITES;
     for (a, spec) in attachments.iter().enumerate() {
         let users: Vec<usize> = (0..uses.len())
             .filter(|&s| !uses[s][a].is_empty())
@@ -488,11 +597,24 @@ fn dependencies(
         let Some(&first) = users.first() else {
             continue;
         };
-        let (dst_stage, dst_access) = combined(&uses[first][a]);
+        let (mut dst_stage, mut dst_access) = combined(&uses[first][a]);
+        if spec.start == AttachmentStart::Kept && !is_depth(spec.format) {
+            // Loading a colour attachment reads it in the attachment
+            // output stage, whatever the subpass then does with it.
+            dst_stage |= vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT;
+            dst_access |= vk::AccessFlags::COLOR_ATTACHMENT_READ;
+        }
+        // A compute pass sampling the attachment (earlier in this
+        // submission, or in the previous one) reads it in the compute stage.
+        let compute_stage = if spec.compute {
+            vk::PipelineStageFlags::COMPUTE_SHADER
+        } else {
+            vk::PipelineStageFlags::empty()
+        };
         add(
             vk::SUBPASS_EXTERNAL,
             first as u32,
-            previous_stages,
+            previous_stages | compute_stage,
             previous_writes,
             dst_stage,
             dst_access,
@@ -505,6 +627,25 @@ fn dependencies(
                 let (ds, da) = combined(&uses[dst][a]);
                 add(src as u32, dst as u32, ss, sa, ds, da);
             }
+        }
+        if spec.kept_after {
+            // To the compute pass sampling it, or the later render pass
+            // loading it (as an input or colour attachment).
+            let last = *users.last().expect("non-empty");
+            let (ss, sa) = combined(&uses[last][a]);
+            add(
+                last as u32,
+                vk::SUBPASS_EXTERNAL,
+                ss,
+                sa,
+                vk::PipelineStageFlags::FRAGMENT_SHADER
+                    | vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
+                    | compute_stage,
+                vk::AccessFlags::SHADER_READ
+                    | vk::AccessFlags::INPUT_ATTACHMENT_READ
+                    | vk::AccessFlags::COLOR_ATTACHMENT_READ
+                    | vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+            );
         }
         if spec.read_after {
             let last = *users.last().expect("non-empty");

@@ -166,7 +166,7 @@ fn every_scene_is_clean_under_every_mode() {
                 &hdr,
                 aerial::scene::ToneMap {
                     operator: aerial::scene::ToneMapOperator::Reinhard,
-                    exposure: 1.0,
+                    exposure: aerial::scene::Exposure::Fixed(1.0),
                 },
             ),
             &settings(mode),

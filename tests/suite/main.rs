@@ -18,6 +18,7 @@ mod common;
 mod aerial_volume;
 mod atmosphere;
 mod atmosphere_objects;
+mod auto_exposure;
 mod bench;
 mod bench_metrics;
 mod bounds;

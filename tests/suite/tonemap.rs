@@ -13,7 +13,7 @@ use crate::common;
 
 use aerial::render::Pixels;
 use aerial::render_run::{self, RenderSettings, RunSource};
-use aerial::scene::{ToneMap, ToneMapOperator};
+use aerial::scene::{Exposure, ToneMap, ToneMapOperator};
 
 fn srgb_encode(linear: f64) -> f64 {
     let c = linear.clamp(0.0, 1.0);
@@ -123,7 +123,7 @@ fn a_mis_sized_image_is_an_error_not_a_crash() {
             &image,
             ToneMap {
                 operator: ToneMapOperator::Reinhard,
-                exposure: 1.0,
+                exposure: Exposure::Fixed(1.0),
             },
         ),
         &RenderSettings::default(),
@@ -199,7 +199,13 @@ fn both_operators_apply_the_exposure() {
     ] {
         for exposure in [0.3f32, 3.0] {
             let run = render_run::run(
-                RunSource::HdrImage(&input, ToneMap { operator, exposure }),
+                RunSource::HdrImage(
+                    &input,
+                    ToneMap {
+                        operator,
+                        exposure: Exposure::Fixed(exposure),
+                    },
+                ),
                 &common::validated_settings(),
                 &mut || {},
             )
@@ -292,7 +298,7 @@ fn the_srgb_encode_is_within_half_a_step_of_the_exact_curve() {
     };
     let tone_map = ToneMap {
         operator: ToneMapOperator::None,
-        exposure: 1.0,
+        exposure: Exposure::Fixed(1.0),
     };
     let run = render_run::run(
         RunSource::HdrImage(&image, tone_map),

@@ -48,7 +48,8 @@ impl PassType for Pass {
             .sky
             .as_ref()
             .is_some_and(|s| s.aerial_perspective == AerialPerspective::Volume);
-        (shape.sky && volume && !scene.objects.is_empty()).then_some(PassIo::Compute)
+        (shape.sky && volume && !scene.objects.is_empty())
+            .then_some(PassIo::Compute { samples: vec![] })
     }
 
     fn create(&self, setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {

@@ -8,16 +8,18 @@
 //! asks each one for its declaration ([`PassDecl`]) and keeps those a
 //! frame holds. Each pass takes its attachments (input attachments in
 //! their declared order) from its declaration and everything else from
-//! the plan ([`PassSetup`]). The renderer begins the render pass before
-//! the first subpass, moves to the next subpass between subpasses and ends
-//! it after the last, so no pass knows its subpass index or its
-//! neighbours. Adding a pass is a new file here (with its `PassType`), its
+//! the plan ([`PassSetup`]). The renderer begins a render pass before
+//! the first of consecutive subpasses, moves to the next subpass between
+//! them and ends it after the last (a compute pass sampling attachments
+//! between subpasses splits the frame into several render passes), so no
+//! pass knows its subpass index or its neighbours. Adding a pass is a new file here (with its `PassType`), its
 //! shaders in `glsl/`, and one line in [`PASSES`].
 
 pub mod aerial_volume;
 pub mod atmosphere;
 pub mod deferred_lighting;
 pub mod depth_prepass;
+pub mod exposure;
 pub mod sky_view;
 pub mod surface;
 pub mod tonemap;
@@ -48,6 +50,7 @@ pub const PASSES: &[&dyn PassType] = &[
     surface::OPAQUE,
     surface::TRANSPARENT,
     atmosphere::PASS,
+    exposure::PASS,
     tonemap::PASS,
     transfer::READBACK,
 ];
@@ -68,8 +71,8 @@ pub trait PassType: Sync {
     /// and the plan.
     fn create(&self, setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError>;
 
-    /// Whether the pass is a subpass of the frame's render pass (most
-    /// are), rather than compute or copies outside it: what `declare`
+    /// Whether the pass is a subpass of one of the frame's render passes
+    /// (most are), rather than compute or copies outside them: what `declare`
     /// returns is then always a [`PassIo::Subpass`].
     fn is_subpass(&self) -> bool {
         true
@@ -123,12 +126,20 @@ pub struct PassResources<'a> {
     /// The atmosphere's uniforms and tables; present when the plan
     /// draws the atmosphere.
     pub sky: Option<&'a SkyResources>,
+    /// One float: the exposure the exposure pass measures and the tone
+    /// map applies; present when the plan holds the exposure pass.
+    pub exposure: Option<&'a Buffer>,
 }
 
 impl PassResources<'_> {
     pub fn sky(&self) -> Result<&SkyResources, RenderError> {
         self.sky
             .ok_or_else(|| RenderError::Frame("the frame has no atmosphere resources".into()))
+    }
+
+    pub fn exposure(&self) -> Result<&Buffer, RenderError> {
+        self.exposure
+            .ok_or_else(|| RenderError::Frame("the frame has no exposure buffer".into()))
     }
 }
 
@@ -139,7 +150,8 @@ pub struct PassSetup<'a> {
     pub plan: &'a FramePlan,
     /// This pass's declaration.
     pub decl: &'a PassDecl,
-    /// The frame's render pass, and this pass's subpass index in it.
+    /// The render pass this subpass belongs to (a frame may have several,
+    /// see `FramePlan::subpass_slots`), and its subpass index there.
     pub render_pass: Option<&'a RenderTargets>,
     pub subpass: u32,
     pub frame: &'a PassResources<'a>,

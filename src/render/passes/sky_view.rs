@@ -41,7 +41,7 @@ impl PassType for Pass {
     /// with an atmosphere pass and a sky-view table.
     fn declare(&self, shape: &FrameShape<'_>) -> Option<PassIo> {
         let sky = shape.scene?.sky.as_ref()?;
-        (shape.sky && sky.sky_view.is_some()).then_some(PassIo::Compute)
+        (shape.sky && sky.sky_view.is_some()).then_some(PassIo::Compute { samples: vec![] })
     }
 
     fn create(&self, setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {

@@ -320,7 +320,10 @@ pub fn tone_map_on_gpu(
     let run = render_run::run(
         aerial::render_run::RunSource::HdrImage(
             &image,
-            aerial::scene::ToneMap { operator, exposure },
+            aerial::scene::ToneMap {
+                operator,
+                exposure: aerial::scene::Exposure::Fixed(exposure),
+            },
         ),
         &validated_settings(),
         &mut || {},
