@@ -17,6 +17,8 @@ layout(constant_id = SPEC_EXPOSURE_STEP) const int STEP = 1;
 // Sum and count per invocation; float sums of up to ~256 samples each
 // keep the rounding well below what the 8-bit output shows.
 shared float sums[EXPOSURE_GROUP_SIZE];
+// Below this a sample counts as black.
+const float MIN_LUMINANCE = 1e-4;
 shared uint counts[EXPOSURE_GROUP_SIZE];
 
 void main() {
@@ -30,10 +32,13 @@ void main() {
         ivec2 p = ivec2(i % grid.x, i / grid.x) * STEP;
         vec3 c = texelFetch(hdr, p, 0).rgb;
         float l = dot(c, vec3(0.2126, 0.7152, 0.0722));
-        // NaN and Inf samples say nothing about the scene's brightness
-        // (a NaN fails both comparisons).
-        if (l >= -3.0e38 && l <= 3.0e38) {
-            sum += log(max(l, 1e-4));
+        // Black samples (space, an empty background) and NaN and Inf ones
+        // say nothing about the brightness of what is in view: counted,
+        // half a frame of space would push the exposure of a planet seen
+        // from orbit up until the planet is white. A NaN fails both
+        // comparisons.
+        if (l >= MIN_LUMINANCE && l <= 3.0e38) {
+            sum += log(l);
             count += 1u;
         }
     }
@@ -48,7 +53,7 @@ void main() {
         barrier();
     }
     if (id == 0u) {
-        // No finite sample: a neutral exposure.
+        // Nothing but black or non-finite samples: a neutral exposure.
         float mean = counts[0] > 0u ? sums[0] / float(counts[0]) : log(0.18);
         exposure = clamp(0.18 / exp(mean), 1e-6, 1e6);
     }

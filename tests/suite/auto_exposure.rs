@@ -53,7 +53,8 @@ fn render_validated(scene: &Scene, keep_hdr: bool) -> RenderRun {
 
 /// The exposure the pass should measure, in f64: 0.18 over the
 /// log-average Rec. 709 luminance of every `step`-th pixel in x and y,
-/// non-finite samples skipped, clamped to [1e-6, 1e6].
+/// black (below 1e-4) and non-finite samples skipped, clamped to
+/// [1e-6, 1e6].
 fn cpu_exposure(hdr: &Pixels<f32>) -> f64 {
     let step = sample_step(hdr.width, hdr.height) as usize;
     let (mut sum, mut count) = (0.0f64, 0u64);
@@ -61,13 +62,14 @@ fn cpu_exposure(hdr: &Pixels<f32>) -> f64 {
         for x in (0..hdr.width).step_by(step) {
             let p = common::pixel(hdr, x, y);
             let l = 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64;
-            if l.is_finite() {
-                sum += l.max(1e-4).ln();
+            // Black (below 1e-4) and non-finite samples are skipped.
+            if l.is_finite() && l >= 1e-4 {
+                sum += l.ln();
                 count += 1;
             }
         }
     }
-    assert!(count > 0, "no finite HDR sample");
+    assert!(count > 0, "no lit HDR sample");
     (0.18 / (sum / count as f64).exp()).clamp(1e-6, 1e6)
 }
 
