@@ -714,44 +714,10 @@ impl CommandBuffer {
         unsafe { self.ctx.device.cmd_draw(self.handle, vertex_count, 1, 0, 0) };
     }
 
-    /// A dependency on the whole of `buffer`: the accesses `src_access` in
-    /// `src_stage` (e.g. a compute shader's write) happen before, and are
-    /// visible to, `dst_access` in `dst_stage` (e.g. fragment shader
-    /// reads). With empty accesses it only orders execution (a write after
-    /// the previous submission's reads).
-    pub fn buffer_barrier(
-        &self,
-        buffer: &Buffer,
-        src_stage: vk::PipelineStageFlags,
-        src_access: vk::AccessFlags,
-        dst_stage: vk::PipelineStageFlags,
-        dst_access: vk::AccessFlags,
-    ) {
-        let barrier = vk::BufferMemoryBarrier::default()
-            .src_access_mask(src_access)
-            .dst_access_mask(dst_access)
-            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .buffer(buffer.handle)
-            .offset(0)
-            .size(vk::WHOLE_SIZE);
-        // SAFETY: recording outside a render pass; the buffer is alive
-        // until the submission ends, and the range is all of it.
-        unsafe {
-            self.ctx.device.cmd_pipeline_barrier(
-                self.handle,
-                src_stage,
-                dst_stage,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[barrier],
-                &[],
-            )
-        };
-    }
-
-    /// A global memory dependency (for buffers read back by the host and
-    /// reused across submissions).
+    /// A global memory dependency: the accesses `src_access` in `src_stage`
+    /// (e.g. a compute shader's write to a buffer) happen before, and are
+    /// visible to, `dst_access` in `dst_stage`; with empty accesses it only
+    /// orders execution (a write after the previous submission's reads).
     pub fn memory_barrier(
         &self,
         src_stage: vk::PipelineStageFlags,

@@ -628,36 +628,28 @@ fn dependencies(
                 add(src as u32, dst as u32, ss, sa, ds, da);
             }
         }
+        // Out of the last subpass using it, to what reads it after the
+        // render pass: the compute pass sampling it or the later render
+        // pass loading it (as an input or colour attachment), and the copy
+        // that reads it back.
+        let mut after = (vk::PipelineStageFlags::empty(), vk::AccessFlags::empty());
         if spec.kept_after {
-            // To the compute pass sampling it, or the later render pass
-            // loading it (as an input or colour attachment).
-            let last = *users.last().expect("non-empty");
-            let (ss, sa) = combined(&uses[last][a]);
-            add(
-                last as u32,
-                vk::SUBPASS_EXTERNAL,
-                ss,
-                sa,
-                vk::PipelineStageFlags::FRAGMENT_SHADER
-                    | vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
-                    | compute_stage,
-                vk::AccessFlags::SHADER_READ
-                    | vk::AccessFlags::INPUT_ATTACHMENT_READ
-                    | vk::AccessFlags::COLOR_ATTACHMENT_READ
-                    | vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
-            );
+            after.0 |= vk::PipelineStageFlags::FRAGMENT_SHADER
+                | vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
+                | compute_stage;
+            after.1 |= vk::AccessFlags::SHADER_READ
+                | vk::AccessFlags::INPUT_ATTACHMENT_READ
+                | vk::AccessFlags::COLOR_ATTACHMENT_READ
+                | vk::AccessFlags::COLOR_ATTACHMENT_WRITE;
         }
         if spec.read_after {
+            after.0 |= vk::PipelineStageFlags::TRANSFER;
+            after.1 |= vk::AccessFlags::TRANSFER_READ;
+        }
+        if !after.0.is_empty() {
             let last = *users.last().expect("non-empty");
             let (ss, sa) = combined(&uses[last][a]);
-            add(
-                last as u32,
-                vk::SUBPASS_EXTERNAL,
-                ss,
-                sa,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::TRANSFER_READ,
-            );
+            add(last as u32, vk::SUBPASS_EXTERNAL, ss, sa, after.0, after.1);
         }
     }
     deps

@@ -128,7 +128,6 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
 
 impl RecordPass for ExposurePass {
     fn record(&self, cmd: &CommandBuffer, frame: &PassResources<'_>) -> Result<(), RenderError> {
-        let buffer = frame.exposure()?;
         // From what the render pass before left it in (the barrier comes
         // from the image's tracked state).
         cmd.transition(
@@ -138,8 +137,7 @@ impl RecordPass for ExposurePass {
         // The previous submission's tone map must have read the value
         // before it is written again (an execution dependency suffices for
         // a write after a read).
-        cmd.buffer_barrier(
-            buffer,
+        cmd.memory_barrier(
             PipelineStageFlags::FRAGMENT_SHADER,
             AccessFlags::empty(),
             PipelineStageFlags::COMPUTE_SHADER,
@@ -149,8 +147,7 @@ impl RecordPass for ExposurePass {
         cmd.bind_compute_descriptor_set(&self.layout, 0, &self.set);
         cmd.dispatch([1, 1, 1]);
         // The tone map reads the value in its fragment shader.
-        cmd.buffer_barrier(
-            buffer,
+        cmd.memory_barrier(
             PipelineStageFlags::COMPUTE_SHADER,
             AccessFlags::SHADER_WRITE,
             PipelineStageFlags::FRAGMENT_SHADER,
