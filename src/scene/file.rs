@@ -29,8 +29,8 @@ use super::material_maps::{
 use super::value_checks::{Check, Result, MAX_COLOUR, MAX_LENGTH, MIN_LENGTH};
 use super::{
     Camera, DebugView, DepthPrepass, Exposure, HdrFormat, Light, Lighting, Material, Object,
-    Output, Scene, SceneError, ShadingModel, Shape, TextureFilter, ToneMap, ToneMapOperator,
-    Transform,
+    Output, Scene, SceneError, ShadingModel, ShadowFilter, ShadowLight, Shape, TextureFilter,
+    ToneMap, ToneMapOperator, Transform, MAX_SHADOW_MAP, MIN_SHADOW_MAP,
 };
 
 use crate::mesh::obj;
@@ -90,6 +90,8 @@ struct OutputFile {
     debug_view: Option<DebugView>,
     static_lights: bool,
     max_pixel_error: f64,
+    shadow_map: u32,
+    shadow_filter: ShadowFilter,
 }
 
 /// The defaults are [`Output`]'s, so they are written once.
@@ -106,6 +108,8 @@ impl Default for OutputFile {
             debug_view: output.debug_view,
             static_lights: output.static_lights,
             max_pixel_error: f64::from(output.max_pixel_error),
+            shadow_map: output.shadow_map,
+            shadow_filter: output.shadow_filter,
         }
     }
 }
@@ -167,6 +171,8 @@ struct LightFile {
     #[serde(default = "one")]
     intensity: f64,
     attenuation: Option<[f64; 3]>,
+    #[serde(default)]
+    shadows: bool,
 }
 
 /// Resolves a file field (named, as given) against the scene's folder.
@@ -220,6 +226,8 @@ struct ObjectFile {
     scale: [f64; 3],
     #[serde(default)]
     two_sided: bool,
+    #[serde(default = "super::sky::yes")]
+    casts_shadows: bool,
 }
 
 #[derive(Deserialize)]
@@ -362,6 +370,8 @@ pub(super) struct ModelObject {
     pub(super) options: obj::ModelOptions,
     /// The transform every part shares.
     pub(super) transform: Transform,
+    /// Every part is drawn into the shadow map (`Object::casts_shadows`).
+    pub(super) casts_shadows: bool,
     /// Every part drawn from both sides (`Object::two_sided`).
     pub(super) two_sided: bool,
 }
@@ -422,6 +432,7 @@ impl Check<'_> {
     }
 
     fn scene(&self, raw: SceneFile) -> Result<Description> {
+        let shadow_light = self.shadow_light(&raw)?;
         let ambient = self.colour("ambient", raw.ambient)?;
         let light_cutoff = self.non_negative("light_cutoff", raw.light_cutoff)?;
         let output = self.output(raw.output)?;
@@ -485,6 +496,7 @@ impl Check<'_> {
                 objects: Vec::new(),
                 light_cutoff,
                 sky,
+                shadow_light,
                 warnings,
                 files: Vec::new(),
             },
@@ -511,6 +523,8 @@ impl Check<'_> {
             debug_view: raw.debug_view,
             static_lights: raw.static_lights,
             max_pixel_error: self.positive("output.max_pixel_error", raw.max_pixel_error)?,
+            shadow_map: self.shadow_map_size("output.shadow_map", raw.shadow_map)?,
+            shadow_filter: raw.shadow_filter,
         })
     }
 
@@ -578,6 +592,49 @@ impl Check<'_> {
             near,
             far,
         })
+    }
+
+    /// The light with `shadows = true`: at most one, a directional light
+    /// or the sun (a point light would need a cube map, which the renderer
+    /// does not draw).
+    fn shadow_light(&self, raw: &SceneFile) -> Result<Option<ShadowLight>> {
+        let mut casters = Vec::new();
+        for (i, light) in raw.lights.iter().enumerate() {
+            if !light.shadows {
+                continue;
+            }
+            let field = format!("lights[{i}].shadows");
+            if matches!(light.kind, LightKind::Point) {
+                return Err(self.invalid(
+                    field,
+                    "only directional lights and the sun cast shadows (point-light cube maps \
+                     are not supported)",
+                ));
+            }
+            casters.push((field, ShadowLight::Light(i)));
+        }
+        if raw.sun.as_ref().is_some_and(|sun| sun.shadows) {
+            casters.push(("sun.shadows".to_owned(), ShadowLight::Sun));
+        }
+        if let [(first, _), (second, _), ..] = casters.as_slice() {
+            return Err(self.invalid(
+                second.clone(),
+                format!("only one light may cast shadows, and {first} is already set"),
+            ));
+        }
+        Ok(casters.first().map(|&(_, light)| light))
+    }
+
+    /// A shadow map size in `MIN_SHADOW_MAP..=MAX_SHADOW_MAP`.
+    fn shadow_map_size(&self, field: &str, size: u32) -> Result<u32> {
+        if (MIN_SHADOW_MAP..=MAX_SHADOW_MAP).contains(&size) {
+            Ok(size)
+        } else {
+            Err(self.invalid(
+                field,
+                format!("must be between {MIN_SHADOW_MAP} and {MAX_SHADOW_MAP} texels, got {size}"),
+            ))
+        }
     }
 
     fn light(&self, path: &str, raw: LightFile) -> Result<Light> {
@@ -816,6 +873,7 @@ impl Check<'_> {
             material: usize::MAX,
             transform,
             two_sided: raw.two_sided,
+            casts_shadows: raw.casts_shadows,
         };
         Ok(match material {
             MaterialRef::Index(i) => {
@@ -956,6 +1014,7 @@ impl Check<'_> {
             options,
             transform,
             two_sided: raw.two_sided,
+            casts_shadows: raw.casts_shadows,
         })
     }
 

@@ -9,7 +9,7 @@
 
 use super::{
     AerialPerspective, DepthPrepass, Exposure, HdrFormat, Lighting, OzoneDepth, Scene,
-    ShadingModel, Shape, TableFilter, TableMapping, TextureFilter, ToneMapOperator,
+    ShadingModel, ShadowFilter, Shape, TableFilter, TableMapping, TextureFilter, ToneMapOperator,
 };
 
 /// One named setting.
@@ -229,6 +229,34 @@ pub const KNOBS: &[Knob] = &[
             Ok(())
         },
         read: |s| s.output.depth_prepass.name().into(),
+    },
+    Knob {
+        name: "shadow_map",
+        best: Best::LastListed,
+        values: "N: the shadow map's width and height in texels (512..=8192; list smallest first)",
+        apply: |s, v| {
+            let n: u32 = v.parse().map_err(|e| format!("{e}"))?;
+            if !(super::MIN_SHADOW_MAP..=super::MAX_SHADOW_MAP).contains(&n) {
+                return Err(format!(
+                    "must be between {} and {}",
+                    super::MIN_SHADOW_MAP,
+                    super::MAX_SHADOW_MAP
+                ));
+            }
+            s.output.shadow_map = n;
+            Ok(())
+        },
+        read: |s| s.output.shadow_map.to_string(),
+    },
+    Knob {
+        name: "shadow_filter",
+        best: Best::Fixed("pcf5"),
+        values: "none | pcf3 | pcf5: depth comparisons averaged over 1, 3x3 or 5x5 shadow-map texels",
+        apply: |s, v| {
+            s.output.shadow_filter = ShadowFilter::parse(v)?;
+            Ok(())
+        },
+        read: |s| s.output.shadow_filter.name().into(),
     },
     Knob {
         name: "atmosphere_samples",
@@ -521,6 +549,7 @@ named! {
     ToneMapOperator { "reinhard" => Reinhard, "aces" => Aces, "none" => None }
     Lighting { "forward" => Forward, "deferred" => Deferred }
     DepthPrepass { "off" => Off, "on" => On, "auto" => Auto }
+    ShadowFilter { "none" => None, "pcf3" => Pcf3, "pcf5" => Pcf5 }
     TableMapping { "horizon" => Horizon, "linear" => Linear }
     TableFilter { "manual" => Manual, "nearest" => Nearest, "hardware" => Hardware }
     OzoneDepth { "exact" => Exact, "table" => Table }
@@ -593,6 +622,7 @@ mod tests {
         names_match_the_scene_file::<ToneMapOperator>();
         names_match_the_scene_file::<Lighting>();
         names_match_the_scene_file::<DepthPrepass>();
+        names_match_the_scene_file::<ShadowFilter>();
         names_match_the_scene_file::<TableMapping>();
         names_match_the_scene_file::<TableFilter>();
         names_match_the_scene_file::<OzoneDepth>();

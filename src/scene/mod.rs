@@ -72,6 +72,8 @@ pub struct Scene {
     /// The sun and atmosphere (`[sun]`, `[atmosphere]`), drawn by the
     /// atmosphere pass; `None` without them.
     pub sky: Option<Sky>,
+    /// The one light that casts shadows, if any.
+    pub shadow_light: Option<ShadowLight>,
     /// What was wrong with the models' assets (MTL libraries, textures)
     /// and what is drawn instead; see [`Scene::strict`].
     pub warnings: Vec<SceneWarning>,
@@ -139,6 +141,52 @@ pub struct Output {
     /// Pixels a `tessellation = "auto"` object's triangles may stray from
     /// its exact surface; finite and > 0.
     pub max_pixel_error: f32,
+    /// The shadow map's width and height in texels, in
+    /// `MIN_SHADOW_MAP..=MAX_SHADOW_MAP` (used only when a light casts
+    /// shadows).
+    pub shadow_map: u32,
+    /// How the shadow map is filtered.
+    pub shadow_filter: ShadowFilter,
+}
+
+/// The smallest `[output] shadow_map`.
+pub const MIN_SHADOW_MAP: u32 = 512;
+/// The largest `[output] shadow_map`.
+pub const MAX_SHADOW_MAP: u32 = 8192;
+
+/// How a shadow map is filtered (`[output] shadow_filter`): depth
+/// comparisons at the nearest texel and its neighbours, averaged.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ShadowFilter {
+    /// One comparison at the nearest texel: hard, stair-stepped edges
+    /// (`"none"`).
+    None,
+    /// 3x3 comparisons (`"pcf3"`, the default).
+    Pcf3,
+    /// 5x5 comparisons (`"pcf5"`).
+    Pcf5,
+}
+
+impl ShadowFilter {
+    /// Texels across the filter's square (1, 3 or 5).
+    pub fn taps(self) -> u32 {
+        match self {
+            ShadowFilter::None => 1,
+            ShadowFilter::Pcf3 => 3,
+            ShadowFilter::Pcf5 => 5,
+        }
+    }
+}
+
+/// The light whose shadows the frame draws (`shadows = true` on a
+/// directional light, or on `[sun]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadowLight {
+    /// `Scene::lights[i]`, a directional light.
+    Light(usize),
+    /// The atmosphere's sun.
+    Sun,
 }
 
 /// A surface attribute drawn instead of the lit image (`[output]
@@ -212,6 +260,8 @@ impl Default for Output {
             debug_view: None,
             static_lights: true,
             max_pixel_error: DEFAULT_MAX_PIXEL_ERROR,
+            shadow_map: 2048,
+            shadow_filter: ShadowFilter::Pcf3,
         }
     }
 }
@@ -355,6 +405,8 @@ impl Scene {
     /// hdr_format = "rgba16f"               # ["rgba16f"] | "rgba32f"
     /// texture_filter = "trilinear"         # ["trilinear"] | "bilinear" | "nearest"
     /// max_pixel_error = 0.5                # [0.5]; > 0, pixels, for tessellation = "auto"
+    /// shadow_map = 2048                    # [2048]; 512..=8192 texels, when a light casts shadows
+    /// shadow_filter = "pcf3"               # ["pcf3"] | "pcf5" | "none"
     /// [camera]                             # required
     /// eye = [0.0, 2.0, 6.0]                # required
     /// look_at = [0.0, 0.0, 0.0]            # required, != eye
@@ -376,6 +428,7 @@ impl Scene {
     /// direction = [-1.0, -1.0, -0.5]       # required, the way the light travels
     /// color = [0.3, 0.3, 0.3]              # [1, 1, 1]
     /// intensity = 1.0                      # [1]
+    /// shadows = false                      # [false]; a shadow map for this light (one light at most)
     /// [[materials]]
     /// name = "red"                         # required, unique, not empty
     /// kd = [0.8, 0.1, 0.1]                 # required; >= 0
@@ -398,6 +451,7 @@ impl Scene {
     /// rotate = { axis = [0.0, 1.0, 0.0], degrees = 30.0 }  # optional; axis not zero
     /// scale = [1.0, 1.0, 1.0]              # [1, 1, 1]; every component > 0
     /// two_sided = false                    # [false]; both sides drawn, whatever the material
+    /// casts_shadows = true                 # [true]; drawn into the shadow map
     /// ```
     ///
     /// Shapes (all lengths > 0): `sphere` (`radius`), `torus`
@@ -451,6 +505,7 @@ impl Scene {
             objects: Vec::new(),
             light_cutoff: DEFAULT_LIGHT_CUTOFF,
             sky: None,
+            shadow_light: None,
             warnings: Vec::new(),
             files: Vec::new(),
         }

@@ -152,6 +152,7 @@ impl Check<'_> {
                 material,
                 transform,
                 two_sided: model.two_sided,
+                casts_shadows: model.casts_shadows,
             });
         }
         if objects.is_empty() {

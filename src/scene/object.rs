@@ -31,6 +31,9 @@ pub struct Object {
     /// Draw both sides of the object's faces whatever its material says
     /// (as [`crate::scene::Material::two_sided`]).
     pub two_sided: bool,
+    /// Drawn into the shadow map (when a light casts shadows); opaque
+    /// objects only.
+    pub casts_shadows: bool,
 }
 
 impl Object {

@@ -50,6 +50,9 @@ pub(super) struct SunFile {
     angular_radius: f64,
     #[serde(default = "yes")]
     disc: bool,
+    /// The sun casts shadows (`Scene::shadow_light`).
+    #[serde(default)]
+    pub(super) shadows: bool,
 }
 
 #[derive(Deserialize)]
@@ -133,7 +136,7 @@ pub(super) fn parse_aerial_volume(v: &str) -> std::result::Result<(u32, u32, u32
 fn ones() -> [f64; 3] {
     [1.0; 3]
 }
-fn yes() -> bool {
+pub(super) fn yes() -> bool {
     true
 }
 fn default_angular_radius() -> f64 {

@@ -304,6 +304,8 @@ fn minimal_scene_gets_the_documented_defaults() {
             debug_view: None,
             static_lights: true,
             max_pixel_error: 0.5,
+            shadow_map: 2048,
+            shadow_filter: crate::scene::ShadowFilter::Pcf3,
         }
     );
     assert_eq!(scene.camera.up, Vec3::Y);
