@@ -15,6 +15,10 @@
 // form too, with the ambient term: per pixel, the sun's colour has no
 // place in the G-buffer, and the lighting pass's tiles would only repeat
 // it for every pixel.
+// With SHADOWS (a light casts shadows), the shadow-casting light's term is
+// scaled by the fraction of the shadow map's comparisons that find the
+// point lit (shadow_map.glsl); not with GOURAUD (lit per vertex) or in the
+// G-buffer form (shadows need forward lighting).
 // With DEBUG_VIEW, the fragment writes one attribute instead of a colour
 // (DEBUG_ATTRIBUTE: world-space normal after normal mapping, tangent,
 // bitangent, UV, or albedo), for finding seams and broken frames.
@@ -25,8 +29,12 @@
 // feature: GOURAUD
 // feature: SUN_LIGHT
 // feature: SKY_LIGHT
+// feature: SHADOWS
 // requires: SKY_LIGHT SUN_LIGHT
 // excludes: SUN_LIGHT DEBUG_VIEW
+// excludes: SHADOWS DEBUG_VIEW
+// excludes: SHADOWS GOURAUD
+// excludes: SHADOWS GBUFFER
 #include "variant_rules.glsl"
 #include "scene_data.glsl"
 #include "lighting.glsl"
@@ -131,6 +139,10 @@ void shade() {
     if (TWO_SIDED && !gl_FrontFacing) {
         n = -n;
     }
+#ifdef SHADOWS
+    // Offset along the interpolated normal, before any normal map.
+    shadow_light_visibility = shadow_visibility(in_world_position, n);
+#endif
 #ifdef NORMAL_MAP
     vec3 m = texture(normal_map, vec2(in_uv.x, 1.0 - in_uv.y)).xyz * 2.0 - 1.0;
     if (object.counts.y != 0u) {

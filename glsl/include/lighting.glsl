@@ -1,5 +1,6 @@
 // Local illumination by one light, shared by the forward object shaders
 // and the deferred lighting pass. Requires frame_data.glsl.
+#include "shadow_map.glsl"
 
 // Direction to the light and the attenuated radiance it brings to `p`.
 // Point lights (w = 1) and directional lights (w = 0) share one formula.
@@ -17,6 +18,12 @@ void light_at(Light light, vec3 p, out vec3 l, out vec3 radiance) {
         att = max(1.0 / max(a.x + a.y * d + a.z * d * d, 1e-6) - light.attenuation.w, 0.0);
     }
     radiance = light.color.rgb * att;
+#ifdef SHADOWS
+    // The shadow-casting directional light (see shadow_map.glsl).
+    if (light.position.w < 0.5 && light.attenuation.w > 0.5) {
+        radiance *= shadow_light_visibility;
+    }
+#endif
 }
 
 // A whole-number shininess of at most 1023 (MAX_SHININESS_EXPONENT in

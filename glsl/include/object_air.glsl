@@ -78,7 +78,12 @@ vec3 air_sun_transmittance(AirPoint a) {
 Light air_sun_light(vec3 transmittance) {
     return Light(vec4(SUN_DIRECTION, 0.0),
                  vec4(sky.sun_irradiance.xyz * transmittance, 0.0),
+#ifdef SHADOWS
+                 // Marks the sun as the shadow-casting light when it is.
+                 vec4(1.0, 0.0, 0.0, shadow.params.z));
+#else
                  vec4(1.0, 0.0, 0.0, 0.0));
+#endif
 }
 
 #ifdef SKY_LIGHT

@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use super::geometry::SceneGeometry;
 use crate::scene::material_maps::{MapKind, MapMask, MapSource, MAP_KIND_COUNT};
-use crate::scene::{Material, Scene, ShadingModel};
+use crate::scene::{Material, Scene, ShadingModel, ShadowLight};
 
 /// A pipeline variant: shading model, light count and whole-number
 /// shininess (specialization constants), the material maps it reads (shader
@@ -47,6 +47,9 @@ pub struct PipelineKey {
     /// Drawn as instances: the transforms come from the instance buffer
     /// (shader feature `INSTANCED`), not the object's block.
     pub instanced: bool,
+    /// Lit by the shadow-casting light, whose term the shadow map scales
+    /// (shader feature `SHADOWS`, the shadow set).
+    pub shadowed: bool,
 }
 
 /// How an atmosphere lights objects: per shaded point (per pixel; per
@@ -312,6 +315,7 @@ fn object_draw(
         let (centre, radius) = geometry.bounds[i];
         scene.lights_reaching_sphere(centre, radius)
     };
+    let shadowed = receives_shadow(scene, material, &lights, debug);
     Draw {
         object: i,
         pipeline: PipelineKey {
@@ -333,6 +337,7 @@ fn object_draw(
             // pass's tiles.
             air: AirLight::of(scene),
             instanced: false,
+            shadowed,
         },
         maps: slots,
         lights,
@@ -340,9 +345,26 @@ fn object_draw(
     }
 }
 
+/// Whether a draw of `material` evaluating scene `lights` (and the sun,
+/// with an atmosphere) is lit by the frame's shadow-casting light, when
+/// the frame draws a shadow map (`plan::shadow_map_size`). Gouraud
+/// surfaces, lit per vertex, take no shadow.
+fn receives_shadow(scene: &Scene, material: &Material, lights: &[usize], debug: u32) -> bool {
+    if super::plan::shadow_map_size(scene, debug).is_none()
+        || material.shading == ShadingModel::Gouraud
+    {
+        return false;
+    }
+    match scene.shadow_light {
+        Some(ShadowLight::Light(l)) => lights.contains(&l),
+        Some(ShadowLight::Sun) => AirLight::of(scene) != AirLight::None,
+        None => false,
+    }
+}
+
 /// The opaque `draws` with every set of at least [`MIN_INSTANCES`] that
-/// differ only in their transform (same mesh, material, maps, lights and
-/// pipeline) made one instanced draw, in the order of their first members;
+/// differ only in their transform (same mesh, material, maps, lights,
+/// pipeline and shadow casting) made one instanced draw, in the order of their first members;
 /// and the instance slots the batches take. The batches follow the scene
 /// alone, not the view.
 fn batch(scene: &Scene, geometry: &SceneGeometry, draws: Vec<Draw>) -> (Vec<Draw>, u32) {
@@ -352,6 +374,7 @@ fn batch(scene: &Scene, geometry: &SceneGeometry, draws: Vec<Draw>) -> (Vec<Draw
         Vec<usize>,
         usize,
         *const crate::mesh::Mesh,
+        bool,
     );
     let key = |d: &Draw| -> BatchKey {
         (
@@ -360,6 +383,8 @@ fn batch(scene: &Scene, geometry: &SceneGeometry, draws: Vec<Draw>) -> (Vec<Draw
             d.lights.clone(),
             scene.objects[d.object].material,
             Arc::as_ptr(&geometry.meshes[d.object]),
+            // The shadow pass draws a batch whole.
+            scene.objects[d.object].casts_shadows,
         )
     };
     let mut groups: Vec<Vec<Draw>> = Vec::new();

@@ -75,6 +75,20 @@ pub struct ExposureBlock {
     pub _pad: [f32; 3],
 }
 
+/// The shadow block (std140, `glsl/include/shadow_map.glsl`): where the
+/// shadow map looks from and how finely.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ShadowUniforms {
+    /// Camera-relative position to the light's clip space
+    /// (`ShadowView::view_projection`).
+    pub view_projection: [[f32; 4]; 4],
+    /// x: one texel in texture coordinates (1 / side); y: a texel's
+    /// world-space width; z: 1 when the light is the atmosphere's sun;
+    /// w: unused.
+    pub params: [f32; 4],
+}
+
 /// One light as the shader reads it (std140: three vec4s).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]

@@ -20,6 +20,8 @@ pub mod preflight;
 pub mod prepass_rule;
 mod renderer;
 mod scene_resources;
+pub mod shadow_resources;
+pub mod shadow_view;
 pub mod sky_resources;
 mod static_lights;
 mod sun_tables;

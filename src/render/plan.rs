@@ -16,6 +16,7 @@ pub use super::draw_list::{
 use super::geometry::SceneGeometry;
 use super::passes::{aerial_volume, PassType, PASSES};
 pub use super::prepass_rule::DepthPrepassRule;
+pub use super::shadow_view::ShadowView;
 use super::tiles::{self, TileGroup};
 use crate::scene::material_maps::{MapKind, MapSource};
 use crate::scene::{
@@ -41,6 +42,28 @@ pub mod attachment {
     /// with `[atmosphere]`): a second attachment, because a subpass cannot
     /// read its own colour target as an input attachment.
     pub const SURFACE: &str = "surface";
+    /// Depth seen from the shadow-casting light, sampled by the passes
+    /// that light surfaces (only when a light casts shadows).
+    pub const SHADOW_MAP: &str = "shadow map";
+}
+
+/// How big an attachment is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AttachmentSize {
+    /// The frame's output size.
+    Output,
+    /// Its own size, whatever the output's (a shadow map).
+    Fixed { width: u32, height: u32 },
+}
+
+impl AttachmentSize {
+    /// Width and height in a frame whose output is `width`×`height`.
+    pub fn extent(self, width: u32, height: u32) -> (u32, u32) {
+        match self {
+            AttachmentSize::Output => (width, height),
+            AttachmentSize::Fixed { width, height } => (width, height),
+        }
+    }
 }
 
 /// One attachment of the frame.
@@ -48,6 +71,7 @@ pub mod attachment {
 pub struct AttachmentDecl {
     pub name: &'static str,
     pub format: Format,
+    pub size: AttachmentSize,
     /// Cleared to this value when the frame starts (depth: the first
     /// component); `None` when every pixel is written before it is read.
     pub clear: Option<[f32; 4]>,
@@ -63,6 +87,10 @@ pub enum PassIo {
         depth: Option<(&'static str, DepthUse)>,
         /// Input attachments, in `input_attachment_index` order.
         inputs: Vec<&'static str>,
+        /// Attachments sampled as textures, written by an earlier render
+        /// pass: a subpass sampling what its own render pass writes
+        /// begins a new one.
+        samples: Vec<&'static str>,
     },
     /// A compute dispatch outside the render passes. Most run before the
     /// first and touch no attachment (what they write, later passes read
@@ -94,6 +122,52 @@ impl PassIo {
             colour,
             depth,
             inputs,
+            samples: Vec::new(),
+        }
+    }
+
+    /// This subpass, also sampling `names` (written by earlier render
+    /// passes) as textures; other passes unchanged.
+    pub fn sampling(mut self, names: &[&'static str]) -> PassIo {
+        if let PassIo::Subpass { samples, .. } = &mut self {
+            samples.extend_from_slice(names);
+        }
+        self
+    }
+
+    /// The attachments a subpass writes (colour targets, and depth unless
+    /// only tested); none for other passes.
+    pub fn writes(&self) -> Vec<&'static str> {
+        match self {
+            PassIo::Subpass { colour, depth, .. } => colour
+                .iter()
+                .copied()
+                .chain(
+                    depth
+                        .filter(|(_, how)| *how == DepthUse::Write)
+                        .map(|(d, _)| d),
+                )
+                .collect(),
+            _ => Vec::new(),
+        }
+    }
+
+    /// Every attachment a subpass uses as an attachment (not what it
+    /// samples).
+    fn attached(&self) -> Vec<&'static str> {
+        match self {
+            PassIo::Subpass {
+                colour,
+                depth,
+                inputs,
+                ..
+            } => colour
+                .iter()
+                .chain(inputs)
+                .copied()
+                .chain(depth.map(|(d, _)| d))
+                .collect(),
+            _ => Vec::new(),
         }
     }
 }
@@ -145,6 +219,15 @@ impl PassDecl {
             _ => &[],
         }
     }
+
+    /// The attachments a subpass samples as textures (none for other
+    /// passes).
+    pub fn samples(&self) -> &[&'static str] {
+        match &self.io {
+            PassIo::Subpass { samples, .. } => samples,
+            _ => &[],
+        }
+    }
 }
 
 /// Why the split between subpasses is approximate, naming the subpasses:
@@ -157,8 +240,9 @@ pub fn subpass_timing_note() -> String {
         .collect();
     let (last, rest) = names.split_last().expect("there are subpasses");
     format!(
-        "the {} and {last} passes are subpasses of the frame's render passes (one, or two \
-         around a compute pass that samples the first one's output): a binning rasterizer \
+        "the {} and {last} passes are subpasses of the frame's render passes (one, or several: one per attachment size, \
+         and one on each side of a compute pass that samples what the first wrote): a binning \
+         rasterizer \
          (lavapipe, tile-based GPUs) may do a draw's work after a later timestamp, so their time \
          split is approximate; the sum over the render pass is exact, and so is each pass's \
          instruction count (--metric instructions counts frame prefixes)",
@@ -199,6 +283,8 @@ pub struct FramePlan {
     /// The distance from the camera the aerial-perspective volume reaches,
     /// when the frame has one (see [`aerial_volume_reach`]).
     pub aerial_volume_reach: Option<f64>,
+    /// The shadow map's view and casters, when the frame draws one.
+    pub shadow: Option<ShadowView>,
 }
 
 impl FramePlan {
@@ -214,6 +300,27 @@ impl FramePlan {
             DepthPrepass::Auto => DepthPrepassRule::of(scene, geometry, &draws.opaque).pays(),
         };
         let graph = FrameGraph::with_prepass(scene, keep_hdr, prepass);
+        let shadow = graph
+            .attachments
+            .iter()
+            .find(|a| a.name == attachment::SHADOW_MAP)
+            .and_then(|map| {
+                let (side, _) = map.size.extent(scene.output.width, scene.output.height);
+                let casters: Vec<Draw> = draws
+                    .opaque
+                    .iter()
+                    .chain(draws.hidden.iter().filter(|d| !d.pipeline.blended))
+                    .filter(|d| scene.objects[d.object].casts_shadows)
+                    .cloned()
+                    .collect();
+                let in_view: Vec<usize> = draws
+                    .opaque
+                    .iter()
+                    .chain(&draws.transparent)
+                    .flat_map(|d| d.visible().iter().copied())
+                    .collect();
+                ShadowView::fit(scene, &geometry.bounds, &in_view, casters, side)
+            });
         let tile_groups = if graph.lighting == Lighting::Deferred {
             tiles::group_lights(scene, scene.output.width, scene.output.height)
         } else {
@@ -233,6 +340,7 @@ impl FramePlan {
             aerial_volume_reach: graph
                 .has(aerial_volume::PASS)
                 .then(|| aerial_volume_reach(scene, &geometry.bounds)),
+            shadow,
             attachments: graph.attachments,
             passes: graph.passes,
         }
@@ -257,32 +365,62 @@ impl FramePlan {
             attachments: graph.attachments,
             passes: graph.passes,
             aerial_volume_reach: None,
+            shadow: None,
         }
     }
 
-    /// The pass names, in order.
     /// Where each pass records, in `passes` order: for a subpass, its
     /// render pass (counted from 0 in frame order) and its subpass index
     /// there; `None` for other passes. Consecutive subpasses form one
-    /// render pass; any other pass between subpasses (a compute pass
-    /// sampling what they wrote) ends it, and the next subpass begins
-    /// another.
+    /// render pass, except that a new one begins at a subpass whose
+    /// attachments are of another size, or that samples an attachment the
+    /// current render pass writes; any other pass between subpasses (a
+    /// compute pass sampling what they wrote) ends it too.
     pub fn subpass_slots(&self) -> Vec<Option<(usize, u32)>> {
         let mut slots = Vec::with_capacity(self.passes.len());
         let (mut run, mut subpass) = (0, 0);
+        // The open render pass's size and what it writes.
+        let mut open: Option<((u32, u32), Vec<&str>)> = None;
         for decl in &self.passes {
-            if decl.is_subpass() {
-                slots.push(Some((run, subpass)));
-                subpass += 1;
-            } else {
-                if subpass > 0 {
+            if !decl.is_subpass() {
+                if open.take().is_some() {
                     run += 1;
                     subpass = 0;
                 }
                 slots.push(None);
+                continue;
             }
+            let size = self.subpass_size(decl);
+            let joins = open.as_ref().is_some_and(|(open_size, written)| {
+                *open_size == size && !decl.samples().iter().any(|s| written.contains(s))
+            });
+            if !joins && open.is_some() {
+                run += 1;
+                subpass = 0;
+            }
+            let (_, written) = open.get_or_insert_with(|| (size, Vec::new()));
+            written.extend(decl.io.writes());
+            slots.push(Some((run, subpass)));
+            subpass += 1;
         }
         slots
+    }
+
+    /// The size of a subpass's attachments (that of its first; the
+    /// renderer checks that they agree): the output's for one with none.
+    pub fn subpass_size(&self, decl: &PassDecl) -> (u32, u32) {
+        decl.io
+            .attached()
+            .first()
+            .and_then(|name| self.attachment(name))
+            .map_or((self.width, self.height), |a| {
+                a.size.extent(self.width, self.height)
+            })
+    }
+
+    /// The size of attachment `a`'s images in this frame.
+    pub fn attachment_extent(&self, a: &AttachmentDecl) -> (u32, u32) {
+        a.size.extent(self.width, self.height)
     }
 
     /// How many render passes the frame records.
@@ -295,6 +433,7 @@ impl FramePlan {
             .unwrap_or(0)
     }
 
+    /// The pass names, in order.
     pub fn pass_names(&self) -> Vec<&'static str> {
         self.passes.iter().map(PassDecl::name).collect()
     }
@@ -355,6 +494,9 @@ pub struct FrameShape<'a> {
     pub target: &'static str,
     /// Opaque surfaces are drawn depth-only first ([`DepthPrepassRule`]).
     pub prepass: bool,
+    /// The shadow map's width and height, when a light casts shadows and
+    /// some opaque object casts them.
+    pub shadow_map: Option<u32>,
 }
 
 impl FrameShape<'_> {
@@ -464,6 +606,7 @@ impl FrameShape<'_> {
             direct,
             target,
             prepass: false,
+            shadow_map: shadow_map_size(scene, debug),
         }
     }
 }
@@ -476,6 +619,7 @@ fn frame_attachments(scene: &Scene, shape: &FrameShape) -> Vec<AttachmentDecl> {
     let mut attachments = vec![AttachmentDecl {
         name: OUTPUT,
         format: OUTPUT_FORMAT,
+        size: AttachmentSize::Output,
         // The tone map writes every pixel (alpha 1); drawn directly, the
         // background is opaque black like the tone-mapped one.
         clear: if shape.direct {
@@ -488,6 +632,7 @@ fn frame_attachments(scene: &Scene, shape: &FrameShape) -> Vec<AttachmentDecl> {
         attachments.push(AttachmentDecl {
             name: HDR,
             format: hdr_format(scene.output.hdr_format),
+            size: AttachmentSize::Output,
             clear: black,
         });
     }
@@ -495,15 +640,29 @@ fn frame_attachments(scene: &Scene, shape: &FrameShape) -> Vec<AttachmentDecl> {
         attachments.push(AttachmentDecl {
             name: SURFACE,
             format: hdr_format(scene.output.hdr_format),
+            size: AttachmentSize::Output,
             clear: black,
         });
     }
     attachments.push(AttachmentDecl {
         name: DEPTH,
         format: DEPTH_FORMAT,
+        size: AttachmentSize::Output,
         // Reversed-Z: the far plane is 0.
         clear: Some([0.0; 4]),
     });
+    if let Some(side) = shape.shadow_map {
+        attachments.push(AttachmentDecl {
+            name: SHADOW_MAP,
+            format: DEPTH_FORMAT,
+            size: AttachmentSize::Fixed {
+                width: side,
+                height: side,
+            },
+            // Forward depth (not reversed): 1 is nothing in the way.
+            clear: Some([1.0; 4]),
+        });
+    }
     if shape.deferred {
         let wide = gbuffer_format(scene);
         for (name, format) in [(ALBEDO, wide), (NORMAL, NORMAL_FORMAT), (MATERIAL, wide)] {
@@ -512,6 +671,7 @@ fn frame_attachments(scene: &Scene, shape: &FrameShape) -> Vec<AttachmentDecl> {
             attachments.push(AttachmentDecl {
                 name,
                 format,
+                size: AttachmentSize::Output,
                 clear: None,
             });
         }
@@ -534,6 +694,7 @@ impl FrameGraph {
             direct: false,
             target: HDR,
             prepass: false,
+            shadow_map: None,
         };
         FrameGraph {
             lighting: Lighting::Forward,
@@ -541,11 +702,13 @@ impl FrameGraph {
                 AttachmentDecl {
                     name: OUTPUT,
                     format: OUTPUT_FORMAT,
+                    size: AttachmentSize::Output,
                     clear: None,
                 },
                 AttachmentDecl {
                     name: HDR,
                     format: hdr_format(HdrFormat::Rgba32F),
+                    size: AttachmentSize::Output,
                     clear: None,
                 },
             ],
@@ -593,6 +756,17 @@ pub fn aerial_volume_reach(scene: &Scene, bounds: &[(glam::DVec3, f32)]) -> f64 
         .far
         .map_or(f64::INFINITY, |far| f64::from(far) * corner.length());
     farthest.min(far_plane).max(1e-3)
+}
+
+/// The shadow map's side for `scene` (`debug`: its debug view, 0 for
+/// none): when a light casts shadows, outside the debug views, and some
+/// opaque object casts them.
+pub(crate) fn shadow_map_size(scene: &Scene, debug: u32) -> Option<u32> {
+    let casters = scene
+        .objects
+        .iter()
+        .any(|o| o.casts_shadows && scene.materials[o.material].opacity >= 1.0);
+    (scene.shadow_light.is_some() && debug == 0 && casters).then_some(scene.output.shadow_map)
 }
 
 /// Whether `scene` draws opaque surfaces: a debug view draws every object

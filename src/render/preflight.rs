@@ -250,7 +250,10 @@ fn attachment_bytes(w: u64, h: u64, graph: &FrameGraph) -> u64 {
     let mut bytes: u64 = graph
         .attachments
         .iter()
-        .map(|a| pixels * bytes_per_texel(a.format))
+        .map(|a| {
+            let (aw, ah) = a.size.extent(w as u32, h as u32);
+            u64::from(aw) * u64::from(ah) * bytes_per_texel(a.format)
+        })
         .sum();
     for pass in &graph.passes {
         if let PassIo::Transfer { reads, .. } = &pass.io {

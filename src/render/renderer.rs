@@ -10,6 +10,7 @@ use super::geometry::SceneGeometry;
 use super::passes::{atmosphere, exposure, Attachments, PassResources, PassSetup, RecordPass};
 use super::plan::{attachment, FramePlan, PassDecl, PassIo};
 use super::scene_resources::SceneResources;
+use super::shadow_resources::ShadowResources;
 use super::sky_resources::SkyResources;
 use super::timed_submit::TimedCommands;
 use super::RenderError;
@@ -65,6 +66,9 @@ pub struct Renderer {
     /// The exposure the exposure pass measures and the tone map applies,
     /// when the scene asks for automatic exposure.
     exposure: Option<Buffer>,
+    /// The shadow pass's and the shadow lookups' shared resources, when a
+    /// light casts shadows.
+    shadow_resources: Option<ShadowResources>,
     targets: Option<FrameTargets>,
     plan: FramePlan,
     /// The scene's meshes, kept so that a new view can be planned (and,
@@ -164,6 +168,23 @@ impl Renderer {
             }
             _ => None,
         };
+        // The shadow set first too: the object pipelines' layout holds it.
+        let shadow_resources = match (&targets, plan.attachment(attachment::SHADOW_MAP)) {
+            (Some(targets), Some(_)) if plan.shadow.is_some() => {
+                let index = plan
+                    .attachments
+                    .iter()
+                    .position(|a| a.name == attachment::SHADOW_MAP)
+                    .expect("found above");
+                Some(ShadowResources::new(
+                    ctx,
+                    scene,
+                    &plan,
+                    &targets.images[index],
+                )?)
+            }
+            _ => None,
+        };
         let scene_resources = if plan.draws().next().is_some() {
             let geometry = geometry.as_deref().ok_or_else(|| {
                 RenderError::Frame("the plan draws objects but there is no geometry".into())
@@ -174,6 +195,7 @@ impl Renderer {
                 geometry,
                 &plan,
                 sky_resources.as_ref(),
+                shadow_resources.as_ref().map(|s| &s.layout),
             )?)
         } else {
             None
@@ -185,6 +207,7 @@ impl Renderer {
             scene_resources.as_ref(),
             sky_resources.as_ref(),
             exposure.as_ref(),
+            shadow_resources.as_ref(),
         );
 
         // Create every pass, each subpass with its render pass and its
@@ -225,6 +248,7 @@ impl Renderer {
             scene_resources,
             sky_resources,
             exposure,
+            shadow_resources,
             targets,
             plan,
             geometry,
@@ -267,6 +291,9 @@ impl Renderer {
             if let (Some(resources), Some(sky)) = (&mut self.sky_resources, &scene.sky) {
                 resources.set_view(sky, &scene.camera, &plan);
             }
+            if let Some(resources) = &mut self.shadow_resources {
+                resources.set_view(scene, &plan)?;
+            }
             for pass in &mut self.passes {
                 pass.set_view(scene, &plan)?;
             }
@@ -281,6 +308,7 @@ impl Renderer {
                     self.scene_resources.as_ref(),
                     self.sky_resources.as_ref(),
                     self.exposure.as_ref(),
+                    self.shadow_resources.as_ref(),
                 );
                 let recording = std::time::Instant::now();
                 let frame = record(
@@ -417,6 +445,7 @@ impl super::PrefixFrames for Renderer {
                 self.scene_resources.as_ref(),
                 self.sky_resources.as_ref(),
                 self.exposure.as_ref(),
+                self.shadow_resources.as_ref(),
             );
             let prefixes = (0..self.pass_count())
                 .map(|k| {
@@ -500,6 +529,7 @@ fn frame_resources<'a>(
     scene: Option<&'a SceneResources>,
     sky: Option<&'a SkyResources>,
     exposure: Option<&'a Buffer>,
+    shadow: Option<&'a ShadowResources>,
 ) -> PassResources<'a> {
     PassResources {
         attachments: Attachments {
@@ -509,6 +539,7 @@ fn frame_resources<'a>(
         scene,
         sky,
         exposure,
+        shadow,
     }
 }
 
@@ -578,7 +609,8 @@ fn build_targets(
                     let decl = &plan.attachments[a];
                     let earlier = (0..run).any(|r| used(r, a));
                     let later = (run + 1..runs).any(|r| used(r, a));
-                    let sampled_after = io.sampled.iter().any(|&(s, r)| s == a && r >= run);
+                    let sampled_after = io.sampled.iter().any(|&(s, r)| s == a && r >= run)
+                        || io.sampled_by_runs.iter().any(|&(s, r)| s == a && r > run);
                     AttachmentSpec {
                         name: decl.name,
                         format: decl.format,
@@ -611,22 +643,33 @@ fn build_targets(
                 attachments,
                 specs,
                 subpasses,
+                sampled: io
+                    .sampled_by_runs
+                    .iter()
+                    .filter(|&&(_, r)| r == run)
+                    .map(|&(a, _)| a)
+                    .collect(),
             }
         })
         .collect();
     let extra_usage: Vec<ImageUsageFlags> = (0..plan.attachments.len())
         .map(|a| {
-            if io.sampled.iter().any(|&(s, _)| s == a) {
+            let by_subpass = io.sampled_by_runs.iter().any(|&(s, _)| s == a);
+            if by_subpass || io.sampled.iter().any(|&(s, _)| s == a) {
                 ImageUsageFlags::SAMPLED
             } else {
                 ImageUsageFlags::empty()
             }
         })
         .collect();
+    let extents: Vec<(u32, u32)> = plan
+        .attachments
+        .iter()
+        .map(|a| plan.attachment_extent(a))
+        .collect();
     Ok(Some(FrameTargets::new(
         ctx,
-        plan.width,
-        plan.height,
+        &extents,
         &extra_usage,
         &run_specs,
     )?))
@@ -641,6 +684,8 @@ struct FrameIo<'a> {
     read_after: Vec<&'static str>,
     /// (attachment, the render pass before the compute pass sampling it).
     sampled: Vec<(usize, usize)>,
+    /// (attachment, the render pass whose subpasses sample it).
+    sampled_by_runs: Vec<(usize, usize)>,
 }
 
 impl<'a> FrameIo<'a> {
@@ -651,6 +696,7 @@ impl<'a> FrameIo<'a> {
             loaded: Vec::new(),
             read_after: Vec::new(),
             sampled: Vec::new(),
+            sampled_by_runs: Vec::new(),
         };
         for (i, decl) in plan.passes.iter().enumerate() {
             match &decl.io {
@@ -673,7 +719,28 @@ impl<'a> FrameIo<'a> {
                         io.sampled.push((io.index(name)?, run));
                     }
                 }
-                PassIo::Subpass { .. } => {}
+                PassIo::Subpass { samples, .. } => {
+                    let Some((run, _)) = slots[i] else {
+                        continue;
+                    };
+                    for name in samples {
+                        let a = io.index(name)?;
+                        // Written by an earlier render pass (the slots put
+                        // a subpass sampling what its own render pass
+                        // writes into the next one).
+                        let written = plan.passes[..i].iter().zip(slots).any(|(d, s)| {
+                            d.io.writes().contains(name) && s.is_some_and(|(r, _)| r < run)
+                        });
+                        if !written {
+                            return Err(RenderError::Frame(format!(
+                                "pass '{}' samples attachment '{name}', which no earlier render \
+                                 pass writes",
+                                decl.name()
+                            )));
+                        }
+                        io.sampled_by_runs.push((a, run));
+                    }
+                }
             }
         }
         Ok(io)
@@ -697,6 +764,7 @@ impl<'a> FrameIo<'a> {
             colour,
             depth,
             inputs,
+            ..
         } = &decl.io
         else {
             return Err(RenderError::Frame(format!(

@@ -14,7 +14,7 @@ use crate::mesh::height::{encode_normal_map, GreenAxis, HeightEdge, HeightFilter
 use crate::mesh::Mesh;
 use crate::scene::material_maps::{MapKind, MapKindInfo, MapSource, MAP_KINDS, MAP_KIND_COUNT};
 use crate::scene::{placeholder_texels, Light, Scene, Texture, TextureFilter, PLACEHOLDER_TEXTURE};
-use crate::shader_ids::{MATERIAL_SET, SKY_SET};
+use crate::shader_ids::{SHADOW_SET, SKY_SET};
 use crate::vk::{
     self, Buffer, BufferUsage, CommandBuffer, Context, DescriptorBinding, DescriptorPool,
     DescriptorSet, DescriptorSetLayout, DescriptorType, Format, Image, ImageAspectFlags, ImageDesc,
@@ -80,6 +80,7 @@ impl SceneResources {
         geometry: &SceneGeometry,
         plan: &FramePlan,
         sky: Option<&SkyResources>,
+        shadow: Option<&DescriptorSetLayout>,
     ) -> Result<SceneResources, RenderError> {
         let (geometry_buffer, ranges) = upload_geometry(ctx, geometry)?;
         let light_anchor = scene.camera.eye;
@@ -129,6 +130,7 @@ impl SceneResources {
             ctx,
             plan,
             sky,
+            shadow,
             [&frame_layout, &object_layout],
             maps.layout.as_ref(),
         )?;
@@ -186,6 +188,16 @@ impl SceneResources {
             .map(|(_, set)| set)
     }
 
+    /// Records every member of `draw` (in view or not), for the shadow
+    /// pass: the instance buffer holds them all after the visible ones.
+    pub fn draw_every_member(&self, cmd: &CommandBuffer, draw: &Draw) -> Result<(), RenderError> {
+        let mut every = draw.clone();
+        if let Some(instances) = &mut every.instances {
+            instances.visible = instances.members.clone();
+        }
+        self.draw(cmd, &every)
+    }
+
     /// Records `draw`'s geometry: its range of the shared buffer, drawn
     /// once or, for an instance batch, once per visible member from the
     /// instance buffer. The pipeline and sets are bound by the caller.
@@ -212,7 +224,7 @@ impl SceneResources {
 
 /// A set layout of one uniform buffer of `kind` at binding 0, read by
 /// both stages (the frame's and the objects' sets).
-fn uniform_layout(
+pub(crate) fn uniform_layout(
     ctx: &Arc<Context>,
     kind: DescriptorType,
 ) -> Result<DescriptorSetLayout, RenderError> {
@@ -256,11 +268,12 @@ fn pipeline_layout(
     ctx: &Arc<Context>,
     plan: &FramePlan,
     sky: Option<&SkyResources>,
+    shadow: Option<&DescriptorSetLayout>,
     sets: [&DescriptorSetLayout; 2],
     material_layout: Option<&DescriptorSetLayout>,
 ) -> Result<(PipelineLayout, Option<DescriptorSetLayout>), RenderError> {
-    let mut set_layouts = sets.to_vec();
-    set_layouts.extend(material_layout);
+    let mut slots: Vec<Option<&DescriptorSetLayout>> = sets.map(Some).to_vec();
+    slots.push(material_layout);
     let air_lit = plan.draws().any(|d| d.pipeline.air != AirLight::None);
     let sky_layout = match sky {
         Some(sky) if air_lit => Some(&sky.layout),
@@ -271,16 +284,27 @@ fn pipeline_layout(
         }
         _ => None,
     };
-    let empty_layout = match (&sky_layout, material_layout) {
-        (Some(_), None) => Some(DescriptorSetLayout::new(ctx, &[])?),
-        _ => None,
-    };
-    if let Some(sky_layout) = sky_layout {
-        set_layouts.extend(&empty_layout);
-        debug_assert_eq!(set_layouts.len() as u32, MATERIAL_SET + 1);
-        debug_assert_eq!(SKY_SET, MATERIAL_SET + 1);
-        set_layouts.push(sky_layout);
+    for (index, layout) in [(SKY_SET, sky_layout), (SHADOW_SET, shadow)] {
+        if let Some(layout) = layout {
+            slots.resize(index as usize, None);
+            slots.push(Some(layout));
+        }
     }
+    while slots.last().is_some_and(Option::is_none) {
+        slots.pop();
+    }
+    // Sets a pipeline does not use, below one it does, get an empty layout.
+    let empty_layout = match slots.iter().any(Option::is_none) {
+        true => Some(DescriptorSetLayout::new(ctx, &[])?),
+        false => None,
+    };
+    let set_layouts: Vec<&DescriptorSetLayout> = slots
+        .iter()
+        .map(|slot| {
+            slot.or(empty_layout.as_ref())
+                .expect("an empty layout fills the gaps")
+        })
+        .collect();
     Ok((PipelineLayout::new(ctx, &set_layouts)?, empty_layout))
 }
 
@@ -489,9 +513,16 @@ fn write_instances(buffer: &mut Buffer, scene: &Scene, plan: &FramePlan) {
         let Some(instances) = &d.instances else {
             continue;
         };
+        // The members in view first (what the surface passes draw), then
+        // the others (the shadow pass draws every member).
+        let others = instances
+            .members
+            .iter()
+            .filter(|m| !instances.visible.contains(m));
         let transforms: Vec<InstanceTransform> = instances
             .visible
             .iter()
+            .chain(others)
             .map(|&i| {
                 let transform = &scene.objects[i].transform;
                 InstanceTransform {
@@ -522,7 +553,7 @@ fn object_block(scene: &Scene, index: usize, draw: Option<&Draw>) -> Vec<u8> {
         .map(|d| {
             d.lights
                 .iter()
-                .map(|&l| gpu_light(&scene.lights[l], scene.camera.eye, scene.light_cutoff))
+                .map(|&l| scene_light(scene, l, scene.camera.eye))
                 .collect()
         })
         .unwrap_or_default();
@@ -565,6 +596,16 @@ pub fn gpu_light(light: &Light, eye: glam::DVec3, cutoff: f32) -> GpuLight {
             attenuation: [1.0, 0.0, 0.0, 0.0],
         },
     }
+}
+
+/// `scene`'s light `l` as the shaders read it ([`gpu_light`]), the
+/// shadow-casting light marked by attenuation w = 1 (`shadow_map.glsl`).
+pub fn scene_light(scene: &Scene, l: usize, eye: glam::DVec3) -> GpuLight {
+    let mut light = gpu_light(&scene.lights[l], eye, scene.light_cutoff);
+    if scene.shadow_light == Some(crate::scene::ShadowLight::Light(l)) {
+        light.attenuation[3] = 1.0;
+    }
+    light
 }
 
 /// Decodes a texture file (PNG or JPEG, recognised by content).

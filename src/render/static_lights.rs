@@ -19,7 +19,9 @@
 //! object shaders compute it per point from the atmosphere's uniforms.
 
 use super::gpu_types::GpuLight;
+#[cfg(test)]
 use super::scene_resources::gpu_light;
+use super::scene_resources::scene_light;
 use crate::scene::Scene;
 use crate::shader_ids::{
     float_constants, MAX_STATIC_LIGHTS, SPEC_STATIC_LIGHTS, SPEC_STATIC_LIGHT_DATA,
@@ -54,7 +56,7 @@ pub fn constants(scene: &Scene, anchor: glam::DVec3, lights: Option<&[usize]>) -
             position,
             color,
             attenuation,
-        } = gpu_light(&scene.lights[light], anchor, scene.light_cutoff);
+        } = scene_light(scene, light, anchor);
         let values = position.into_iter().chain(color).chain(attenuation);
         constants.extend(float_constants(
             SPEC_STATIC_LIGHT_DATA + 12 * k as u32,

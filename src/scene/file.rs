@@ -622,6 +622,9 @@ impl Check<'_> {
                 format!("only one light may cast shadows, and {first} is already set"),
             ));
         }
+        if let (Some((field, _)), Lighting::Deferred) = (casters.first(), raw.output.lighting) {
+            return Err(self.invalid(field.clone(), super::SHADOWS_NEED_FORWARD));
+        }
         Ok(casters.first().map(|&(_, light)| light))
     }
 

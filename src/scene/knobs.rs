@@ -213,7 +213,11 @@ pub const KNOBS: &[Knob] = &[
         best: Best::Fixed("forward"),
         values: "forward | deferred",
         apply: |s, v| {
-            s.output.lighting = Lighting::parse(v)?;
+            let lighting = Lighting::parse(v)?;
+            if lighting == Lighting::Deferred && s.shadow_light.is_some() {
+                return Err(super::SHADOWS_NEED_FORWARD.into());
+            }
+            s.output.lighting = lighting;
             Ok(())
         },
         read: |s| s.output.lighting.name().into(),

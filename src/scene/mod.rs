@@ -149,6 +149,10 @@ pub struct Output {
     pub shadow_filter: ShadowFilter,
 }
 
+/// Why a scene with a shadow-casting light cannot be lit deferred.
+pub const SHADOWS_NEED_FORWARD: &str =
+    "shadows need lighting = \"forward\" (the deferred lighting pass does not read the shadow map)";
+
 /// The smallest `[output] shadow_map`.
 pub const MIN_SHADOW_MAP: u32 = 512;
 /// The largest `[output] shadow_map`.

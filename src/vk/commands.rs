@@ -462,6 +462,10 @@ impl CommandBuffer {
     /// `images` are the frame's attachments, which `pass.attachments`
     /// index.
     pub fn begin_render_pass(&self, pass: &RenderTargets, images: &[Image]) {
+        // What the subpasses sample, written by earlier render passes.
+        for &a in &pass.sampled {
+            self.transition(&images[a], ImageUse::FragmentSampled);
+        }
         for (&a, initial) in pass.attachments.iter().zip(&pass.initial_layouts) {
             let image = &images[a];
             match *initial {

@@ -333,6 +333,32 @@ impl Sampler {
         Sampler::with_addressing(ctx, filtering, 1, vk::SamplerAddressMode::CLAMP_TO_EDGE)
     }
 
+    /// A shadow-map sampler: one depth comparison (LESS_OR_EQUAL: 1 where
+    /// the reference is no farther than the stored depth) at the nearest
+    /// texel, and outside the map the border's depth 1, so a point the map
+    /// does not cover is lit.
+    pub fn depth_comparison(ctx: &Arc<Context>) -> Result<Sampler, VkError> {
+        let border = vk::SamplerAddressMode::CLAMP_TO_BORDER;
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::NEAREST)
+            .min_filter(vk::Filter::NEAREST)
+            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+            .address_mode_u(border)
+            .address_mode_v(border)
+            .address_mode_w(border)
+            .border_color(vk::BorderColor::FLOAT_OPAQUE_WHITE)
+            .compare_enable(true)
+            .compare_op(vk::CompareOp::LESS_OR_EQUAL)
+            .min_lod(0.0)
+            .max_lod(1.0);
+        // SAFETY: valid device; a core border colour, no anisotropy.
+        let handle = unsafe { ctx.device.create_sampler(&info, None) }?;
+        Ok(Sampler {
+            ctx: ctx.clone(),
+            handle,
+        })
+    }
+
     fn with_addressing(
         ctx: &Arc<Context>,
         filtering: SamplerFilter,

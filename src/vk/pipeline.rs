@@ -91,6 +91,9 @@ pub struct GraphicsPipelineDesc<'a> {
     /// The depth test's comparison, `None` for no test.
     pub depth_test: Option<vk::CompareOp>,
     pub depth_write: bool,
+    /// Depth bias `(constant, slope)` added to each fragment's depth (a
+    /// shadow map's), `None` for none.
+    pub depth_bias: Option<(f32, f32)>,
     /// One blend state per colour target of the subpass, in order.
     pub blend: &'a [Blend],
     pub subpass: u32,
@@ -183,6 +186,13 @@ impl GraphicsPipeline {
             // projection's flip) is front.
             .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .line_width(1.0);
+        let raster = match desc.depth_bias {
+            Some((constant, slope)) => raster
+                .depth_bias_enable(true)
+                .depth_bias_constant_factor(constant)
+                .depth_bias_slope_factor(slope),
+            None => raster,
+        };
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()

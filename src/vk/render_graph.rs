@@ -148,6 +148,10 @@ pub struct RenderTargets {
     pub final_layouts: Vec<vk::ImageLayout>,
     /// The layout each attachment must be in when the pass begins.
     pub initial_layouts: Vec<vk::ImageLayout>,
+    /// Frame images (indices into [`FrameTargets::images`]) the pass's
+    /// subpasses sample, written by earlier render passes:
+    /// `CommandBuffer::begin_render_pass` makes them shader-readable.
+    pub sampled: Vec<usize>,
 }
 
 /// One render pass of a frame: the frame attachments it uses and its
@@ -162,6 +166,8 @@ pub struct RunSpec {
     pub specs: Vec<AttachmentSpec>,
     /// Indices into `specs`.
     pub subpasses: Vec<SubpassSpec>,
+    /// Frame images the subpasses sample (not attachments of this pass).
+    pub sampled: Vec<usize>,
 }
 
 /// A frame's attachment images (created once, sized for the frame) and
@@ -173,7 +179,8 @@ pub struct FrameTargets {
 }
 
 impl FrameTargets {
-    /// One render pass over every attachment in `attachments`, in order.
+    /// One `width`×`height` render pass over every attachment in
+    /// `attachments`, in order.
     pub fn single(
         ctx: &Arc<Context>,
         width: u32,
@@ -185,20 +192,22 @@ impl FrameTargets {
             attachments: (0..attachments.len()).collect(),
             specs: attachments.to_vec(),
             subpasses: subpasses.to_vec(),
+            sampled: Vec::new(),
         };
         let usage = vec![vk::ImageUsageFlags::empty(); attachments.len()];
-        FrameTargets::new(ctx, width, height, &usage, &[run])
+        let extents = vec![(width, height); attachments.len()];
+        FrameTargets::new(ctx, &extents, &usage, &[run])
     }
 
     /// Derives the render passes of `runs` and creates them, the
-    /// `width`×`height` attachments (usage: the union over every run, plus
-    /// `extra_usage[a]`, e.g. SAMPLED for one a compute pass samples) and
-    /// one framebuffer per run. Every frame attachment must be used by
-    /// some run; its name and format come from its first run's spec.
+    /// attachments (attachment a of size `extents[a]`; usage: the union
+    /// over every run, plus `extra_usage[a]`, e.g. SAMPLED for one a later
+    /// pass samples) and one framebuffer per run. Every frame attachment
+    /// must be used by some run; its name and format come from its first
+    /// run's spec. The attachments of one run must share a size.
     pub fn new(
         ctx: &Arc<Context>,
-        width: u32,
-        height: u32,
+        extents: &[(u32, u32)],
         extra_usage: &[vk::ImageUsageFlags],
         runs: &[RunSpec],
     ) -> Result<FrameTargets, VkError> {
@@ -226,9 +235,20 @@ impl FrameTargets {
                 })
             })
             .collect::<Result<_, _>>()?;
-        let images = create_attachment_images(ctx, width, height, &specs, &usages)?;
+        let images = create_attachment_images(ctx, extents, &specs, &usages)?;
         let mut built = Vec::with_capacity(runs.len());
         for (run, (uses, described)) in runs.iter().zip(derived) {
+            let sizes: Vec<(u32, u32)> = run.attachments.iter().map(|&a| extents[a]).collect();
+            if sizes.windows(2).any(|w| w[0] != w[1]) {
+                return Err(VkError::Graph(format!(
+                    "a render pass's attachments differ in size: {:?}",
+                    run.specs
+                        .iter()
+                        .map(|s| s.name)
+                        .zip(&sizes)
+                        .collect::<Vec<_>>()
+                )));
+            }
             let render_pass = create_render_pass(
                 ctx,
                 &run.specs,
@@ -245,6 +265,7 @@ impl FrameTargets {
                 clears: clear_values(&run.specs),
                 final_layouts: described.final_layouts,
                 initial_layouts: described.initial_layouts,
+                sampled: run.sampled.clone(),
             });
         }
         Ok(FrameTargets {
@@ -456,18 +477,19 @@ fn create_render_pass(
     })
 }
 
-/// One `width`×`height` image per attachment, with the usage its uses need.
+/// One image per attachment, of its size in `extents`, with the usage its
+/// uses need.
 fn create_attachment_images(
     ctx: &Arc<Context>,
-    width: u32,
-    height: u32,
+    extents: &[(u32, u32)],
     attachments: &[AttachmentSpec],
     usages: &[vk::ImageUsageFlags],
 ) -> Result<Vec<Image>, VkError> {
     attachments
         .iter()
         .zip(usages)
-        .map(|(spec, &usage)| {
+        .zip(extents)
+        .map(|((spec, &usage), &(width, height))| {
             Image::new(
                 ctx,
                 spec.name,

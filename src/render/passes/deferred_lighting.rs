@@ -14,7 +14,7 @@
 use super::{InputAttachments, PassResources, PassSetup, PassType, RecordPass};
 use crate::render::gpu_types::GpuLight;
 use crate::render::plan::{attachment, FrameShape, PassIo};
-use crate::render::scene_resources::{gpu_light, pack_blocks, SceneResources};
+use crate::render::scene_resources::{pack_blocks, scene_light, SceneResources};
 use crate::render::static_lights;
 use crate::render::RenderError;
 use crate::shader_ids::{SPEC_LIGHT_ARRAY_LENGTH, SPEC_LIGHT_COUNT};
@@ -58,7 +58,7 @@ pub struct DeferredLightingPass {
 fn group_block(scene: &crate::scene::Scene, lights: &[usize]) -> Vec<u8> {
     let lights: Vec<GpuLight> = lights
         .iter()
-        .map(|&l| gpu_light(&scene.lights[l], scene.camera.eye, scene.light_cutoff))
+        .map(|&l| scene_light(scene, l, scene.camera.eye))
         .collect();
     bytemuck::cast_slice(&lights).to_vec()
 }
@@ -250,6 +250,7 @@ fn create_pipelines(
                 // depth is nearer, i.e. that hold a surface, pass.
                 depth_test: Some(CompareOp::LESS),
                 depth_write: false,
+                depth_bias: None,
                 blend: &[Blend::Add],
                 subpass: setup.subpass,
             },

@@ -68,6 +68,23 @@ impl PassType for Pass {
     }
 }
 
+/// The vertex attributes of `object.vert`'s plainest variant, which depth-
+/// only pipelines use: the position and the normal.
+pub(super) fn depth_only_attributes() -> [VertexAttribute; 2] {
+    [
+        VertexAttribute {
+            location: 0,
+            format: Format::R32G32B32_SFLOAT,
+            offset: std::mem::offset_of!(Vertex, position) as u32,
+        },
+        VertexAttribute {
+            location: 1,
+            format: Format::R32G32B32_SFLOAT,
+            offset: std::mem::offset_of!(Vertex, normal) as u32,
+        },
+    ]
+}
+
 fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     let draws = setup.plan.opaque.clone();
     // Pipelines for the opaque draws out of view too, so a view that
@@ -80,19 +97,7 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     if !every.is_empty() {
         let resources = setup.scene_resources()?;
         let render_pass = setup.render_pass()?;
-        // The plainest variant reads the position and the normal.
-        let attributes = [
-            VertexAttribute {
-                location: 0,
-                format: Format::R32G32B32_SFLOAT,
-                offset: std::mem::offset_of!(Vertex, position) as u32,
-            },
-            VertexAttribute {
-                location: 1,
-                format: Format::R32G32B32_SFLOAT,
-                offset: std::mem::offset_of!(Vertex, normal) as u32,
-            },
-        ];
+        let attributes = depth_only_attributes();
         let instance = instance_attributes();
         for (i, pipeline) in pipelines.iter_mut().enumerate() {
             let Some(d) = every.iter().find(|d| slot(d) == i) else {
@@ -128,6 +133,7 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
                     // Reversed-Z: nearer surfaces have larger depth.
                     depth_test: Some(CompareOp::GREATER),
                     depth_write: true,
+                    depth_bias: None,
                     blend: &[],
                     subpass: setup.subpass,
                 },

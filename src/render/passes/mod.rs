@@ -20,6 +20,7 @@ pub mod atmosphere;
 pub mod deferred_lighting;
 pub mod depth_prepass;
 pub mod exposure;
+pub mod shadow_map;
 pub mod sky_view;
 pub mod surface;
 pub mod tonemap;
@@ -27,6 +28,7 @@ pub mod transfer;
 
 use super::plan::{FramePlan, FrameShape, PassDecl, PassIo};
 use super::scene_resources::SceneResources;
+use super::shadow_resources::ShadowResources;
 use super::sky_resources::SkyResources;
 use super::{Pixels, RenderError};
 use crate::scene::Scene;
@@ -44,6 +46,7 @@ pub const PASSES: &[&dyn PassType] = &[
     transfer::HDR_UPLOAD,
     sky_view::PASS,
     aerial_volume::PASS,
+    shadow_map::PASS,
     depth_prepass::PASS,
     surface::GBUFFER,
     deferred_lighting::PASS,
@@ -129,6 +132,9 @@ pub struct PassResources<'a> {
     /// One float: the exposure the exposure pass measures and the tone
     /// map applies; present when the plan holds the exposure pass.
     pub exposure: Option<&'a Buffer>,
+    /// The light's frame set and the shadow set; present when the plan
+    /// draws a shadow map.
+    pub shadow: Option<&'a ShadowResources>,
 }
 
 impl PassResources<'_> {
@@ -250,6 +256,7 @@ pub(crate) fn fullscreen_pipeline(
             cull_mode: CullModeFlags::NONE,
             depth_test,
             depth_write: false,
+            depth_bias: None,
             blend: &[Blend::Replace],
             subpass,
         },

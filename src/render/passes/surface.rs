@@ -106,7 +106,13 @@ impl PassType for Form {
             }
             _ => return None,
         };
-        Some(io)
+        // Shadowed draws look the shadow map up (forward forms only).
+        let shadowed = shape.shadow_map.is_some() && *self != Form::GBuffer;
+        Some(if shadowed {
+            io.sampling(&[SHADOW_MAP])
+        } else {
+            io
+        })
     }
 
     fn create(&self, setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
@@ -185,6 +191,7 @@ impl SurfacePass {
                 let specialization = specialization(
                     &key,
                     encode_srgb,
+                    setup.scene.output.shadow_filter.taps(),
                     static_lights::constants(
                         setup.scene,
                         resources.light_anchor,
@@ -218,6 +225,7 @@ impl SurfacePass {
                         // do not hide each other; they are sorted instead.
                         // After a depth pre-pass, depth is final already.
                         depth_write: form != Form::Transparent && !after_prepass(setup),
+                        depth_bias: None,
                         blend: &blend,
                         subpass: setup.subpass,
                     },
@@ -250,6 +258,10 @@ impl RecordPass for SurfacePass {
                     // Every draw of a scene shares one AirLight.
                     if key.0.air != AirLight::None {
                         cmd.bind_descriptor_set(layout, SKY_SET, &frame.sky()?.set, &[]);
+                    }
+                    // Present exactly when some draw is shadowed.
+                    if let Some(shadow) = frame.shadow {
+                        cmd.bind_descriptor_set(layout, SHADOW_SET, &shadow.set, &[]);
                     }
                 }
                 bound = Some(key);
@@ -327,6 +339,7 @@ fn depth_compare(setup: &PassSetup<'_>, form: Form) -> CompareOp {
 fn specialization(
     key: &PipelineKey,
     encode_srgb: bool,
+    shadow_taps: u32,
     light_constants: Vec<(u32, u32)>,
     air_constants: &[(u32, u32)],
 ) -> Result<Vec<(u32, u32)>, RenderError> {
@@ -349,6 +362,9 @@ fn specialization(
     }
     if encode_srgb {
         specialization.push((SPEC_ENCODE_SRGB, 1));
+    }
+    if key.shadowed {
+        specialization.push((SPEC_SHADOW_TAPS, shadow_taps));
     }
     specialization.extend(light_constants);
     if key.air != AirLight::None {
@@ -379,7 +395,11 @@ fn shader_features(key: &PipelineKey, form: Form) -> (ObjectVertFeatures, Object
         .with(ObjectFragFeatures::DEBUG_VIEW, debug)
         .with(ObjectFragFeatures::GOURAUD, gouraud)
         .with(ObjectFragFeatures::SUN_LIGHT, key.air.sun())
-        .with(ObjectFragFeatures::SKY_LIGHT, key.air.sky());
+        .with(ObjectFragFeatures::SKY_LIGHT, key.air.sky())
+        .with(
+            ObjectFragFeatures::SHADOWS,
+            key.shadowed && form != Form::GBuffer,
+        );
     (vert, frag)
 }
 
@@ -473,6 +493,7 @@ mod tests {
                                 two_sided: false,
                                 air,
                                 instanced,
+                                shadowed: false,
                             };
                             let (vert, frag) = shader_features(&key, form);
                             assert!(shaders::OBJECT_VERT.is_compiled(vert), "{key:?}");

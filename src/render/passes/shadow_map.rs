@@ -1,0 +1,156 @@
+//! The shadow pass: the shadow-casting light's view of the casters, depth
+//! only, into the shadow map (`shadow map`, [`PASS`]), for frames whose
+//! scene has a light with `shadows = true` and an opaque object that casts
+//! shadows.
+//!
+//! The map is its own size (`[output] shadow_map`), so the pass is a render
+//! pass of its own, before the frame's others; the passes that light
+//! surfaces sample it (`glsl/include/shadow_map.glsl`). Every caster is
+//! drawn, in view or not (one behind the camera still shadows what is in
+//! view), with both faces (a plane casts whichever side the light meets)
+//! and a slope-scaled depth bias, so a lit surface's own depth does not
+//! shadow it where the light grazes it. Where it looks from is
+//! `FramePlan::shadow` (`render::shadow_view`).
+
+use super::depth_prepass::depth_only_attributes;
+use super::surface::instance_attributes;
+use super::{PassResources, PassSetup, PassType, RecordPass};
+use crate::mesh::Vertex;
+use crate::render::gpu_types::InstanceTransform;
+use crate::render::plan::{attachment, Draw, FramePlan, FrameShape, PassIo};
+use crate::render::RenderError;
+use crate::scene::Scene;
+use crate::shader_ids::{FRAME_SET, OBJECT_SET};
+use crate::shaders::{self, ObjectVertFeatures};
+use crate::vk::{
+    CommandBuffer, CompareOp, CullModeFlags, DepthUse, GraphicsPipeline, GraphicsPipelineDesc,
+    ShaderModule,
+};
+
+/// The depth bias's constant part, in units of the map's depth precision.
+const BIAS_CONSTANT: f32 = 1.0;
+/// The depth bias's slope factor: depth the surface's own slope moves it
+/// across two texels, so grazing surfaces stay off their own shadow.
+const BIAS_SLOPE: f32 = 2.0;
+
+pub struct ShadowPass {
+    casters: Vec<Draw>,
+    /// Indexed by whether the draw is an instance batch.
+    pipelines: [Option<GraphicsPipeline>; 2],
+}
+
+/// The pass in the frame's list ([`super::PASSES`]).
+pub const PASS: &dyn PassType = &Pass;
+
+struct Pass;
+
+impl PassType for Pass {
+    fn name(&self) -> &'static str {
+        "shadow map"
+    }
+
+    /// Writes the shadow map's depth, in frames that have one.
+    fn declare(&self, shape: &FrameShape<'_>) -> Option<PassIo> {
+        shape.shadow_map.map(|_| {
+            PassIo::subpass(
+                vec![],
+                Some((attachment::SHADOW_MAP, DepthUse::Write)),
+                vec![],
+            )
+        })
+    }
+
+    fn create(&self, setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+        create(setup)
+    }
+}
+
+fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
+    let casters = setup
+        .plan
+        .shadow
+        .as_ref()
+        .map_or_else(Vec::new, |view| view.casters.clone());
+    let mut pipelines = [None, None];
+    if !casters.is_empty() {
+        let resources = setup.scene_resources()?;
+        let render_pass = setup.render_pass()?;
+        let attributes = depth_only_attributes();
+        let instance = instance_attributes();
+        for (slot, pipeline) in pipelines.iter_mut().enumerate() {
+            let instanced = slot == 1;
+            if !casters.iter().any(|d| d.pipeline.instanced == instanced) {
+                continue;
+            }
+            let features =
+                ObjectVertFeatures::default().with(ObjectVertFeatures::INSTANCED, instanced);
+            let vertex = ShaderModule::new(setup.ctx, shaders::OBJECT_VERT.spirv(features))?;
+            *pipeline = Some(GraphicsPipeline::new(
+                setup.ctx,
+                &resources.layout,
+                &render_pass.render_pass,
+                &GraphicsPipelineDesc {
+                    vertex_shader: &vertex,
+                    fragment_shader: None,
+                    specialization: &[],
+                    vertex_stride: std::mem::size_of::<Vertex>() as u32,
+                    vertex_attributes: &attributes,
+                    instance_stride: if instanced {
+                        std::mem::size_of::<InstanceTransform>() as u32
+                    } else {
+                        0
+                    },
+                    instance_attributes: if instanced { &instance } else { &[] },
+                    cull_mode: CullModeFlags::NONE,
+                    // Forward depth: nearer the light is smaller.
+                    depth_test: Some(CompareOp::LESS),
+                    depth_write: true,
+                    depth_bias: Some((BIAS_CONSTANT, BIAS_SLOPE)),
+                    blend: &[],
+                    subpass: setup.subpass,
+                },
+            )?);
+        }
+    }
+    Ok(Box::new(ShadowPass { casters, pipelines }))
+}
+
+impl RecordPass for ShadowPass {
+    fn record(&self, cmd: &CommandBuffer, frame: &PassResources<'_>) -> Result<(), RenderError> {
+        let (Some(resources), Some(shadow)) = (frame.scene, frame.shadow) else {
+            return Ok(());
+        };
+        let layout = &resources.layout;
+        let mut bound: Option<usize> = None;
+        for d in &self.casters {
+            if resources.ranges[d.object].index_count == 0 {
+                continue;
+            }
+            let slot = d.pipeline.instanced as usize;
+            if bound != Some(slot) {
+                let pipeline = self.pipelines[slot].as_ref().ok_or_else(|| {
+                    RenderError::Frame("the shadow pass has no pipeline for a caster".into())
+                })?;
+                cmd.bind_pipeline(pipeline);
+                if bound.is_none() {
+                    cmd.bind_descriptor_set(layout, FRAME_SET, &shadow.light_frame_set, &[]);
+                }
+                bound = Some(slot);
+            }
+            cmd.bind_descriptor_set(
+                layout,
+                OBJECT_SET,
+                &resources.object_set,
+                &[resources.block_offsets[d.object]],
+            );
+            resources.draw_every_member(cmd, d)?;
+        }
+        Ok(())
+    }
+
+    /// The casters do not follow the view (only the light's view does,
+    /// which `ShadowResources::set_view` rewrites).
+    fn set_view(&mut self, _scene: &Scene, _plan: &FramePlan) -> Result<(), RenderError> {
+        Ok(())
+    }
+}
