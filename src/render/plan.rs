@@ -394,11 +394,14 @@ impl FramePlan {
             let joins = open.as_ref().is_some_and(|(open_size, written)| {
                 *open_size == size && !decl.samples().iter().any(|s| written.contains(s))
             });
-            if !joins && open.is_some() {
-                run += 1;
-                subpass = 0;
+            if !joins {
+                if open.is_some() {
+                    run += 1;
+                    subpass = 0;
+                }
+                open = Some((size, Vec::new()));
             }
-            let (_, written) = open.get_or_insert_with(|| (size, Vec::new()));
+            let (_, written) = open.as_mut().expect("opened above");
             written.extend(decl.io.writes());
             slots.push(Some((run, subpass)));
             subpass += 1;

@@ -60,6 +60,7 @@ mod regression;
 mod scene_errors;
 mod screen_tessellation;
 mod shading;
+mod shadows;
 mod sweep;
 mod sweep_shards;
 mod tall_atmosphere;
