@@ -18,8 +18,16 @@
 //! ([`crate::atmosphere::transport::sky_irradiance`], Monte Carlo, at
 //! three altitudes across each object's bounding sphere, interpolated)
 //! spread over tilted surfaces by [`tilted_sky`]: isotropic with a
-//! brighter horizon, plus the ground's reflection. Left out, as on the GPU: objects shadow neither
-//! each other nor the ground, and block none of each other's sky; the sky
+//! brighter horizon, plus the ground's reflection.
+//!
+//! The shadow-casting light ([`Scene::shadow_light`]: a directional
+//! light, or the sun) is occluded exactly: its term at a point counts
+//! only when a ray from there towards the light meets no opaque object
+//! with `casts_shadows` (either face; [`shadows`]), where the GPU samples
+//! a shadow map. Left out: every other light's shadows (as on the GPU),
+//! shadows of transparent objects, the sun's penumbra (the sun is a
+//! direction, so its shadows are hard); objects block none of each
+//! other's sky; the sky
 //! light has no specular part, is zero above the atmosphere (the light
 //! the planet reflects into space is left out), and ignores the tilted
 //! model's own error (docs/atmosphere.md measures it against full
@@ -75,9 +83,10 @@ use crate::atmosphere::transport::{
 use crate::atmosphere::{quadrature, Atmosphere, Sun};
 use crate::scene::material_maps::{ColorSpace, MapKindInfo, MapSource, ReferenceUse};
 use crate::scene::{
-    placeholder_texels, Light, Material, Scene, ShadingModel, Shape, Texture, TextureFilter,
-    Transform, MAX_OUTPUT_SIZE, PLACEHOLDER_TEXTURE,
+    placeholder_texels, Light, Material, Scene, ShadingModel, ShadowLight, Shape, Texture,
+    TextureFilter, Transform, MAX_OUTPUT_SIZE, PLACEHOLDER_TEXTURE,
 };
+use shadows::{Caster, Occluders};
 
 /// Why a scene has no CPU reference.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -148,6 +157,10 @@ pub struct CpuScene {
     sky: Option<(Sun, Atmosphere)>,
     /// How much of the light transport the air's radiance includes.
     transport: Transport,
+    /// Whether the sun is the shadow-casting light.
+    sun_shadowed: bool,
+    /// What occludes the shadow-casting light; empty without one.
+    casters: Vec<Caster>,
 }
 
 /// How much light transport the reference computes in the air.
@@ -336,6 +349,8 @@ enum CpuLight {
         /// Unit vector towards the light (the negated travel direction).
         to_light: DVec3,
         color: DVec3,
+        /// Whether it is the shadow-casting light.
+        shadowed: bool,
     },
 }
 
@@ -499,41 +514,60 @@ impl Surface {
         t_min: f64,
         t_max: f64,
     ) -> Option<Hit> {
-        let (o, d) = (origin, direction);
-        let in_range = |t: f64| t >= t_min && t <= t_max;
-        let front = |t: f64, normal: DVec3| {
-            (in_range(t) && normal.dot(d) < 0.0).then_some(Hit { t, normal })
-        };
+        self.crossings(origin, direction)
+            .into_iter()
+            .flatten()
+            .find(|hit| hit.t >= t_min && hit.t <= t_max && hit.normal.dot(direction) < 0.0)
+    }
+
+    /// Whether the ray `origin + t * direction` meets the surface, by
+    /// either face, at a `t` in `(t_min, t_max]`: an occluder blocks light
+    /// whichever way it faces.
+    pub fn blocks(&self, origin: DVec3, direction: DVec3, t_min: f64, t_max: f64) -> bool {
+        self.crossings(origin, direction)
+            .into_iter()
+            .flatten()
+            .any(|hit| hit.t > t_min && hit.t <= t_max)
+    }
+
+    /// Every point where the line `o + t d` meets the surface, either
+    /// face, smaller `t` first, with the outward normal there.
+    fn crossings(&self, o: DVec3, d: DVec3) -> [Option<Hit>; 2] {
+        let at = |t: f64, normal: DVec3| Some(Hit { t, normal });
         match *self {
             Surface::Sphere { radius } => {
-                let roots = sphere_roots(o, d, radius)?;
+                let Some(roots) = sphere_roots(o, d, radius) else {
+                    return [None; 2];
+                };
                 // From outside the near root is the front face and the far
                 // one the back face; from inside both face away.
-                roots.into_iter().find_map(|t| front(t, o + d * t))
+                roots.map(|t| at(t, o + d * t))
             }
             Surface::Plane { width, depth } => {
                 if d.y == 0.0 {
-                    return None;
+                    return [None; 2];
                 }
                 let t = -o.y / d.y;
                 let p = o + d * t;
                 if p.x.abs() > width * 0.5 || p.z.abs() > depth * 0.5 {
-                    return None;
+                    return [None; 2];
                 }
-                front(t, DVec3::Y)
+                [at(t, DVec3::Y), None]
             }
             Surface::Cylinder { radius, height } => {
                 let flat = DVec3::new(1.0, 0.0, 1.0);
-                let roots = sphere_roots(o * flat, d * flat, radius)?;
+                let Some(roots) = sphere_roots(o * flat, d * flat, radius) else {
+                    return [None; 2];
+                };
                 // The cylinder is open: a ray can pass the near wall above
                 // its rim and meet the far wall from inside, which is a back
                 // face and culled, exactly as on the GPU.
-                roots.into_iter().find_map(|t| {
+                roots.map(|t| {
                     let p = o + d * t;
-                    if p.y.abs() > height * 0.5 {
-                        return None;
-                    }
-                    front(t, DVec3::new(p.x, 0.0, p.z))
+                    (p.y.abs() <= height * 0.5).then_some(Hit {
+                        t,
+                        normal: DVec3::new(p.x, 0.0, p.z),
+                    })
                 })
             }
         }
@@ -635,8 +669,8 @@ impl CpuScene {
             let lights = scene
                 .lights_reaching(index)
                 .into_iter()
-                .filter_map(|i| scene.lights.get(i))
-                .map(|light| match *light {
+                .filter_map(|i| scene.lights.get(i).map(|light| (i, light)))
+                .map(|(i, light)| match *light {
                     Light::Point {
                         position,
                         color,
@@ -653,6 +687,7 @@ impl CpuScene {
                     Light::Directional { direction, color } => CpuLight::Directional {
                         to_light: (-direction.as_dvec3()).normalize_or_zero(),
                         color: color.as_dvec3(),
+                        shadowed: scene.shadow_light == Some(ShadowLight::Light(i)),
                     },
                 })
                 .collect();
@@ -699,6 +734,11 @@ impl CpuScene {
                 .as_ref()
                 .map(|sky| (sky.sun.clone(), sky.atmosphere.clone())),
             transport: Transport::Full { paths: IMAGE_PATHS },
+            sun_shadowed: scene.sky.is_some() && scene.shadow_light == Some(ShadowLight::Sun),
+            casters: match scene.shadow_light {
+                Some(_) => shadows::casters(scene),
+                None => Vec::new(),
+            },
         })
     }
 
@@ -736,6 +776,8 @@ impl CpuScene {
             },
         });
         let air = air.as_ref();
+        let occluders = Occluders::new(self.casters.clone());
+        let occluders = &occluders;
         let mut data = vec![0f32; w * h * 4];
         let threads = std::thread::available_parallelism()
             .map_or(1, |n| n.get())
@@ -751,7 +793,7 @@ impl CpuScene {
                 s.spawn(move || {
                     for (y, row) in part {
                         for (x, pixel) in row.chunks_exact_mut(4).enumerate() {
-                            pixel.copy_from_slice(&self.pixel(x as u32, y as u32, air));
+                            pixel.copy_from_slice(&self.pixel(x as u32, y as u32, air, occluders));
                         }
                     }
                 });
@@ -766,9 +808,9 @@ impl CpuScene {
 
     /// RGBA of pixel (x, y): alpha 1 where a surface is hit and, with an
     /// atmosphere, everywhere (the atmosphere pass writes every pixel).
-    fn pixel(&self, x: u32, y: u32, air: Option<&ObjectAir>) -> [f32; 4] {
+    fn pixel(&self, x: u32, y: u32, air: Option<&ObjectAir>, occluders: &Occluders) -> [f32; 4] {
         let dir = self.ray(x, y);
-        let surface = self.shade(dir, air);
+        let surface = self.shade(dir, air, occluders);
         let colour = match &self.sky {
             None => surface.map(|(_, c)| c),
             Some((sun, atmosphere)) => {
@@ -798,27 +840,36 @@ impl CpuScene {
 
     /// The distance to and the radiance of the surface along the unit ray
     /// `dir` from the eye, or `None` when it hits nothing.
-    /// `air`: the atmosphere's light on the objects, with `[atmosphere]`.
-    fn shade(&self, dir: DVec3, air: Option<&ObjectAir>) -> Option<(f64, DVec3)> {
+    /// `air`: the atmosphere's light on the objects, with `[atmosphere]`;
+    /// `occluders`: what blocks the shadow-casting light.
+    fn shade(
+        &self,
+        dir: DVec3,
+        air: Option<&ObjectAir>,
+        occluders: &Occluders,
+    ) -> Option<(f64, DVec3)> {
         let hit = self.trace(dir)?;
         let object = &self.objects[hit.object];
-        let v = -dir;
-        let ks = object.ks_at(hit.point);
-        let mut colour = object.blinn_phong(hit.point, hit.normal, v, self.ambient, ks);
+        let at = Shading {
+            hit,
+            v: -dir,
+            ks: object.ks_at(hit.point),
+            occluders,
+        };
+        let mut colour = object.ka * self.ambient;
+        for light in &object.lights {
+            colour += object.lit(light, &at);
+        }
         if let Some(air) = air {
             // The sun after the object's lights, then the sky, in the
             // shaders' order.
             let (sun, sky) = air.at(hit.object, hit.point, hit.normal);
-            colour += object.light(
-                &CpuLight::Directional {
-                    to_light: air.sun.direction,
-                    color: sun,
-                },
-                hit.point,
-                hit.normal,
-                v,
-                ks,
-            );
+            let light = CpuLight::Directional {
+                to_light: air.sun.direction,
+                color: sun,
+                shadowed: self.sun_shadowed,
+            };
+            colour += object.lit(&light, &at);
             colour += object.kd * sky;
         }
         Some((hit.t, colour))
@@ -954,16 +1005,37 @@ fn air(
     colour
 }
 
+/// What lighting one visible point needs.
+struct Shading<'a> {
+    hit: WorldHit,
+    /// Unit vector towards the eye.
+    v: DVec3,
+    /// The specular reflectance there ([`CpuObject::ks_at`]).
+    ks: DVec3,
+    occluders: &'a Occluders,
+}
+
 impl CpuObject {
-    /// `blinn_phong` of `lighting.glsl`, in f64: `ka La` plus, for every
-    /// light in front of the surface (`cos > 0`), `Le att (kd cos + ks
-    /// max(N.H, 0)^shininess)`, with `ks` at `p` ([`Self::ks_at`]).
-    fn blinn_phong(&self, p: DVec3, n: DVec3, v: DVec3, ambient: DVec3, ks: DVec3) -> DVec3 {
-        let mut color = self.ka * ambient;
-        for light in &self.lights {
-            color += self.light(light, p, n, v, ks);
+    /// One light's term of `blinn_phong` in `lighting.glsl` (which sums
+    /// them after `ka La`), times the light's visibility at the point
+    /// when it is the shadow-casting light (tested only where the term
+    /// is not zero).
+    fn lit(&self, light: &CpuLight, at: &Shading) -> DVec3 {
+        let WorldHit {
+            object,
+            point,
+            normal,
+            ..
+        } = at.hit;
+        let term = self.light(light, point, normal, at.v, at.ks);
+        match *light {
+            CpuLight::Directional {
+                to_light,
+                shadowed: true,
+                ..
+            } if term != DVec3::ZERO => term * at.occluders.visibility(object, point, to_light),
+            _ => term,
         }
-        color
     }
 
     /// The specular reflectance at the world point `p`: `ks` times the
@@ -976,7 +1048,8 @@ impl CpuObject {
         }
     }
 
-    /// One light's Blinn-Phong term.
+    /// One light's Blinn-Phong term: for a light in front of the surface
+    /// (`cos > 0`), `Le att (kd cos + ks max(N.H, 0)^shininess)`.
     fn light(&self, light: &CpuLight, p: DVec3, n: DVec3, v: DVec3, ks: DVec3) -> DVec3 {
         let (l, radiance) = match *light {
             CpuLight::Point {
@@ -994,7 +1067,9 @@ impl CpuObject {
                 let att = (1.0 / (a.x + a.y * d + a.z * d * d).max(1e-6) - window).max(0.0);
                 (l, color * att)
             }
-            CpuLight::Directional { to_light, color } => (to_light, color),
+            CpuLight::Directional {
+                to_light, color, ..
+            } => (to_light, color),
         };
         let cos_theta = n.dot(l);
         if cos_theta > 0.0 {
@@ -1006,5 +1081,9 @@ impl CpuObject {
     }
 }
 
+mod shadows;
+
+#[cfg(test)]
+mod shadow_tests;
 #[cfg(test)]
 mod tests;
