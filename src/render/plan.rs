@@ -897,6 +897,7 @@ mod tests {
         let (mut scene, _) = load("earth_objects.toml");
         scene.sky.as_mut().unwrap().aerial_perspective = AerialPerspective::Volume;
         scene.tone_map.exposure = Exposure::Auto;
+        scene.shadow_light = Some(crate::scene::ShadowLight::Sun);
         plans.push(FramePlan::new(
             &scene,
             &SceneGeometry::new(&scene).unwrap(),
