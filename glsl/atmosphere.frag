@@ -2,6 +2,7 @@
 // feature: SKY_VIEW
 // feature: MULTIPLE_SCATTERING
 // feature: AERIAL_VOLUME
+// feature: SHADOWS
 // The atmosphere subpass: for each pixel, single scattering along the view
 // ray through the atmosphere (Rayleigh + Mie, ozone absorption) in front
 // of whatever the surface pass drew there, or the analytic ground sphere,
@@ -27,6 +28,7 @@
 // ground's light behind it).
 
 #include "atmosphere.glsl"
+#include "shadow_map.glsl"
 
 #ifdef SKY_VIEW
 // Bilinear through the sampler where the device filters the table's
@@ -167,6 +169,22 @@ void aerial_volume_read(float t, out vec3 inscatter, out vec3 transmittance) {
 }
 #endif
 
+// With SHADOWS (the sun casts shadows), the fraction of the ground's
+// light at p (relative to the centre; q the same point relative to the
+// camera) that remains where objects shadow it: the sun's direct part is
+// scaled by the shadow map's visibility, the sky's light is not.
+vec3 ground_shadowing(vec3 p, vec3 q) {
+#ifdef SHADOWS
+    float hidden = 1.0 - shadow_visibility(q, normalize(p));
+    if (hidden > 0.0) {
+        vec3 full = ground_radiance(p);
+        vec3 kept = full - hidden * ground_direct(p);
+        return mix(vec3(1.0), kept / max(full, vec3(1e-30)), greaterThan(full, vec3(0.0)));
+    }
+#endif
+    return vec3(1.0);
+}
+
 void main() {
 #ifdef SKY_VIEW
     vec3 colour = TRANSPARENT_OVER_SKY ? subpassLoad(surface).rgb : vec3(0.0);
@@ -215,7 +233,9 @@ void main() {
     float g0, g1;
     bool behind_ground = sphere(o, d, sky.terms.x, STATIC_RADII.x, g0, g1)
         && g0 >= 0.0 && g1 > 0.0 && g0 < t_surface;
-    vec3 in_front = behind_ground ? ground_radiance(o + g0 * d) : colour;
+    vec3 in_front = behind_ground
+        ? ground_radiance(o + g0 * d) * ground_shadowing(o + g0 * d, g0 * d)
+        : colour;
     vec3 air_light;
     vec3 air_transmittance;
     aerial_volume_read(min(behind_ground ? g0 : t_surface, sky.forward.w), air_light, air_transmittance);
@@ -246,6 +266,17 @@ void main() {
         seen = path.transmittance;
 #else
         seen = ground_radiance(o + path.t_end * d) * path.transmittance;
+#endif
+#ifdef SHADOWS
+        float t_ground = path.t_end;
+#ifdef SKY_VIEW
+        // The table gives no distance: the ground's, along the ray.
+        float g0, g1;
+        t_ground = sphere(o, d, sky.terms.x, STATIC_RADII.x, g0, g1) ? max(g0, 0.0) : INF;
+#endif
+        if (t_ground < INF) {
+            seen *= ground_shadowing(o + t_ground * d, t_ground * d);
+        }
 #endif
     } else {
         seen = (colour + disc) * path.transmittance;

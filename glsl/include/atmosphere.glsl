@@ -642,20 +642,27 @@ vec2 phases(float mu) {
     return vec2(phase_r, phase_m);
 }
 
-// The ground at p (relative to the centre, on the planet): the Lambertian
-// albedo under the transmitted sun, and, with GROUND_SKY_LIGHT, under the
-// sky's irradiance.
-vec3 ground_radiance(vec3 p) {
+// The sun's direct light reflected by the ground at p (relative to the
+// centre): zero where the sun is below the horizon or the planet hides it.
+vec3 ground_direct(vec3 p) {
     vec3 normal = normalize(p);
-    vec3 sun = SUN_DIRECTION;
-    float cos_sun = dot(normal, sun);
+    float cos_sun = dot(normal, SUN_DIRECTION);
     bool lit;
     vec3 sun_tau = sun_optical_depth(0.0, STATIC_RADII.x, p, lit);
     vec3 radiance = vec3(0.0);
     if (cos_sun > 0.0 && lit) {
         radiance = STATIC_GROUND_ALBEDO.xyz / PI * cos_sun * sky.sun_irradiance.xyz * exp(-sun_tau);
     }
+    return radiance;
+}
+
+// The ground at p (relative to the centre, on the planet): the Lambertian
+// albedo under the transmitted sun, and, with GROUND_SKY_LIGHT, under the
+// sky's irradiance.
+vec3 ground_radiance(vec3 p) {
+    vec3 radiance = ground_direct(p);
 #ifdef GROUND_SKY_LIGHT
+    float cos_sun = dot(normalize(p), SUN_DIRECTION);
     radiance += STATIC_GROUND_ALBEDO.xyz / PI * sky.sun_irradiance.xyz * sky_irradiance(0.0, cos_sun);
 #endif
     return radiance;

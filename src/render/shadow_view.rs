@@ -10,6 +10,10 @@
 //! is spent where a shadow can fall. Along the light it spans from the
 //! caster nearest the light to the farthest receiver, so no caster is
 //! clipped (a caster behind the camera still shadows what is in view).
+//! For the sun, whose shadows also fall on the planet's ground, the map
+//! covers the casters whole, and ground beyond its far side compares as
+//! its farthest depth (`shadow_map.glsl` clamps), so it is shadowed
+//! exactly where a caster covers the texel.
 //! Texels are not snapped to a world grid: each frame is fitted on its own
 //! (a moving camera's shadows may shimmer by a texel).
 
@@ -106,11 +110,18 @@ impl ShadowView {
                 caster_box.add(to_light(c), f64::from(r));
             }
         }
+        // Across the light: where a shadow can fall on screen. The sun
+        // also shadows the planet's ground, which lies under every caster
+        // and may be seen beyond the farthest object: its map covers the
+        // casters.
         let frustum = frustum_box(scene, farthest, &to_light);
-        // Across the light: where a shadow can fall on screen.
-        let mut across = LightBox {
-            min: receivers.min.max(frustum.min).max(caster_box.min),
-            max: receivers.max.min(frustum.max).min(caster_box.max),
+        let mut across = if light == ShadowLight::Sun {
+            caster_box
+        } else {
+            LightBox {
+                min: receivers.min.max(frustum.min).max(caster_box.min),
+                max: receivers.max.min(frustum.max).min(caster_box.max),
+            }
         };
         if across.is_empty() {
             // No caster over anything in view: any small map will do.

@@ -22,13 +22,16 @@ use crate::atmosphere::TableMapping;
 use crate::render::plan::{attachment, FrameShape, PassIo};
 use crate::render::sky_resources::SkyResources;
 use crate::render::RenderError;
-use crate::scene::{OzoneDepth, TableFilter};
+use crate::scene::{OzoneDepth, ShadowLight, TableFilter};
 use crate::shader_ids::{
-    SPEC_OZONE_EXACT, SPEC_SKY_VIEW_HARDWARE_FILTER, SPEC_TABLE_FILTER, SPEC_TABLE_MAPPING,
-    SPEC_TRANSPARENT_OVER_SKY,
+    SHADOW_SET, SPEC_OZONE_EXACT, SPEC_SHADOW_TAPS, SPEC_SKY_VIEW_HARDWARE_FILTER,
+    SPEC_TABLE_FILTER, SPEC_TABLE_MAPPING, SPEC_TRANSPARENT_OVER_SKY,
 };
 use crate::shaders::{self, AtmosphereFragFeatures};
-use crate::vk::{CommandBuffer, ComputePipeline, GraphicsPipeline, PipelineLayout, ShaderModule};
+use crate::vk::{
+    CommandBuffer, ComputePipeline, DescriptorSetLayout, GraphicsPipeline, PipelineLayout,
+    ShaderModule,
+};
 use crate::vk::{CompareOp, DepthUse};
 
 /// Fields drop in order: the pipelines before their layout and the sets.
@@ -37,6 +40,9 @@ pub struct AtmospherePass {
     pipelines: Vec<GraphicsPipeline>,
     layout: PipelineLayout,
     inputs: InputAttachments,
+    /// The empty sets' layout below the shadow set, with the sun's
+    /// shadows (whose set is then bound).
+    empty: Option<DescriptorSetLayout>,
 }
 
 /// A compute pipeline over the atmosphere's set that marches it (the
@@ -92,11 +98,17 @@ impl PassType for Pass {
     fn declare(&self, shape: &FrameShape<'_>) -> Option<PassIo> {
         use attachment::*;
         shape.sky.then(|| {
-            PassIo::subpass(
+            let io = PassIo::subpass(
                 vec![HDR],
                 Some((DEPTH, DepthUse::Test)),
                 vec![SURFACE, DEPTH],
-            )
+            );
+            // The ground takes the sun's shadows.
+            if sun_shadows(shape) {
+                io.sampling(&[SHADOW_MAP])
+            } else {
+                io
+            }
         })
     }
 
@@ -105,13 +117,36 @@ impl PassType for Pass {
     }
 }
 
+/// Whether the frame draws the sun's shadows (onto the ground too).
+fn sun_shadows(shape: &FrameShape<'_>) -> bool {
+    shape.shadow_map.is_some()
+        && shape
+            .scene
+            .is_some_and(|s| s.shadow_light == Some(ShadowLight::Sun))
+}
+
 fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     let resources = setup.sky_resources()?;
     let sky = setup.scene.sky.as_ref().ok_or_else(|| {
         RenderError::Frame("the atmosphere pass needs a scene with [atmosphere]".into())
     })?;
     let inputs = InputAttachments::declared(setup)?;
-    let layout = PipelineLayout::new(setup.ctx, &[&resources.layout, &inputs.layout])?;
+    // With the sun's shadows, the shadow set at SHADOW_SET, after empty
+    // sets.
+    let shadow = match setup.decl.samples() {
+        [] => None,
+        _ => Some(setup.frame.shadow()?),
+    };
+    let empty = match shadow {
+        Some(_) => Some(DescriptorSetLayout::new(setup.ctx, &[])?),
+        None => None,
+    };
+    let mut set_layouts = vec![&resources.layout, &inputs.layout];
+    if let (Some(shadow), Some(empty)) = (shadow, &empty) {
+        set_layouts.resize(SHADOW_SET as usize, empty);
+        set_layouts.push(&shadow.layout);
+    }
+    let layout = PipelineLayout::new(setup.ctx, &set_layouts)?;
     // The march's constants, plus the two only this pass's sky-view
     // variant reads.
     let constants = [
@@ -127,6 +162,10 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
             ),
         ],
         &resources.static_constants(),
+        &shadow
+            .map(|_| (SPEC_SHADOW_TAPS, setup.scene.output.shadow_filter.taps()))
+            .into_iter()
+            .collect::<Vec<_>>(),
     ]
     .concat();
     // (shader features, depth test) per draw.
@@ -134,10 +173,12 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     // (the AERIAL_VOLUME variant, LESS) and the others take the sky view
     // or march (EQUAL); without, the marching variant draws the surfaces.
     type Features = AtmosphereFragFeatures;
-    let base = Features::NONE.with(
-        Features::MULTIPLE_SCATTERING,
-        resources.multiple_scattering(),
-    );
+    let base = Features::NONE
+        .with(
+            Features::MULTIPLE_SCATTERING,
+            resources.multiple_scattering(),
+        )
+        .with(Features::SHADOWS, shadow.is_some());
     let volume = resources.aerial_volume.is_some();
     let surfaces = base.with(Features::AERIAL_VOLUME, volume);
     let draws: Vec<(Features, Option<CompareOp>)> = match (resources.sky_view.is_some(), volume) {
@@ -169,6 +210,7 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
         pipelines,
         layout,
         inputs,
+        empty,
     }))
 }
 
@@ -179,6 +221,9 @@ impl RecordPass for AtmospherePass {
         // the pipeline switch.
         cmd.bind_descriptor_set(&self.layout, 0, &sky.set, &[]);
         cmd.bind_descriptor_set(&self.layout, 1, &self.inputs.set, &[]);
+        if self.empty.is_some() {
+            cmd.bind_descriptor_set(&self.layout, SHADOW_SET, &frame.shadow()?.set, &[]);
+        }
         for pipeline in &self.pipelines {
             cmd.bind_pipeline(pipeline);
             cmd.draw(3);

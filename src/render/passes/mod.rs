@@ -143,6 +143,11 @@ impl PassResources<'_> {
             .ok_or_else(|| RenderError::Frame("the frame has no atmosphere resources".into()))
     }
 
+    pub fn shadow(&self) -> Result<&ShadowResources, RenderError> {
+        self.shadow
+            .ok_or_else(|| RenderError::Frame("the frame has no shadow map".into()))
+    }
+
     pub fn exposure(&self) -> Result<&Buffer, RenderError> {
         self.exposure
             .ok_or_else(|| RenderError::Frame("the frame has no exposure buffer".into()))
