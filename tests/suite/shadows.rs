@@ -224,3 +224,58 @@ fn shadow_settings_are_checked() {
     assert!((knob("lighting").apply)(&mut scene, "deferred").is_err());
     assert!((knob("shadow_filter").apply)(&mut scene, "pcf5").is_ok());
 }
+
+/// A sphere of radius 2 resting on the planet, seen from 30 m straight
+/// above, under an Earth atmosphere's sun 30° up: `shadows` on `[sun]`.
+fn sun_scene(shadows: bool) -> Scene {
+    let s = 30f64.to_radians();
+    let (up, across) = (s.sin(), s.cos() / 2f64.sqrt());
+    common::scene(&format!(
+        "[output]\nwidth = 320\nheight = 180\nhdr_format = \"rgba32f\"\n\
+         [tone_map]\nexposure = 4.0\n\
+         [camera]\neye = [0.0, 30.0, 0.0]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 0.0, -1.0]\n\
+         [[materials]]\nname = \"grey\"\nkd = [0.5, 0.5, 0.5]\n\
+         [[objects]]\nname = \"ball\"\nmaterial = \"grey\"\n\
+         shape = {{ type = \"sphere\", radius = 2.0 }}\ntranslate = [0.0, 2.0, 0.0]\n\
+         [sun]\ndirection = [{}, {up}, {across}]\nshadows = {shadows}\n\
+         [atmosphere]\n",
+        -across
+    ))
+}
+
+/// The sun's shadow falls on the planet's ground (drawn by the atmosphere
+/// pass, not an object): where the line through the sphere's centre along
+/// the sunlight meets the ground, 2 / tan 30° = 3.46 m from its foot
+/// (away from the sun), the ground keeps only the sky's light; on the
+/// sun's side it is unchanged.
+#[test]
+fn the_sun_shadows_the_planet_s_ground() {
+    let on = hdr(&sun_scene(true));
+    let off = hdr(&sun_scene(false));
+    // Ground units per pixel from 30 m with a 45° field of view.
+    let per_pixel = 2.0 * 30.0 * 22.5f64.to_radians().tan() / f64::from(on.height);
+    let at = |image: &Pixels<f32>, x: f64, z: f64| {
+        let col = f64::from(image.width) / 2.0 + x / per_pixel;
+        let row = f64::from(image.height) / 2.0 + z / per_pixel;
+        common::pixel(image, col as u32, row as u32)
+    };
+    let reach = 2.0 / 30f64.to_radians().tan() / 2f64.sqrt();
+    let (shadow, lit) = (at(&on, reach, -reach), at(&off, reach, -reach));
+    for c in 0..3 {
+        assert!(
+            shadow[c] < 0.8 * lit[c] && shadow[c] > 0.0,
+            "channel {c}: {} in the shadow, {} without shadows",
+            shadow[c],
+            lit[c]
+        );
+    }
+    let (sunny, sunny_off) = (at(&on, -5.0, 5.0), at(&off, -5.0, 5.0));
+    for c in 0..3 {
+        assert!(
+            (sunny[c] - sunny_off[c]).abs() <= 1e-6 * sunny_off[c].abs().max(1.0),
+            "channel {c} on the sun's side moved: {} against {}",
+            sunny[c],
+            sunny_off[c]
+        );
+    }
+}
