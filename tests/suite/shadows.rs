@@ -279,3 +279,33 @@ fn the_sun_shadows_the_planet_s_ground() {
         );
     }
 }
+
+/// No peter-panning: an upright cylinder (radius 0.3, height 2) standing
+/// on the plane, the light 45° from vertical towards +x, seen from above
+/// at 1280x720: the shadow touches the cylinder's base. The first whole
+/// pixel of ground beyond the base on the shadow's side is in shadow
+/// (less than half the light reaches it), so any gap is under a pixel.
+#[test]
+fn a_shadow_touches_the_base_of_its_caster() {
+    let post = "[[objects]]\nname = \"post\"\nmaterial = \"ball\"\n\
+                shape = { type = \"cylinder\", radius = 0.3, height = 2.0 }\n\
+                tessellation = [256, 4]\ntranslate = [0.0, 1.0, 0.0]\n";
+    let on = hdr(&top_view(1280, true, 45.0, "pcf3", post));
+    let off = hdr(&top_view(1280, false, 45.0, "pcf3", post));
+    let per_pixel = 2.0 * 10.0 * 15f64.to_radians().tan() / f64::from(on.height);
+    // The base at x = 0.3 on the centre row; the wall above it projects
+    // further left, so the pixels right of it are ground.
+    let base = f64::from(on.width) / 2.0 + (0.3 - 1.0) / per_pixel;
+    let row = on.height / 2;
+    let ambient = 0.1 * 0.8;
+    let first = base.ceil() as u32 + 1;
+    for col in first..first + 3 {
+        let lit = common::pixel(&off, col, row)[0] - ambient;
+        let seen = common::pixel(&on, col, row)[0] - ambient;
+        assert!(
+            lit > 0.1 && seen < 0.5 * lit,
+            "column {col} ({:.2} px beyond the base): {seen} of {lit} reaches it",
+            f64::from(col) - base
+        );
+    }
+}
