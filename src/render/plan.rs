@@ -16,6 +16,7 @@ pub use super::draw_list::{
 use super::geometry::SceneGeometry;
 use super::passes::{aerial_volume, PassType, PASSES};
 pub use super::prepass_rule::DepthPrepassRule;
+use super::shadow_view;
 pub use super::shadow_view::ShadowView;
 use super::tiles::{self, TileGroup};
 use crate::scene::material_maps::{MapKind, MapSource};
@@ -306,18 +307,19 @@ impl FramePlan {
             .find(|a| a.name == attachment::SHADOW_MAP)
             .and_then(|map| {
                 let (side, _) = map.size.extent(scene.output.width, scene.output.height);
-                let casters: Vec<Draw> = draws
-                    .opaque
-                    .iter()
-                    .chain(draws.hidden.iter().filter(|d| !d.pipeline.blended))
-                    .filter(|d| scene.objects[d.object].casts_shadows)
-                    .cloned()
-                    .collect();
                 let in_view: Vec<usize> = draws
                     .opaque
                     .iter()
                     .chain(&draws.transparent)
                     .flat_map(|d| d.visible().iter().copied())
+                    .collect();
+                let casters: Vec<Draw> = draws
+                    .opaque
+                    .iter()
+                    .chain(draws.hidden.iter().filter(|d| !d.pipeline.blended))
+                    .filter(|d| scene.objects[d.object].casts_shadows)
+                    .filter(|d| shadow_view::may_shadow(scene, geometry, &in_view, d.objects()))
+                    .cloned()
                     .collect();
                 ShadowView::fit(scene, &geometry.bounds, &in_view, casters, side)
             });

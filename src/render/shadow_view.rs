@@ -18,8 +18,9 @@
 //! (a moving camera's shadows may shimmer by a texel).
 
 use super::draw_list::Draw;
+use super::geometry::SceneGeometry;
 use super::sky_resources::ray_basis;
-use crate::scene::{Light, Scene, ShadowLight};
+use crate::scene::{Light, Scene, ShadowLight, Shape};
 use glam::{DMat4, DVec3, DVec4};
 
 /// The shadow map's view for one frame.
@@ -47,6 +48,56 @@ pub fn light_direction(scene: &Scene, light: ShadowLight) -> Option<DVec3> {
         },
         ShadowLight::Sun => Some(-scene.sky.as_ref()?.sun.direction.normalize()),
     }
+}
+
+/// Whether any of `objects` (a draw's) may shadow something in view
+/// (`in_view`): false only for a flat caster (a plane, which cannot shadow
+/// itself) with every vertex of every other object in view on its lit
+/// side, where nothing lies behind it. The sun's planet ground may lie
+/// behind any caster, so under the sun every caster may shadow. Drawing
+/// such a plane into the map (a ground plane under the objects, say)
+/// would fill every texel for nothing.
+pub fn may_shadow(
+    scene: &Scene,
+    geometry: &SceneGeometry,
+    in_view: &[usize],
+    objects: &[usize],
+) -> bool {
+    let Some(light) = scene.shadow_light else {
+        return false;
+    };
+    let Some(direction) = light_direction(scene, light) else {
+        return false;
+    };
+    if light == ShadowLight::Sun {
+        return true;
+    }
+    objects.iter().any(|&o| {
+        let object = &scene.objects[o];
+        if !matches!(object.shape, Shape::Plane { .. }) {
+            return true;
+        }
+        let normal = (object.transform.normal_matrix() * glam::Vec3::Y)
+            .as_dvec3()
+            .normalize();
+        // The side the light comes from.
+        let lit_side = if normal.dot(direction) < 0.0 {
+            normal
+        } else {
+            -normal
+        };
+        let origin = object.transform.translate;
+        // A vertex this far behind the plane (relative to the scene's
+        // size) still counts as on it: objects resting on a plane touch it.
+        let tolerance = 1e-6 * f64::from(geometry.bounds[o].1);
+        in_view.iter().filter(|&&r| r != o).any(|&r| {
+            let model = scene.objects[r].transform.matrix_f64();
+            geometry.meshes[r].vertices.iter().any(|v| {
+                let p = model.transform_point3(glam::Vec3::from(v.position).as_dvec3());
+                (p - origin).dot(lit_side) < -tolerance
+            })
+        })
+    })
 }
 
 /// An axis-aligned box in the light's frame (x, y across, z along).

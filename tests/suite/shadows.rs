@@ -102,15 +102,32 @@ fn a_sphere_casts_the_ellipse_of_the_closed_form() {
     assert!(at(2.4) > 0.3, "beyond the ellipse is dark: {}", at(2.4));
 }
 
-/// No self-shadowing: a plane with nothing over it is lit the same with
-/// shadows on and off (within 1/255 in the 8-bit output), at a grazing
-/// light (75° from vertical) where depth bias matters most, for every
-/// filter.
+/// A sphere under the plane, hidden by it: the plane may shadow it, so
+/// the plane is drawn into the map (a plane with nothing behind it is
+/// left out, `shadow_view::may_shadow`).
+const UNDER: &str = "[[objects]]\nname = \"under\"\nmaterial = \"ball\"\n\
+                     shape = { type = \"sphere\", radius = 0.5 }\ntranslate = [1.0, -2.0, 0.0]\n";
+
+/// No self-shadowing: a plane with nothing over it (only a sphere under
+/// it, out of sight) is lit the same with shadows on and off (within
+/// 1/255 in the 8-bit output), at a grazing light (75° from vertical)
+/// where depth bias matters most, for every filter.
 #[test]
 fn a_plane_alone_does_not_shadow_itself() {
-    let off = common::render(&top_view(320, false, 75.0, "pcf3", ""), false).output;
+    let geometry_plan =
+        |scene: &Scene| FramePlan::new(scene, &SceneGeometry::new(scene).expect("geometry"), false);
+    let shadowed = top_view(320, true, 75.0, "pcf3", UNDER);
+    let casters = geometry_plan(&shadowed)
+        .shadow
+        .expect("a shadow view")
+        .casters;
+    assert!(
+        casters.iter().any(|d| d.object == 0),
+        "the plane is not drawn into the map"
+    );
+    let off = common::render(&top_view(320, false, 75.0, "pcf3", UNDER), false).output;
     for filter in ["none", "pcf3", "pcf5"] {
-        let on = common::render(&top_view(320, true, 75.0, filter, ""), false).output;
+        let on = common::render(&top_view(320, true, 75.0, filter, UNDER), false).output;
         let worst = on
             .data
             .iter()
@@ -139,12 +156,19 @@ fn the_frame_holds_the_shadow_pass_only_when_asked() {
     let map = with.attachment(attachment::SHADOW_MAP).expect("a map");
     assert_eq!(with.attachment_extent(map), (2048, 2048));
     assert_eq!(with.render_pass_count(), 2);
-    assert!(with.shadow.as_ref().is_some_and(|s| s.casters.len() == 2));
+    assert!(with.shadow.as_ref().is_some_and(|s| s.casters.len() == 1));
 
     let without = plan(&top_view(320, false, 45.0, "pcf3", BALL));
     assert!(!without.has(shadow_map::PASS));
     assert!(!without.has_attachment(attachment::SHADOW_MAP));
     assert_eq!(without.render_pass_count(), 1);
+
+    // A ground plane with everything on its lit side casts nothing onto
+    // them: left out of the map.
+    assert!(with
+        .shadow
+        .as_ref()
+        .is_some_and(|s| s.casters.iter().all(|d| d.object != 0)));
 
     // Nothing casts: no pass either.
     let mut no_casters = top_view(320, true, 45.0, "pcf3", BALL);
