@@ -80,7 +80,7 @@ Light air_sun_light(vec3 transmittance) {
                  vec4(sky.sun_irradiance.xyz * transmittance, 0.0),
 #ifdef SHADOWS
                  // Marks the sun as the shadow-casting light when it is.
-                 vec4(1.0, 0.0, 0.0, shadow.params.z));
+                 vec4(1.0, 0.0, 0.0, shadow.params.w));
 #else
                  vec4(1.0, 0.0, 0.0, 0.0));
 #endif

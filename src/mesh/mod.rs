@@ -63,11 +63,9 @@ impl Mesh {
     /// `sqrt(3)/2` times the optimum radius otherwise. An empty mesh gives
     /// `(0, 0)`.
     pub fn bounding_sphere(&self) -> (Vec3, f32) {
-        let mut points = self.vertices.iter().map(|v| Vec3::from(v.position));
-        let Some(first) = points.next() else {
+        let Some((min, max)) = self.bounding_box() else {
             return (Vec3::ZERO, 0.0);
         };
-        let (min, max) = points.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p)));
         let centre = (min + max) * 0.5;
         let radius = self
             .vertices
@@ -75,6 +73,14 @@ impl Mesh {
             .map(|v| Vec3::from(v.position).distance(centre))
             .fold(0.0_f32, f32::max);
         (centre, radius)
+    }
+
+    /// The axis-aligned box `(min, max)` around every vertex; `None`
+    /// without vertices.
+    pub fn bounding_box(&self) -> Option<(Vec3, Vec3)> {
+        let mut points = self.vertices.iter().map(|v| Vec3::from(v.position));
+        let first = points.next()?;
+        Some(points.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p))))
     }
 
     /// Number of triangles (`indices.len() / 3`).

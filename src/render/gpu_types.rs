@@ -75,17 +75,21 @@ pub struct ExposureBlock {
     pub _pad: [f32; 3],
 }
 
-/// The shadow block (std140, `glsl/include/shadow_map.glsl`): where the
-/// shadow map looks from and how finely.
+/// The shadow block (std140, `glsl/include/shadow_map.glsl`): where each
+/// cascade of the shadow map looks from and how finely.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct ShadowUniforms {
-    /// Camera-relative position to the light's clip space
-    /// (`ShadowView::view_projection`).
-    pub view_projection: [[f32; 4]; 4],
-    /// x: one texel in texture coordinates (1 / side); y: a texel's
-    /// world-space width; z: 1 when the light is the atmosphere's sun;
-    /// w: unused.
+    /// Per cascade, camera-relative position to the light's clip space
+    /// over its tile (`Cascade::view_projection`).
+    pub view_projection: [[[f32; 4]; 4]; 4],
+    /// Per cascade, the distance from the camera where it ends (`f32::MAX`
+    /// for the last and the unused ones).
+    pub reach: [f32; 4],
+    /// Per cascade, a texel's world-space width.
+    pub texel: [f32; 4],
+    /// x: one texel of a tile in tile coordinates (1 / side); y, z: tiles
+    /// across and down; w: 1 when the light is the atmosphere's sun.
     pub params: [f32; 4],
 }
 

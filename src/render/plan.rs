@@ -21,7 +21,8 @@ pub use super::shadow_view::ShadowView;
 use super::tiles::{self, TileGroup};
 use crate::scene::material_maps::{MapKind, MapSource};
 use crate::scene::{
-    DepthPrepass, Exposure, HdrFormat, Lighting, Scene, ShadingModel, ToneMapOperator,
+    DepthPrepass, Exposure, HdrFormat, Lighting, Scene, ShadingModel, ShadowCascades,
+    ToneMapOperator, MAX_SHADOW_CASCADES,
 };
 use crate::vk::{DepthUse, Format};
 
@@ -300,29 +301,19 @@ impl FramePlan {
             DepthPrepass::Off => false,
             DepthPrepass::Auto => DepthPrepassRule::of(scene, geometry, &draws.opaque).pays(),
         };
-        let graph = FrameGraph::with_prepass(scene, keep_hdr, prepass);
-        let shadow = graph
-            .attachments
-            .iter()
-            .find(|a| a.name == attachment::SHADOW_MAP)
-            .and_then(|map| {
-                let (side, _) = map.size.extent(scene.output.width, scene.output.height);
-                let in_view: Vec<usize> = draws
-                    .opaque
-                    .iter()
-                    .chain(&draws.transparent)
-                    .flat_map(|d| d.visible().iter().copied())
-                    .collect();
-                let casters: Vec<Draw> = draws
-                    .opaque
-                    .iter()
-                    .chain(draws.hidden.iter().filter(|d| !d.pipeline.blended))
-                    .filter(|d| scene.objects[d.object].casts_shadows)
-                    .filter(|d| shadow_view::may_shadow(scene, geometry, &in_view, d.objects()))
-                    .cloned()
-                    .collect();
-                ShadowView::fit(scene, &geometry.bounds, &in_view, casters, side)
-            });
+        let shadow = shadow_casting(scene, geometry, &draws);
+        let cascades = shadow.as_ref().map_or(1, |s| s.count);
+        let graph = FrameGraph::with_prepass(scene, keep_hdr, prepass, cascades);
+        let shadow = shadow.and_then(|s| {
+            ShadowView::fit(
+                scene,
+                &geometry.bounds,
+                &s.in_view,
+                s.casters,
+                scene.output.shadow_map,
+                (s.count, s.depths),
+            )
+        });
         let tile_groups = if graph.lighting == Lighting::Deferred {
             tiles::group_lights(scene, scene.output.width, scene.output.height)
         } else {
@@ -499,9 +490,11 @@ pub struct FrameShape<'a> {
     pub target: &'static str,
     /// Opaque surfaces are drawn depth-only first ([`DepthPrepassRule`]).
     pub prepass: bool,
-    /// The shadow map's width and height, when a light casts shadows and
-    /// some opaque object casts them.
+    /// The shadow map's width and height (of one cascade's tile), when a
+    /// light casts shadows and some opaque object casts them.
     pub shadow_map: Option<u32>,
+    /// Cascades in the shadow map, each a tile (`shadow_view::tiles`).
+    pub shadow_cascades: u32,
 }
 
 impl FrameShape<'_> {
@@ -535,14 +528,22 @@ impl FrameGraph {
     /// no attachment, so what `preflight` sizes from this graph is the same.
     pub fn new(scene: &Scene, keep_hdr: bool) -> FrameGraph {
         let prepass = scene.output.depth_prepass == DepthPrepass::On;
-        FrameGraph::with_prepass(scene, keep_hdr, prepass)
+        // Automatic cascades count as the most, for the same reason: the
+        // largest shadow map the frame may need.
+        let cascades = match scene.output.shadow_cascades {
+            ShadowCascades::Count(n) => n,
+            ShadowCascades::Auto => MAX_SHADOW_CASCADES,
+        };
+        FrameGraph::with_prepass(scene, keep_hdr, prepass, cascades)
     }
 
     /// [`FrameGraph::new`] with the depth pre-pass decided by the caller
-    /// (`prepass`; it has no effect on a frame without opaque draws).
-    pub fn with_prepass(scene: &Scene, keep_hdr: bool, prepass: bool) -> FrameGraph {
+    /// (`prepass`; it has no effect on a frame without opaque draws), and
+    /// the shadow map's cascades (`cascades`, its tiles).
+    pub fn with_prepass(scene: &Scene, keep_hdr: bool, prepass: bool, cascades: u32) -> FrameGraph {
         let mut shape = FrameShape::of(scene, keep_hdr);
         shape.prepass = prepass && has_opaque_draws(scene);
+        shape.shadow_cascades = cascades;
         let lighting = if shape.deferred {
             Lighting::Deferred
         } else {
@@ -612,6 +613,7 @@ impl FrameShape<'_> {
             target,
             prepass: false,
             shadow_map: shadow_map_size(scene, debug),
+            shadow_cascades: 1,
         }
     }
 }
@@ -660,9 +662,12 @@ fn frame_attachments(scene: &Scene, shape: &FrameShape) -> Vec<AttachmentDecl> {
         attachments.push(AttachmentDecl {
             name: SHADOW_MAP,
             format: DEPTH_FORMAT,
-            size: AttachmentSize::Fixed {
-                width: side,
-                height: side,
+            size: {
+                let (across, down) = shadow_view::tiles(shape.shadow_cascades);
+                AttachmentSize::Fixed {
+                    width: side * across,
+                    height: side * down,
+                }
             },
             // Forward depth (not reversed): 1 is nothing in the way.
             clear: Some([1.0; 4]),
@@ -700,6 +705,7 @@ impl FrameGraph {
             target: HDR,
             prepass: false,
             shadow_map: None,
+            shadow_cascades: 1,
         };
         FrameGraph {
             lighting: Lighting::Forward,
@@ -761,6 +767,46 @@ pub fn aerial_volume_reach(scene: &Scene, bounds: &[(glam::DVec3, f32)]) -> f64 
         .far
         .map_or(f64::INFINITY, |far| f64::from(far) * corner.length());
     farthest.min(far_plane).max(1e-3)
+}
+
+/// What the shadow map is fitted to, before the frame graph sizes it.
+struct ShadowCasting {
+    in_view: Vec<usize>,
+    casters: Vec<Draw>,
+    depths: (f64, f64),
+    count: u32,
+}
+
+/// The objects in view, the casters drawn into the shadow map, the depths
+/// the cascades split and their count, when the frame draws a shadow map.
+fn shadow_casting(
+    scene: &Scene,
+    geometry: &SceneGeometry,
+    draws: &DrawList,
+) -> Option<ShadowCasting> {
+    let debug = scene.output.debug_view.map_or(0, |v| v as u32);
+    shadow_map_size(scene, debug)?;
+    let in_view: Vec<usize> = draws
+        .opaque
+        .iter()
+        .chain(&draws.transparent)
+        .flat_map(|d| d.visible().iter().copied())
+        .collect();
+    let casters: Vec<Draw> = draws
+        .opaque
+        .iter()
+        .chain(draws.hidden.iter().filter(|d| !d.pipeline.blended))
+        .filter(|d| scene.objects[d.object].casts_shadows)
+        .filter(|d| shadow_view::may_shadow(scene, geometry, &in_view, d.objects()))
+        .cloned()
+        .collect();
+    let depths = shadow_view::caster_depths(scene, geometry, &in_view, &casters);
+    Some(ShadowCasting {
+        count: shadow_view::cascade_count(scene, depths),
+        in_view,
+        casters,
+        depths,
+    })
 }
 
 /// The shadow map's side for `scene` (`debug`: its debug view, 0 for

@@ -21,15 +21,15 @@ use std::sync::Arc;
 pub struct ShadowResources {
     /// The object pipelines' shadow set (`SHADOW_SET`).
     pub set: DescriptorSet,
-    /// The shadow pass's frame set: the frame block with the light's
-    /// view-projection, bound at `FRAME_SET`.
-    pub light_frame_set: DescriptorSet,
+    /// The shadow pass's frame sets, one per cascade: the frame block with
+    /// the cascade's view-projection, bound at `FRAME_SET`.
+    pub light_frame_sets: Vec<DescriptorSet>,
     _pool: DescriptorPool,
     /// The shadow set's layout, in the object pipelines' layout.
     pub layout: DescriptorSetLayout,
     _frame_layout: DescriptorSetLayout,
     block: Buffer,
-    light_frame: Buffer,
+    light_frames: Vec<Buffer>,
     _sampler: Sampler,
 }
 
@@ -43,19 +43,24 @@ impl ShadowResources {
         map: &Image,
     ) -> Result<ShadowResources, RenderError> {
         let view = shadow_view(plan)?;
-        let (block, light_frame) = uniforms(scene, plan, view);
+        let (block, light_frames) = uniforms(scene, plan, view);
         let block = Buffer::with_data(
             ctx,
             "shadow block",
             bytemuck::bytes_of(&block),
-            BufferUsage::Uniform,
+            BufferUsage::Storage,
         )?;
-        let light_frame = Buffer::with_data(
-            ctx,
-            "light frame",
-            bytemuck::bytes_of(&light_frame),
-            BufferUsage::Uniform,
-        )?;
+        let light_frames = light_frames
+            .iter()
+            .map(|frame| {
+                Buffer::with_data(
+                    ctx,
+                    "light frame",
+                    bytemuck::bytes_of(frame),
+                    BufferUsage::Uniform,
+                )
+            })
+            .collect::<Result<Vec<_>, _>>()?;
         let layout = DescriptorSetLayout::new(
             ctx,
             &[
@@ -66,7 +71,7 @@ impl ShadowResources {
                 },
                 DescriptorBinding {
                     binding: SHADOW_BLOCK_BINDING,
-                    kind: DescriptorType::UNIFORM_BUFFER,
+                    kind: DescriptorType::STORAGE_BUFFER,
                     stages: ShaderStageFlags::FRAGMENT,
                 },
             ],
@@ -74,31 +79,39 @@ impl ShadowResources {
         // Defined as the object pipelines' frame layout is, so the light's
         // set binds where theirs does.
         let frame_layout = uniform_layout(ctx, DescriptorType::UNIFORM_BUFFER)?;
-        let pool = DescriptorPool::for_layouts(ctx, &[&layout, &frame_layout])?;
+        let mut pool_layouts = vec![&layout];
+        pool_layouts.extend(std::iter::repeat_n(&frame_layout, light_frames.len()));
+        let pool = DescriptorPool::for_layouts(ctx, &pool_layouts)?;
         let sampler = Sampler::depth_comparison(ctx)?;
         let set = pool.allocate(&layout)?;
         set.write_sampled_image(SHADOW_MAP_BINDING, map, &sampler);
         set.write_buffer(
             SHADOW_BLOCK_BINDING,
-            DescriptorType::UNIFORM_BUFFER,
+            DescriptorType::STORAGE_BUFFER,
             &block,
             std::mem::size_of::<ShadowUniforms>() as u64,
         );
-        let light_frame_set = pool.allocate(&frame_layout)?;
-        light_frame_set.write_buffer(
-            0,
-            DescriptorType::UNIFORM_BUFFER,
-            &light_frame,
-            std::mem::size_of::<ViewUniforms>() as u64,
-        );
+        let light_frame_sets = light_frames
+            .iter()
+            .map(|buffer| {
+                let set = pool.allocate(&frame_layout)?;
+                set.write_buffer(
+                    0,
+                    DescriptorType::UNIFORM_BUFFER,
+                    buffer,
+                    std::mem::size_of::<ViewUniforms>() as u64,
+                );
+                Ok(set)
+            })
+            .collect::<Result<Vec<_>, RenderError>>()?;
         Ok(ShadowResources {
             set,
-            light_frame_set,
+            light_frame_sets,
             _pool: pool,
             layout,
             _frame_layout: frame_layout,
             block,
-            light_frame,
+            light_frames,
             _sampler: sampler,
         })
     }
@@ -106,9 +119,16 @@ impl ShadowResources {
     /// Rewrites the blocks for a new view (`plan`, of `scene`), between
     /// frames.
     pub fn set_view(&mut self, scene: &Scene, plan: &FramePlan) -> Result<(), RenderError> {
-        let (block, light_frame) = uniforms(scene, plan, shadow_view(plan)?);
+        let (block, light_frames) = uniforms(scene, plan, shadow_view(plan)?);
+        if light_frames.len() != self.light_frames.len() {
+            return Err(RenderError::Frame(
+                "the new view has another number of shadow cascades".into(),
+            ));
+        }
         self.block.write(0, bytemuck::bytes_of(&block));
-        self.light_frame.write(0, bytemuck::bytes_of(&light_frame));
+        for (buffer, frame) in self.light_frames.iter_mut().zip(&light_frames) {
+            buffer.write(0, bytemuck::bytes_of(frame));
+        }
         Ok(())
     }
 }
@@ -119,23 +139,35 @@ fn shadow_view(plan: &FramePlan) -> Result<&ShadowView, RenderError> {
         .ok_or_else(|| RenderError::Frame("the frame has no shadow view".into()))
 }
 
-/// The shadow block and the shadow pass's frame block (the camera's, with
-/// the light's view-projection).
-fn uniforms(scene: &Scene, plan: &FramePlan, view: &ShadowView) -> (ShadowUniforms, ViewUniforms) {
-    let side = plan
-        .attachment(super::plan::attachment::SHADOW_MAP)
-        .map_or(1, |a| plan.attachment_extent(a).0);
-    let view_projection = view.view_projection.as_mat4().to_cols_array_2d();
-    let block = ShadowUniforms {
-        view_projection,
+/// The shadow block and the shadow pass's frame blocks (the camera's,
+/// with each cascade's view-projection).
+fn uniforms(
+    scene: &Scene,
+    plan: &FramePlan,
+    view: &ShadowView,
+) -> (ShadowUniforms, Vec<ViewUniforms>) {
+    let mut block = ShadowUniforms {
+        view_projection: [[[0.0; 4]; 4]; 4],
+        reach: [f32::MAX; 4],
+        texel: [0.0; 4],
         params: [
-            1.0 / side as f32,
-            view.texel as f32,
+            1.0 / scene.output.shadow_map as f32,
+            view.tiles.0 as f32,
+            view.tiles.1 as f32,
             if view.sun { 1.0 } else { 0.0 },
-            0.0,
         ],
     };
-    let mut light_frame = ViewUniforms::new(scene, plan.width, plan.height, scene.camera.eye);
-    light_frame.view_projection = view_projection;
-    (block, light_frame)
+    let mut frames = Vec::with_capacity(view.cascades.len());
+    for (c, cascade) in view.cascades.iter().enumerate().take(4) {
+        let view_projection = cascade.view_projection.as_mat4().to_cols_array_2d();
+        block.view_projection[c] = view_projection;
+        block.texel[c] = cascade.texel as f32;
+        if cascade.reach.is_finite() {
+            block.reach[c] = cascade.reach as f32;
+        }
+        let mut frame = ViewUniforms::new(scene, plan.width, plan.height, scene.camera.eye);
+        frame.view_projection = view_projection;
+        frames.push(frame);
+    }
+    (block, frames)
 }

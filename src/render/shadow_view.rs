@@ -20,23 +20,113 @@
 use super::draw_list::Draw;
 use super::geometry::SceneGeometry;
 use super::sky_resources::ray_basis;
-use crate::scene::{Light, Scene, ShadowLight, Shape};
+use crate::scene::{Light, Scene, ShadowCascades, ShadowLight, Shape, MAX_SHADOW_CASCADES};
 use glam::{DMat4, DVec3, DVec4};
 
-/// The shadow map's view for one frame.
+/// The shadow map's views for one frame: one per cascade, each in its
+/// tile of the map.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShadowView {
-    /// Camera-relative position (as every position the GPU sees) to the
-    /// light's clip space: x, y in [-1, 1] across the map, z in [0, 1]
-    /// from the caster nearest the light.
-    pub view_projection: DMat4,
-    /// The world-space width of one texel (the larger of its two sides).
-    pub texel: f64,
+    /// Nearest first.
+    pub cascades: Vec<Cascade>,
+    /// The map's tiles across and down (cascade i in column i % across,
+    /// row i / across).
+    pub tiles: (u32, u32),
     /// Whether the light is the atmosphere's sun (else a scene light).
     pub sun: bool,
     /// The draws drawn into the map: every opaque draw, in view or not,
-    /// whose objects cast shadows.
+    /// whose objects cast shadows (and may shadow something in view).
     pub casters: Vec<Draw>,
+}
+
+/// One cascade: the part of the view up to some distance from the camera,
+/// seen from the light.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cascade {
+    /// Camera-relative position (as every position the GPU sees) to the
+    /// light's clip space: x, y in [-1, 1] across the cascade's tile, z in
+    /// [0, 1] from the caster nearest the light.
+    pub view_projection: DMat4,
+    /// The world-space width of one texel (the larger of its two sides).
+    pub texel: f64,
+    /// The distance from the camera where the cascade ends (the last one:
+    /// everywhere beyond).
+    pub reach: f64,
+}
+
+/// The map's tiles across and down for `count` cascades: one, two side by
+/// side, or two rows of two.
+pub fn tiles(count: u32) -> (u32, u32) {
+    (count.clamp(1, 2), count.div_ceil(2).max(1))
+}
+
+/// How many cascades `scene` asks for: its count, or with `auto` one
+/// while the farthest caster in view (`depths`, [`caster_depths`]) is
+/// within 30 times the nearest one's distance, and one more per further
+/// factor of ten, at most [`MAX_SHADOW_CASCADES`].
+pub fn cascade_count(scene: &Scene, depths: (f64, f64)) -> u32 {
+    match scene.output.shadow_cascades {
+        ShadowCascades::Count(n) => n,
+        ShadowCascades::Auto => {
+            let ratio = depths.1 / depths.0;
+            if ratio < 30.0 {
+                1
+            } else {
+                (1 + (ratio / 30.0).log10().ceil() as u32).min(MAX_SHADOW_CASCADES)
+            }
+        }
+    }
+}
+
+/// The nearest and farthest distances from the camera of the casters'
+/// objects `in_view` (each by the box around its vertices, not its
+/// bounding sphere, which a ground plane would stretch to the camera);
+/// the nearest at least the near plane's. Where the cascades split.
+pub fn caster_depths(
+    scene: &Scene,
+    geometry: &SceneGeometry,
+    in_view: &[usize],
+    casters: &[Draw],
+) -> (f64, f64) {
+    let near_plane = f64::from(scene.camera.near);
+    let (mut near, mut far) = (f64::INFINITY, near_plane);
+    let eye = scene.camera.eye;
+    for d in casters {
+        for o in d.objects().iter().filter(|o| in_view.contains(o)) {
+            let Some((min, max)) = geometry.meshes[*o].bounding_box() else {
+                continue;
+            };
+            let model = scene.objects[*o].transform.matrix_f64();
+            let corners = (0..8).map(|k| {
+                let pick = |bit: usize, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
+                let corner = glam::Vec3::new(
+                    pick(1, min.x, max.x),
+                    pick(2, min.y, max.y),
+                    pick(4, min.z, max.z),
+                );
+                model.transform_point3(corner.as_dvec3())
+            });
+            let (lo, hi) = corners.fold(
+                (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                |(lo, hi), p| (lo.min(p), hi.max(p)),
+            );
+            near = near.min(eye.clamp(lo, hi).distance(eye));
+            far = far.max(
+                (0..8)
+                    .map(|k| {
+                        let pick = |bit: usize, a: f64, b: f64| if k & bit == 0 { a } else { b };
+                        DVec3::new(
+                            pick(1, lo.x, hi.x),
+                            pick(2, lo.y, hi.y),
+                            pick(4, lo.z, hi.z),
+                        )
+                        .distance(eye)
+                    })
+                    .fold(0.0, f64::max),
+            );
+        }
+    }
+    (near.max(near_plane).min(far), far)
 }
 
 /// The unit direction `light` travels in `scene`.
@@ -121,89 +211,208 @@ impl LightBox {
     fn is_empty(&self) -> bool {
         self.min.x > self.max.x || self.min.y > self.max.y
     }
+
+    /// The overlap across the light (z is kept from `self`).
+    fn intersect(&self, other: &LightBox) -> LightBox {
+        LightBox {
+            min: DVec3::new(
+                self.min.x.max(other.min.x),
+                self.min.y.max(other.min.y),
+                self.min.z,
+            ),
+            max: DVec3::new(
+                self.max.x.min(other.max.x),
+                self.max.y.min(other.max.y),
+                self.max.z,
+            ),
+        }
+    }
 }
 
-impl ShadowView {
-    /// The view for `scene`'s shadow light, or `None` when it casts none
-    /// (no such light). `bounds` are the objects' world bounding spheres,
-    /// `in_view` the objects on screen, `casters` the draws drawn into the
-    /// map, `side` the map's width in texels.
-    pub fn fit(
-        scene: &Scene,
-        bounds: &[(DVec3, f32)],
-        in_view: &[usize],
-        casters: Vec<Draw>,
-        side: u32,
-    ) -> Option<ShadowView> {
-        let light = scene.shadow_light?;
-        let direction = light_direction(scene, light)?;
-        // The light's frame: z along the light, x and y across it.
+/// The light's frame: x and y across the light, z along it.
+struct LightFrame {
+    x_axis: DVec3,
+    y_axis: DVec3,
+    z_axis: DVec3,
+}
+
+impl LightFrame {
+    fn along(direction: DVec3) -> LightFrame {
         let helper = if direction.y.abs() < 0.9 {
             DVec3::Y
         } else {
             DVec3::X
         };
         let x_axis = helper.cross(direction).normalize();
-        let y_axis = direction.cross(x_axis);
-        let to_light = |p: DVec3| DVec3::new(p.dot(x_axis), p.dot(y_axis), p.dot(direction));
-
-        let mut receivers = LightBox::EMPTY;
-        let mut farthest = 0.0_f64;
-        for &o in in_view {
-            let (c, r) = bounds[o];
-            receivers.add(to_light(c), f64::from(r));
-            farthest = farthest.max(c.distance(scene.camera.eye) + f64::from(r));
+        LightFrame {
+            x_axis,
+            y_axis: direction.cross(x_axis),
+            z_axis: direction,
         }
+    }
+
+    fn of(&self, p: DVec3) -> DVec3 {
+        DVec3::new(p.dot(self.x_axis), p.dot(self.y_axis), p.dot(self.z_axis))
+    }
+
+    /// World to the light's frame.
+    fn matrix(&self) -> DMat4 {
+        DMat4::from_cols(
+            self.x_axis.extend(0.0),
+            self.y_axis.extend(0.0),
+            self.z_axis.extend(0.0),
+            DVec4::W,
+        )
+        .transpose()
+    }
+}
+
+/// What every cascade is fitted from.
+struct Fitting<'a> {
+    scene: &'a Scene,
+    frame: LightFrame,
+    /// The far side of the farthest object in view.
+    farthest: f64,
+    sun: bool,
+    bounds: &'a [(DVec3, f32)],
+    in_view: &'a [usize],
+    casters: LightBox,
+    side: u32,
+}
+
+impl ShadowView {
+    /// The views for `scene`'s shadow light in `count` cascades split
+    /// over `depths` ([`caster_depths`]), or `None` when it casts none
+    /// (no such light). `bounds` are the objects' world bounding spheres,
+    /// `in_view` the objects on screen, `casters` the draws drawn into the
+    /// map, `side` a tile's width in texels.
+    pub fn fit(
+        scene: &Scene,
+        bounds: &[(DVec3, f32)],
+        in_view: &[usize],
+        casters: Vec<Draw>,
+        side: u32,
+        (count, depths): (u32, (f64, f64)),
+    ) -> Option<ShadowView> {
+        let light = scene.shadow_light?;
+        let frame = LightFrame::along(light_direction(scene, light)?);
         let mut caster_box = LightBox::EMPTY;
         for d in &casters {
             for &o in d.objects() {
                 let (c, r) = bounds[o];
-                caster_box.add(to_light(c), f64::from(r));
+                caster_box.add(frame.of(c), f64::from(r));
+            }
+        }
+        // The last cascade's frustum reaches the farthest object in view.
+        let farthest = in_view
+            .iter()
+            .map(|&o| bounds[o].0.distance(scene.camera.eye) + f64::from(bounds[o].1))
+            .fold(0.0, f64::max);
+        let fitting = Fitting {
+            scene,
+            frame,
+            farthest,
+            sun: light == ShadowLight::Sun,
+            bounds,
+            in_view,
+            casters: caster_box,
+            side,
+        };
+        let splits = splits(scene, depths, count.max(1));
+        let cascades = splits
+            .windows(2)
+            .enumerate()
+            .map(|(i, w)| fitting.cascade(w[0], w[1], i + 2 == splits.len()))
+            .collect::<Vec<_>>();
+        Some(ShadowView {
+            tiles: tiles(cascades.len() as u32),
+            cascades,
+            sun: fitting.sun,
+            casters,
+        })
+    }
+}
+
+/// The distances from the camera where cascades begin and end: the near
+/// plane, then (with several) a blend of logarithmic and even steps
+/// (four parts to one) between the nearest and farthest casters in view
+/// (`depths`), then the farthest (the last cascade reaches beyond).
+fn splits(scene: &Scene, depths: (f64, f64), count: u32) -> Vec<f64> {
+    let (near, far) = depths;
+    let mut splits = vec![f64::from(scene.camera.near)];
+    for i in 1..count {
+        let f = f64::from(i) / f64::from(count);
+        let logarithmic = near * (far / near).powf(f);
+        let even = near + (far - near) * f;
+        splits.push(0.8 * logarithmic + 0.2 * even);
+    }
+    splits.push(far);
+    splits
+}
+
+impl Fitting<'_> {
+    /// The cascade over distances `from..to` from the camera (`last`: and
+    /// beyond).
+    fn cascade(&self, from: f64, to: f64, last: bool) -> Cascade {
+        let scene = self.scene;
+        let single = from <= f64::from(scene.camera.near) && last;
+        // The receivers in view that reach into this cascade's distances.
+        let mut receivers = LightBox::EMPTY;
+        for &o in self.in_view {
+            let (c, r) = self.bounds[o];
+            let d = c.distance(scene.camera.eye);
+            let r = f64::from(r);
+            if single || (d + r >= from && (last || d - r <= to)) {
+                receivers.add(self.frame.of(c), r);
             }
         }
         // Across the light: where a shadow can fall on screen. The sun
         // also shadows the planet's ground, which lies under every caster
         // and may be seen beyond the farthest object: its map covers the
-        // casters.
-        let frustum = frustum_box(scene, farthest, &to_light);
-        let mut across = if light == ShadowLight::Sun {
-            caster_box
-        } else {
-            LightBox {
-                min: receivers.min.max(frustum.min).max(caster_box.min),
-                max: receivers.max.min(frustum.max).min(caster_box.max),
-            }
+        // casters (a nearer cascade, those over its part of the view).
+        let frustum_end = if last { self.farthest } else { to };
+        let frustum = frustum_box(scene, from, frustum_end, &|p| self.frame.of(p));
+        let mut across = match (self.sun, single || last) {
+            (true, true) => self.casters,
+            (true, false) => self.casters.intersect(&frustum),
+            (false, _) => receivers.intersect(&frustum).intersect(&self.casters),
         };
         if across.is_empty() {
             // No caster over anything in view: any small map will do.
             across = if receivers.is_empty() {
-                caster_box
+                self.casters
             } else {
                 receivers
             };
         }
         if across.is_empty() {
-            return None;
+            // Nothing in view and nothing casting: a unit box at the
+            // camera, which every lookup finds lit.
+            let eye = self.frame.of(scene.camera.eye);
+            across = LightBox {
+                min: eye - 0.5,
+                max: eye + 0.5,
+            };
         }
-        // Along it: from the nearest caster to the farthest receiver, a
-        // little beyond both so that nothing sits exactly on a plane.
-        let near = caster_box.min.z.min(receivers.min.z);
-        let far = caster_box.max.z.max(receivers.max.z);
+        self.projection(&across, &receivers, to, last)
+    }
+
+    /// The orthographic view of `across` (x, y), from the caster nearest
+    /// the light to the farthest of them and the `receivers` (z).
+    fn projection(&self, across: &LightBox, receivers: &LightBox, to: f64, last: bool) -> Cascade {
+        let casters = &self.casters;
+        // Along it, a little beyond both ends so that nothing sits exactly
+        // on a plane.
+        let near = casters.min.z.min(receivers.min.z);
+        let far = casters.max.z.max(receivers.max.z);
         let depth_pad = 1e-3 * (far - near).max(1e-6);
         let (near, far) = (near - depth_pad, far + depth_pad);
         // A texel's margin around the box, so the filter's taps at its
-        // edge read the map, not its border.
+        // edge read the tile, not its neighbours or the border.
         let width = (across.max.x - across.min.x).max(across.max.y - across.min.y);
-        let margin = 4.0 * width / f64::from(side);
+        let margin = 4.0 * width / f64::from(self.side);
         let (x0, x1) = (across.min.x - margin, across.max.x + margin);
         let (y0, y1) = (across.min.y - margin, across.max.y + margin);
-        let world_to_light = DMat4::from_cols(
-            x_axis.extend(0.0),
-            y_axis.extend(0.0),
-            direction.extend(0.0),
-            DVec4::W,
-        )
-        .transpose();
         let ortho = DMat4::from_cols(
             DVec4::new(2.0 / (x1 - x0), 0.0, 0.0, 0.0),
             DVec4::new(0.0, 2.0 / (y1 - y0), 0.0, 0.0),
@@ -215,27 +424,26 @@ impl ShadowView {
                 1.0,
             ),
         );
-        let camera_relative = DMat4::from_translation(scene.camera.eye);
-        Some(ShadowView {
-            view_projection: ortho * world_to_light * camera_relative,
-            texel: (x1 - x0).max(y1 - y0) / f64::from(side),
-            sun: light == ShadowLight::Sun,
-            casters,
-        })
+        let camera_relative = DMat4::from_translation(self.scene.camera.eye);
+        Cascade {
+            view_projection: ortho * self.frame.matrix() * camera_relative,
+            texel: (x1 - x0).max(y1 - y0) / f64::from(self.side),
+            reach: if last { f64::INFINITY } else { to },
+        }
     }
 }
 
-/// The light-frame box around the camera's frustum from its near plane to
-/// `reach` from the eye (at least the near plane).
-fn frustum_box(scene: &Scene, reach: f64, to_light: &dyn Fn(DVec3) -> DVec3) -> LightBox {
+/// The light-frame box around the camera's frustum between view depths
+/// `from` and `to` (clamped to at least the near plane).
+fn frustum_box(scene: &Scene, from: f64, to: f64, to_light: &dyn Fn(DVec3) -> DVec3) -> LightBox {
     let camera = &scene.camera;
     let aspect = f64::from(scene.output.width) / f64::from(scene.output.height);
     let (forward, right, up) = ray_basis(camera, aspect);
     let near = f64::from(camera.near);
     let mut frustum = LightBox::EMPTY;
     // The corners' rays have length |corner| per unit of view depth, so
-    // depth `reach` along them reaches at least `reach` from the eye.
-    for depth in [near, reach.max(near)] {
+    // depth `to` along them reaches at least `to` from the eye.
+    for depth in [from.max(near), to.max(near)] {
         for sx in [-1.0, 1.0] {
             for sy in [-1.0, 1.0] {
                 let p = camera.eye + (forward + right * sx + up * sy) * depth;

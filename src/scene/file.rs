@@ -29,8 +29,8 @@ use super::material_maps::{
 use super::value_checks::{Check, Result, MAX_COLOUR, MAX_LENGTH, MIN_LENGTH};
 use super::{
     Camera, DebugView, DepthPrepass, Exposure, HdrFormat, Light, Lighting, Material, Object,
-    Output, Scene, SceneError, ShadingModel, ShadowFilter, ShadowLight, Shape, TextureFilter,
-    ToneMap, ToneMapOperator, Transform, MAX_SHADOW_MAP, MIN_SHADOW_MAP,
+    Output, Scene, SceneError, ShadingModel, ShadowCascades, ShadowFilter, ShadowLight, Shape,
+    TextureFilter, ToneMap, ToneMapOperator, Transform, MAX_SHADOW_MAP, MIN_SHADOW_MAP,
 };
 
 use crate::mesh::obj;
@@ -92,6 +92,7 @@ struct OutputFile {
     max_pixel_error: f64,
     shadow_map: u32,
     shadow_filter: ShadowFilter,
+    shadow_cascades: toml::Value,
 }
 
 /// The defaults are [`Output`]'s, so they are written once.
@@ -110,6 +111,7 @@ impl Default for OutputFile {
             max_pixel_error: f64::from(output.max_pixel_error),
             shadow_map: output.shadow_map,
             shadow_filter: output.shadow_filter,
+            shadow_cascades: toml::Value::String(output.shadow_cascades.name()),
         }
     }
 }
@@ -525,6 +527,7 @@ impl Check<'_> {
             max_pixel_error: self.positive("output.max_pixel_error", raw.max_pixel_error)?,
             shadow_map: self.shadow_map_size("output.shadow_map", raw.shadow_map)?,
             shadow_filter: raw.shadow_filter,
+            shadow_cascades: self.shadow_cascades(&raw.shadow_cascades)?,
         })
     }
 
@@ -626,6 +629,17 @@ impl Check<'_> {
             return Err(self.invalid(field.clone(), super::SHADOWS_NEED_FORWARD));
         }
         Ok(casters.first().map(|&(_, light)| light))
+    }
+
+    /// `[output] shadow_cascades`: `"auto"` or a whole count, read from
+    /// any TOML value so a wrong type is reported with the field's name.
+    fn shadow_cascades(&self, raw: &toml::Value) -> Result<ShadowCascades> {
+        let text = match raw {
+            toml::Value::String(s) => s.clone(),
+            toml::Value::Integer(n) => n.to_string(),
+            other => format!("{other}"),
+        };
+        ShadowCascades::parse(&text).map_err(|e| self.invalid("output.shadow_cascades", e))
     }
 
     /// A shadow map size in `MIN_SHADOW_MAP..=MAX_SHADOW_MAP`.

@@ -263,6 +263,16 @@ pub const KNOBS: &[Knob] = &[
         read: |s| s.output.shadow_filter.name().into(),
     },
     Knob {
+        name: "shadow_cascades",
+        best: Best::LastListed,
+        values: "auto | N: shadow maps split along the view's depth (1..=4; list fewest first)",
+        apply: |s, v| {
+            s.output.shadow_cascades = super::ShadowCascades::parse(v)?;
+            Ok(())
+        },
+        read: |s| s.output.shadow_cascades.name(),
+    },
+    Knob {
         name: "atmosphere_samples",
         best: Best::LastListed,
         values: "N: ray-march samples per pixel of the atmosphere pass (1..=1024)",

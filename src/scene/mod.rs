@@ -147,6 +147,48 @@ pub struct Output {
     pub shadow_map: u32,
     /// How the shadow map is filtered.
     pub shadow_filter: ShadowFilter,
+    /// How many shadow maps split the view's depth.
+    pub shadow_cascades: ShadowCascades,
+}
+
+/// The most shadow cascades.
+pub const MAX_SHADOW_CASCADES: u32 = 4;
+
+/// How many shadow maps (cascades) split the view's depth for the
+/// shadow-casting light (`[output] shadow_cascades`): each covers a range
+/// of distances from the camera, nearer ones finer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadowCascades {
+    /// From how deep the view is: one while the farthest object in view is
+    /// within 30 times the nearest's distance, one more for each further
+    /// factor of ten, at most [`MAX_SHADOW_CASCADES`] (`"auto"`, the
+    /// default).
+    Auto,
+    /// This many, `1..=MAX_SHADOW_CASCADES`.
+    Count(u32),
+}
+
+impl ShadowCascades {
+    /// Parses `auto` or a count in `1..=MAX_SHADOW_CASCADES`.
+    pub fn parse(value: &str) -> Result<ShadowCascades, String> {
+        if value == "auto" {
+            return Ok(ShadowCascades::Auto);
+        }
+        match value.parse::<u32>() {
+            Ok(n) if (1..=MAX_SHADOW_CASCADES).contains(&n) => Ok(ShadowCascades::Count(n)),
+            _ => Err(format!(
+                "expected \"auto\" or a count from 1 to {MAX_SHADOW_CASCADES}, got \"{value}\""
+            )),
+        }
+    }
+
+    /// The setting as the scene file and the knob write it.
+    pub fn name(self) -> String {
+        match self {
+            ShadowCascades::Auto => "auto".into(),
+            ShadowCascades::Count(n) => n.to_string(),
+        }
+    }
 }
 
 /// Why a scene with a shadow-casting light cannot be lit deferred.
@@ -266,6 +308,7 @@ impl Default for Output {
             max_pixel_error: DEFAULT_MAX_PIXEL_ERROR,
             shadow_map: 2048,
             shadow_filter: ShadowFilter::Pcf3,
+            shadow_cascades: ShadowCascades::Auto,
         }
     }
 }
@@ -411,6 +454,7 @@ impl Scene {
     /// max_pixel_error = 0.5                # [0.5]; > 0, pixels, for tessellation = "auto"
     /// shadow_map = 2048                    # [2048]; 512..=8192 texels, when a light casts shadows
     /// shadow_filter = "pcf3"               # ["pcf3"] | "pcf5" | "none"
+    /// shadow_cascades = "auto"             # ["auto"] | 1..=4 shadow maps split along the view
     /// [camera]                             # required
     /// eye = [0.0, 2.0, 6.0]                # required
     /// look_at = [0.0, 0.0, 0.0]            # required, != eye

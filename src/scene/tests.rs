@@ -306,6 +306,7 @@ fn minimal_scene_gets_the_documented_defaults() {
             max_pixel_error: 0.5,
             shadow_map: 2048,
             shadow_filter: crate::scene::ShadowFilter::Pcf3,
+            shadow_cascades: crate::scene::ShadowCascades::Auto,
         }
     );
     assert_eq!(scene.camera.up, Vec3::Y);

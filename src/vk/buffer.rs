@@ -20,7 +20,8 @@ pub enum BufferUsage {
     Upload,
     /// Destination of image copies, read back on the CPU.
     Readback,
-    /// Written and read by shaders (a value one pass computes for another).
+    /// Read, or written and read, by shaders (a value one pass computes
+    /// for another; the shadow block, see `shadow_map.glsl`).
     Storage,
 }
 

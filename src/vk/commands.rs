@@ -493,17 +493,26 @@ impl CommandBuffer {
                 .device
                 .cmd_begin_render_pass(self.handle, &info, vk::SubpassContents::INLINE)
         };
+        self.set_viewport(0, 0, extent.width, extent.height);
+    }
+
+    /// Draws into the `width`×`height` rectangle at (`x`, `y`) of the
+    /// framebuffer (viewport and scissor both), depth range 0..1.
+    pub fn set_viewport(&self, x: u32, y: u32, width: u32, height: u32) {
         let viewport = vk::Viewport {
-            x: 0.0,
-            y: 0.0,
-            width: extent.width as f32,
-            height: extent.height as f32,
+            x: x as f32,
+            y: y as f32,
+            width: width as f32,
+            height: height as f32,
             min_depth: 0.0,
             max_depth: 1.0,
         };
         let scissor = vk::Rect2D {
-            offset: vk::Offset2D::default(),
-            extent,
+            offset: vk::Offset2D {
+                x: x as i32,
+                y: y as i32,
+            },
+            extent: vk::Extent2D { width, height },
         };
         // SAFETY: every pipeline declares viewport and scissor dynamic.
         unsafe {

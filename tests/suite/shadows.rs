@@ -76,18 +76,54 @@ fn shadow_area(with: &Pixels<f32>, without: &Pixels<f32>, ambient: f32, pixel_ar
 /// less area).
 #[test]
 fn a_sphere_casts_the_ellipse_of_the_closed_form() {
+    ellipse_area_within_two_percent(None);
+}
+
+/// The same with the view split into 2 and 4 cascades, each in its tile of
+/// the map: the plane under the sphere reaches into every cascade.
+#[test]
+fn cascades_cast_the_same_ellipse() {
+    for count in [2, 4] {
+        ellipse_area_within_two_percent(Some(count));
+    }
+}
+
+fn ellipse_area_within_two_percent(cascades: Option<u32>) {
     let width = 1280;
-    let on = hdr(&top_view(width, true, 45.0, "pcf3", BALL));
-    let off = hdr(&top_view(width, false, 45.0, "pcf3", BALL));
+    let scene = |shadows: bool| {
+        let mut scene = top_view(width, shadows, 45.0, "pcf3", BALL);
+        if let Some(n) = cascades {
+            let knob = KNOBS
+                .iter()
+                .find(|k| k.name == "shadow_cascades")
+                .expect("a knob");
+            (knob.apply)(&mut scene, &n.to_string()).expect("a count");
+        }
+        scene
+    };
+    if let Some(n) = cascades {
+        let shadow_scene = scene(true);
+        let plan = FramePlan::new(
+            &shadow_scene,
+            &SceneGeometry::new(&shadow_scene).expect("geometry"),
+            false,
+        );
+        assert_eq!(
+            plan.shadow.as_ref().map(|s| s.cascades.len()),
+            Some(n as usize)
+        );
+    }
+    let on = hdr(&scene(true));
+    let off = hdr(&scene(false));
     // The plane faces the camera: a pixel covers (2 d tan(fov / 2) / h)^2.
     let per_pixel = 2.0 * 10.0 * 15f64.to_radians().tan() / f64::from(on.height);
     let area = shadow_area(&on, &off, 0.1 * 0.8, per_pixel * per_pixel);
     let expected = std::f64::consts::PI * 0.25 / 45f64.to_radians().cos();
     let error = (area - expected).abs() / expected;
-    eprintln!("shadow area {area:.5}, closed form {expected:.5}");
+    eprintln!("{cascades:?} cascades: shadow area {area:.5}, closed form {expected:.5}");
     assert!(
         error < 0.02,
-        "shadow area {area:.4}, closed form {expected:.4} ({:.2} %)",
+        "{cascades:?} cascades: shadow area {area:.4}, closed form {expected:.4} ({:.2} %)",
         100.0 * error
     );
     // The ellipse is centred 1.5 tan 45° = 1.5 along +x from the sphere:
@@ -332,4 +368,30 @@ fn a_shadow_touches_the_base_of_its_caster() {
             f64::from(col) - base
         );
     }
+}
+
+/// Automatic cascades follow the view's depth: one for objects at about
+/// the same distance, several for earth_objects' spheres from 40 m to
+/// 13 km (the map then holds one tile per cascade).
+#[test]
+fn automatic_cascades_follow_the_depth_of_the_view() {
+    let plan =
+        |scene: &Scene| FramePlan::new(scene, &SceneGeometry::new(scene).expect("geometry"), false);
+    let near = plan(&top_view(320, true, 45.0, "pcf3", BALL));
+    assert_eq!(near.shadow.as_ref().map(|s| s.cascades.len()), Some(1));
+
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/earth_objects.toml");
+    let mut deep = Scene::load(&path).expect("earth_objects loads");
+    deep.shadow_light = Some(aerial::scene::ShadowLight::Sun);
+    let deep = plan(&deep);
+    let view = deep.shadow.as_ref().expect("a shadow view");
+    assert!(view.cascades.len() >= 3, "{} cascades", view.cascades.len());
+    // Nearer cascades are finer.
+    for pair in view.cascades.windows(2) {
+        assert!(pair[0].texel < pair[1].texel && pair[0].reach < pair[1].reach);
+    }
+    let map = deep.attachment(attachment::SHADOW_MAP).expect("a map");
+    let (across, down) = view.tiles;
+    assert_eq!(deep.attachment_extent(map), (2048 * across, 2048 * down));
 }

@@ -18,13 +18,15 @@ use super::{PassResources, PassSetup, PassType, RecordPass};
 use crate::mesh::Vertex;
 use crate::render::gpu_types::InstanceTransform;
 use crate::render::plan::{attachment, Draw, FramePlan, FrameShape, PassIo};
+use crate::render::scene_resources::SceneResources;
+use crate::render::shadow_view;
 use crate::render::RenderError;
 use crate::scene::Scene;
 use crate::shader_ids::{FRAME_SET, OBJECT_SET};
 use crate::shaders::{self, ObjectVertFeatures};
 use crate::vk::{
-    CommandBuffer, CompareOp, CullModeFlags, DepthUse, GraphicsPipeline, GraphicsPipelineDesc,
-    ShaderModule,
+    CommandBuffer, CompareOp, CullModeFlags, DepthUse, DescriptorSet, GraphicsPipeline,
+    GraphicsPipelineDesc, ShaderModule,
 };
 
 /// The depth bias's constant part, in units of the map's depth precision.
@@ -35,6 +37,8 @@ const BIAS_SLOPE: f32 = 2.0;
 
 pub struct ShadowPass {
     casters: Vec<Draw>,
+    /// A cascade's tile, in texels across.
+    side: u32,
     /// Indexed by whether the draw is an instance batch.
     pipelines: [Option<GraphicsPipeline>; 2],
 }
@@ -112,14 +116,21 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
             )?);
         }
     }
-    Ok(Box::new(ShadowPass { casters, pipelines }))
+    Ok(Box::new(ShadowPass {
+        casters,
+        side: setup.scene.output.shadow_map,
+        pipelines,
+    }))
 }
 
-impl RecordPass for ShadowPass {
-    fn record(&self, cmd: &CommandBuffer, frame: &PassResources<'_>) -> Result<(), RenderError> {
-        let (Some(resources), Some(shadow)) = (frame.scene, frame.shadow) else {
-            return Ok(());
-        };
+impl ShadowPass {
+    /// Every caster, seen through `light_frame` (a cascade's frame set).
+    fn draw_casters(
+        &self,
+        cmd: &CommandBuffer,
+        resources: &SceneResources,
+        light_frame: &DescriptorSet,
+    ) -> Result<(), RenderError> {
         let layout = &resources.layout;
         let mut bound: Option<usize> = None;
         for d in &self.casters {
@@ -133,7 +144,7 @@ impl RecordPass for ShadowPass {
                 })?;
                 cmd.bind_pipeline(pipeline);
                 if bound.is_none() {
-                    cmd.bind_descriptor_set(layout, FRAME_SET, &shadow.light_frame_set, &[]);
+                    cmd.bind_descriptor_set(layout, FRAME_SET, light_frame, &[]);
                 }
                 bound = Some(slot);
             }
@@ -144,6 +155,30 @@ impl RecordPass for ShadowPass {
                 &[resources.block_offsets[d.object]],
             );
             resources.draw_every_member(cmd, d)?;
+        }
+        Ok(())
+    }
+}
+
+impl RecordPass for ShadowPass {
+    fn record(&self, cmd: &CommandBuffer, frame: &PassResources<'_>) -> Result<(), RenderError> {
+        let (Some(resources), Some(shadow)) = (frame.scene, frame.shadow) else {
+            return Ok(());
+        };
+        // One tile of the map per cascade, each drawn from its own view.
+        let cascades = shadow.light_frame_sets.len() as u32;
+        let (across, _) = shadow_view::tiles(cascades);
+        for (c, light_frame) in shadow.light_frame_sets.iter().enumerate() {
+            let c = c as u32;
+            if cascades > 1 {
+                cmd.set_viewport(
+                    (c % across) * self.side,
+                    (c / across) * self.side,
+                    self.side,
+                    self.side,
+                );
+            }
+            self.draw_casters(cmd, resources, light_frame)?;
         }
         Ok(())
     }
