@@ -19,8 +19,8 @@ void light_at(Light light, vec3 p, out vec3 l, out vec3 radiance) {
     }
     radiance = light.color.rgb * att;
 #ifdef SHADOWS
-    // The shadow-casting directional light (see shadow_map.glsl).
-    if (light.position.w < 0.5 && light.attenuation.w > 0.5) {
+    // The shadow-casting light (see shadow_map.glsl).
+    if (light.color.w > 0.5) {
         radiance *= shadow_light_visibility;
     }
 #endif

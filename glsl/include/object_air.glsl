@@ -76,14 +76,15 @@ vec3 air_sun_transmittance(AirPoint a) {
 
 // The sun as a directional light of the point's own colour.
 Light air_sun_light(vec3 transmittance) {
-    return Light(vec4(SUN_DIRECTION, 0.0),
-                 vec4(sky.sun_irradiance.xyz * transmittance, 0.0),
 #ifdef SHADOWS
-                 // Marks the sun as the shadow-casting light when it is.
-                 vec4(1.0, 0.0, 0.0, shadow.params.w));
+    // Marks the sun as the shadow-casting light when it is.
+    float shadowed = shadow.params.w;
 #else
-                 vec4(1.0, 0.0, 0.0, 0.0));
+    float shadowed = 0.0;
 #endif
+    return Light(vec4(SUN_DIRECTION, 0.0),
+                 vec4(sky.sun_irradiance.xyz * transmittance, shadowed),
+                 vec4(1.0, 0.0, 0.0, 0.0));
 }
 
 #ifdef SKY_LIGHT

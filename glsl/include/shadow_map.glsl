@@ -15,10 +15,11 @@ layout(set = SHADOW_SET, binding = SHADOW_MAP_BINDING) uniform sampler2DShadow s
 // uniform block's values into the shader at draw time, and crashed doing
 // so for the sun-lit objects' variant once a cascade indexed the block.
 layout(std430, set = SHADOW_SET, binding = SHADOW_BLOCK_BINDING) readonly buffer ShadowBlock {
-    mat4 view_projection[4];  // per cascade: camera-relative position to its clip space (orthographic)
+    mat4 view_projection[6];  // per cascade or cube face: camera-relative position to its clip space
     vec4 reach;               // per cascade: the distance from the camera where it ends
-    vec4 texel;               // per cascade: a texel's world width
+    vec4 texel;               // per cascade: a texel's world width (x, point light: per unit distance)
     vec4 params;              // x: 1 / tile side; y, z: tiles across and down; w: 1 for the sun
+    vec4 light;               // xyz: a point light's camera-relative position, w = 1; w = 0 otherwise
 } shadow;
 
 // Texels across the filter's square: 1 (one comparison), 3 or 5.
@@ -26,46 +27,67 @@ layout(constant_id = SPEC_SHADOW_TAPS) const int SHADOW_TAPS = 3;
 
 float shadow_light_visibility = 1.0;
 
+// Where the point `p` (moved along its normal `n`) falls in the map: its
+// view (a cascade by distance from the camera, or a point light's cube
+// face by the direction from the light), its coordinates in that view's
+// tile, and its depth there.
+struct ShadowLookup {
+    int view;
+    vec2 uv;
+    float depth;
+};
+
+ShadowLookup shadow_lookup(vec3 p, vec3 n) {
+    // The normal offset: as many texels as the filter reaches, plus one.
+    float offset = float(SHADOW_TAPS / 2) + 1.0;
+    ShadowLookup at;
+    vec4 clip;
+    if (shadow.light.w > 0.5) {
+        vec3 from_light = p - shadow.light.xyz;
+        vec3 q = p + n * (length(from_light) * shadow.texel.x * offset);
+        vec3 d = q - shadow.light.xyz;
+        vec3 a = abs(d);
+        at.view = a.x >= a.y && a.x >= a.z ? (d.x >= 0.0 ? 0 : 1)
+                : a.y >= a.z ? (d.y >= 0.0 ? 2 : 3)
+                : (d.z >= 0.0 ? 4 : 5);
+        clip = shadow.view_projection[at.view] * vec4(q, 1.0);
+        clip.xyz /= clip.w;
+    } else {
+        bvec3 beyond = greaterThan(vec3(length(p)), shadow.reach.xyz);
+        at.view = int(dot(vec3(beyond), vec3(1.0)));
+        vec3 q = p + n * (shadow.texel[at.view] * offset);
+        clip = shadow.view_projection[at.view] * vec4(q, 1.0);
+    }
+    at.uv = clip.xy * 0.5 + 0.5;
+    // Beyond the farthest receiver the map was fitted to: nothing there.
+    at.depth = min(clip.z, 1.0);
+    return at;
+}
+
 // The fraction of SHADOW_TAPS^2 comparisons around the point's texel that
-// find nothing nearer the light, in the cascade the point's distance from
-// the camera falls in. The point is first moved along its normal `n` by as
-// many texels as the filter reaches plus one, so a lit surface does not
-// shadow itself where its own depth, rasterized at texel centres, is
-// compared a few texels away (the shadow pass adds a slope-scaled depth
-// bias for the texel it is in). A point outside its cascade's tile is lit
-// (the tile covers every caster that can shadow what the camera sees).
+// find nothing nearer the light. The point is first moved along its
+// normal `n` by as many texels as the filter reaches plus one, so a lit
+// surface does not shadow itself where its own depth, rasterized at
+// texel centres, is compared a few texels away (the shadow pass adds a
+// slope-scaled depth bias for the texel it is in). A point outside its
+// view's tile is lit (a cascade's tile covers every caster that can
+// shadow what the camera sees; a cube face's covers its quarter of the
+// directions and a margin).
 float shadow_visibility(vec3 p, vec3 n) {
-    float dist = length(p);
-    // The cascade, and its matrix and texel selected by constant indices:
-    // lavapipe (Mesa 22.3) crashed drawing sun-lit objects when these
-    // arrays were indexed by a computed cascade.
-    bvec3 beyond = greaterThan(vec3(dist), shadow.reach.xyz);
-    float cascade = dot(vec3(beyond), vec3(1.0));
-    mat4 view_projection = beyond.x
-        ? (beyond.y ? (beyond.z ? shadow.view_projection[3] : shadow.view_projection[2])
-                    : shadow.view_projection[1])
-        : shadow.view_projection[0];
-    float texel = beyond.x ? (beyond.y ? (beyond.z ? shadow.texel.w : shadow.texel.z)
-                                       : shadow.texel.y)
-                           : shadow.texel.x;
-    float reach = float(SHADOW_TAPS / 2) + 1.0;
-    vec3 q = p + n * (texel * reach);
-    vec4 clip = view_projection * vec4(q, 1.0);
-    vec2 uv = clip.xy * 0.5 + 0.5;
-    if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) {
+    ShadowLookup at = shadow_lookup(p, n);
+    if (any(lessThan(at.uv, vec2(0.0))) || any(greaterThan(at.uv, vec2(1.0)))) {
         return 1.0;
     }
     vec2 tiles = shadow.params.yz;
-    vec2 tile = vec2(mod(cascade, tiles.x), floor(cascade / tiles.x));
-    vec2 at = (uv + tile) / tiles;
+    float view = float(at.view);
+    vec2 tile = vec2(mod(view, tiles.x), floor(view / tiles.x));
+    vec2 uv = (at.uv + tile) / tiles;
     vec2 step = vec2(shadow.params.x) / tiles;
-    // Beyond the farthest receiver the map was fitted to: nothing there.
-    float depth = min(clip.z, 1.0);
     int r = SHADOW_TAPS / 2;
     float lit = 0.0;
     for (int y = -r; y <= r; ++y) {
         for (int x = -r; x <= r; ++x) {
-            lit += texture(shadow_map, vec3(at + vec2(x, y) * step, depth));
+            lit += texture(shadow_map, vec3(uv + vec2(x, y) * step, at.depth));
         }
     }
     return lit / float(SHADOW_TAPS * SHADOW_TAPS);

@@ -344,6 +344,8 @@ enum CpuLight {
         attenuation: DVec3,
         /// Subtracted from the attenuation (`Light::window`).
         window: f64,
+        /// Whether it is the shadow-casting light.
+        shadowed: bool,
     },
     Directional {
         /// Unit vector towards the light (the negated travel direction).
@@ -680,6 +682,7 @@ impl CpuScene {
                         color: color.as_dvec3(),
                         attenuation: attenuation.as_dvec3(),
                         window: f64::from(light.window(scene.light_cutoff)),
+                        shadowed: scene.shadow_light == Some(ShadowLight::Light(i)),
                     },
                     // The scene holds a unit travel direction; the shader
                     // is given its negation and normalizes it again, so the
@@ -1034,6 +1037,11 @@ impl CpuObject {
                 shadowed: true,
                 ..
             } if term != DVec3::ZERO => term * at.occluders.visibility(object, point, to_light),
+            CpuLight::Point {
+                position,
+                shadowed: true,
+                ..
+            } if term != DVec3::ZERO => term * at.occluders.visibility_to(object, point, position),
             _ => term,
         }
     }
@@ -1057,6 +1065,7 @@ impl CpuObject {
                 color,
                 attenuation: a,
                 window,
+                ..
             } => {
                 let to_light = position - p;
                 let d = to_light.length();

@@ -80,17 +80,21 @@ pub struct ExposureBlock {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct ShadowUniforms {
-    /// Per cascade, camera-relative position to the light's clip space
-    /// over its tile (`Cascade::view_projection`).
-    pub view_projection: [[[f32; 4]; 4]; 4],
+    /// Per cascade or cube face, camera-relative position to the light's
+    /// clip space over its tile (`Cascade::view_projection`).
+    pub view_projection: [[[f32; 4]; 4]; 6],
     /// Per cascade, the distance from the camera where it ends (`f32::MAX`
     /// for the last and the unused ones).
     pub reach: [f32; 4],
-    /// Per cascade, a texel's world-space width.
+    /// Per cascade, a texel's world-space width; x for a point light: per
+    /// unit of distance from it.
     pub texel: [f32; 4],
     /// x: one texel of a tile in tile coordinates (1 / side); y, z: tiles
     /// across and down; w: 1 when the light is the atmosphere's sun.
     pub params: [f32; 4],
+    /// A point light's camera-relative position (xyz) with w = 1; w = 0
+    /// for other lights.
+    pub light: [f32; 4],
 }
 
 /// One light as the shader reads it (std140: three vec4s).

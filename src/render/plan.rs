@@ -530,7 +530,12 @@ impl FrameGraph {
         let prepass = scene.output.depth_prepass == DepthPrepass::On;
         // Automatic cascades count as the most, for the same reason: the
         // largest shadow map the frame may need.
+        let point = scene
+            .shadow_light
+            .and_then(|l| shadow_view::point_light(scene, l))
+            .is_some();
         let cascades = match scene.output.shadow_cascades {
+            _ if point => 6,
             ShadowCascades::Count(n) => n,
             ShadowCascades::Auto => MAX_SHADOW_CASCADES,
         };
@@ -802,7 +807,7 @@ fn shadow_casting(
         .collect();
     let depths = shadow_view::caster_depths(scene, geometry, &in_view, &casters);
     Some(ShadowCasting {
-        count: shadow_view::cascade_count(scene, depths),
+        count: shadow_view::view_count(scene, depths),
         in_view,
         casters,
         depths,

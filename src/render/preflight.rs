@@ -312,7 +312,18 @@ pub fn scene_on_device(scene: &Scene, ctx: &Context) -> Result<(), RenderError> 
             });
         }
     }
-
+    // Attachments of their own size (the shadow map's tiles) too.
+    let graph = FrameGraph::new(scene, false);
+    for a in &graph.attachments {
+        let (w, h) = a.size.extent(scene.output.width, scene.output.height);
+        if w.max(h) > max_side {
+            return Err(RenderError::Frame(format!(
+                "the {} attachment would be {w}x{h}, beyond this device's image size limit of \
+                 {max_side} pixels per side (maxImageDimension2D); lower output.shadow_map",
+                a.name
+            )));
+        }
+    }
     Ok(())
 }
 

@@ -599,11 +599,11 @@ pub fn gpu_light(light: &Light, eye: glam::DVec3, cutoff: f32) -> GpuLight {
 }
 
 /// `scene`'s light `l` as the shaders read it ([`gpu_light`]), the
-/// shadow-casting light marked by attenuation w = 1 (`shadow_map.glsl`).
+/// shadow-casting light marked by colour w = 1 (`shadow_map.glsl`).
 pub fn scene_light(scene: &Scene, l: usize, eye: glam::DVec3) -> GpuLight {
     let mut light = gpu_light(&scene.lights[l], eye, scene.light_cutoff);
     if scene.shadow_light == Some(crate::scene::ShadowLight::Light(l)) {
-        light.attenuation[3] = 1.0;
+        light.color[3] = 1.0;
     }
     light
 }

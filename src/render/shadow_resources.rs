@@ -146,8 +146,13 @@ fn uniforms(
     plan: &FramePlan,
     view: &ShadowView,
 ) -> (ShadowUniforms, Vec<ViewUniforms>) {
+    let light = match view.point {
+        Some(p) => (p - scene.camera.eye).as_vec3().extend(1.0).to_array(),
+        None => [0.0; 4],
+    };
     let mut block = ShadowUniforms {
-        view_projection: [[[0.0; 4]; 4]; 4],
+        light,
+        view_projection: [[[0.0; 4]; 4]; 6],
         reach: [f32::MAX; 4],
         texel: [0.0; 4],
         params: [
@@ -158,12 +163,14 @@ fn uniforms(
         ],
     };
     let mut frames = Vec::with_capacity(view.cascades.len());
-    for (c, cascade) in view.cascades.iter().enumerate().take(4) {
+    for (c, cascade) in view.cascades.iter().enumerate().take(6) {
         let view_projection = cascade.view_projection.as_mat4().to_cols_array_2d();
         block.view_projection[c] = view_projection;
-        block.texel[c] = cascade.texel as f32;
-        if cascade.reach.is_finite() {
-            block.reach[c] = cascade.reach as f32;
+        if c < 4 {
+            block.texel[c] = cascade.texel as f32;
+            if cascade.reach.is_finite() {
+                block.reach[c] = cascade.reach as f32;
+            }
         }
         let mut frame = ViewUniforms::new(scene, plan.width, plan.height, scene.camera.eye);
         frame.view_projection = view_projection;

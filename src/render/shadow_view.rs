@@ -34,6 +34,9 @@ pub struct ShadowView {
     pub tiles: (u32, u32),
     /// Whether the light is the atmosphere's sun (else a scene light).
     pub sun: bool,
+    /// A point light's world position: the views are then the six faces
+    /// of a cube around it (+x, -x, +y, -y, +z, -z), not cascades.
+    pub point: Option<DVec3>,
     /// The draws drawn into the map: every opaque draw, in view or not,
     /// whose objects cast shadows (and may shadow something in view).
     pub casters: Vec<Draw>,
@@ -47,17 +50,44 @@ pub struct Cascade {
     /// light's clip space: x, y in [-1, 1] across the cascade's tile, z in
     /// [0, 1] from the caster nearest the light.
     pub view_projection: DMat4,
-    /// The world-space width of one texel (the larger of its two sides).
+    /// The world-space width of one texel (the larger of its two sides);
+    /// for a cube face, per unit of distance from the light.
     pub texel: f64,
     /// The distance from the camera where the cascade ends (the last one:
     /// everywhere beyond).
     pub reach: f64,
 }
 
-/// The map's tiles across and down for `count` cascades: one, two side by
-/// side, or two rows of two.
+/// The map's tiles across and down for `count` views: one, two side by
+/// side, two rows of two (three or four cascades), or two rows of three
+/// (a point light's cube faces).
 pub fn tiles(count: u32) -> (u32, u32) {
-    (count.clamp(1, 2), count.div_ceil(2).max(1))
+    match count {
+        0 | 1 => (1, 1),
+        2 => (2, 1),
+        3 | 4 => (2, 2),
+        _ => (3, 2),
+    }
+}
+
+/// The views a shadow map holds: a point light's six cube faces, or the
+/// cascades [`cascade_count`] gives (`depths`: the casters' in view).
+pub fn view_count(scene: &Scene, depths: (f64, f64)) -> u32 {
+    match scene.shadow_light.and_then(|l| point_light(scene, l)) {
+        Some(_) => 6,
+        None => cascade_count(scene, depths),
+    }
+}
+
+/// The position of `light` when it is a point light.
+pub fn point_light(scene: &Scene, light: ShadowLight) -> Option<DVec3> {
+    let ShadowLight::Light(i) = light else {
+        return None;
+    };
+    match scene.lights.get(i)? {
+        Light::Point { position, .. } => Some(*position),
+        Light::Directional { .. } => None,
+    }
 }
 
 /// How many cascades `scene` asks for: its count, or with `auto` one
@@ -156,8 +186,9 @@ pub fn may_shadow(
     let Some(light) = scene.shadow_light else {
         return false;
     };
+    // A point light's rays diverge: no half-space test here.
     let Some(direction) = light_direction(scene, light) else {
-        return false;
+        return true;
     };
     if light == ShadowLight::Sun {
         return true;
@@ -295,6 +326,9 @@ impl ShadowView {
         (count, depths): (u32, (f64, f64)),
     ) -> Option<ShadowView> {
         let light = scene.shadow_light?;
+        if let Some(position) = point_light(scene, light) {
+            return Some(cube_faces(scene, bounds, in_view, casters, side, position));
+        }
         let frame = LightFrame::along(light_direction(scene, light)?);
         let mut caster_box = LightBox::EMPTY;
         for d in &casters {
@@ -328,6 +362,7 @@ impl ShadowView {
             tiles: tiles(cascades.len() as u32),
             cascades,
             sun: fitting.sun,
+            point: None,
             casters,
         })
     }
@@ -430,6 +465,72 @@ impl Fitting<'_> {
             texel: (x1 - x0).max(y1 - y0) / f64::from(self.side),
             reach: if last { f64::INFINITY } else { to },
         }
+    }
+}
+
+/// Texels of margin around each cube face: its view is that much wider
+/// than 90°, so the filter's taps at a face's edge read the face's own
+/// tile (no seam where two faces meet).
+const FACE_MARGIN: f64 = 4.0;
+
+/// The six 90°-and-a-margin perspective views of a point light at
+/// `position`, from a little in front of the nearest caster to the
+/// farthest object.
+fn cube_faces(
+    scene: &Scene,
+    bounds: &[(DVec3, f32)],
+    in_view: &[usize],
+    casters: Vec<Draw>,
+    side: u32,
+    position: DVec3,
+) -> ShadowView {
+    let reach = |o: usize| {
+        let (c, r) = bounds[o];
+        (
+            c.distance(position) - f64::from(r),
+            c.distance(position) + f64::from(r),
+        )
+    };
+    let caster_objects = casters.iter().flat_map(|d| d.objects().iter().copied());
+    let far = in_view
+        .iter()
+        .copied()
+        .chain(caster_objects.clone())
+        .map(|o| reach(o).1)
+        .fold(1e-3, f64::max);
+    let nearest = caster_objects
+        .map(|o| reach(o).0)
+        .fold(f64::INFINITY, f64::min);
+    let near = (0.5 * nearest).clamp(1e-4 * far, 0.5 * far);
+    // tan of the half-angle: 1 at the tile's inner edge, FACE_MARGIN
+    // texels more at its border.
+    let half = f64::from(side) / (f64::from(side) - 2.0 * FACE_MARGIN);
+    let projection = DMat4::perspective_rh(2.0 * half.atan(), 1.0, near, far);
+    let camera_relative = DMat4::from_translation(scene.camera.eye);
+    let faces = [
+        (DVec3::X, DVec3::Y),
+        (DVec3::NEG_X, DVec3::Y),
+        (DVec3::Y, DVec3::Z),
+        (DVec3::NEG_Y, DVec3::Z),
+        (DVec3::Z, DVec3::Y),
+        (DVec3::NEG_Z, DVec3::Y),
+    ];
+    let cascades = faces
+        .iter()
+        .map(|&(axis, up)| Cascade {
+            view_projection: projection
+                * DMat4::look_at_rh(position, position + axis, up)
+                * camera_relative,
+            texel: 2.0 * half / f64::from(side),
+            reach: f64::INFINITY,
+        })
+        .collect();
+    ShadowView {
+        cascades,
+        tiles: tiles(6),
+        sun: false,
+        point: Some(position),
+        casters,
     }
 }
 

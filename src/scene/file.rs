@@ -597,24 +597,15 @@ impl Check<'_> {
         })
     }
 
-    /// The light with `shadows = true`: at most one, a directional light
-    /// or the sun (a point light would need a cube map, which the renderer
-    /// does not draw).
+    /// The light with `shadows = true`: at most one (a point light, a
+    /// directional light or the sun).
     fn shadow_light(&self, raw: &SceneFile) -> Result<Option<ShadowLight>> {
         let mut casters = Vec::new();
         for (i, light) in raw.lights.iter().enumerate() {
             if !light.shadows {
                 continue;
             }
-            let field = format!("lights[{i}].shadows");
-            if matches!(light.kind, LightKind::Point) {
-                return Err(self.invalid(
-                    field,
-                    "only directional lights and the sun cast shadows (point-light cube maps \
-                     are not supported)",
-                ));
-            }
-            casters.push((field, ShadowLight::Light(i)));
+            casters.push((format!("lights[{i}].shadows"), ShadowLight::Light(i)));
         }
         if raw.sun.as_ref().is_some_and(|sun| sun.shadows) {
             casters.push(("sun.shadows".to_owned(), ShadowLight::Sun));

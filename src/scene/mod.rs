@@ -225,11 +225,11 @@ impl ShadowFilter {
     }
 }
 
-/// The light whose shadows the frame draws (`shadows = true` on a
-/// directional light, or on `[sun]`).
+/// The light whose shadows the frame draws (`shadows = true` on a light,
+/// or on `[sun]`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShadowLight {
-    /// `Scene::lights[i]`, a directional light.
+    /// `Scene::lights[i]`.
     Light(usize),
     /// The atmosphere's sun.
     Sun,

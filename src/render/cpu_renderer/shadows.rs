@@ -168,11 +168,40 @@ impl Occluders {
     }
 }
 
+impl Occluders {
+    /// 1 when nothing but object `own` meets the segment from the world
+    /// point `p` to the point light at `light`, else 0.
+    pub(super) fn visibility_to(&self, own: usize, p: DVec3, light: DVec3) -> f64 {
+        let to_light = light - p;
+        let ray = ShadowRay {
+            origin: p,
+            direction: to_light,
+        };
+        let blocked = self
+            .bvh
+            .traverse(&ray, &self.casters)
+            .into_iter()
+            .filter(|caster| caster.object != own)
+            .any(|caster| caster.blocks_within(p, to_light, 1.0));
+        if blocked {
+            0.0
+        } else {
+            1.0
+        }
+    }
+}
+
 impl Caster {
     /// Whether the surface meets the world-space ray `p + t d`, `t > 0`.
     fn blocks(&self, p: DVec3, d: DVec3) -> bool {
+        self.blocks_within(p, d, f64::INFINITY)
+    }
+
+    /// Whether the surface meets the world-space ray `p + t d` for
+    /// `0 < t < t_max`.
+    fn blocks_within(&self, p: DVec3, d: DVec3, t_max: f64) -> bool {
         let o = self.world_to_object.transform_point3(p);
         let d = self.world_to_object.transform_vector3(d);
-        self.surface.blocks(o, d, 0.0, f64::INFINITY)
+        self.surface.blocks(o, d, 0.0, t_max)
     }
 }
