@@ -20,9 +20,10 @@
 //! spread over tilted surfaces by [`tilted_sky`]: isotropic with a
 //! brighter horizon, plus the ground's reflection.
 //!
-//! The shadow-casting light ([`Scene::shadow_light`]: a directional
-//! light, or the sun) is occluded exactly: its term at a point counts
-//! only when a ray from there towards the light meets no opaque object
+//! The shadow-casting light ([`Scene::shadow_light`]: a point light, a
+//! directional light, or the sun) is occluded exactly: its term at a
+//! point counts only when a ray from there towards the light (up to a
+//! point light's position) meets no opaque object
 //! with `casts_shadows` (either face; [`shadows`]), where the GPU samples
 //! a shadow map. Left out: every other light's shadows (as on the GPU),
 //! shadows of transparent objects, the sun's penumbra (the sun is a

@@ -561,6 +561,20 @@ fn same_resources(a: &FramePlan, b: &FramePlan) -> bool {
         && a.instance_slots == b.instance_slots
         && by_object(a) == by_object(b)
         && a.tile_groups == b.tile_groups
+        && shadow_casters(a) == shadow_casters(b)
+}
+
+/// What the shadow pass draws, without what the view decides: its casters
+/// and views.
+fn shadow_casters(plan: &FramePlan) -> Option<(Vec<super::plan::Draw>, usize)> {
+    plan.shadow.as_ref().map(|s| {
+        let casters = s
+            .casters
+            .iter()
+            .map(super::plan::Draw::without_view)
+            .collect();
+        (casters, s.cascades.len())
+    })
 }
 
 /// Whether two plans record the same commands: the same resources, and the

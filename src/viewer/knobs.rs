@@ -118,7 +118,32 @@ const CYCLES: &[Cycle] = &[
         values: &["auto", "off", "on"],
         applies: has_objects,
     },
+    Cycle {
+        name: "exposure",
+        values: &["1", "auto"],
+        applies: |_| true,
+    },
+    Cycle {
+        name: "shadow_map",
+        values: &["512", "1024", "2048", "4096"],
+        applies: casts_shadows,
+    },
+    Cycle {
+        name: "shadow_filter",
+        values: &["none", "pcf3", "pcf5"],
+        applies: casts_shadows,
+    },
+    Cycle {
+        name: "shadow_cascades",
+        values: &["auto", "1", "2", "4"],
+        applies: casts_shadows,
+    },
 ];
+
+/// Shadow settings matter only with a shadow-casting light.
+fn casts_shadows(s: &Scene) -> bool {
+    s.shadow_light.is_some()
+}
 
 /// The knobs that apply to `scene`; key N cycles entry N-1 (key 0 the
 /// tenth, F2 to F11 the eleventh to the twentieth).

@@ -3,7 +3,8 @@
 //!
 //! The GPU approximates that light's visibility with a shadow map
 //! (resolution, depth bias, filtering); the reference casts a ray from the
-//! shaded point towards the light and asks whether any opaque object with
+//! shaded point towards the light (up to it, for a point light) and asks
+//! whether any opaque object with
 //! `casts_shadows` meets it, so a sweep measures the shadow map's error
 //! against the true shadow. A [`bvh`] over the casters' world-space boxes
 //! finds the candidates, and the analytic intersection
