@@ -335,7 +335,7 @@ impl Bloom {
     pub fn intensity_from(x: f64) -> Result<f32, String> {
         if !x.is_finite() || x <= 0.0 || x > 1.0 {
             return Err(format!(
-                "must be greater than 0 and at most 1 (the fraction of the blurred image mixed in), got {x}"
+                "must be a finite number greater than 0 and at most 1 (the fraction of the blurred image mixed in), got {x}"
             ));
         }
         Ok(x as f32)
