@@ -1,5 +1,5 @@
 #version 450
-// feature: AUTO_EXPOSURE
+// feature: AUTO_EXPOSURE BLOOM
 #include "constants.glsl"
 // Tone-map subpass: reads the HDR colour of this pixel as an input
 // attachment and writes display colour, sRGB-encoded here into the UNORM
@@ -24,8 +24,28 @@ layout(set = EXPOSURE_SET, binding = 0, std430) readonly buffer Exposure {
     float exposure;
 };
 #define EXPOSURE exposure
+#define BLOOM_SET (EXPOSURE_SET + 1)
 #else
 layout(constant_id = SPEC_TONEMAP_EXPOSURE) const float EXPOSURE = 1.0;
+#define BLOOM_SET EXPOSURE_SET
+#endif
+#ifdef BLOOM
+// Level 0 of the bloom pass's chain (half the output's size), in the set
+// after the exposure's (or in its place without one).
+layout(set = BLOOM_SET, binding = 0) uniform sampler2D bloom;
+layout(constant_id = SPEC_TONEMAP_BLOOM_INTENSITY) const float BLOOM_INTENSITY = 0.04;
+
+// (1 - intensity) * hdr + intensity * bloom, the HDR colour sanitized
+// first so that a NaN pixel still shows the light around it. Pixel x of
+// the output is at x/2 in level 0 (whose texel q covers pixels 2q and
+// 2q+1), sampled bilinearly.
+vec3 with_bloom(vec3 hdr) {
+    vec2 uv = gl_FragCoord.xy * 0.5 / vec2(textureSize(bloom, 0));
+    return mix(sanitize_hdr(hdr), textureLod(bloom, uv, 0.0).rgb, BLOOM_INTENSITY);
+}
+#define HDR_IN(c) with_bloom(c)
+#else
+#define HDR_IN(c) (c)
 #endif
 
 void main() {
@@ -40,7 +60,7 @@ void main() {
     // bright value can overflow to +Inf (and the curves then divide Inf by
     // Inf, giving NaN = black), so it is clamped after scaling. That keeps
     // the curve monotonic for every finite exposure.
-    vec3 c = sanitize_hdr(subpassLoad(hdr).rgb * EXPOSURE);
+    vec3 c = sanitize_hdr(HDR_IN(subpassLoad(hdr).rgb) * EXPOSURE);
     if (OPERATOR == TONEMAP_ACES) {
         c = aces_fit(c);
     } else if (OPERATOR == TONEMAP_NONE) {

@@ -58,6 +58,7 @@ pub fn run(args: ToneMapArgs) -> anyhow::Result<()> {
             Operator::Aces => ToneMapOperator::Aces,
         },
         exposure: Exposure::Fixed(args.exposure),
+        bloom: None,
     };
     let run = render_run::run(
         RunSource::HdrImage(&image, tone_map),

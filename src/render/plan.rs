@@ -591,11 +591,13 @@ impl FrameShape<'_> {
         // would hold, so the PNG is the same with or without --hdr (which
         // needs the target); an rgba16f target rounds it (relative 2^-11),
         // which moved 4.8 % of default.toml's pixels by 1/255.
+        // Bloom blurs the HDR image before the tone map, so it needs both.
         // A debug view shows surface attributes: no atmosphere over them.
         let sky = scene.sky.is_some() && debug == 0;
         let direct = debug == 0
             && scene.tone_map.operator == ToneMapOperator::None
             && scene.tone_map.exposure == Exposure::Fixed(1.0)
+            && scene.tone_map.bloom.is_none()
             && scene.output.hdr_format == HdrFormat::Rgba32F
             && !any_transparent
             && !keep_hdr

@@ -7,7 +7,9 @@
 //! back.
 
 use super::geometry::SceneGeometry;
-use super::passes::{atmosphere, exposure, Attachments, PassResources, PassSetup, RecordPass};
+use super::passes::{
+    atmosphere, bloom, exposure, Attachments, PassResources, PassSetup, RecordPass,
+};
 use super::plan::{attachment, FramePlan, PassDecl, PassIo};
 use super::scene_resources::SceneResources;
 use super::shadow_resources::ShadowResources;
@@ -17,8 +19,8 @@ use super::RenderError;
 use crate::image_io::Pixels;
 use crate::scene::{HdrFormat, Scene, ToneMap};
 use crate::vk::{
-    AttachmentSpec, AttachmentStart, Buffer, BufferUsage, Context, FrameTargets, Image,
-    ImageUsageFlags, RunSpec, SubpassSpec,
+    AttachmentSpec, AttachmentStart, Buffer, BufferUsage, Context, Format, FrameTargets, Image,
+    ImageAspectFlags, ImageDesc, ImageUsageFlags, RunSpec, SubpassSpec,
 };
 use std::sync::Arc;
 
@@ -69,6 +71,9 @@ pub struct Renderer {
     /// The shadow pass's and the shadow lookups' shared resources, when a
     /// light casts shadows.
     shadow_resources: Option<ShadowResources>,
+    /// The bloom chain the bloom pass writes and the tone map samples,
+    /// when the scene asks for bloom.
+    bloom: Option<Image>,
     targets: Option<FrameTargets>,
     plan: FramePlan,
     /// The scene's meshes, kept so that a new view can be planned (and,
@@ -159,6 +164,7 @@ impl Renderer {
         } else {
             None
         };
+        let bloom = bloom_image(ctx, scene, &plan)?;
         crate::interrupt::check()?;
         // The sky's resources first: objects lit by the atmosphere bind
         // its set.
@@ -208,6 +214,7 @@ impl Renderer {
             sky_resources.as_ref(),
             exposure.as_ref(),
             shadow_resources.as_ref(),
+            bloom.as_ref(),
         );
 
         // Create every pass, each subpass with its render pass and its
@@ -249,6 +256,7 @@ impl Renderer {
             sky_resources,
             exposure,
             shadow_resources,
+            bloom,
             targets,
             plan,
             geometry,
@@ -309,6 +317,7 @@ impl Renderer {
                     self.sky_resources.as_ref(),
                     self.exposure.as_ref(),
                     self.shadow_resources.as_ref(),
+                    self.bloom.as_ref(),
                 );
                 let recording = std::time::Instant::now();
                 let frame = record(
@@ -446,6 +455,7 @@ impl super::PrefixFrames for Renderer {
                 self.sky_resources.as_ref(),
                 self.exposure.as_ref(),
                 self.shadow_resources.as_ref(),
+                self.bloom.as_ref(),
             );
             let prefixes = (0..self.pass_count())
                 .map(|k| {
@@ -530,6 +540,7 @@ fn frame_resources<'a>(
     sky: Option<&'a SkyResources>,
     exposure: Option<&'a Buffer>,
     shadow: Option<&'a ShadowResources>,
+    bloom: Option<&'a Image>,
 ) -> PassResources<'a> {
     PassResources {
         attachments: Attachments {
@@ -540,7 +551,34 @@ fn frame_resources<'a>(
         sky,
         exposure,
         shadow,
+        bloom,
     }
+}
+
+/// The bloom chain, when the plan holds the bloom pass: RGBA16F, sampled
+/// and written as a storage image, with one mip level per level of the
+/// chain, level 0 half the output's size.
+fn bloom_image(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    plan: &FramePlan,
+) -> Result<Option<Image>, RenderError> {
+    if !plan.has(bloom::PASS) {
+        return Ok(None);
+    }
+    let Some(settings) = scene.tone_map.bloom else {
+        return Ok(None);
+    };
+    let (width, height) = bloom::level_size(plan.width, plan.height, 0);
+    let desc = ImageDesc {
+        width,
+        height,
+        format: Format::R16G16B16A16_SFLOAT,
+        usage: ImageUsageFlags::STORAGE | ImageUsageFlags::SAMPLED,
+        mip_levels: settings.chain_levels(plan.width, plan.height),
+        aspect: ImageAspectFlags::COLOR,
+    };
+    Ok(Some(Image::new(ctx, "bloom", desc)?))
 }
 
 /// Whether a new view's plan `b` can reuse everything created for `a`:

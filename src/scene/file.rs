@@ -28,7 +28,7 @@ use super::material_maps::{
 };
 use super::value_checks::{Check, Result, MAX_COLOUR, MAX_LENGTH, MIN_LENGTH};
 use super::{
-    Camera, DebugView, DepthPrepass, Exposure, HdrFormat, Light, Lighting, Material, Object,
+    Bloom, Camera, DebugView, DepthPrepass, Exposure, HdrFormat, Light, Lighting, Material, Object,
     Output, Scene, SceneError, ShadingModel, ShadowCascades, ShadowFilter, ShadowLight, Shape,
     TextureFilter, ToneMap, ToneMapOperator, Transform, MAX_SHADOW_MAP, MIN_SHADOW_MAP,
 };
@@ -135,6 +135,17 @@ struct CameraFile {
 struct ToneMapFile {
     operator: ToneMapOperator,
     exposure: ExposureFile,
+    bloom: Option<BloomFile>,
+}
+
+/// `bloom = { intensity = 0.04, levels = 6, radius = 1 }`; `bloom = {}`
+/// takes the defaults.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BloomFile {
+    intensity: Option<f64>,
+    levels: Option<i64>,
+    radius: Option<f64>,
 }
 
 /// `exposure = 1.5` or `exposure = "auto"`.
@@ -150,6 +161,7 @@ impl Default for ToneMapFile {
         ToneMapFile {
             operator: ToneMapOperator::Reinhard,
             exposure: ExposureFile::Number(1.0),
+            bloom: None,
         }
     }
 }
@@ -433,6 +445,32 @@ impl Check<'_> {
         }
     }
 
+    /// Each field checked; an absent one takes [`Bloom::default`]'s value.
+    fn bloom(&self, raw: Option<BloomFile>) -> Result<Option<Bloom>> {
+        let Some(raw) = raw else {
+            return Ok(None);
+        };
+        let default = Bloom::default();
+        let field = |name: &str| {
+            let path = format!("tone_map.bloom.{name}");
+            move |reason: String| self.invalid(path, reason)
+        };
+        Ok(Some(Bloom {
+            intensity: match raw.intensity {
+                Some(x) => Bloom::intensity_from(x).map_err(field("intensity"))?,
+                None => default.intensity,
+            },
+            levels: match raw.levels {
+                Some(x) => Bloom::levels_from(x).map_err(field("levels"))?,
+                None => default.levels,
+            },
+            radius: match raw.radius {
+                Some(x) => Bloom::radius_from(x).map_err(field("radius"))?,
+                None => default.radius,
+            },
+        }))
+    }
+
     fn scene(&self, raw: SceneFile) -> Result<Description> {
         let shadow_light = self.shadow_light(&raw)?;
         let ambient = self.colour("ambient", raw.ambient)?;
@@ -442,6 +480,7 @@ impl Check<'_> {
         let tone_map = ToneMap {
             operator: raw.tone_map.operator,
             exposure: self.exposure(raw.tone_map.exposure)?,
+            bloom: self.bloom(raw.tone_map.bloom)?,
         };
         let lights = raw
             .lights

@@ -8,7 +8,7 @@
 //! in `viewer::knobs`.
 
 use super::{
-    AerialPerspective, DepthPrepass, Exposure, HdrFormat, Lighting, OzoneDepth, Scene,
+    AerialPerspective, Bloom, DepthPrepass, Exposure, HdrFormat, Lighting, OzoneDepth, Scene,
     ShadingModel, ShadowFilter, Shape, TableFilter, TableMapping, TextureFilter, ToneMapOperator,
 };
 
@@ -205,6 +205,17 @@ pub const KNOBS: &[Knob] = &[
             Ok(())
         },
         read: |s| s.tone_map.exposure.name(),
+    },
+    Knob {
+        name: "bloom",
+        // Bloom changes what the output shows, not how well.
+        best: Best::Unchanged,
+        values: "off | on | an intensity in (0, 1] (on: the scene's bloom, or the defaults)",
+        apply: |s, v| {
+            s.tone_map.bloom = Bloom::parse(v, s.tone_map.bloom)?;
+            Ok(())
+        },
+        read: |s| Bloom::name(s.tone_map.bloom),
     },
     Knob {
         name: "lighting",

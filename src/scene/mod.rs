@@ -337,6 +337,108 @@ pub struct ToneMap {
     pub operator: ToneMapOperator,
     /// Linear scale applied before the curve.
     pub exposure: Exposure,
+    /// Bloom mixed into the HDR image before exposure and the curve
+    /// (`[tone_map] bloom = { ... }`); `None`: no bloom pass.
+    pub bloom: Option<Bloom>,
+}
+
+/// Physically based bloom: a chain of half-size levels of the HDR image,
+/// blurred down and back up, mixed in as
+/// `(1 - intensity) * hdr + intensity * bloom`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bloom {
+    /// The fraction of the blurred image in the mix: finite, in (0, 1].
+    pub intensity: f32,
+    /// Levels of the chain asked for, 1..=[`Bloom::MAX_LEVELS`]; the frame
+    /// uses fewer when the smallest would be under 1x1 texel.
+    pub levels: u32,
+    /// The upsampling tent filter's radius, in texels of each level:
+    /// finite, in (0, [`Bloom::MAX_RADIUS`]].
+    pub radius: f32,
+}
+
+impl Default for Bloom {
+    fn default() -> Self {
+        Bloom {
+            intensity: 0.04,
+            levels: 6,
+            radius: 1.0,
+        }
+    }
+}
+
+impl Bloom {
+    /// Most levels a chain may ask for.
+    pub const MAX_LEVELS: u32 = 10;
+    /// Largest upsampling radius, in texels.
+    pub const MAX_RADIUS: f64 = 4.0;
+
+    /// An intensity from a number (the scene field and the knob share the
+    /// check); the error is the reason.
+    pub fn intensity_from(x: f64) -> Result<f32, String> {
+        if !x.is_finite() || x <= 0.0 || x > 1.0 {
+            return Err(format!(
+                "must be a finite number greater than 0 and at most 1 (the fraction of the blurred image mixed in), got {x}"
+            ));
+        }
+        Ok(x as f32)
+    }
+
+    /// A level count from a number: 1..=[`Bloom::MAX_LEVELS`].
+    pub fn levels_from(x: i64) -> Result<u32, String> {
+        if !(1..=i64::from(Bloom::MAX_LEVELS)).contains(&x) {
+            return Err(format!("must be in 1..={}, got {x}", Bloom::MAX_LEVELS));
+        }
+        Ok(x as u32)
+    }
+
+    /// A radius from a number: finite, in (0, [`Bloom::MAX_RADIUS`]].
+    pub fn radius_from(x: f64) -> Result<f32, String> {
+        if !x.is_finite() || x <= 0.0 || x > Bloom::MAX_RADIUS {
+            return Err(format!(
+                "must be greater than 0 and at most {} texels, got {x}",
+                Bloom::MAX_RADIUS
+            ));
+        }
+        Ok(x as f32)
+    }
+
+    /// The levels a `width`×`height` frame's chain has: the ones asked for,
+    /// but no more than leave the smallest level at least 1x1 texel (level
+    /// k is `width >> (k + 1)` by `height >> (k + 1)`); 0 when the frame is
+    /// under 2 pixels in either direction.
+    pub fn chain_levels(&self, width: u32, height: u32) -> u32 {
+        let smaller = width.min(height);
+        let fit = if smaller == 0 { 0 } else { smaller.ilog2() };
+        self.levels.min(fit)
+    }
+
+    /// The knob syntax: `on` for the defaults, else the intensity.
+    pub fn name(bloom: Option<Bloom>) -> String {
+        match bloom {
+            None => "off".into(),
+            Some(b) if b == Bloom::default() => "on".into(),
+            Some(b) => b.intensity.to_string(),
+        }
+    }
+
+    /// Parses the knob: `off`, `on` (the defaults) or an intensity, which
+    /// keeps `current`'s levels and radius.
+    pub fn parse(value: &str, current: Option<Bloom>) -> Result<Option<Bloom>, String> {
+        match value {
+            "off" => Ok(None),
+            "on" => Ok(Some(current.unwrap_or_default())),
+            _ => {
+                let x: f64 = value.parse().map_err(|_| {
+                    format!("expected off, on or an intensity in (0, 1], got '{value}'")
+                })?;
+                Ok(Some(Bloom {
+                    intensity: Bloom::intensity_from(x)?,
+                    ..current.unwrap_or_default()
+                }))
+            }
+        }
+    }
 }
 
 /// The linear scale the tone map applies before its curve.

@@ -322,7 +322,8 @@ fn minimal_scene_gets_the_documented_defaults() {
         scene.tone_map,
         ToneMap {
             operator: ToneMapOperator::Reinhard,
-            exposure: Exposure::Fixed(1.0)
+            exposure: Exposure::Fixed(1.0),
+            bloom: None,
         }
     );
     assert_eq!(scene.ambient, Vec3::ZERO);

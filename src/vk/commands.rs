@@ -318,6 +318,31 @@ impl CommandBuffer {
         };
     }
 
+    /// Makes a compute shader's write of mip `level` visible to the next
+    /// compute dispatches, which read it (sampled or as a storage image)
+    /// or write it again, the image staying in GENERAL layout: the barrier
+    /// between the levels of a chain that compute shaders build one level
+    /// per dispatch. The image must already be in GENERAL layout for
+    /// compute writes (`transition*(image, ImageUse::ComputeWrite)`); its
+    /// tracked state stays that, so a later `transition` waits for the
+    /// last level's write too.
+    pub fn compute_level_barrier(&self, image: &Image, level: u32) {
+        debug_assert_eq!(image.state.get().layout, vk::ImageLayout::GENERAL);
+        self.image_barrier(
+            image,
+            ImageBarrier {
+                old_layout: vk::ImageLayout::GENERAL,
+                new_layout: vk::ImageLayout::GENERAL,
+                src_stage: vk::PipelineStageFlags::COMPUTE_SHADER,
+                src_access: vk::AccessFlags::SHADER_WRITE,
+                dst_stage: vk::PipelineStageFlags::COMPUTE_SHADER,
+                dst_access: vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
+                base_mip: level,
+                mip_count: 1,
+            },
+        );
+    }
+
     /// Copies mip level 0 of a colour image into a buffer, tightly packed
     /// (moving the image to TRANSFER_SRC_OPTIMAL first if needed).
     pub fn copy_image_to_buffer(&self, image: &Image, buffer: &Buffer) {

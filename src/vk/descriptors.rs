@@ -1,6 +1,6 @@
 //! Descriptor set layouts, pools and sets.
 
-use super::{Buffer, Context, Image, Sampler, VkError};
+use super::{Buffer, Context, Image, MipView, Sampler, VkError};
 use ash::vk;
 use std::sync::Arc;
 
@@ -160,6 +160,41 @@ impl DescriptorSet {
         let infos = [vk::DescriptorImageInfo {
             sampler: vk::Sampler::null(),
             image_view: image.view,
+            image_layout: vk::ImageLayout::GENERAL,
+        }];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(self.handle)
+            .dst_binding(binding)
+            .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
+            .image_info(&infos);
+        // SAFETY: the set is not in use by a pending command buffer.
+        unsafe { self.ctx.device.update_descriptor_sets(&[write], &[]) };
+    }
+
+    /// Points `binding` at one mip level of an image sampled in GENERAL
+    /// layout (a level of a chain that compute shaders write and read in
+    /// turn).
+    pub fn write_sampled_mip(&self, binding: u32, view: &MipView, sampler: &Sampler) {
+        let infos = [vk::DescriptorImageInfo {
+            sampler: sampler.handle,
+            image_view: view.view,
+            image_layout: vk::ImageLayout::GENERAL,
+        }];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(self.handle)
+            .dst_binding(binding)
+            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+            .image_info(&infos);
+        // SAFETY: the set is not in use by a pending command buffer.
+        unsafe { self.ctx.device.update_descriptor_sets(&[write], &[]) };
+    }
+
+    /// Points `binding` at one mip level of a storage image, read and
+    /// written in GENERAL layout.
+    pub fn write_storage_mip(&self, binding: u32, view: &MipView) {
+        let infos = [vk::DescriptorImageInfo {
+            sampler: vk::Sampler::null(),
+            image_view: view.view,
             image_layout: vk::ImageLayout::GENERAL,
         }];
         let write = vk::WriteDescriptorSet::default()

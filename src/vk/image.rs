@@ -167,6 +167,52 @@ impl Image {
     }
 }
 
+/// A view of one mip level of an [`Image`], for shaders that read or
+/// write that level alone (a storage image is written through a view of
+/// one level). It does not keep the image alive: its owner drops it first.
+pub struct MipView {
+    ctx: Arc<Context>,
+    pub(crate) view: vk::ImageView,
+    /// The level it shows.
+    pub level: u32,
+}
+
+impl Image {
+    /// A view of mip `level` alone.
+    pub fn mip_view(&self, level: u32) -> Result<MipView, VkError> {
+        if level >= self.desc.mip_levels {
+            return Err(VkError::Unsupported(format!(
+                "mip level {level} of an image of {} levels",
+                self.desc.mip_levels
+            )));
+        }
+        let mut range = self.full_range();
+        range.base_mip_level = level;
+        range.level_count = 1;
+        let info = vk::ImageViewCreateInfo::default()
+            .image(self.handle)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(self.desc.format)
+            .subresource_range(range);
+        // SAFETY: the image is bound to memory and the level is within it
+        // (checked above).
+        let view = unsafe { self.ctx.device.create_image_view(&info, None) }?;
+        Ok(MipView {
+            ctx: self.ctx.clone(),
+            view,
+            level,
+        })
+    }
+}
+
+impl Drop for MipView {
+    fn drop(&mut self) {
+        // SAFETY: no pending command buffer uses the view (its owner waits
+        // for the device before dropping it).
+        unsafe { self.ctx.device.destroy_image_view(self.view, None) };
+    }
+}
+
 /// Fails with a clear error when the image is larger than the device
 /// allows (creating it would be invalid usage, not a reported error).
 fn check_size(ctx: &Context, name: &str, desc: &ImageDesc) -> Result<(), VkError> {

@@ -27,7 +27,7 @@ pub use buffer::{Buffer, BufferUsage};
 pub use commands::{CommandBuffer, Fence, ImageUse};
 pub use context::{Context, ContextOptions, DeviceInfo};
 pub use descriptors::{DescriptorBinding, DescriptorPool, DescriptorSet, DescriptorSetLayout};
-pub use image::{bytes_per_texel, Image, ImageDesc, Sampler, SamplerFilter};
+pub use image::{bytes_per_texel, Image, ImageDesc, MipView, Sampler, SamplerFilter};
 pub use pipeline::{
     Blend, ComputePipeline, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, ShaderModule,
     VertexAttribute,

@@ -167,6 +167,7 @@ fn every_scene_is_clean_under_every_mode() {
                 aerial::scene::ToneMap {
                     operator: aerial::scene::ToneMapOperator::Reinhard,
                     exposure: aerial::scene::Exposure::Fixed(1.0),
+                    bloom: None,
                 },
             ),
             &settings(mode),

@@ -21,6 +21,7 @@ mod atmosphere_objects;
 mod auto_exposure;
 mod bench;
 mod bench_metrics;
+mod bloom;
 mod bounds;
 mod claims_validation;
 mod cli;

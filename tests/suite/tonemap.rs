@@ -124,6 +124,7 @@ fn a_mis_sized_image_is_an_error_not_a_crash() {
             ToneMap {
                 operator: ToneMapOperator::Reinhard,
                 exposure: Exposure::Fixed(1.0),
+                bloom: None,
             },
         ),
         &RenderSettings::default(),
@@ -204,6 +205,7 @@ fn both_operators_apply_the_exposure() {
                     ToneMap {
                         operator,
                         exposure: Exposure::Fixed(exposure),
+                        bloom: None,
                     },
                 ),
                 &common::validated_settings(),
@@ -299,6 +301,7 @@ fn the_srgb_encode_is_within_half_a_step_of_the_exact_curve() {
     let tone_map = ToneMap {
         operator: ToneMapOperator::None,
         exposure: Exposure::Fixed(1.0),
+        bloom: None,
     };
     let run = render_run::run(
         RunSource::HdrImage(&image, tone_map),

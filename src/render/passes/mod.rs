@@ -17,6 +17,7 @@
 
 pub mod aerial_volume;
 pub mod atmosphere;
+pub mod bloom;
 pub mod deferred_lighting;
 pub mod depth_prepass;
 pub mod exposure;
@@ -54,6 +55,7 @@ pub const PASSES: &[&dyn PassType] = &[
     surface::TRANSPARENT,
     atmosphere::PASS,
     exposure::PASS,
+    bloom::PASS,
     tonemap::PASS,
     transfer::READBACK,
 ];
@@ -135,6 +137,10 @@ pub struct PassResources<'a> {
     /// The light's frame set and the shadow set; present when the plan
     /// draws a shadow map.
     pub shadow: Option<&'a ShadowResources>,
+    /// The bloom chain (RGBA16F, a mip level per level, level 0 half the
+    /// output's size) the bloom pass writes and the tone map samples;
+    /// present when the plan holds the bloom pass.
+    pub bloom: Option<&'a Image>,
 }
 
 impl PassResources<'_> {
@@ -151,6 +157,11 @@ impl PassResources<'_> {
     pub fn exposure(&self) -> Result<&Buffer, RenderError> {
         self.exposure
             .ok_or_else(|| RenderError::Frame("the frame has no exposure buffer".into()))
+    }
+
+    pub fn bloom(&self) -> Result<&Image, RenderError> {
+        self.bloom
+            .ok_or_else(|| RenderError::Frame("the frame has no bloom image".into()))
     }
 }
 

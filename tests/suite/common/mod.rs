@@ -323,6 +323,7 @@ pub fn tone_map_on_gpu(
             aerial::scene::ToneMap {
                 operator,
                 exposure: aerial::scene::Exposure::Fixed(exposure),
+                bloom: None,
             },
         ),
         &validated_settings(),
