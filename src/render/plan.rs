@@ -953,6 +953,7 @@ mod tests {
         scene.sky.as_mut().unwrap().aerial_perspective = AerialPerspective::Volume;
         scene.tone_map.exposure = Exposure::Auto;
         scene.shadow_light = Some(crate::scene::ShadowLight::Sun);
+        scene.tone_map.bloom = Some(crate::scene::Bloom::default());
         plans.push(FramePlan::new(
             &scene,
             &SceneGeometry::new(&scene).unwrap(),
