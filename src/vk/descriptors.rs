@@ -141,68 +141,73 @@ impl DescriptorSet {
 
     /// Points `binding` at a sampled image in SHADER_READ_ONLY_OPTIMAL.
     pub fn write_sampled_image(&self, binding: u32, image: &Image, sampler: &Sampler) {
-        let infos = [vk::DescriptorImageInfo {
-            sampler: sampler.handle,
-            image_view: image.view,
-            image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-        }];
-        let write = vk::WriteDescriptorSet::default()
-            .dst_set(self.handle)
-            .dst_binding(binding)
-            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-            .image_info(&infos);
-        // SAFETY: the set is not in use by a pending command buffer.
-        unsafe { self.ctx.device.update_descriptor_sets(&[write], &[]) };
+        self.write_image(
+            binding,
+            vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            image.view,
+            sampler.handle,
+            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+        );
     }
 
     /// Points `binding` at a storage image, written in GENERAL layout.
     pub fn write_storage_image(&self, binding: u32, image: &Image) {
-        let infos = [vk::DescriptorImageInfo {
-            sampler: vk::Sampler::null(),
-            image_view: image.view,
-            image_layout: vk::ImageLayout::GENERAL,
-        }];
-        let write = vk::WriteDescriptorSet::default()
-            .dst_set(self.handle)
-            .dst_binding(binding)
-            .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
-            .image_info(&infos);
-        // SAFETY: the set is not in use by a pending command buffer.
-        unsafe { self.ctx.device.update_descriptor_sets(&[write], &[]) };
+        self.write_image(
+            binding,
+            vk::DescriptorType::STORAGE_IMAGE,
+            image.view,
+            vk::Sampler::null(),
+            vk::ImageLayout::GENERAL,
+        );
     }
 
     /// Points `binding` at one mip level of an image sampled in GENERAL
     /// layout (a level of a chain that compute shaders write and read in
     /// turn).
     pub fn write_sampled_mip(&self, binding: u32, view: &MipView, sampler: &Sampler) {
-        let infos = [vk::DescriptorImageInfo {
-            sampler: sampler.handle,
-            image_view: view.view,
-            image_layout: vk::ImageLayout::GENERAL,
-        }];
-        let write = vk::WriteDescriptorSet::default()
-            .dst_set(self.handle)
-            .dst_binding(binding)
-            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-            .image_info(&infos);
-        // SAFETY: the set is not in use by a pending command buffer.
-        unsafe { self.ctx.device.update_descriptor_sets(&[write], &[]) };
+        self.write_image(
+            binding,
+            vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            view.view,
+            sampler.handle,
+            vk::ImageLayout::GENERAL,
+        );
     }
 
     /// Points `binding` at one mip level of a storage image, read and
     /// written in GENERAL layout.
     pub fn write_storage_mip(&self, binding: u32, view: &MipView) {
+        self.write_image(
+            binding,
+            vk::DescriptorType::STORAGE_IMAGE,
+            view.view,
+            vk::Sampler::null(),
+            vk::ImageLayout::GENERAL,
+        );
+    }
+
+    /// Points `binding` (of `kind`) at `image_view` with `sampler` (null
+    /// for storage images), read in `image_layout`.
+    fn write_image(
+        &self,
+        binding: u32,
+        kind: vk::DescriptorType,
+        image_view: vk::ImageView,
+        sampler: vk::Sampler,
+        image_layout: vk::ImageLayout,
+    ) {
         let infos = [vk::DescriptorImageInfo {
-            sampler: vk::Sampler::null(),
-            image_view: view.view,
-            image_layout: vk::ImageLayout::GENERAL,
+            sampler,
+            image_view,
+            image_layout,
         }];
         let write = vk::WriteDescriptorSet::default()
             .dst_set(self.handle)
             .dst_binding(binding)
-            .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
+            .descriptor_type(kind)
             .image_info(&infos);
-        // SAFETY: the set is not in use by a pending command buffer.
+        // SAFETY: the set is not in use by a pending command buffer; the
+        // view and sampler (if any) are alive and match `kind`.
         unsafe { self.ctx.device.update_descriptor_sets(&[write], &[]) };
     }
 
@@ -214,17 +219,12 @@ impl DescriptorSet {
         } else {
             vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL
         };
-        let infos = [vk::DescriptorImageInfo {
-            sampler: vk::Sampler::null(),
-            image_view: image.view,
+        self.write_image(
+            binding,
+            vk::DescriptorType::INPUT_ATTACHMENT,
+            image.view,
+            vk::Sampler::null(),
             image_layout,
-        }];
-        let write = vk::WriteDescriptorSet::default()
-            .dst_set(self.handle)
-            .dst_binding(binding)
-            .descriptor_type(vk::DescriptorType::INPUT_ATTACHMENT)
-            .image_info(&infos);
-        // SAFETY: the set is not in use by a pending command buffer.
-        unsafe { self.ctx.device.update_descriptor_sets(&[write], &[]) };
+        );
     }
 }

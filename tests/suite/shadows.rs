@@ -164,13 +164,7 @@ fn a_plane_alone_does_not_shadow_itself() {
     let off = common::render(&top_view(320, false, 75.0, "pcf3", UNDER), false).output;
     for filter in ["none", "pcf3", "pcf5"] {
         let on = common::render(&top_view(320, true, 75.0, filter, UNDER), false).output;
-        let worst = on
-            .data
-            .iter()
-            .zip(&off.data)
-            .map(|(a, b)| a.abs_diff(*b))
-            .max()
-            .unwrap_or(0);
+        let worst = largest_difference(&on, &off);
         assert!(worst <= 1, "{filter}: a pixel moved by {worst}/255");
         // Lit: kd (0.8) times cos 75° plus the ambient 0.08, tone-mapped,
         // far above the ambient alone.
@@ -221,14 +215,18 @@ fn an_object_that_casts_no_shadow_leaves_the_plane_lit() {
     let ball = BALL.replace("translate", "casts_shadows = false\ntranslate");
     let on = common::render(&top_view(320, true, 45.0, "pcf3", &ball), false).output;
     let off = common::render(&top_view(320, false, 45.0, "pcf3", BALL), false).output;
-    let worst = on
-        .data
-        .iter()
-        .zip(&off.data)
-        .map(|(a, b)| a.abs_diff(*b))
-        .max()
-        .unwrap_or(0);
+    let worst = largest_difference(&on, &off);
     assert!(worst <= 1, "a pixel moved by {worst}/255");
+}
+
+/// The largest difference of one channel between two 8-bit images.
+fn largest_difference(a: &Pixels<u8>, b: &Pixels<u8>) -> u8 {
+    a.data
+        .iter()
+        .zip(&b.data)
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap_or(0)
 }
 
 /// Bad values name the field and the reason.

@@ -149,9 +149,20 @@ impl Occluders {
     /// 1 when nothing but object `own` (`Scene::objects` index) meets the
     /// ray from the world point `p` along `to_light`, else 0.
     pub(super) fn visibility(&self, own: usize, p: DVec3, to_light: DVec3) -> f64 {
+        self.visibility_along(own, p, to_light, f64::INFINITY)
+    }
+
+    /// 1 when nothing but object `own` meets the segment from the world
+    /// point `p` to the point light at `light`, else 0.
+    pub(super) fn visibility_to(&self, own: usize, p: DVec3, light: DVec3) -> f64 {
+        self.visibility_along(own, p, light - p, 1.0)
+    }
+
+    /// 1 when nothing but object `own` meets `p + t d` for `0 < t < t_max`.
+    fn visibility_along(&self, own: usize, p: DVec3, d: DVec3, t_max: f64) -> f64 {
         let ray = ShadowRay {
             origin: p,
-            direction: to_light,
+            direction: d,
         };
         // `traverse` rather than `traverse_iterator`: the iterator's stack
         // has a fixed 32 entries, which a deep tree would overflow.
@@ -160,30 +171,7 @@ impl Occluders {
             .traverse(&ray, &self.casters)
             .into_iter()
             .filter(|caster| caster.object != own)
-            .any(|caster| caster.blocks(p, to_light));
-        if blocked {
-            0.0
-        } else {
-            1.0
-        }
-    }
-}
-
-impl Occluders {
-    /// 1 when nothing but object `own` meets the segment from the world
-    /// point `p` to the point light at `light`, else 0.
-    pub(super) fn visibility_to(&self, own: usize, p: DVec3, light: DVec3) -> f64 {
-        let to_light = light - p;
-        let ray = ShadowRay {
-            origin: p,
-            direction: to_light,
-        };
-        let blocked = self
-            .bvh
-            .traverse(&ray, &self.casters)
-            .into_iter()
-            .filter(|caster| caster.object != own)
-            .any(|caster| caster.blocks_within(p, to_light, 1.0));
+            .any(|caster| caster.blocks_within(p, d, t_max));
         if blocked {
             0.0
         } else {
@@ -193,11 +181,6 @@ impl Occluders {
 }
 
 impl Caster {
-    /// Whether the surface meets the world-space ray `p + t d`, `t > 0`.
-    fn blocks(&self, p: DVec3, d: DVec3) -> bool {
-        self.blocks_within(p, d, f64::INFINITY)
-    }
-
     /// Whether the surface meets the world-space ray `p + t d` for
     /// `0 < t < t_max`.
     fn blocks_within(&self, p: DVec3, d: DVec3, t_max: f64) -> bool {

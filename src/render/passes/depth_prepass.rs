@@ -68,10 +68,25 @@ impl PassType for Pass {
     }
 }
 
-/// The vertex attributes of `object.vert`'s plainest variant, which depth-
-/// only pipelines use: the position and the normal.
-pub(super) fn depth_only_attributes() -> [VertexAttribute; 2] {
-    [
+/// How a depth-only pipeline tests and writes depth.
+pub(super) struct DepthOnly {
+    /// One draw per instance batch (`object.vert`'s INSTANCED variant).
+    pub instanced: bool,
+    pub cull_mode: CullModeFlags,
+    pub depth_test: CompareOp,
+    pub depth_bias: Option<(f32, f32)>,
+}
+
+/// A depth-only pipeline over `object.vert`'s plainest variant (position
+/// and normal; no fragment stage) in `setup`'s subpass: the depth pre-pass
+/// and the shadow pass draw with these.
+pub(super) fn depth_only_pipeline(
+    setup: &PassSetup<'_>,
+    how: DepthOnly,
+) -> Result<GraphicsPipeline, RenderError> {
+    let resources = setup.scene_resources()?;
+    let render_pass = setup.render_pass()?;
+    let attributes = [
         VertexAttribute {
             location: 0,
             format: Format::R32G32B32_SFLOAT,
@@ -82,7 +97,40 @@ pub(super) fn depth_only_attributes() -> [VertexAttribute; 2] {
             format: Format::R32G32B32_SFLOAT,
             offset: std::mem::offset_of!(Vertex, normal) as u32,
         },
-    ]
+    ];
+    let instance = if how.instanced {
+        instance_attributes()
+    } else {
+        Vec::new()
+    };
+    // The instanced variant reads its model matrix per instance;
+    // `gl_Position` is the same expression of the same values.
+    let features = ObjectVertFeatures::default().with(ObjectVertFeatures::INSTANCED, how.instanced);
+    let vertex = ShaderModule::new(setup.ctx, shaders::OBJECT_VERT.spirv(features))?;
+    Ok(GraphicsPipeline::new(
+        setup.ctx,
+        &resources.layout,
+        &render_pass.render_pass,
+        &GraphicsPipelineDesc {
+            vertex_shader: &vertex,
+            fragment_shader: None,
+            specialization: &[],
+            vertex_stride: std::mem::size_of::<Vertex>() as u32,
+            vertex_attributes: &attributes,
+            instance_stride: if how.instanced {
+                std::mem::size_of::<InstanceTransform>() as u32
+            } else {
+                0
+            },
+            instance_attributes: &instance,
+            cull_mode: how.cull_mode,
+            depth_test: Some(how.depth_test),
+            depth_write: true,
+            depth_bias: how.depth_bias,
+            blend: &[],
+            subpass: setup.subpass,
+        },
+    )?)
 }
 
 fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
@@ -94,51 +142,24 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
         .chain(setup.plan.hidden.iter().filter(|d| !d.pipeline.blended))
         .collect();
     let mut pipelines = [None, None, None, None];
-    if !every.is_empty() {
-        let resources = setup.scene_resources()?;
-        let render_pass = setup.render_pass()?;
-        let attributes = depth_only_attributes();
-        let instance = instance_attributes();
-        for (i, pipeline) in pipelines.iter_mut().enumerate() {
-            let Some(d) = every.iter().find(|d| slot(d) == i) else {
-                continue;
-            };
-            let (two_sided, instanced) = (d.pipeline.two_sided, d.pipeline.instanced);
-            // The instanced variant reads its model matrix per instance;
-            // `gl_Position` is the same expression of the same values.
-            let features =
-                ObjectVertFeatures::default().with(ObjectVertFeatures::INSTANCED, instanced);
-            let vertex = ShaderModule::new(setup.ctx, shaders::OBJECT_VERT.spirv(features))?;
-            *pipeline = Some(GraphicsPipeline::new(
-                setup.ctx,
-                &resources.layout,
-                &render_pass.render_pass,
-                &GraphicsPipelineDesc {
-                    vertex_shader: &vertex,
-                    fragment_shader: None,
-                    specialization: &[],
-                    vertex_stride: std::mem::size_of::<Vertex>() as u32,
-                    vertex_attributes: &attributes,
-                    instance_stride: if instanced {
-                        std::mem::size_of::<InstanceTransform>() as u32
-                    } else {
-                        0
-                    },
-                    instance_attributes: if instanced { &instance } else { &[] },
-                    cull_mode: if two_sided {
-                        CullModeFlags::NONE
-                    } else {
-                        CullModeFlags::BACK
-                    },
-                    // Reversed-Z: nearer surfaces have larger depth.
-                    depth_test: Some(CompareOp::GREATER),
-                    depth_write: true,
-                    depth_bias: None,
-                    blend: &[],
-                    subpass: setup.subpass,
+    for (i, pipeline) in pipelines.iter_mut().enumerate() {
+        let Some(d) = every.iter().find(|d| slot(d) == i) else {
+            continue;
+        };
+        *pipeline = Some(depth_only_pipeline(
+            setup,
+            DepthOnly {
+                instanced: d.pipeline.instanced,
+                cull_mode: if d.pipeline.two_sided {
+                    CullModeFlags::NONE
+                } else {
+                    CullModeFlags::BACK
                 },
-            )?);
-        }
+                // Reversed-Z: nearer surfaces have larger depth.
+                depth_test: CompareOp::GREATER,
+                depth_bias: None,
+            },
+        )?);
     }
     Ok(Box::new(DepthPrepass { draws, pipelines }))
 }

@@ -12,21 +12,16 @@
 //! shadow it where the light grazes it. Where it looks from is
 //! `FramePlan::shadow` (`render::shadow_view`).
 
-use super::depth_prepass::depth_only_attributes;
-use super::surface::instance_attributes;
+use super::depth_prepass::{depth_only_pipeline, DepthOnly};
 use super::{PassResources, PassSetup, PassType, RecordPass};
-use crate::mesh::Vertex;
-use crate::render::gpu_types::InstanceTransform;
 use crate::render::plan::{attachment, Draw, FramePlan, FrameShape, PassIo};
 use crate::render::scene_resources::SceneResources;
 use crate::render::shadow_view;
 use crate::render::RenderError;
 use crate::scene::Scene;
 use crate::shader_ids::{FRAME_SET, OBJECT_SET};
-use crate::shaders::{self, ObjectVertFeatures};
 use crate::vk::{
     CommandBuffer, CompareOp, CullModeFlags, DepthUse, DescriptorSet, GraphicsPipeline,
-    GraphicsPipelineDesc, ShaderModule,
 };
 
 /// The depth bias's constant part, in units of the map's depth precision.
@@ -76,45 +71,21 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
         .as_ref()
         .map_or_else(Vec::new, |view| view.casters.clone());
     let mut pipelines = [None, None];
-    if !casters.is_empty() {
-        let resources = setup.scene_resources()?;
-        let render_pass = setup.render_pass()?;
-        let attributes = depth_only_attributes();
-        let instance = instance_attributes();
-        for (slot, pipeline) in pipelines.iter_mut().enumerate() {
-            let instanced = slot == 1;
-            if !casters.iter().any(|d| d.pipeline.instanced == instanced) {
-                continue;
-            }
-            let features =
-                ObjectVertFeatures::default().with(ObjectVertFeatures::INSTANCED, instanced);
-            let vertex = ShaderModule::new(setup.ctx, shaders::OBJECT_VERT.spirv(features))?;
-            *pipeline = Some(GraphicsPipeline::new(
-                setup.ctx,
-                &resources.layout,
-                &render_pass.render_pass,
-                &GraphicsPipelineDesc {
-                    vertex_shader: &vertex,
-                    fragment_shader: None,
-                    specialization: &[],
-                    vertex_stride: std::mem::size_of::<Vertex>() as u32,
-                    vertex_attributes: &attributes,
-                    instance_stride: if instanced {
-                        std::mem::size_of::<InstanceTransform>() as u32
-                    } else {
-                        0
-                    },
-                    instance_attributes: if instanced { &instance } else { &[] },
-                    cull_mode: CullModeFlags::NONE,
-                    // Forward depth: nearer the light is smaller.
-                    depth_test: Some(CompareOp::LESS),
-                    depth_write: true,
-                    depth_bias: Some((BIAS_CONSTANT, BIAS_SLOPE)),
-                    blend: &[],
-                    subpass: setup.subpass,
-                },
-            )?);
+    for (slot, pipeline) in pipelines.iter_mut().enumerate() {
+        let instanced = slot == 1;
+        if !casters.iter().any(|d| d.pipeline.instanced == instanced) {
+            continue;
         }
+        *pipeline = Some(depth_only_pipeline(
+            setup,
+            DepthOnly {
+                instanced,
+                cull_mode: CullModeFlags::NONE,
+                // Forward depth: nearer the light is smaller.
+                depth_test: CompareOp::LESS,
+                depth_bias: Some((BIAS_CONSTANT, BIAS_SLOPE)),
+            },
+        )?);
     }
     Ok(Box::new(ShadowPass {
         casters,
