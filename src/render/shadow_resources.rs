@@ -156,7 +156,7 @@ fn uniforms(
         reach: [f32::MAX; 4],
         texel: [0.0; 4],
         params: [
-            1.0 / scene.output.shadow_map as f32,
+            1.0 / view.side as f32,
             view.tiles.0 as f32,
             view.tiles.1 as f32,
             if view.sun { 1.0 } else { 0.0 },

@@ -40,6 +40,10 @@ pub struct ShadowView {
     /// The draws drawn into the map: every opaque draw, in view or not,
     /// whose objects cast shadows (and may shadow something in view).
     pub casters: Vec<Draw>,
+    /// A tile's width in texels (`[output] shadow_map`).
+    pub side: u32,
+    /// Texels across the lookup's filter (`[output] shadow_filter`).
+    pub taps: u32,
 }
 
 /// One cascade: the part of the view up to some distance from the camera,
@@ -364,6 +368,8 @@ impl ShadowView {
             sun: fitting.sun,
             point: None,
             casters,
+            side,
+            taps: scene.output.shadow_filter.taps(),
         })
     }
 }
@@ -531,6 +537,8 @@ fn cube_faces(
         sun: false,
         point: Some(position),
         casters,
+        side,
+        taps: scene.output.shadow_filter.taps(),
     }
 }
 

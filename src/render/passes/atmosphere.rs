@@ -163,7 +163,8 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
         ],
         &resources.static_constants(),
         &shadow
-            .map(|_| (SPEC_SHADOW_TAPS, setup.scene.output.shadow_filter.taps()))
+            .and(setup.plan.shadow.as_ref())
+            .map(|view| (SPEC_SHADOW_TAPS, view.taps))
             .into_iter()
             .collect::<Vec<_>>(),
     ]

@@ -65,11 +65,11 @@ impl PassType for Pass {
 }
 
 fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
-    let casters = setup
+    let (casters, side) = setup
         .plan
         .shadow
         .as_ref()
-        .map_or_else(Vec::new, |view| view.casters.clone());
+        .map_or((Vec::new(), 0), |view| (view.casters.clone(), view.side));
     let mut pipelines = [None, None];
     for (slot, pipeline) in pipelines.iter_mut().enumerate() {
         let instanced = slot == 1;
@@ -89,7 +89,7 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     }
     Ok(Box::new(ShadowPass {
         casters,
-        side: setup.scene.output.shadow_map,
+        side,
         pipelines,
     }))
 }

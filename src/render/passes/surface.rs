@@ -191,7 +191,7 @@ impl SurfacePass {
                 let specialization = specialization(
                     &key,
                     encode_srgb,
-                    setup.scene.output.shadow_filter.taps(),
+                    setup.plan.shadow.as_ref().map_or(1, |s| s.taps),
                     static_lights::constants(
                         setup.scene,
                         resources.light_anchor,
