@@ -17,6 +17,32 @@ pub struct SceneGeometry {
     pub meshes: Vec<Arc<Mesh>>,
     /// `bounds[i]` is object i's world-space bounding sphere `(centre, radius)`.
     pub bounds: Vec<(glam::DVec3, f32)>,
+    /// `boxes[i]` is object i's object-space box `(min, max)` around its
+    /// vertices, so that plans need not walk the vertices again.
+    pub boxes: Vec<(glam::Vec3, glam::Vec3)>,
+}
+
+impl SceneGeometry {
+    /// Object `i`'s world-space axis-aligned box: its object-space box's
+    /// corners moved by the object's transform (in `scene`).
+    pub fn world_box(&self, scene: &Scene, i: usize) -> (glam::DVec3, glam::DVec3) {
+        let (min, max) = self.boxes[i];
+        let model = scene.objects[i].transform.matrix_f64();
+        (0..8)
+            .map(|k| {
+                let pick = |bit: usize, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
+                let corner = glam::Vec3::new(
+                    pick(1, min.x, max.x),
+                    pick(2, min.y, max.y),
+                    pick(4, min.z, max.z),
+                );
+                model.transform_point3(corner.as_dvec3())
+            })
+            .fold(
+                (glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY),
+                |(lo, hi), p| (lo.min(p), hi.max(p)),
+            )
+    }
 }
 
 impl SceneGeometry {
@@ -26,6 +52,7 @@ impl SceneGeometry {
     pub fn new(scene: &Scene) -> Result<SceneGeometry, RenderError> {
         let mut meshes: Vec<Arc<Mesh>> = Vec::with_capacity(scene.objects.len());
         let mut bounds = Vec::with_capacity(scene.objects.len());
+        let mut boxes = Vec::with_capacity(scene.objects.len());
         for (i, (object, source)) in scene.objects.iter().zip(scene.mesh_sources()).enumerate() {
             let name = || format!("objects[{i}] \"{}\"", object.name);
             let mesh = if source < i {
@@ -54,10 +81,19 @@ impl SceneGeometry {
                     reason: "its vertices are not finite numbers (sizes too large)".into(),
                 });
             }
+            // Shared meshes share their box too.
+            boxes.push(match source < i {
+                true => boxes[source],
+                false => mesh.bounding_box().unwrap_or_default(),
+            });
             meshes.push(mesh);
             bounds.push((centre, radius));
         }
-        Ok(SceneGeometry { meshes, bounds })
+        Ok(SceneGeometry {
+            meshes,
+            bounds,
+            boxes,
+        })
     }
 }
 

@@ -21,8 +21,7 @@ pub use super::shadow_view::ShadowView;
 use super::tiles::{self, TileGroup};
 use crate::scene::material_maps::{MapKind, MapSource};
 use crate::scene::{
-    DepthPrepass, Exposure, HdrFormat, Lighting, Scene, ShadingModel, ShadowCascades,
-    ToneMapOperator, MAX_SHADOW_CASCADES,
+    DepthPrepass, Exposure, HdrFormat, Lighting, Scene, ShadingModel, ToneMapOperator,
 };
 use crate::vk::{DepthUse, Format};
 
@@ -528,18 +527,9 @@ impl FrameGraph {
     /// no attachment, so what `preflight` sizes from this graph is the same.
     pub fn new(scene: &Scene, keep_hdr: bool) -> FrameGraph {
         let prepass = scene.output.depth_prepass == DepthPrepass::On;
-        // Automatic cascades count as the most, for the same reason: the
-        // largest shadow map the frame may need.
-        let point = scene
-            .shadow_light
-            .and_then(|l| shadow_view::point_light(scene, l))
-            .is_some();
-        let cascades = match scene.output.shadow_cascades {
-            _ if point => 6,
-            ShadowCascades::Count(n) => n,
-            ShadowCascades::Auto => MAX_SHADOW_CASCADES,
-        };
-        FrameGraph::with_prepass(scene, keep_hdr, prepass, cascades)
+        // Automatic cascades count as the most, for the same reason.
+        let views = shadow_view::view_count(scene, None);
+        FrameGraph::with_prepass(scene, keep_hdr, prepass, views)
     }
 
     /// [`FrameGraph::new`] with the depth pre-pass decided by the caller
@@ -809,7 +799,7 @@ fn shadow_casting(
         .collect();
     let depths = shadow_view::caster_depths(scene, geometry, &in_view, &casters);
     Some(ShadowCasting {
-        count: shadow_view::view_count(scene, depths),
+        count: shadow_view::view_count(scene, Some(depths)),
         in_view,
         casters,
         depths,

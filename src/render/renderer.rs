@@ -24,6 +24,40 @@ use crate::vk::{
 };
 use std::sync::Arc;
 
+/// What the passes share, each present when the plan needs it. Fields
+/// drop in order: the resources before the attachments.
+struct FrameParts {
+    scene_resources: Option<SceneResources>,
+    sky_resources: Option<SkyResources>,
+    /// The exposure the exposure pass measures and the tone map applies,
+    /// when the scene asks for automatic exposure.
+    exposure: Option<Buffer>,
+    /// The shadow pass's and the shadow lookups' shared resources, when a
+    /// light casts shadows.
+    shadow_resources: Option<ShadowResources>,
+    /// The bloom chain the bloom pass writes and the tone map samples,
+    /// when the scene asks for bloom.
+    bloom: Option<Image>,
+    targets: Option<FrameTargets>,
+}
+
+impl FrameParts {
+    /// What the passes of `plan` record against.
+    fn pass_resources(&self, plan: &FramePlan) -> PassResources<'_> {
+        PassResources {
+            attachments: Attachments {
+                names: plan.attachments.iter().map(|a| a.name).collect(),
+                images: self.targets.as_ref().map_or(&[], |t| t.images.as_slice()),
+            },
+            scene: self.scene_resources.as_ref(),
+            sky: self.sky_resources.as_ref(),
+            exposure: self.exposure.as_ref(),
+            shadow: self.shadow_resources.as_ref(),
+            bloom: self.bloom.as_ref(),
+        }
+    }
+}
+
 /// Timing of one submitted frame.
 #[derive(Clone, Debug)]
 pub struct FrameTiming {
@@ -63,18 +97,7 @@ pub struct Renderer {
     /// `PrefixFrames::render_prefix`: element k records the first k passes.
     prefixes: Vec<TimedCommands>,
     passes: Vec<Box<dyn RecordPass>>,
-    scene_resources: Option<SceneResources>,
-    sky_resources: Option<SkyResources>,
-    /// The exposure the exposure pass measures and the tone map applies,
-    /// when the scene asks for automatic exposure.
-    exposure: Option<Buffer>,
-    /// The shadow pass's and the shadow lookups' shared resources, when a
-    /// light casts shadows.
-    shadow_resources: Option<ShadowResources>,
-    /// The bloom chain the bloom pass writes and the tone map samples,
-    /// when the scene asks for bloom.
-    bloom: Option<Image>,
-    targets: Option<FrameTargets>,
+    parts: FrameParts,
     plan: FramePlan,
     /// The scene's meshes, kept so that a new view can be planned (and,
     /// when the plan changes, built) without tessellating again; `None`
@@ -175,20 +198,17 @@ impl Renderer {
             _ => None,
         };
         // The shadow set first too: the object pipelines' layout holds it.
-        let shadow_resources = match (&targets, plan.attachment(attachment::SHADOW_MAP)) {
-            (Some(targets), Some(_)) if plan.shadow.is_some() => {
-                let index = plan
-                    .attachments
-                    .iter()
-                    .position(|a| a.name == attachment::SHADOW_MAP)
-                    .expect("found above");
-                Some(ShadowResources::new(
-                    ctx,
-                    scene,
-                    &plan,
-                    &targets.images[index],
-                )?)
-            }
+        let shadow_map = plan
+            .attachments
+            .iter()
+            .position(|a| a.name == attachment::SHADOW_MAP);
+        let shadow_resources = match (&targets, shadow_map, &plan.shadow) {
+            (Some(targets), Some(map), Some(_)) => Some(ShadowResources::new(
+                ctx,
+                scene,
+                &plan,
+                &targets.images[map],
+            )?),
             _ => None,
         };
         let scene_resources = if plan.draws().next().is_some() {
@@ -207,15 +227,15 @@ impl Renderer {
             None
         };
         crate::interrupt::check()?;
-        let frame_resources = frame_resources(
-            &plan,
-            targets.as_ref(),
-            scene_resources.as_ref(),
-            sky_resources.as_ref(),
-            exposure.as_ref(),
-            shadow_resources.as_ref(),
-            bloom.as_ref(),
-        );
+        let parts = FrameParts {
+            scene_resources,
+            sky_resources,
+            exposure,
+            shadow_resources,
+            bloom,
+            targets,
+        };
+        let frame_resources = parts.pass_resources(&plan);
 
         // Create every pass, each subpass with its render pass and its
         // index there.
@@ -227,7 +247,7 @@ impl Renderer {
                 scene,
                 plan: &plan,
                 decl,
-                render_pass: slot.and_then(|(run, _)| targets.as_ref()?.runs.get(run)),
+                render_pass: slot.and_then(|(run, _)| parts.targets.as_ref()?.runs.get(run)),
                 subpass: slot.map_or(0, |(_, subpass)| subpass),
                 frame: &frame_resources,
                 hdr_input,
@@ -235,29 +255,17 @@ impl Renderer {
             passes.push(decl.pass.create(&setup)?);
         }
 
-        let recording = std::time::Instant::now();
-        let frame = record(
-            ctx,
-            &plan,
-            &passes,
-            targets.as_ref(),
-            &frame_resources,
-            usize::MAX,
-        )?;
-        let record_seconds = recording.elapsed().as_secs_f64();
         drop(frame_resources);
+        let recording = std::time::Instant::now();
+        let frame = record(ctx, &plan, &passes, &parts, usize::MAX)?;
+        let record_seconds = recording.elapsed().as_secs_f64();
 
         Ok(Renderer {
             frame,
             record_seconds,
             prefixes: Vec::new(),
             passes,
-            scene_resources,
-            sky_resources,
-            exposure,
-            shadow_resources,
-            bloom,
-            targets,
+            parts,
             plan,
             geometry,
             keep_hdr,
@@ -285,7 +293,7 @@ impl Renderer {
         let plan = FramePlan::new(scene, &geometry, self.keep_hdr);
         // The atmosphere's pipelines hold its unchanging fields as
         // constants; a sky that changes them needs new pipelines.
-        let sky_kept = match (&self.sky_resources, &scene.sky) {
+        let sky_kept = match (&self.parts.sky_resources, &scene.sky) {
             (Some(resources), Some(sky)) => {
                 resources.keeps_static_fields(sky, &scene.camera, &plan)
             }
@@ -293,13 +301,13 @@ impl Renderer {
             _ => false,
         };
         if sky_kept && same_resources(&self.plan, &plan) {
-            if let Some(resources) = &mut self.scene_resources {
+            if let Some(resources) = &mut self.parts.scene_resources {
                 resources.set_view(scene, &plan);
             }
-            if let (Some(resources), Some(sky)) = (&mut self.sky_resources, &scene.sky) {
+            if let (Some(resources), Some(sky)) = (&mut self.parts.sky_resources, &scene.sky) {
                 resources.set_view(sky, &scene.camera, &plan);
             }
-            if let Some(resources) = &mut self.shadow_resources {
+            if let Some(resources) = &mut self.parts.shadow_resources {
                 resources.set_view(scene, &plan)?;
             }
             for pass in &mut self.passes {
@@ -310,26 +318,9 @@ impl Renderer {
             } else {
                 // Only the draw order changed: record the frame again with
                 // the same pipelines, buffers and attachments.
-                let frame_resources = frame_resources(
-                    &plan,
-                    self.targets.as_ref(),
-                    self.scene_resources.as_ref(),
-                    self.sky_resources.as_ref(),
-                    self.exposure.as_ref(),
-                    self.shadow_resources.as_ref(),
-                    self.bloom.as_ref(),
-                );
                 let recording = std::time::Instant::now();
-                let frame = record(
-                    &self.ctx,
-                    &plan,
-                    &self.passes,
-                    self.targets.as_ref(),
-                    &frame_resources,
-                    usize::MAX,
-                )?;
+                let frame = record(&self.ctx, &plan, &self.passes, &self.parts, usize::MAX)?;
                 self.record_seconds = recording.elapsed().as_secs_f64();
-                drop(frame_resources);
                 self.prefixes.clear();
                 // The old command buffer is not pending: render_frame
                 // waited for it.
@@ -354,7 +345,7 @@ impl Renderer {
             .attachments
             .iter()
             .position(|a| a.name == attachment::OUTPUT)?;
-        self.targets.as_ref()?.images.get(index)
+        self.parts.targets.as_ref()?.images.get(index)
     }
 
     /// What building this frame cost beyond its passes, as named values
@@ -366,13 +357,13 @@ impl Renderer {
     /// (`od_table_bake_ms`) when the scene has an atmosphere.
     pub fn setup_measures(&self) -> Vec<(&'static str, f64)> {
         let mut measures = vec![("record_ms", self.record_seconds * 1e3)];
-        if let Some(resources) = &self.scene_resources {
+        if let Some(resources) = &self.parts.scene_resources {
             let kib = |bytes: u64| bytes as f64 / 1024.0;
             measures.push(("geometry_kib", kib(resources.geometry.size())));
             let instances = resources.instances.as_ref().map_or(0, |b| b.size());
             measures.push(("instances_kib", kib(instances)));
         }
-        if let Some(sky) = &self.sky_resources {
+        if let Some(sky) = &self.parts.sky_resources {
             measures.push(("od_table_kib", sky.table_bytes as f64 / 1024.0));
             measures.push(("od_table_bake_ms", sky.table_bake_seconds * 1e3));
         }
@@ -448,28 +439,9 @@ impl super::PrefixFrames for Renderer {
             return self.frame.submit();
         }
         if self.prefixes.is_empty() {
-            let frame_resources = frame_resources(
-                &self.plan,
-                self.targets.as_ref(),
-                self.scene_resources.as_ref(),
-                self.sky_resources.as_ref(),
-                self.exposure.as_ref(),
-                self.shadow_resources.as_ref(),
-                self.bloom.as_ref(),
-            );
             let prefixes = (0..self.pass_count())
-                .map(|k| {
-                    record(
-                        &self.ctx,
-                        &self.plan,
-                        &self.passes,
-                        self.targets.as_ref(),
-                        &frame_resources,
-                        k,
-                    )
-                })
+                .map(|k| record(&self.ctx, &self.plan, &self.passes, &self.parts, k))
                 .collect::<Result<Vec<_>, _>>()?;
-            drop(frame_resources);
             self.prefixes = prefixes;
         }
         self.prefixes[recorded].submit()
@@ -497,10 +469,11 @@ fn record(
     ctx: &Arc<Context>,
     plan: &FramePlan,
     passes: &[Box<dyn RecordPass>],
-    targets: Option<&FrameTargets>,
-    frame_resources: &PassResources<'_>,
+    parts: &FrameParts,
     recorded: usize,
 ) -> Result<TimedCommands, RenderError> {
+    let frame_resources = &parts.pass_resources(plan);
+    let targets = parts.targets.as_ref();
     let frame = TimedCommands::begin(ctx, plan.passes.len() as u32)?;
     let cmd = frame.cmd();
     let slots = plan.subpass_slots();
@@ -530,29 +503,6 @@ fn record(
         frame.stamp();
     }
     frame.finish()
-}
-
-/// What the passes record against, from the renderer's parts.
-fn frame_resources<'a>(
-    plan: &FramePlan,
-    targets: Option<&'a FrameTargets>,
-    scene: Option<&'a SceneResources>,
-    sky: Option<&'a SkyResources>,
-    exposure: Option<&'a Buffer>,
-    shadow: Option<&'a ShadowResources>,
-    bloom: Option<&'a Image>,
-) -> PassResources<'a> {
-    PassResources {
-        attachments: Attachments {
-            names: plan.attachments.iter().map(|a| a.name).collect(),
-            images: targets.map_or(&[], |t| t.images.as_slice()),
-        },
-        scene,
-        sky,
-        exposure,
-        shadow,
-        bloom,
-    }
 }
 
 /// The bloom chain, when the plan holds the bloom pass: RGBA16F, sampled

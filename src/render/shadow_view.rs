@@ -75,11 +75,20 @@ pub fn tiles(count: u32) -> (u32, u32) {
 }
 
 /// The views a shadow map holds: a point light's six cube faces, or the
-/// cascades [`cascade_count`] gives (`depths`: the casters' in view).
-pub fn view_count(scene: &Scene, depths: (f64, f64)) -> u32 {
-    match scene.shadow_light.and_then(|l| point_light(scene, l)) {
-        Some(_) => 6,
-        None => cascade_count(scene, depths),
+/// cascades [`cascade_count`] gives (`depths`: the casters' in view; with
+/// `None`, before any view is known, `auto` counts as the most it can
+/// give, the largest map the frame may need).
+pub fn view_count(scene: &Scene, depths: Option<(f64, f64)>) -> u32 {
+    match (
+        scene.shadow_light.and_then(|l| point_light(scene, l)),
+        depths,
+    ) {
+        (Some(_), _) => 6,
+        (None, Some(depths)) => cascade_count(scene, depths),
+        (None, None) => match scene.output.shadow_cascades {
+            ShadowCascades::Count(n) => n,
+            ShadowCascades::Auto => MAX_SHADOW_CASCADES,
+        },
     }
 }
 
@@ -125,40 +134,19 @@ pub fn caster_depths(
     let near_plane = f64::from(scene.camera.near);
     let (mut near, mut far) = (f64::INFINITY, near_plane);
     let eye = scene.camera.eye;
-    for d in casters {
-        for o in d.objects().iter().filter(|o| in_view.contains(o)) {
-            let Some((min, max)) = geometry.meshes[*o].bounding_box() else {
-                continue;
-            };
-            let model = scene.objects[*o].transform.matrix_f64();
-            let corners = (0..8).map(|k| {
-                let pick = |bit: usize, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
-                let corner = glam::Vec3::new(
-                    pick(1, min.x, max.x),
-                    pick(2, min.y, max.y),
-                    pick(4, min.z, max.z),
-                );
-                model.transform_point3(corner.as_dvec3())
-            });
-            let (lo, hi) = corners.fold(
-                (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-                |(lo, hi), p| (lo.min(p), hi.max(p)),
-            );
-            near = near.min(eye.clamp(lo, hi).distance(eye));
-            far = far.max(
-                (0..8)
-                    .map(|k| {
-                        let pick = |bit: usize, a: f64, b: f64| if k & bit == 0 { a } else { b };
-                        DVec3::new(
-                            pick(1, lo.x, hi.x),
-                            pick(2, lo.y, hi.y),
-                            pick(4, lo.z, hi.z),
-                        )
-                        .distance(eye)
-                    })
-                    .fold(0.0, f64::max),
-            );
-        }
+    let mut seen = vec![false; scene.objects.len()];
+    for &o in in_view {
+        seen[o] = true;
+    }
+    for &o in casters
+        .iter()
+        .flat_map(|d| d.objects())
+        .filter(|&&o| seen[o])
+    {
+        let (lo, hi) = geometry.world_box(scene, o);
+        near = near.min(eye.clamp(lo, hi).distance(eye));
+        // The box's corner farthest from the eye.
+        far = far.max((eye - lo).abs().max((hi - eye).abs()).length());
     }
     (near.max(near_plane).min(far), far)
 }
@@ -216,6 +204,12 @@ pub fn may_shadow(
         // size) still counts as on it: objects resting on a plane touch it.
         let tolerance = 1e-6 * f64::from(geometry.bounds[o].1);
         in_view.iter().filter(|&&r| r != o).any(|&r| {
+            // Wholly on the lit side by its bounding sphere: no vertex to
+            // look at (the usual case, a plan for every frame).
+            let (centre, radius) = geometry.bounds[r];
+            if (centre - origin).dot(lit_side) >= f64::from(radius) {
+                return false;
+            }
             let model = scene.objects[r].transform.matrix_f64();
             geometry.meshes[r].vertices.iter().any(|v| {
                 let p = model.transform_point3(glam::Vec3::from(v.position).as_dvec3());

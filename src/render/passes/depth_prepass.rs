@@ -21,12 +21,13 @@ use super::{PassResources, PassSetup, PassType, RecordPass};
 use crate::mesh::Vertex;
 use crate::render::gpu_types::InstanceTransform;
 use crate::render::plan::{attachment, Draw, FramePlan, FrameShape, PassIo};
+use crate::render::scene_resources::SceneResources;
 use crate::render::RenderError;
 use crate::scene::Scene;
 use crate::shader_ids::{FRAME_SET, OBJECT_SET};
 use crate::shaders::{self, ObjectVertFeatures};
 use crate::vk::{
-    CommandBuffer, CompareOp, CullModeFlags, DepthUse, Format, GraphicsPipeline,
+    CommandBuffer, CompareOp, CullModeFlags, DepthUse, DescriptorSet, Format, GraphicsPipeline,
     GraphicsPipelineDesc, ShaderModule, VertexAttribute,
 };
 
@@ -133,6 +134,56 @@ pub(super) fn depth_only_pipeline(
     )?)
 }
 
+/// Draws recorded with depth-only pipelines: each draw's pipeline by its
+/// slot, the frame block from `frame_set`, the object's block bound per
+/// draw.
+pub(super) struct DepthOnlyDraws<'a> {
+    pub pipelines: &'a [Option<GraphicsPipeline>],
+    pub frame_set: &'a DescriptorSet,
+    /// The pass's name, for the error of a missing pipeline.
+    pub pass: &'static str,
+}
+
+impl DepthOnlyDraws<'_> {
+    /// Records `draws` (each with its pipeline slot) by `draw` (one of
+    /// `SceneResources`' ways to draw), binding a pipeline only when the
+    /// slot changes. Draws without triangles are skipped, as the surface
+    /// pass skips them.
+    pub fn record<'d>(
+        &self,
+        cmd: &CommandBuffer,
+        resources: &SceneResources,
+        draws: impl Iterator<Item = (&'d Draw, usize)>,
+        draw: fn(&SceneResources, &CommandBuffer, &Draw) -> Result<(), RenderError>,
+    ) -> Result<(), RenderError> {
+        let layout = &resources.layout;
+        let mut bound: Option<usize> = None;
+        for (d, slot) in draws {
+            if resources.ranges[d.object].index_count == 0 {
+                continue;
+            }
+            if bound != Some(slot) {
+                let pipeline = self.pipelines[slot].as_ref().ok_or_else(|| {
+                    RenderError::Frame(format!("the {} has no pipeline for a draw", self.pass))
+                })?;
+                cmd.bind_pipeline(pipeline);
+                if bound.is_none() {
+                    cmd.bind_descriptor_set(layout, FRAME_SET, self.frame_set, &[]);
+                }
+                bound = Some(slot);
+            }
+            cmd.bind_descriptor_set(
+                layout,
+                OBJECT_SET,
+                &resources.object_set,
+                &[resources.block_offsets[d.object]],
+            );
+            draw(resources, cmd, d)?;
+        }
+        Ok(())
+    }
+}
+
 fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     let draws = setup.plan.opaque.clone();
     // Pipelines for the opaque draws out of view too, so a view that
@@ -169,33 +220,13 @@ impl RecordPass for DepthPrepass {
         let Some(resources) = frame.scene else {
             return Ok(());
         };
-        let layout = &resources.layout;
-        let mut bound: Option<usize> = None;
-        for d in &self.draws {
-            // Draws without triangles are skipped, as the surface pass does.
-            if resources.ranges[d.object].index_count == 0 {
-                continue;
-            }
-            let slot = slot(d);
-            if bound != Some(slot) {
-                let pipeline = self.pipelines[slot].as_ref().ok_or_else(|| {
-                    RenderError::Frame("the depth pre-pass has no pipeline for a draw".into())
-                })?;
-                cmd.bind_pipeline(pipeline);
-                if bound.is_none() {
-                    cmd.bind_descriptor_set(layout, FRAME_SET, &resources.frame_set, &[]);
-                }
-                bound = Some(slot);
-            }
-            cmd.bind_descriptor_set(
-                layout,
-                OBJECT_SET,
-                &resources.object_set,
-                &[resources.block_offsets[d.object]],
-            );
-            resources.draw(cmd, d)?;
-        }
-        Ok(())
+        let draws = self.draws.iter().map(|d| (d, slot(d)));
+        let pipelines = DepthOnlyDraws {
+            pipelines: &self.pipelines,
+            frame_set: &resources.frame_set,
+            pass: "depth pre-pass",
+        };
+        pipelines.record(cmd, resources, draws, SceneResources::draw)
     }
 
     /// Takes the new view's draw order (the same draws, sorted from the

@@ -10,19 +10,16 @@
 //! view), with both faces (a plane casts whichever side the light meets)
 //! and a slope-scaled depth bias, so a lit surface's own depth does not
 //! shadow it where the light grazes it. Where it looks from is
-//! `FramePlan::shadow` (`render::shadow_view`).
+//! `FramePlan::shadow` (`render::shadow_view`); the casters do not follow
+//! the view, so nothing here changes with it (`ShadowResources::set_view`
+//! rewrites the views).
 
-use super::depth_prepass::{depth_only_pipeline, DepthOnly};
+use super::depth_prepass::{depth_only_pipeline, DepthOnly, DepthOnlyDraws};
 use super::{PassResources, PassSetup, PassType, RecordPass};
-use crate::render::plan::{attachment, Draw, FramePlan, FrameShape, PassIo};
+use crate::render::plan::{attachment, Draw, FrameShape, PassIo};
 use crate::render::scene_resources::SceneResources;
-use crate::render::shadow_view;
 use crate::render::RenderError;
-use crate::scene::Scene;
-use crate::shader_ids::{FRAME_SET, OBJECT_SET};
-use crate::vk::{
-    CommandBuffer, CompareOp, CullModeFlags, DepthUse, DescriptorSet, GraphicsPipeline,
-};
+use crate::vk::{CommandBuffer, CompareOp, CullModeFlags, DepthUse, GraphicsPipeline};
 
 /// The depth bias's constant part, in units of the map's depth precision.
 const BIAS_CONSTANT: f32 = 1.0;
@@ -32,8 +29,10 @@ const BIAS_SLOPE: f32 = 2.0;
 
 pub struct ShadowPass {
     casters: Vec<Draw>,
-    /// A cascade's tile, in texels across.
+    /// A view's tile, in texels across, and the tiles across and down
+    /// (`ShadowView::tiles`).
     side: u32,
+    tiles: (u32, u32),
     /// Indexed by whether the draw is an instance batch.
     pipelines: [Option<GraphicsPipeline>; 2],
 }
@@ -65,11 +64,13 @@ impl PassType for Pass {
 }
 
 fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
-    let (casters, side) = setup
+    let (casters, side, tiles) = setup
         .plan
         .shadow
         .as_ref()
-        .map_or((Vec::new(), 0), |view| (view.casters.clone(), view.side));
+        .map_or((Vec::new(), 0, (1, 1)), |view| {
+            (view.casters.clone(), view.side, view.tiles)
+        });
     let mut pipelines = [None, None];
     for (slot, pipeline) in pipelines.iter_mut().enumerate() {
         let instanced = slot == 1;
@@ -90,45 +91,9 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
     Ok(Box::new(ShadowPass {
         casters,
         side,
+        tiles,
         pipelines,
     }))
-}
-
-impl ShadowPass {
-    /// Every caster, seen through `light_frame` (a cascade's frame set).
-    fn draw_casters(
-        &self,
-        cmd: &CommandBuffer,
-        resources: &SceneResources,
-        light_frame: &DescriptorSet,
-    ) -> Result<(), RenderError> {
-        let layout = &resources.layout;
-        let mut bound: Option<usize> = None;
-        for d in &self.casters {
-            if resources.ranges[d.object].index_count == 0 {
-                continue;
-            }
-            let slot = d.pipeline.instanced as usize;
-            if bound != Some(slot) {
-                let pipeline = self.pipelines[slot].as_ref().ok_or_else(|| {
-                    RenderError::Frame("the shadow pass has no pipeline for a caster".into())
-                })?;
-                cmd.bind_pipeline(pipeline);
-                if bound.is_none() {
-                    cmd.bind_descriptor_set(layout, FRAME_SET, light_frame, &[]);
-                }
-                bound = Some(slot);
-            }
-            cmd.bind_descriptor_set(
-                layout,
-                OBJECT_SET,
-                &resources.object_set,
-                &[resources.block_offsets[d.object]],
-            );
-            resources.draw_every_member(cmd, d)?;
-        }
-        Ok(())
-    }
 }
 
 impl RecordPass for ShadowPass {
@@ -136,27 +101,25 @@ impl RecordPass for ShadowPass {
         let (Some(resources), Some(shadow)) = (frame.scene, frame.shadow) else {
             return Ok(());
         };
-        // One tile of the map per cascade, each drawn from its own view.
-        let cascades = shadow.light_frame_sets.len() as u32;
-        let (across, _) = shadow_view::tiles(cascades);
-        for (c, light_frame) in shadow.light_frame_sets.iter().enumerate() {
-            let c = c as u32;
-            if cascades > 1 {
-                cmd.set_viewport(
-                    (c % across) * self.side,
-                    (c / across) * self.side,
-                    self.side,
-                    self.side,
-                );
+        // One tile of the map per view (cascade or cube face), each drawn
+        // through its own frame set.
+        let (across, _) = self.tiles;
+        for (v, light_frame) in (0u32..).zip(&shadow.light_frame_sets) {
+            if self.tiles != (1, 1) {
+                let (x, y) = ((v % across) * self.side, (v / across) * self.side);
+                cmd.set_viewport(x, y, self.side, self.side);
             }
-            self.draw_casters(cmd, resources, light_frame)?;
+            let casters = self
+                .casters
+                .iter()
+                .map(|d| (d, d.pipeline.instanced as usize));
+            let pipelines = DepthOnlyDraws {
+                pipelines: &self.pipelines,
+                frame_set: light_frame,
+                pass: "shadow pass",
+            };
+            pipelines.record(cmd, resources, casters, SceneResources::draw_every_member)?;
         }
-        Ok(())
-    }
-
-    /// The casters do not follow the view (only the light's view does,
-    /// which `ShadowResources::set_view` rewrites).
-    fn set_view(&mut self, _scene: &Scene, _plan: &FramePlan) -> Result<(), RenderError> {
         Ok(())
     }
 }
