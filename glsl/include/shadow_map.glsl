@@ -4,13 +4,14 @@
 //
 // The light's term is scaled by `shadow_light_visibility`, which the
 // shader sets once per pixel (before any light is evaluated) with
-// `shadow_visibility`; the scene light it belongs to carries
-// attenuation.w = 1 (directional lights use no attenuation otherwise), the
-// sun is marked by the block's params.w.
+// `shadow_visibility`; the light it belongs to carries colour w = 1 (a
+// scene light's block, or the sun's light when the block's params.w
+// says the sun casts the shadows).
 
 #ifdef SHADOWS
 layout(set = SHADOW_SET, binding = SHADOW_MAP_BINDING) uniform sampler2DShadow shadow_map;
-// The map holds one tile per cascade (nearest first, across then down).
+// The map holds one tile per view: per cascade (nearest first) or per
+// cube face, across then down.
 // A storage buffer, not a uniform block: lavapipe (Mesa 22.3) inlines a
 // uniform block's values into the shader at draw time, and crashed doing
 // so for the sun-lit objects' variant once a cascade indexed the block.

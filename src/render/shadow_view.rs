@@ -1,6 +1,8 @@
-//! Where the shadow map looks from: an orthographic view along the
-//! shadow-casting light, fitted to the casters that can shadow what the
-//! camera sees.
+//! Where the shadow map looks from: for a directional light or the sun,
+//! orthographic views along the light (one per cascade of the view's
+//! depth), fitted to the casters that can shadow what the camera sees; for
+//! a point light, the six faces of a cube around it. Each view is a tile
+//! of the one map ([`tiles`]).
 //!
 //! The map covers, across the light, the intersection of three boxes in
 //! the light's frame: the camera's frustum (cut at the far side of the

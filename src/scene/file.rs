@@ -30,7 +30,7 @@ use super::value_checks::{Check, Result, MAX_COLOUR, MAX_LENGTH, MIN_LENGTH};
 use super::{
     Bloom, Camera, DebugView, DepthPrepass, Exposure, HdrFormat, Light, Lighting, Material, Object,
     Output, Scene, SceneError, ShadingModel, ShadowCascades, ShadowFilter, ShadowLight, Shape,
-    TextureFilter, ToneMap, ToneMapOperator, Transform, MAX_SHADOW_MAP, MIN_SHADOW_MAP,
+    TextureFilter, ToneMap, ToneMapOperator, Transform,
 };
 
 use crate::mesh::obj;
@@ -564,7 +564,8 @@ impl Check<'_> {
             debug_view: raw.debug_view,
             static_lights: raw.static_lights,
             max_pixel_error: self.positive("output.max_pixel_error", raw.max_pixel_error)?,
-            shadow_map: self.shadow_map_size("output.shadow_map", raw.shadow_map)?,
+            shadow_map: super::shadow_map_side(raw.shadow_map)
+                .map_err(|e| self.invalid("output.shadow_map", e))?,
             shadow_filter: raw.shadow_filter,
             shadow_cascades: self.shadow_cascades(&raw.shadow_cascades)?,
         })
@@ -670,18 +671,6 @@ impl Check<'_> {
             other => format!("{other}"),
         };
         ShadowCascades::parse(&text).map_err(|e| self.invalid("output.shadow_cascades", e))
-    }
-
-    /// A shadow map size in `MIN_SHADOW_MAP..=MAX_SHADOW_MAP`.
-    fn shadow_map_size(&self, field: &str, size: u32) -> Result<u32> {
-        if (MIN_SHADOW_MAP..=MAX_SHADOW_MAP).contains(&size) {
-            Ok(size)
-        } else {
-            Err(self.invalid(
-                field,
-                format!("must be between {MIN_SHADOW_MAP} and {MAX_SHADOW_MAP} texels, got {size}"),
-            ))
-        }
     }
 
     fn light(&self, path: &str, raw: LightFile) -> Result<Light> {

@@ -251,14 +251,7 @@ pub const KNOBS: &[Knob] = &[
         values: "N: the shadow map's width and height in texels (512..=8192; list smallest first)",
         apply: |s, v| {
             let n: u32 = v.parse().map_err(|e| format!("{e}"))?;
-            if !(super::MIN_SHADOW_MAP..=super::MAX_SHADOW_MAP).contains(&n) {
-                return Err(format!(
-                    "must be between {} and {}",
-                    super::MIN_SHADOW_MAP,
-                    super::MAX_SHADOW_MAP
-                ));
-            }
-            s.output.shadow_map = n;
+            s.output.shadow_map = super::shadow_map_side(n)?;
             Ok(())
         },
         read: |s| s.output.shadow_map.to_string(),

@@ -200,6 +200,18 @@ pub const MIN_SHADOW_MAP: u32 = 512;
 /// The largest `[output] shadow_map`.
 pub const MAX_SHADOW_MAP: u32 = 8192;
 
+/// A shadow map side in `MIN_SHADOW_MAP..=MAX_SHADOW_MAP`, or why not (the
+/// scene file's field and the knob both check with it).
+pub fn shadow_map_side(side: u32) -> Result<u32, String> {
+    if (MIN_SHADOW_MAP..=MAX_SHADOW_MAP).contains(&side) {
+        Ok(side)
+    } else {
+        Err(format!(
+            "must be between {MIN_SHADOW_MAP} and {MAX_SHADOW_MAP} texels, got {side}"
+        ))
+    }
+}
+
 /// How a shadow map is filtered (`[output] shadow_filter`): depth
 /// comparisons at the nearest texel and its neighbours, averaged.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
