@@ -3,10 +3,14 @@
 // Bloom, upsampling: a level of the chain becomes the weighted mean of its
 // own downsample (OWN_WEIGHT = 1 / the levels from it to the smallest) and
 // the level below it (already upsampled the same way), blurred up with a
-// 3x3 tent filter (weights 1 2 1 / 2 4 2 / 1 2 1, over 16) of RADIUS
-// texels of that level, each tap bilinear. So each level ends as the mean
-// of every level from it down, each blurred up to it, and level 0 keeps
-// the HDR image's mean brightness.
+// 2x2 box RADIUS texels of that level wide over its bilinear
+// reconstruction: four bilinear taps at (+-RADIUS/2, +-RADIUS/2). So each
+// level ends as the mean of every level from it down, each blurred up to
+// it, and level 0 keeps the HDR image's mean brightness.
+//
+// Jimenez (2014) blurs up with a 3x3 tent (nine taps); the box is the
+// tent's half (the tent is the box convolved with itself), at under half
+// the reads, and the chain's levels below each add their own blur.
 //
 // Texel x of this level is at x/2 + 1/4 in the level below (its texel q
 // covers texels 2q and 2q+1 here).
@@ -28,11 +32,8 @@ void main() {
     }
     vec2 size = vec2(textureSize(below, 0));
     vec2 uv = (vec2(p) + 0.5) * 0.5 / size;
-    vec2 dx = vec2(RADIUS / size.x, 0.0);
-    vec2 dy = vec2(0.0, RADIUS / size.y);
-    vec3 tent = 4.0 * tap(uv)
-                + 2.0 * (tap(uv - dx) + tap(uv + dx) + tap(uv - dy) + tap(uv + dy))
-                + tap(uv - dx - dy) + tap(uv + dx - dy) + tap(uv - dx + dy) + tap(uv + dx + dy);
+    vec2 d = 0.5 * RADIUS / size;
+    vec3 box = tap(uv - d) + tap(uv + vec2(d.x, -d.y)) + tap(uv + vec2(-d.x, d.y)) + tap(uv + d);
     vec3 own = imageLoad(level, p).rgb;
-    imageStore(level, p, vec4(mix(tent / 16.0, own, OWN_WEIGHT), 1.0));
+    imageStore(level, p, vec4(mix(0.25 * box, own, OWN_WEIGHT), 1.0));
 }

@@ -30,17 +30,17 @@ layout(constant_id = SPEC_TONEMAP_EXPOSURE) const float EXPOSURE = 1.0;
 #define BLOOM_SET EXPOSURE_SET
 #endif
 #ifdef BLOOM
-// Level 0 of the bloom pass's chain (half the output's size), in the set
+// Level 0 of the bloom pass's chain (a quarter of the output's size), in the set
 // after the exposure's (or in its place without one).
 layout(set = BLOOM_SET, binding = 0) uniform sampler2D bloom;
 layout(constant_id = SPEC_TONEMAP_BLOOM_INTENSITY) const float BLOOM_INTENSITY = 0.04;
 
 // (1 - intensity) * hdr + intensity * bloom, the HDR colour sanitized
 // first so that a NaN pixel still shows the light around it. Pixel x of
-// the output is at x/2 in level 0 (whose texel q covers pixels 2q and
-// 2q+1), sampled bilinearly.
+// the output is at x/4 in level 0 (whose texel q covers pixels 4q to
+// 4q+3), sampled bilinearly.
 vec3 with_bloom(vec3 hdr) {
-    vec2 uv = gl_FragCoord.xy * 0.5 / vec2(textureSize(bloom, 0));
+    vec2 uv = gl_FragCoord.xy * 0.25 / vec2(textureSize(bloom, 0));
     return mix(sanitize_hdr(hdr), textureLod(bloom, uv, 0.0).rgb, BLOOM_INTENSITY);
 }
 #define HDR_IN(c) with_bloom(c)

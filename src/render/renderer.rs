@@ -507,7 +507,7 @@ fn record(
 
 /// The bloom chain, when the plan holds the bloom pass: RGBA16F, sampled
 /// and written as a storage image, with one mip level per level of the
-/// chain, level 0 half the output's size.
+/// chain, level 0 a quarter of the output's size.
 fn bloom_image(
     ctx: &Arc<Context>,
     scene: &Scene,

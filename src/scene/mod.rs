@@ -364,7 +364,7 @@ pub struct Bloom {
     /// Levels of the chain asked for, 1..=[`Bloom::MAX_LEVELS`]; the frame
     /// uses fewer when the smallest would be under 1x1 texel.
     pub levels: u32,
-    /// The upsampling tent filter's radius, in texels of each level:
+    /// The width of the box that blurs each level up, in texels of it:
     /// finite, in (0, [`Bloom::MAX_RADIUS`]].
     pub radius: f32,
 }
@@ -382,7 +382,7 @@ impl Default for Bloom {
 impl Bloom {
     /// Most levels a chain may ask for.
     pub const MAX_LEVELS: u32 = 10;
-    /// Largest upsampling radius, in texels.
+    /// Largest upsampling box width, in texels.
     pub const MAX_RADIUS: f64 = 4.0;
 
     /// An intensity from a number (the scene field and the knob share the
@@ -417,11 +417,15 @@ impl Bloom {
 
     /// The levels a `width`×`height` frame's chain has: the ones asked for,
     /// but no more than leave the smallest level at least 1x1 texel (level
-    /// k is `width >> (k + 1)` by `height >> (k + 1)`); 0 when the frame is
-    /// under 2 pixels in either direction.
+    /// k is `width >> (k + 2)` by `height >> (k + 2)`); 0 when the frame is
+    /// under 4 pixels in either direction.
     pub fn chain_levels(&self, width: u32, height: u32) -> u32 {
         let smaller = width.min(height);
-        let fit = if smaller == 0 { 0 } else { smaller.ilog2() };
+        let fit = if smaller == 0 {
+            0
+        } else {
+            smaller.ilog2().saturating_sub(1)
+        };
         self.levels.min(fit)
     }
 

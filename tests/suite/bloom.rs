@@ -1,7 +1,7 @@
 //! Bloom (`[tone_map] bloom = { ... }`, knob `bloom`): one compute pass
 //! between the render pass that draws the HDR image and the one that
-//! tone-maps it builds a chain of half-size levels (13-tap downsample,
-//! 3x3 tent upsample, each level the mean of its own downsample and the
+//! tone-maps it builds a chain of levels (a quarter-size 4x4 mean of the
+//! HDR image, then half-size 13-tap downsamples, 2x2-box upsamples, each level the mean of its own downsample and the
 //! level below), and the tone map mixes level 0 in. Without bloom the
 //! frame is exactly what it was; with it, the tone map's output matches
 //! the same chain computed on the CPU in f64 from the read-back HDR image,
@@ -84,11 +84,12 @@ fn the_chain_is_capped_so_its_smallest_level_is_one_texel() {
         ..Bloom::default()
     };
     assert_eq!(b(6).chain_levels(1280, 720), 6);
-    // 720 >> 10 = 0: nine levels, the smallest 2x1.
-    assert_eq!(b(10).chain_levels(1280, 720), 9);
-    assert_eq!(bloom::level_size(1280, 720, 8), (2, 1));
-    assert_eq!(b(3).chain_levels(3, 3), 1);
-    assert_eq!(b(3).chain_levels(1, 64), 0);
+    // 720 >> 10 = 0: eight levels, the smallest 2x1.
+    assert_eq!(b(10).chain_levels(1280, 720), 8);
+    assert_eq!(bloom::level_size(1280, 720, 7), (2, 1));
+    assert_eq!(bloom::level_size(1280, 720, 8).1, 0);
+    assert_eq!(b(3).chain_levels(7, 7), 1);
+    assert_eq!(b(3).chain_levels(3, 64), 0);
     // A frame too small for one level has no bloom pass.
     let plan = plan_of(&glow_scene(1, 16, "bloom = {}"));
     assert!(!plan.has(bloom::PASS));
@@ -143,6 +144,27 @@ impl Level {
         out
     }
 
+    /// Level 0 from the HDR image: each texel the mean of the four 2x2
+    /// boxes (each clamped to [0, 65504]) of the 4x4 texels it covers
+    /// (documented in glsl/bloom_down.comp).
+    fn down_from_hdr(&self) -> Level {
+        let (width, height) = (self.width / 4, self.height / 4);
+        let mut rgb = Vec::with_capacity(width * height);
+        for y in 0..height as i64 {
+            for x in 0..width as i64 {
+                let mut sum = [0.0; 3];
+                for (ox, oy) in [(-1, -1), (1, -1), (-1, 1), (1, 1)] {
+                    let b = self.boxed(4 * x + 2 + ox, 4 * y + 2 + oy);
+                    for c in 0..3 {
+                        sum[c] += 0.25 * b[c].clamp(0.0, 65504.0);
+                    }
+                }
+                rgb.push(sum);
+            }
+        }
+        Level { width, height, rgb }
+    }
+
     /// The 13-tap downsample (documented in glsl/bloom_down.comp).
     fn down(&self) -> Level {
         let (width, height) = (self.width / 2, self.height / 2);
@@ -178,23 +200,23 @@ impl Level {
     }
 
     /// `own_weight` of this level plus the rest of `below` blurred up with
-    /// the 3x3 tent of radius 1 (glsl/bloom_up.comp).
+    /// the 2x2 box of width 1: four bilinear taps at (+-1/2, +-1/2)
+    /// (glsl/bloom_up.comp).
     fn up(&self, below: &Level, own_weight: f64) -> Level {
         let mut rgb = Vec::with_capacity(self.rgb.len());
         for y in 0..self.height {
             for x in 0..self.width {
                 let (u, v) = ((x as f64 + 0.5) * 0.5, (y as f64 + 0.5) * 0.5);
-                let mut tent = [0.0; 3];
-                for (dx, dy) in (-1..=1).flat_map(|dy| (-1..=1).map(move |dx| (dx, dy))) {
-                    let w = f64::from((2 - dx * dx) * (2 - dy * dy)) / 16.0;
-                    let t = below.bilinear(u + f64::from(dx), v + f64::from(dy));
+                let mut blur = [0.0; 3];
+                for (dx, dy) in [(-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)] {
+                    let t = below.bilinear(u + dx, v + dy);
                     for c in 0..3 {
-                        tent[c] += w * t[c];
+                        blur[c] += 0.25 * t[c];
                     }
                 }
                 let own = self.rgb[y * self.width + x];
                 rgb.push(std::array::from_fn(|c| {
-                    own_weight * own[c] + (1.0 - own_weight) * tent[c]
+                    own_weight * own[c] + (1.0 - own_weight) * blur[c]
                 }));
             }
         }
@@ -216,16 +238,16 @@ fn cpu_bloom(hdr: &Pixels<f32>) -> Level {
         rgb: hdr
             .data
             .chunks_exact(4)
-            .map(|p| std::array::from_fn(|c| f64::from(p[c]).clamp(0.0, 65504.0)))
+            .map(|p| std::array::from_fn(|c| f64::from(p[c])))
             .collect(),
     };
-    let level0 = image.down();
+    let level0 = image.down_from_hdr();
     let level1 = level0.down();
     let level0 = level0.up(&level1, 0.5);
     let mut rgb = Vec::with_capacity(image.rgb.len());
     for y in 0..image.height {
         for x in 0..image.width {
-            rgb.push(level0.bilinear((x as f64 + 0.5) * 0.5, (y as f64 + 0.5) * 0.5));
+            rgb.push(level0.bilinear((x as f64 + 0.5) * 0.25, (y as f64 + 0.5) * 0.25));
         }
     }
     Level { rgb, ..image }
@@ -318,7 +340,7 @@ fn compare_with_cpu(glow: impl Fn(&str) -> Scene) -> Comparison {
 /// error 2^-11 per step, and the output is rounded to 8 bits), carries the
 /// light that came in (within 2 %: the filters are normalized, and what
 /// the 8-bit output rounds away in the faint tail is below that;
-/// measured: 0.49/255 at worst, ratio 0.9996) and
+/// measured: 0.50/255 at worst, ratio 0.9995) and
 /// spreads it beyond the glowing sphere.
 #[test]
 fn bloom_matches_the_cpu_chain_and_keeps_the_light() {
@@ -345,7 +367,7 @@ fn bloom_matches_the_cpu_chain_and_keeps_the_light() {
 
 /// HDR values above the largest half float are read as 65504: a sphere
 /// whose ambient term is 1e12 (1e6 times 1e6, finite in the rgba32f
-/// target) blooms like the CPU chain of the clamped image (the 8-bit
+/// target) blooms like the CPU chain whose 2x2 boxes are clamped (the 8-bit
 /// output would saturate around the sphere if 1e12 reached the chain).
 #[test]
 fn huge_hdr_values_are_clamped_before_the_chain() {

@@ -1,11 +1,12 @@
 //! The bloom pass, for scenes with `[tone_map] bloom = { ... }`: physically
 //! based bloom in the manner of Jimenez (2014). One compute pass between
 //! the render pass that draws the HDR image and the one that tone-maps it
-//! records the whole chain: level 0 (half the output's size) downsampled
-//! from the HDR attachment, each next level from the one above with the
+//! records the whole chain: level 0 (a quarter of the output's size, the
+//! mean of each 4x4 HDR texels) downsampled from the HDR attachment, each
+//! next level from the one above with the
 //! 13-tap filter (`glsl/bloom_down.comp`), then from the smallest level
 //! back up, each level replaced by the mean of its own downsample and the
-//! level below blurred up with a 3x3 tent (`glsl/bloom_up.comp`). The tone
+//! level below blurred up with a 2x2 box (`glsl/bloom_up.comp`). The tone
 //! map's BLOOM variant samples level 0 and mixes it in with the scene's
 //! intensity, before exposure and the curve.
 //!
@@ -30,9 +31,10 @@ use crate::vk::{
 };
 
 /// The size of level `level` of the chain of a `width`×`height` frame:
-/// `width >> (level + 1)` by `height >> (level + 1)`.
+/// `width >> (level + 2)` by `height >> (level + 2)` (level 0 is a
+/// quarter of the frame: the HDR image is read once, in 2x2 boxes).
 pub fn level_size(width: u32, height: u32, level: u32) -> (u32, u32) {
-    (width >> (level + 1), height >> (level + 1))
+    (width >> (level + 2), height >> (level + 2))
 }
 
 /// The scene's bloom and the levels its chain has in a frame of the
@@ -132,10 +134,13 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
         .collect::<Result<Vec<_>, _>>()?;
 
     let down = ShaderModule::new(ctx, shaders::BLOOM_DOWN_COMP.base())?;
-    let down_hdr = ShaderModule::new(
-        ctx,
-        shaders::BLOOM_DOWN_COMP.spirv(BloomDownCompFeatures::FROM_HDR),
-    )?;
+    // Level 0 reads the HDR image in bilinear 2x2 boxes where the device
+    // filters its format (always for RGBA16F; RGBA32F is optional).
+    let from_hdr = BloomDownCompFeatures::FROM_HDR.with(
+        BloomDownCompFeatures::FETCH_TEXELS,
+        !crate::vk::supports_linear_sampling(ctx, hdr.desc.format),
+    );
+    let down_hdr = ShaderModule::new(ctx, shaders::BLOOM_DOWN_COMP.spirv(from_hdr))?;
     let up = ShaderModule::new(ctx, shaders::BLOOM_UP_COMP.base())?;
     let mut pipelines = vec![ComputePipeline::new(ctx, &layout, &down_hdr, &[])?];
     if levels > 1 {
