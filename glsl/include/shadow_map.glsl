@@ -25,6 +25,8 @@ layout(std430, set = SHADOW_SET, binding = SHADOW_BLOCK_BINDING) readonly buffer
 
 // Texels across the filter's square: 1 (one comparison), 3 or 5.
 layout(constant_id = SPEC_SHADOW_TAPS) const int SHADOW_TAPS = 3;
+// The views the block holds: cascades (1 to 4) or 6 cube faces.
+layout(constant_id = SPEC_SHADOW_VIEWS) const int SHADOW_VIEWS = 1;
 
 float shadow_light_visibility = 1.0;
 
@@ -37,6 +39,18 @@ struct ShadowLookup {
     vec2 uv;
     float depth;
 };
+
+// View `view`'s matrix. The block is read at constant indices and the
+// matrix chosen per pixel: indexed by a per-pixel view, lavapipe loads
+// each element lane by lane (with one view and no filter that cost 630
+// instructions a pixel, as much as all six lights of a textured object).
+mat4 shadow_view_projection(int view) {
+    mat4 m = shadow.view_projection[0];
+    for (int i = 1; i < SHADOW_VIEWS; ++i) {
+        m = view == i ? shadow.view_projection[i] : m;
+    }
+    return m;
+}
 
 ShadowLookup shadow_lookup(vec3 p, vec3 n) {
     // The normal offset: as many texels as the filter reaches, plus one.
@@ -51,13 +65,19 @@ ShadowLookup shadow_lookup(vec3 p, vec3 n) {
         at.view = a.x >= a.y && a.x >= a.z ? (d.x >= 0.0 ? 0 : 1)
                 : a.y >= a.z ? (d.y >= 0.0 ? 2 : 3)
                 : (d.z >= 0.0 ? 4 : 5);
-        clip = shadow.view_projection[at.view] * vec4(q, 1.0);
+        clip = shadow_view_projection(at.view) * vec4(q, 1.0);
         clip.xyz /= clip.w;
     } else {
-        bvec3 beyond = greaterThan(vec3(length(p)), shadow.reach.xyz);
-        at.view = int(dot(vec3(beyond), vec3(1.0)));
-        vec3 q = p + n * (shadow.texel[at.view] * offset);
-        clip = shadow.view_projection[at.view] * vec4(q, 1.0);
+        at.view = 0;
+        float texel = shadow.texel[0];
+        if (SHADOW_VIEWS > 1) {
+            bvec3 beyond = greaterThan(vec3(length(p)), shadow.reach.xyz);
+            at.view = int(dot(vec3(beyond), vec3(1.0)));
+            vec4 texels = shadow.texel;
+            texel = texels[at.view];
+        }
+        vec3 q = p + n * (texel * offset);
+        clip = shadow_view_projection(at.view) * vec4(q, 1.0);
     }
     at.uv = clip.xy * 0.5 + 0.5;
     // Beyond the farthest receiver the map was fitted to: nothing there.

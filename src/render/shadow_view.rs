@@ -23,6 +23,7 @@ use super::draw_list::Draw;
 use super::geometry::SceneGeometry;
 use super::sky_resources::ray_basis;
 use crate::scene::{Light, Scene, ShadowCascades, ShadowLight, Shape, MAX_SHADOW_CASCADES};
+use crate::shader_ids::{SPEC_SHADOW_TAPS, SPEC_SHADOW_VIEWS};
 use glam::{DMat4, DVec3, DVec4};
 
 /// The shadow map's views for one frame: one per cascade, each in its
@@ -46,6 +47,18 @@ pub struct ShadowView {
     pub side: u32,
     /// Texels across the lookup's filter (`[output] shadow_filter`).
     pub taps: u32,
+}
+
+impl ShadowView {
+    /// The specialization constants of the shaders that look the map up:
+    /// the filter's taps and the number of views (cascades or cube faces),
+    /// which lets them read the shadow block with constant indices.
+    pub fn constants(&self) -> [(u32, u32); 2] {
+        [
+            (SPEC_SHADOW_TAPS, self.taps),
+            (SPEC_SHADOW_VIEWS, self.cascades.len() as u32),
+        ]
+    }
 }
 
 /// One cascade: the part of the view up to some distance from the camera,
@@ -166,11 +179,11 @@ pub fn light_direction(scene: &Scene, light: ShadowLight) -> Option<DVec3> {
 
 /// Whether any of `objects` (a draw's) may shadow something in view
 /// (`in_view`): false only for a flat caster (a plane, which cannot shadow
-/// itself) with every vertex of every other object in view on its lit
-/// side, where nothing lies behind it. The sun's planet ground may lie
-/// behind any caster, so under the sun every caster may shadow. Drawing
-/// such a plane into the map (a ground plane under the objects, say)
-/// would fill every texel for nothing.
+/// itself) with every other object in view on its lit side, or behind it
+/// only where the plane hides it from the camera. The sun's planet ground
+/// may lie behind any caster, so under the sun every caster may shadow.
+/// Drawing such a plane into the map (a ground plane under the objects,
+/// say) would fill every texel for nothing.
 pub fn may_shadow(
     scene: &Scene,
     geometry: &SceneGeometry,
@@ -189,9 +202,9 @@ pub fn may_shadow(
     }
     objects.iter().any(|&o| {
         let object = &scene.objects[o];
-        if !matches!(object.shape, Shape::Plane { .. }) {
+        let Shape::Plane { width, depth } = object.shape else {
             return true;
-        }
+        };
         let normal = (object.transform.normal_matrix() * glam::Vec3::Y)
             .as_dvec3()
             .normalize();
@@ -201,24 +214,98 @@ pub fn may_shadow(
         } else {
             -normal
         };
-        let origin = object.transform.translate;
-        // A vertex this far behind the plane (relative to the scene's
-        // size) still counts as on it: objects resting on a plane touch it.
-        let tolerance = 1e-6 * f64::from(geometry.bounds[o].1);
+        let plane = FlatCaster {
+            origin: object.transform.translate,
+            lit_side,
+            // A vertex this far behind the plane (relative to the scene's
+            // size) still counts as on it: objects resting on a plane
+            // touch it.
+            tolerance: 1e-6 * f64::from(geometry.bounds[o].1),
+            world_to_plane: object.transform.matrix_f64().inverse(),
+            half_extent: (f64::from(width) / 2.0, f64::from(depth) / 2.0),
+        };
+        // The plane hides what is behind it only from its front (a
+        // one-sided plane seen from behind is not drawn), only when it is
+        // opaque, and only from the lit side.
+        let eye = scene.camera.eye;
+        let hides = scene.materials[object.material].opacity >= 1.0
+            && (eye - plane.origin).dot(normal) > 0.0
+            && plane.height(eye) > 0.0;
         in_view.iter().filter(|&&r| r != o).any(|&r| {
             // Wholly on the lit side by its bounding sphere: no vertex to
             // look at (the usual case, a plan for every frame).
             let (centre, radius) = geometry.bounds[r];
-            if (centre - origin).dot(lit_side) >= f64::from(radius) {
+            if plane.height(centre) >= f64::from(radius) {
                 return false;
             }
             let model = scene.objects[r].transform.matrix_f64();
-            geometry.meshes[r].vertices.iter().any(|v| {
+            let behind = geometry.meshes[r].vertices.iter().any(|v| {
                 let p = model.transform_point3(glam::Vec3::from(v.position).as_dvec3());
-                (p - origin).dot(lit_side) < -tolerance
-            })
+                plane.height(p) < -plane.tolerance
+            });
+            behind && !(hides && plane.hides_from(eye, geometry.world_box(scene, r)))
         })
     })
+}
+
+/// A plane that may cast shadows, as `may_shadow` tests it.
+struct FlatCaster {
+    origin: DVec3,
+    /// Its unit normal on the side the light comes from.
+    lit_side: DVec3,
+    tolerance: f64,
+    world_to_plane: DMat4,
+    /// Half its width (object x) and depth (object z).
+    half_extent: (f64, f64),
+}
+
+impl FlatCaster {
+    /// Signed distance of `p` from the plane, positive on the lit side.
+    fn height(&self, p: DVec3) -> f64 {
+        (p - self.origin).dot(self.lit_side)
+    }
+
+    /// Whether the point `x` on the plane is on its rectangle.
+    fn covers(&self, x: DVec3) -> bool {
+        let local = self.world_to_plane.transform_point3(x);
+        local.x.abs() <= self.half_extent.0 - self.tolerance
+            && local.z.abs() <= self.half_extent.1 - self.tolerance
+    }
+
+    /// Whether every point of the box `(min, max)` behind the plane is
+    /// hidden from `eye` (on the lit side) by the rectangle: whether the
+    /// segment from the eye to it crosses the rectangle. The points behind
+    /// the rectangle seen from the eye form a convex region, and the part
+    /// of the box behind the plane is a convex polytope whose vertices are
+    /// the box's corners behind the plane and its edges' crossings of it,
+    /// so those vertices decide.
+    fn hides_from(&self, eye: DVec3, (min, max): (DVec3, DVec3)) -> bool {
+        let corner = |k: usize| {
+            DVec3::new(
+                if k & 1 == 0 { min.x } else { max.x },
+                if k & 2 == 0 { min.y } else { max.y },
+                if k & 4 == 0 { min.z } else { max.z },
+            )
+        };
+        let eye_height = self.height(eye);
+        let corners_hidden = (0..8).map(corner).all(|p| {
+            let h = self.height(p);
+            // On the plane's level is where the segment ends.
+            h >= 0.0 || self.covers(eye + (p - eye) * (eye_height / (eye_height - h)))
+        });
+        // The box's 12 edges join corners differing in one bit.
+        let crossings_covered = (0..8).all(|a: usize| {
+            [1, 2, 4].into_iter().filter(|bit| a & bit == 0).all(|bit| {
+                let (p, q) = (corner(a), corner(a | bit));
+                let (hp, hq) = (self.height(p), self.height(q));
+                if (hp < 0.0) == (hq < 0.0) {
+                    return true;
+                }
+                self.covers(p + (q - p) * (hp / (hp - hq)))
+            })
+        });
+        corners_hidden && crossings_covered
+    }
 }
 
 /// An axis-aligned box in the light's frame (x, y across, z along).

@@ -138,11 +138,18 @@ fn ellipse_area_within_two_percent(cascades: Option<u32>) {
     assert!(at(2.4) > 0.3, "beyond the ellipse is dark: {}", at(2.4));
 }
 
-/// A sphere under the plane, hidden by it: the plane may shadow it, so
-/// the plane is drawn into the map (a plane with nothing behind it is
-/// left out, `shadow_view::may_shadow`).
+/// A sphere under the plane's edge, in the frustum and not wholly behind
+/// the plane as the camera sees it: the plane may shadow what of it shows
+/// past the edge, so the plane is drawn into the map (a plane with nothing
+/// behind it, or only what it hides, is left out,
+/// `shadow_view::may_shadow`). The image ends just short of the edge.
 const UNDER: &str = "[[objects]]\nname = \"under\"\nmaterial = \"ball\"\n\
-                     shape = { type = \"sphere\", radius = 0.5 }\ntranslate = [1.0, -2.0, 0.0]\n";
+                     shape = { type = \"sphere\", radius = 0.5 }\ntranslate = [6.0, -0.6, 0.0]\n";
+
+/// The same sphere right under the plane's middle, which hides it from
+/// the camera: the plane can shadow nothing the camera sees.
+const HIDDEN: &str = "[[objects]]\nname = \"under\"\nmaterial = \"ball\"\n\
+                      shape = { type = \"sphere\", radius = 0.5 }\ntranslate = [1.0, -2.0, 0.0]\n";
 
 /// No self-shadowing: a plane with nothing over it (only a sphere under
 /// it, out of sight) is lit the same with shadows on and off (within
@@ -160,6 +167,16 @@ fn a_plane_alone_does_not_shadow_itself() {
     assert!(
         casters.iter().any(|d| d.object == 0),
         "the plane is not drawn into the map"
+    );
+    let hidden = geometry_plan(&top_view(320, true, 75.0, "pcf3", HIDDEN));
+    assert!(
+        hidden
+            .shadow
+            .expect("a shadow view")
+            .casters
+            .iter()
+            .all(|d| d.object != 0),
+        "the plane is drawn though it hides all that is behind it"
     );
     let off = common::render(&top_view(320, false, 75.0, "pcf3", UNDER), false).output;
     for filter in ["none", "pcf3", "pcf5"] {

@@ -24,8 +24,8 @@ use crate::render::sky_resources::SkyResources;
 use crate::render::RenderError;
 use crate::scene::{OzoneDepth, ShadowLight, TableFilter};
 use crate::shader_ids::{
-    SHADOW_SET, SPEC_OZONE_EXACT, SPEC_SHADOW_TAPS, SPEC_SKY_VIEW_HARDWARE_FILTER,
-    SPEC_TABLE_FILTER, SPEC_TABLE_MAPPING, SPEC_TRANSPARENT_OVER_SKY,
+    SHADOW_SET, SPEC_OZONE_EXACT, SPEC_SKY_VIEW_HARDWARE_FILTER, SPEC_TABLE_FILTER,
+    SPEC_TABLE_MAPPING, SPEC_TRANSPARENT_OVER_SKY,
 };
 use crate::shaders::{self, AtmosphereFragFeatures};
 use crate::vk::{
@@ -164,9 +164,7 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
         &resources.static_constants(),
         &shadow
             .and(setup.plan.shadow.as_ref())
-            .map(|view| (SPEC_SHADOW_TAPS, view.taps))
-            .into_iter()
-            .collect::<Vec<_>>(),
+            .map_or(Vec::new(), |view| view.constants().to_vec()),
     ]
     .concat();
     // (shader features, depth test) per draw.

@@ -7,9 +7,12 @@
 //! pass of its own, before the frame's others; the passes that light
 //! surfaces sample it (`glsl/include/shadow_map.glsl`). Every caster is
 //! drawn, in view or not (one behind the camera still shadows what is in
-//! view), with both faces (a plane casts whichever side the light meets)
-//! and a slope-scaled depth bias, so a lit surface's own depth does not
-//! shadow it where the light grazes it. Where it looks from is
+//! view), with a slope-scaled depth bias, so a lit surface's own depth
+//! does not shadow it where the light grazes it. Open surfaces are drawn
+//! with both faces (a plane casts whichever side the light meets); closed
+//! ones (spheres and tori not mirrored) with their faces towards the light
+//! only: the nearest depth is the same, and the far side's fill (half of
+//! a closed caster's texels) is left out. Where it looks from is
 //! `FramePlan::shadow` (`render::shadow_view`); the casters do not follow
 //! the view, so nothing here changes with it (`ShadowResources::set_view`
 //! rewrites the views).
@@ -18,7 +21,9 @@ use super::depth_prepass::{depth_only_pipeline, DepthOnly, DepthOnlyDraws};
 use super::{PassResources, PassSetup, PassType, RecordPass};
 use crate::render::plan::{attachment, Draw, FrameShape, PassIo};
 use crate::render::scene_resources::SceneResources;
+use crate::render::shadow_view::ShadowView;
 use crate::render::RenderError;
+use crate::scene::{Scene, Shape};
 use crate::vk::{CommandBuffer, CompareOp, CullModeFlags, DepthUse, GraphicsPipeline};
 
 /// The depth bias's constant part, in units of the map's depth precision.
@@ -29,12 +34,15 @@ const BIAS_SLOPE: f32 = 2.0;
 
 pub struct ShadowPass {
     casters: Vec<Draw>,
+    /// Each caster's index into `pipelines`.
+    slots: Vec<usize>,
     /// A view's tile, in texels across, and the tiles across and down
     /// (`ShadowView::tiles`).
     side: u32,
     tiles: (u32, u32),
-    /// Indexed by whether the draw is an instance batch.
-    pipelines: [Option<GraphicsPipeline>; 2],
+    /// Indexed by whether the draw is an instance batch plus 2 if its
+    /// objects are closed ([`closed`]).
+    pipelines: [Option<GraphicsPipeline>; 4],
 }
 
 /// The pass in the frame's list ([`super::PASSES`]).
@@ -71,29 +79,72 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
         .map_or((Vec::new(), 0, (1, 1)), |view| {
             (view.casters.clone(), view.side, view.tiles)
         });
-    let mut pipelines = [None, None];
+    let towards_light = setup
+        .plan
+        .shadow
+        .as_ref()
+        .map_or(CullModeFlags::NONE, |view| back_of_light(setup.scene, view));
+    let mut pipelines = [None, None, None, None];
     for (slot, pipeline) in pipelines.iter_mut().enumerate() {
-        let instanced = slot == 1;
-        if !casters.iter().any(|d| d.pipeline.instanced == instanced) {
+        if !casters.iter().any(|d| slot_of(setup.scene, d) == slot) {
             continue;
         }
         *pipeline = Some(depth_only_pipeline(
             setup,
             DepthOnly {
-                instanced,
-                cull_mode: CullModeFlags::NONE,
+                instanced: slot % 2 == 1,
+                cull_mode: if slot >= 2 {
+                    towards_light
+                } else {
+                    CullModeFlags::NONE
+                },
                 // Forward depth: nearer the light is smaller.
                 depth_test: CompareOp::LESS,
                 depth_bias: Some((BIAS_CONSTANT, BIAS_SLOPE)),
             },
         )?);
     }
+    let slots = casters.iter().map(|d| slot_of(setup.scene, d)).collect();
     Ok(Box::new(ShadowPass {
+        slots,
         casters,
         side,
         tiles,
         pipelines,
     }))
+}
+
+/// A caster's pipeline slot: 1 for an instance batch, plus 2 when closed.
+fn slot_of(scene: &Scene, draw: &Draw) -> usize {
+    usize::from(draw.pipeline.instanced) + 2 * usize::from(closed(scene, draw.objects()))
+}
+
+/// Whether every one of `objects` is a closed surface whose triangles
+/// wind as modelled (a mirroring transform reverses them): a sphere or a
+/// torus. Its faces turned from the light are behind its faces turned
+/// towards it, so they cannot be the nearest depth.
+fn closed(scene: &Scene, objects: &[usize]) -> bool {
+    objects.iter().all(|&o| {
+        let object = &scene.objects[o];
+        matches!(object.shape, Shape::Sphere { .. } | Shape::Torus { .. })
+            && object.transform.matrix_f64().determinant() > 0.0
+    })
+}
+
+/// The cull mode that leaves out the faces turned from the light. The
+/// pipelines take counter-clockwise triangles as front faces, as the
+/// camera's do, and a face turned towards a viewer winds as the sign of
+/// the determinant of its view-projection (that of the projective map's
+/// Jacobian) times +1 if depth grows towards the viewer (the camera's
+/// reversed Z) or -1 if it shrinks (the light's).
+fn back_of_light(scene: &Scene, view: &ShadowView) -> CullModeFlags {
+    let camera = scene.camera.projection_f64(1.0).determinant();
+    let light = view.cascades[0].view_projection.determinant();
+    if (camera > 0.0) == (light < 0.0) {
+        CullModeFlags::BACK
+    } else {
+        CullModeFlags::FRONT
+    }
 }
 
 impl RecordPass for ShadowPass {
@@ -109,10 +160,7 @@ impl RecordPass for ShadowPass {
                 let (x, y) = ((v % across) * self.side, (v / across) * self.side);
                 cmd.set_viewport(x, y, self.side, self.side);
             }
-            let casters = self
-                .casters
-                .iter()
-                .map(|d| (d, d.pipeline.instanced as usize));
+            let casters = self.casters.iter().zip(self.slots.iter().copied());
             let pipelines = DepthOnlyDraws {
                 pipelines: &self.pipelines,
                 frame_set: light_frame,

@@ -18,6 +18,7 @@ use crate::render::gpu_types::InstanceTransform;
 use crate::render::plan::{
     attachment, AirLight, Draw, FramePlan, FrameShape, PassIo, PipelineKey, ShadingKey,
 };
+use crate::render::shadow_view::ShadowView;
 use crate::render::static_lights;
 use crate::render::RenderError;
 use crate::scene::material_maps::MapMask;
@@ -191,7 +192,7 @@ impl SurfacePass {
                 let specialization = specialization(
                     &key,
                     encode_srgb,
-                    setup.plan.shadow.as_ref().map_or(1, |s| s.taps),
+                    setup.plan.shadow.as_ref(),
                     static_lights::constants(
                         setup.scene,
                         resources.light_anchor,
@@ -339,7 +340,7 @@ fn depth_compare(setup: &PassSetup<'_>, form: Form) -> CompareOp {
 fn specialization(
     key: &PipelineKey,
     encode_srgb: bool,
-    shadow_taps: u32,
+    shadow: Option<&ShadowView>,
     light_constants: Vec<(u32, u32)>,
     air_constants: &[(u32, u32)],
 ) -> Result<Vec<(u32, u32)>, RenderError> {
@@ -363,8 +364,8 @@ fn specialization(
     if encode_srgb {
         specialization.push((SPEC_ENCODE_SRGB, 1));
     }
-    if key.shadowed {
-        specialization.push((SPEC_SHADOW_TAPS, shadow_taps));
+    if let Some(shadow) = shadow.filter(|_| key.shadowed) {
+        specialization.extend(shadow.constants());
     }
     specialization.extend(light_constants);
     if key.air != AirLight::None {
