@@ -255,6 +255,12 @@ fn attachment_bytes(w: u64, h: u64, graph: &FrameGraph) -> u64 {
             u64::from(aw) * u64::from(ah) * bytes_per_texel(a.format)
         })
         .sum();
+    // The bloom chain beside them: RGBA16F, level 0 a quarter of the
+    // frame each way, the levels below it a third more at most.
+    if graph.has(super::passes::bloom::PASS) {
+        let (lw, lh) = super::passes::bloom::level_size(w as u32, h as u32, 0);
+        bytes += u64::from(lw) * u64::from(lh) * 8 * 4 / 3;
+    }
     for pass in &graph.passes {
         if let PassIo::Transfer { reads, .. } = &pass.io {
             for name in reads {
