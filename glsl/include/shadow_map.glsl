@@ -16,11 +16,12 @@ layout(set = SHADOW_SET, binding = SHADOW_MAP_BINDING) uniform sampler2DShadow s
 // uniform block's values into the shader at draw time, and crashed doing
 // so for the sun-lit objects' variant once a cascade indexed the block.
 layout(std430, set = SHADOW_SET, binding = SHADOW_BLOCK_BINDING) readonly buffer ShadowBlock {
-    mat4 view_projection[6];  // per cascade or cube face: camera-relative position to its clip space
+    mat4 view_projection[6];  // per cascade (and cube face, which the lookup projects with `face`): camera-relative position to its clip space
     vec4 reach;               // per cascade: the distance from the camera where it ends
     vec4 texel;               // per cascade: a texel's world width (x, point light: per unit distance)
     vec4 params;              // x: 1 / tile side; y, z: tiles across and down; w: 1 for the sun
     vec4 light;               // xyz: a point light's camera-relative position, w = 1; w = 0 otherwise
+    vec4 face;                // a point light's face projection: x: 1 / tan(half-angle); y: far / (near - far); z: y * near
 } shadow;
 
 // Texels across the filter's square: 1 (one comparison), 3 or 5.
@@ -62,10 +63,24 @@ ShadowLookup shadow_lookup(vec3 p, vec3 n) {
         vec3 q = p + n * (length(from_light) * shadow.texel.x * offset);
         vec3 d = q - shadow.light.xyz;
         vec3 a = abs(d);
-        at.view = a.x >= a.y && a.x >= a.z ? (d.x >= 0.0 ? 0 : 1)
-                : a.y >= a.z ? (d.y >= 0.0 ? 2 : 3)
-                : (d.z >= 0.0 ? 4 : 5);
-        clip = shadow_view_projection(at.view) * vec4(q, 1.0);
+        // The face the direction leaves the cube through, the direction in
+        // that face's view (the axes `shadow_view::cube_faces` looks along
+        // and up with: x, y across, and the distance along the face's
+        // axis), then the faces' shared projection. The six matrices would
+        // be 96 reads of the block per pixel.
+        vec3 v;
+        if (a.x >= a.y && a.x >= a.z) {
+            at.view = d.x >= 0.0 ? 0 : 1;
+            v = vec3(d.x >= 0.0 ? d.z : -d.z, d.y, a.x);
+        } else if (a.y >= a.z) {
+            at.view = d.y >= 0.0 ? 2 : 3;
+            v = vec3(d.y >= 0.0 ? d.x : -d.x, d.z, a.y);
+        } else {
+            at.view = d.z >= 0.0 ? 4 : 5;
+            v = vec3(d.z >= 0.0 ? -d.x : d.x, d.y, a.z);
+        }
+        vec4 face = shadow.face;
+        clip = vec4(face.x * v.xy, face.z - face.y * v.z, v.z);
         clip.xyz /= clip.w;
     } else {
         at.view = 0;

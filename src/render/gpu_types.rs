@@ -95,6 +95,9 @@ pub struct ShadowUniforms {
     /// A point light's camera-relative position (xyz) with w = 1; w = 0
     /// for other lights.
     pub light: [f32; 4],
+    /// A point light's face projection (`ShadowView::face_projection`):
+    /// x = 1 / tan(half-angle), y = far / (near - far), z = y * near.
+    pub face: [f32; 4],
 }
 
 /// One light as the shader reads it (std140: three vec4s).

@@ -150,8 +150,10 @@ fn uniforms(
         Some(p) => (p - scene.camera.eye).as_vec3().extend(1.0).to_array(),
         None => [0.0; 4],
     };
+    let [scale, r, rn] = view.face_projection.map(|x| x as f32);
     let mut block = ShadowUniforms {
         light,
+        face: [scale, r, rn, 0.0],
         view_projection: [[[0.0; 4]; 4]; 6],
         reach: [f32::MAX; 4],
         texel: [0.0; 4],

@@ -40,6 +40,11 @@ pub struct ShadowView {
     /// A point light's world position: the views are then the six faces
     /// of a cube around it (+x, -x, +y, -y, +z, -z), not cascades.
     pub point: Option<DVec3>,
+    /// The faces' perspective projection (glam's `perspective_rh`, depth
+    /// 0 to 1): its x and y scale, `far / (near - far)` and that times
+    /// `near`; zeros for cascades. The lookup projects with these and the
+    /// face's axes (fixed), not the six matrices.
+    pub face_projection: [f64; 3],
     /// The draws drawn into the map: every opaque draw, in view or not,
     /// whose objects cast shadows (and may shadow something in view).
     pub casters: Vec<Draw>,
@@ -450,6 +455,7 @@ impl ShadowView {
             cascades,
             sun: fitting.sun,
             point: None,
+            face_projection: [0.0; 3],
             casters,
             side,
             taps: scene.output.shadow_filter.taps(),
@@ -619,6 +625,11 @@ fn cube_faces(
         tiles: tiles(6),
         sun: false,
         point: Some(position),
+        face_projection: [
+            projection.x_axis.x,
+            projection.z_axis.z,
+            projection.w_axis.z,
+        ],
         casters,
         side,
         taps: scene.output.shadow_filter.taps(),
