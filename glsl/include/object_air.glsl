@@ -78,7 +78,7 @@ vec3 air_sun_transmittance(AirPoint a) {
 Light air_sun_light(vec3 transmittance) {
 #ifdef SHADOWS
     // Marks the sun as the shadow-casting light when it is.
-    float shadowed = shadow.params.w;
+    float shadowed = SHADOW_SUN ? 1.0 : 0.0;
 #else
     float shadowed = 0.0;
 #endif

@@ -13,13 +13,17 @@ layout(set = SHADOW_SET, binding = SHADOW_MAP_BINDING) uniform sampler2DShadow s
 // The map holds one tile per view: per cascade (nearest first) or per
 // cube face, across then down.
 // A storage buffer, not a uniform block: lavapipe (Mesa 22.3) inlines a
-// uniform block's values into the shader at draw time, and crashed doing
-// so for the sun-lit objects' variant once a cascade indexed the block.
+// uniform block's values into the shader at draw time, and crashes doing
+// so for the sun-lit objects' variant with two cascades or more (a
+// segmentation fault or "stack smashing detected", on earth_objects with
+// the sun's shadows), even with the block read at constant indices and no
+// branch on its values. A uniform block would make the lookup about 100
+// instructions a pixel cheaper (docs/performance.md, "Shadows").
 layout(std430, set = SHADOW_SET, binding = SHADOW_BLOCK_BINDING) readonly buffer ShadowBlock {
     mat4 view_projection[6];  // per cascade (and cube face, which the lookup projects with `face`): camera-relative position to its clip space
     vec4 reach;               // per cascade: the distance from the camera where it ends
     vec4 texel;               // per cascade: a texel's world width (x, point light: per unit distance)
-    vec4 params;              // x: 1 / tile side; y, z: tiles across and down; w: 1 for the sun
+    vec4 params;              // x: 1 / tile side; y, z: tiles across and down; w unused (SHADOW_SUN)
     vec4 light;               // xyz: a point light's camera-relative position, w = 1; w = 0 otherwise
     vec4 face;                // a point light's face projection: x: 1 / tan(half-angle); y: far / (near - far); z: y * near
 } shadow;
@@ -28,6 +32,10 @@ layout(std430, set = SHADOW_SET, binding = SHADOW_BLOCK_BINDING) readonly buffer
 layout(constant_id = SPEC_SHADOW_TAPS) const int SHADOW_TAPS = 3;
 // The views the block holds: cascades (1 to 4) or 6 cube faces.
 layout(constant_id = SPEC_SHADOW_VIEWS) const int SHADOW_VIEWS = 1;
+// Six views are a point light's faces (cascades are at most four).
+const bool SHADOW_POINT = SHADOW_VIEWS == 6;
+// Whether the atmosphere's sun casts the shadows.
+layout(constant_id = SPEC_SHADOW_SUN) const bool SHADOW_SUN = false;
 
 float shadow_light_visibility = 1.0;
 
@@ -58,7 +66,7 @@ ShadowLookup shadow_lookup(vec3 p, vec3 n) {
     float offset = float(SHADOW_TAPS / 2) + 1.0;
     ShadowLookup at;
     vec4 clip;
-    if (shadow.light.w > 0.5) {
+    if (SHADOW_POINT) {
         vec3 from_light = p - shadow.light.xyz;
         vec3 q = p + n * (length(from_light) * shadow.texel.x * offset);
         vec3 d = q - shadow.light.xyz;

@@ -90,7 +90,8 @@ pub struct ShadowUniforms {
     /// unit of distance from it.
     pub texel: [f32; 4],
     /// x: one texel of a tile in tile coordinates (1 / side); y, z: tiles
-    /// across and down; w: 1 when the light is the atmosphere's sun.
+    /// across and down; w unused (whether the sun casts the shadows is a
+    /// specialization constant, `ShadowView::constants`).
     pub params: [f32; 4],
     /// A point light's camera-relative position (xyz) with w = 1; w = 0
     /// for other lights.

@@ -161,7 +161,7 @@ fn uniforms(
             1.0 / view.side as f32,
             view.tiles.0 as f32,
             view.tiles.1 as f32,
-            if view.sun { 1.0 } else { 0.0 },
+            0.0,
         ],
     };
     let mut frames = Vec::with_capacity(view.cascades.len());
