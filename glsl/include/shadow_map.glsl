@@ -5,7 +5,7 @@
 // The light's term is scaled by `shadow_light_visibility`, which the
 // shader sets once per pixel (before any light is evaluated) with
 // `shadow_visibility`; the light it belongs to carries colour w = 1 (a
-// scene light's block, or the sun's light when the block's params.w
+// scene light's block, or the sun's light when SHADOW_SUN
 // says the sun casts the shadows).
 
 #ifdef SHADOWS
@@ -23,7 +23,6 @@ layout(std430, set = SHADOW_SET, binding = SHADOW_BLOCK_BINDING) readonly buffer
     mat4 view_projection[6];  // per cascade (and cube face, which the lookup projects with `face`): camera-relative position to its clip space
     vec4 reach;               // per cascade: the distance from the camera where it ends
     vec4 texel;               // per cascade: a texel's world width (x, point light: per unit distance)
-    vec4 params;              // x: 1 / tile side; y, z: tiles across and down; w unused (SHADOW_SUN)
     vec4 light;               // xyz: a point light's camera-relative position, w = 1; w = 0 otherwise
     vec4 face;                // a point light's face projection: x: 1 / tan(half-angle); y: far / (near - far); z: y * near
 } shadow;
@@ -36,6 +35,10 @@ layout(constant_id = SPEC_SHADOW_VIEWS) const int SHADOW_VIEWS = 1;
 const bool SHADOW_POINT = SHADOW_VIEWS == 6;
 // Whether the atmosphere's sun casts the shadows.
 layout(constant_id = SPEC_SHADOW_SUN) const bool SHADOW_SUN = false;
+// One texel of a tile in tile coordinates, and the tiles across and down.
+layout(constant_id = SPEC_SHADOW_TILE_TEXEL) const float SHADOW_TILE_TEXEL = 1.0 / 2048.0;
+layout(constant_id = SPEC_SHADOW_TILES_ACROSS) const int SHADOW_TILES_ACROSS = 1;
+layout(constant_id = SPEC_SHADOW_TILES_DOWN) const int SHADOW_TILES_DOWN = 1;
 
 float shadow_light_visibility = 1.0;
 
@@ -122,11 +125,11 @@ float shadow_visibility(vec3 p, vec3 n) {
     if (any(lessThan(at.uv, vec2(0.0))) || any(greaterThan(at.uv, vec2(1.0)))) {
         return 1.0;
     }
-    vec2 tiles = shadow.params.yz;
+    vec2 tiles = vec2(SHADOW_TILES_ACROSS, SHADOW_TILES_DOWN);
     float view = float(at.view);
     vec2 tile = vec2(mod(view, tiles.x), floor(view / tiles.x));
     vec2 uv = (at.uv + tile) / tiles;
-    vec2 step = vec2(shadow.params.x) / tiles;
+    vec2 step = vec2(SHADOW_TILE_TEXEL) / tiles;
     int r = SHADOW_TAPS / 2;
     float lit = 0.0;
     for (int y = -r; y <= r; ++y) {

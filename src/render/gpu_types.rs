@@ -89,10 +89,6 @@ pub struct ShadowUniforms {
     /// Per cascade, a texel's world-space width; x for a point light: per
     /// unit of distance from it.
     pub texel: [f32; 4],
-    /// x: one texel of a tile in tile coordinates (1 / side); y, z: tiles
-    /// across and down; w unused (whether the sun casts the shadows is a
-    /// specialization constant, `ShadowView::constants`).
-    pub params: [f32; 4],
     /// A point light's camera-relative position (xyz) with w = 1; w = 0
     /// for other lights.
     pub light: [f32; 4],

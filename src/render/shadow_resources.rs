@@ -157,12 +157,6 @@ fn uniforms(
         view_projection: [[[0.0; 4]; 4]; 6],
         reach: [f32::MAX; 4],
         texel: [0.0; 4],
-        params: [
-            1.0 / view.side as f32,
-            view.tiles.0 as f32,
-            view.tiles.1 as f32,
-            0.0,
-        ],
     };
     let mut frames = Vec::with_capacity(view.cascades.len());
     for (c, cascade) in view.cascades.iter().enumerate().take(6) {

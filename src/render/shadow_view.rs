@@ -23,7 +23,10 @@ use super::draw_list::Draw;
 use super::geometry::SceneGeometry;
 use super::sky_resources::ray_basis;
 use crate::scene::{Light, Scene, ShadowCascades, ShadowLight, Shape, MAX_SHADOW_CASCADES};
-use crate::shader_ids::{SPEC_SHADOW_SUN, SPEC_SHADOW_TAPS, SPEC_SHADOW_VIEWS};
+use crate::shader_ids::{
+    SPEC_SHADOW_SUN, SPEC_SHADOW_TAPS, SPEC_SHADOW_TILES_ACROSS, SPEC_SHADOW_TILES_DOWN,
+    SPEC_SHADOW_TILE_TEXEL, SPEC_SHADOW_VIEWS,
+};
 use glam::{DMat4, DVec3, DVec4};
 
 /// The shadow map's views for one frame: one per cascade, each in its
@@ -57,14 +60,19 @@ pub struct ShadowView {
 impl ShadowView {
     /// The specialization constants of the shaders that look the map up:
     /// the filter's taps, the number of views (cascades or cube faces),
-    /// which lets them read the shadow block with constant indices, and
-    /// whether the sun casts the shadows. What decides a branch is a
-    /// constant, not a value of the block (see `glsl/include/shadow_map.glsl`).
-    pub fn constants(&self) -> [(u32, u32); 3] {
+    /// which lets them read the shadow block with constant indices,
+    /// whether the sun casts the shadows, and the map's tiles. What the
+    /// plan fixes is a constant, not a value read from the block per pixel
+    /// (see `glsl/include/shadow_map.glsl`); the block holds what follows
+    /// the view.
+    pub fn constants(&self) -> [(u32, u32); 6] {
         [
             (SPEC_SHADOW_TAPS, self.taps),
             (SPEC_SHADOW_VIEWS, self.cascades.len() as u32),
             (SPEC_SHADOW_SUN, u32::from(self.sun)),
+            (SPEC_SHADOW_TILE_TEXEL, (1.0 / self.side as f32).to_bits()),
+            (SPEC_SHADOW_TILES_ACROSS, self.tiles.0),
+            (SPEC_SHADOW_TILES_DOWN, self.tiles.1),
         ]
     }
 }
