@@ -91,6 +91,11 @@ pub struct Cascade {
     /// The distance from the camera where the cascade ends (the last one:
     /// everywhere beyond).
     pub reach: f64,
+    /// The casters drawn into this view, as indices into
+    /// [`ShadowView::casters`]; `None` for every one. A cube face lists
+    /// those whose bounding spheres reach into it (a cascade's box is
+    /// fitted to the casters, so it takes them all).
+    pub drawn: Option<Vec<usize>>,
 }
 
 /// The map's tiles across and down for `count` views: one, two side by
@@ -570,6 +575,7 @@ impl Fitting<'_> {
             view_projection: ortho * self.frame.matrix() * camera_relative,
             texel: (x1 - x0).max(y1 - y0) / f64::from(self.side),
             reach: if last { f64::INFINITY } else { to },
+            drawn: None,
         }
     }
 }
@@ -629,6 +635,16 @@ fn cube_faces(
                 * camera_relative,
             texel: 2.0 * half / f64::from(side),
             reach: f64::INFINITY,
+            drawn: Some(
+                (0..casters.len())
+                    .filter(|&i| {
+                        casters[i].objects().iter().any(|&o| {
+                            let (centre, radius) = bounds[o];
+                            reaches_face(centre - position, f64::from(radius), axis, up, half)
+                        })
+                    })
+                    .collect(),
+            ),
         })
         .collect();
     ShadowView {
@@ -645,6 +661,21 @@ fn cube_faces(
         side,
         taps: scene.output.shadow_filter.taps(),
     }
+}
+
+/// Whether a sphere of `radius` at `d` from a point light reaches into
+/// the cube face looking along `axis` (up `up`) whose half-angle's tangent
+/// is `half`: whether it is within `radius` of the inner side of each of
+/// the face's four side planes (a test that may keep a sphere near an
+/// edge of the pyramid outside it, never drop one inside).
+fn reaches_face(d: DVec3, radius: f64, axis: DVec3, up: DVec3, half: f64) -> bool {
+    let across = axis.cross(up);
+    // The planes' outward normals are (e - half axis) / |e - half axis|,
+    // e one of +-across, +-up (unit, at right angles to the axis).
+    let norm = (1.0 + half * half).sqrt();
+    [across, -across, up, -up]
+        .into_iter()
+        .all(|e| (d.dot(e) - half * d.dot(axis)) / norm <= radius)
 }
 
 /// The light-frame box around the camera's frustum between view depths

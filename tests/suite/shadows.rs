@@ -495,3 +495,36 @@ fn a_point_light_casts_the_shadow_of_the_exact_reference() {
     }
     assert!(checked > 1000, "only {checked} core pixels");
 }
+
+/// A point light's cube faces draw only the casters that reach into them
+/// (`Cascade::drawn`): the ball (radius 0.5, centre 4.5 from the light
+/// along +x) is drawn into the +x face alone; the ground plane, whose
+/// bounding sphere (radius 8.5) holds the light, into all six: the test
+/// is by bounding spheres, so it keeps what it cannot rule out.
+#[test]
+fn a_cube_face_draws_only_the_casters_that_reach_into_it() {
+    let mut scene = point_view(320, true);
+    scene.objects[1].transform.translate = glam::DVec3::new(1.5, 4.0, 0.0);
+    let geometry = SceneGeometry::new(&scene).expect("geometry");
+    let view = FramePlan::new(&scene, &geometry, false)
+        .shadow
+        .expect("a shadow view");
+    let faces_with = |object: usize| -> Vec<usize> {
+        let caster = view
+            .casters
+            .iter()
+            .position(|d| d.object == object)
+            .expect("a caster");
+        (0..view.cascades.len())
+            .filter(|&f| {
+                view.cascades[f]
+                    .drawn
+                    .as_ref()
+                    .expect("a face's list")
+                    .contains(&caster)
+            })
+            .collect()
+    };
+    assert_eq!(faces_with(1), vec![0], "the ball's faces");
+    assert_eq!(faces_with(0), vec![0, 1, 2, 3, 4, 5], "the ground's faces");
+}

@@ -36,6 +36,8 @@ pub struct ShadowPass {
     casters: Vec<Draw>,
     /// Each caster's index into `pipelines`.
     slots: Vec<usize>,
+    /// Per view, the casters drawn into it (`Cascade::drawn`).
+    drawn: Vec<Option<Vec<usize>>>,
     /// A view's tile, in texels across, and the tiles across and down
     /// (`ShadowView::tiles`).
     side: u32,
@@ -105,8 +107,12 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
         )?);
     }
     let slots = casters.iter().map(|d| slot_of(setup.scene, d)).collect();
+    let drawn = setup.plan.shadow.as_ref().map_or(Vec::new(), |view| {
+        view.cascades.iter().map(|c| c.drawn.clone()).collect()
+    });
     Ok(Box::new(ShadowPass {
         slots,
+        drawn,
         casters,
         side,
         tiles,
@@ -160,7 +166,14 @@ impl RecordPass for ShadowPass {
                 let (x, y) = ((v % across) * self.side, (v / across) * self.side);
                 cmd.set_viewport(x, y, self.side, self.side);
             }
-            let casters = self.casters.iter().zip(self.slots.iter().copied());
+            let drawn = self.drawn.get(v as usize).and_then(Option::as_ref);
+            let casters = self
+                .casters
+                .iter()
+                .zip(self.slots.iter().copied())
+                .enumerate()
+                .filter(|(i, _)| drawn.is_none_or(|list| list.contains(i)))
+                .map(|(_, caster)| caster);
             let pipelines = DepthOnlyDraws {
                 pipelines: &self.pipelines,
                 frame_set: light_frame,
