@@ -16,10 +16,9 @@
 //! checks instead that images with and without the pre-pass are equal and
 //! that each covered pixel is shaded once (`tests/suite/depth_prepass.rs`).
 
-use super::surface::instance_attributes;
+use super::surface::{instance_attributes, instance_stride};
 use super::{PassResources, PassSetup, PassType, RecordPass};
 use crate::mesh::Vertex;
-use crate::render::gpu_types::InstanceTransform;
 use crate::render::plan::{attachment, Draw, FramePlan, FrameShape, PassIo};
 use crate::render::scene_resources::SceneResources;
 use crate::render::RenderError;
@@ -118,11 +117,7 @@ pub(super) fn depth_only_pipeline(
             specialization: &[],
             vertex_stride: std::mem::size_of::<Vertex>() as u32,
             vertex_attributes: &attributes,
-            instance_stride: if how.instanced {
-                std::mem::size_of::<InstanceTransform>() as u32
-            } else {
-                0
-            },
+            instance_stride: instance_stride(how.instanced),
             instance_attributes: &instance,
             cull_mode: how.cull_mode,
             depth_test: Some(how.depth_test),

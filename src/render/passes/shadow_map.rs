@@ -36,8 +36,9 @@ pub struct ShadowPass {
     casters: Vec<Draw>,
     /// Each caster's index into `pipelines`.
     slots: Vec<usize>,
-    /// Per view, the casters drawn into it (`Cascade::drawn`).
-    drawn: Vec<Option<Vec<usize>>>,
+    /// Per view, the indices of the casters drawn into it
+    /// (`Cascade::drawn`, every caster where it has no list).
+    drawn: Vec<Vec<usize>>,
     /// A view's tile, in texels across, and the tiles across and down
     /// (`ShadowView::tiles`).
     side: u32,
@@ -86,9 +87,10 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
         .shadow
         .as_ref()
         .map_or(CullModeFlags::NONE, |view| back_of_light(setup.scene, view));
+    let slots: Vec<usize> = casters.iter().map(|d| slot_of(setup.scene, d)).collect();
     let mut pipelines = [None, None, None, None];
     for (slot, pipeline) in pipelines.iter_mut().enumerate() {
-        if !casters.iter().any(|d| slot_of(setup.scene, d) == slot) {
+        if !slots.contains(&slot) {
             continue;
         }
         *pipeline = Some(depth_only_pipeline(
@@ -106,9 +108,15 @@ fn create(setup: &PassSetup<'_>) -> Result<Box<dyn RecordPass>, RenderError> {
             },
         )?);
     }
-    let slots = casters.iter().map(|d| slot_of(setup.scene, d)).collect();
     let drawn = setup.plan.shadow.as_ref().map_or(Vec::new(), |view| {
-        view.cascades.iter().map(|c| c.drawn.clone()).collect()
+        view.cascades
+            .iter()
+            .map(|c| {
+                c.drawn
+                    .clone()
+                    .unwrap_or_else(|| (0..casters.len()).collect())
+            })
+            .collect()
     });
     Ok(Box::new(ShadowPass {
         slots,
@@ -166,14 +174,8 @@ impl RecordPass for ShadowPass {
                 let (x, y) = ((v % across) * self.side, (v / across) * self.side);
                 cmd.set_viewport(x, y, self.side, self.side);
             }
-            let drawn = self.drawn.get(v as usize).and_then(Option::as_ref);
-            let casters = self
-                .casters
-                .iter()
-                .zip(self.slots.iter().copied())
-                .enumerate()
-                .filter(|(i, _)| drawn.is_none_or(|list| list.contains(i)))
-                .map(|(_, caster)| caster);
+            let drawn = self.drawn.get(v as usize).map_or(&[][..], Vec::as_slice);
+            let casters = drawn.iter().map(|&i| (&self.casters[i], self.slots[i]));
             let pipelines = DepthOnlyDraws {
                 pipelines: &self.pipelines,
                 frame_set: light_frame,

@@ -210,11 +210,7 @@ impl SurfacePass {
                         specialization: &specialization,
                         vertex_stride: std::mem::size_of::<Vertex>() as u32,
                         vertex_attributes: &attributes,
-                        instance_stride: if key.instanced {
-                            std::mem::size_of::<InstanceTransform>() as u32
-                        } else {
-                            0
-                        },
+                        instance_stride: instance_stride(key.instanced),
                         instance_attributes: &instance_attributes,
                         cull_mode: if key.two_sided {
                             CullModeFlags::NONE
@@ -402,6 +398,16 @@ fn shader_features(key: &PipelineKey, form: Form) -> (ObjectVertFeatures, Object
             key.shadowed && form != Form::GBuffer,
         );
     (vert, frag)
+}
+
+/// The instance buffer's stride for a pipeline: an instance's transforms
+/// when it draws batches as instances, else none.
+pub(super) fn instance_stride(instanced: bool) -> u32 {
+    if instanced {
+        std::mem::size_of::<InstanceTransform>() as u32
+    } else {
+        0
+    }
 }
 
 /// The per-instance attributes of an instanced pipeline: the model
